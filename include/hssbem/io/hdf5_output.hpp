@@ -1,0 +1,48 @@
+/// \file hdf5_output.hpp
+/// Result files: HDF5 with a ParaView-readable XDMF sidecar, written atomically.
+#pragma once
+
+#include "hssbem/bem/geometry.hpp"
+
+#include <array>
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace hssbem {
+
+class OutputError : public std::runtime_error {
+public:
+  using std::runtime_error::runtime_error;
+};
+
+/// Everything a result file holds, all arrays in mesh vertex order. Serial: the caller gathers.
+struct ResultData {
+  std::vector<Vec3> vertices;
+  std::vector<std::array<int, 3>> triangles;
+  std::vector<int> triangle_region;                 ///< /mesh/triangle_region
+  std::vector<Vec3> displacement;                   ///< /fields/displacement
+  std::vector<Vec3> traction;                       ///< /fields/traction (mean over double nodes)
+  std::vector<std::array<Vec3, 3>> traction_corner; ///< /fields/traction_corner (nt x 3 x 3)
+  std::vector<std::array<bool, 3>> displacement_prescribed; ///< /bc/displacement_prescribed (0/1)
+  std::vector<int> sharp_vertex;                    ///< /mesh/sharp_vertex (0/1): double nodes
+  std::map<std::string, Vec3> reactions;            ///< /reactions/<region>: integral of traction
+  std::vector<Vec3> interior_points;                ///< /interior/points
+  std::vector<Vec3> interior_displacement;          ///< /interior/displacement
+  std::map<std::string, double> attributes_real;    ///< root attributes (E, nu, residual, ...)
+  std::map<std::string, long long> attributes_int;  ///< root attributes (iterations, ranks, ...)
+  std::map<std::string, std::string> attributes_str;///< root attributes (solver, version, ...)
+  std::map<std::string, double> timings;            ///< /timings attributes, seconds per phase
+};
+
+/// Check that `path` can be written (directory exists and is writable) before any work is done.
+/// Throws OutputError naming the path.
+void check_output_path(const std::string &path);
+
+/// Write `path` (HDF5) and `path` with extension .xdmf beside it. Both are written under temporary
+/// names and renamed when complete, so a crash never leaves a file that looks complete.
+/// Throws OutputError.
+void write_result(const std::string &path, const ResultData &data);
+
+} // namespace hssbem

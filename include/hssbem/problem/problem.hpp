@@ -1,0 +1,82 @@
+/// \file problem.hpp
+/// The problem file (JSON): mesh, material, boundary rules, interior points, output.
+#pragma once
+
+#include "hssbem/bem/discretization.hpp"
+#include "hssbem/bem/kelvin.hpp"
+#include "hssbem/bem/mesh.hpp"
+
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace hssbem {
+
+/// Any problem with the problem file or its boundary rules; the message names the file and the
+/// rule (by index, 0-based) at fault.
+class ProblemError : public std::runtime_error {
+public:
+  using std::runtime_error::runtime_error;
+};
+
+/// What a rule selects (one of the alternatives is set).
+struct Selector {
+  enum class Kind { All, Region, Box, Sphere, Vertices } kind = Kind::All;
+  std::string region_name; ///< Region: name, or empty when given by tag
+  int region_tag = -1;     ///< Region: tag when given as a number
+  Vec3 lo{}, hi{};         ///< Box
+  Vec3 center{};           ///< Sphere
+  double radius = 0;       ///< Sphere
+  std::vector<int> vertices; ///< Vertices (0-based, file order)
+};
+
+/// One boundary rule: selector plus one of displacement / traction / pressure. Values are either one
+/// row for all selected vertices or one row per selected vertex (in selection order: ascending
+/// vertex index, which for "all" is mesh order); a NaN component means "null" (leave as it was).
+struct BoundaryRule {
+  enum class Kind { Displacement, Traction, Pressure } kind = Kind::Displacement;
+  Selector where;
+  std::vector<Vec3> rows;      ///< displacement / traction rows (size 1 or number selected)
+  std::vector<double> pressure; ///< pressure values (size 1 or number selected)
+};
+
+/// Parsed problem file, before it meets a mesh. Paths are resolved relative to the file.
+struct ProblemSpec {
+  std::string file;            ///< problem file path (for messages)
+  std::string mesh_path;
+  std::optional<double> E, nu, lambda, mu;
+  std::vector<BoundaryRule> rules;
+  std::vector<Vec3> interior_points;
+  std::string output;          ///< may be empty
+};
+
+/// Parse a problem file. Throws ProblemError (file, key at fault) on malformed input.
+ProblemSpec read_problem(const std::string &path);
+/// Parse from a JSON string (for tests); `origin` is used in messages and to resolve paths.
+ProblemSpec parse_problem(const std::string &json_text, const std::string &origin);
+
+/// Boundary condition per vertex and component, in mesh order.
+struct VertexConditions {
+  std::vector<std::array<bool, 3>> displacement_prescribed; ///< else traction prescribed
+  std::vector<Vec3> value;          ///< displacement or traction value
+  std::vector<double> pressure;     ///< pressure p for components set by a pressure rule (NaN else)
+  std::vector<std::array<bool, 3>> from_pressure; ///< component was last set by a pressure rule
+};
+
+/// Apply the rules in order (later rules win per vertex and component). Throws ProblemError for a
+/// rule that selects no vertex, an out-of-range vertex index, a row count that does not match, or
+/// an unknown region.
+VertexConditions apply_rules(const std::vector<BoundaryRule> &rules, const SurfaceMesh &mesh,
+                             const std::string &origin);
+
+/// Boundary condition per dof node and component (what the solver sees). Pressure becomes
+/// traction -p n with the normal of each node's smooth group.
+struct NodeConditions {
+  std::vector<std::array<bool, 3>> displacement_prescribed;
+  std::vector<Vec3> value;
+  int num_displacement_prescribed() const;
+};
+NodeConditions node_conditions(const VertexConditions &vc, const Discretization &disc);
+
+} // namespace hssbem
