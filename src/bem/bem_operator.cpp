@@ -1,1 +1,167 @@
-// placeholder: filled in by its module
+#include "hssbem/bem/bem_operator.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+
+namespace hssbem {
+
+BemOperator::BemOperator(const Discretization &disc, const Material &material, const QuadratureOptions &options)
+  : m_disc(&disc), m_material(material), m_quad(material, options)
+{
+  const SurfaceMesh &mesh = disc.mesh();
+  m_tri.resize(mesh.triangles.size());
+  for (int t = 0; t < mesh.num_triangles(); ++t) {
+    const auto &v = mesh.triangles[t];
+    m_tri[t] = Triangle{{mesh.vertices[v[0]], mesh.vertices[v[1]], mesh.vertices[v[2]]}, mesh.triangle_normal(t), mesh.triangle_area(t)};
+  }
+  m_rigid.assign(disc.num_nodes(), Mat3{});
+  m_has_rigid.assign(disc.num_nodes(), 0);
+  m_col_pos.assign(disc.num_nodes(), -1);
+  m_elem_mark.assign(mesh.triangles.size(), 0);
+}
+
+bool BemOperator::contains(int row, int t) const
+{
+  const DofNode &node = m_disc->node(row);
+  if (node.element >= 0) return node.element == t;
+  const auto &tri = m_disc->mesh().triangles[t];
+  return tri[0] == node.vertex || tri[1] == node.vertex || tri[2] == node.vertex;
+}
+
+void BemOperator::element_integrals(const Vec3 &x, int row, int t, ElementIntegrals &out) const
+{
+  out.clear();
+  if (row < 0 || !contains(row, t)) return m_quad.regular(x, m_tri[t], out);
+  const DofNode &node = m_disc->node(row);
+  std::array<double, 3> bx = node.bary;
+  if (node.element < 0) {
+    const auto &tri = m_disc->mesh().triangles[t];
+    for (int c = 0; c < 3; ++c) bx[c] = tri[c] == node.vertex ? 1.0 : 0.0;
+  }
+  m_quad.singular(x, bx, m_tri[t], out);
+}
+
+void BemOperator::compute_rigid_body_terms(const std::vector<int> &rows)
+{
+  ElementIntegrals ei;
+  for (int i : rows) {
+    Mat3 D{};
+    const Vec3 &x = m_disc->node(i).point;
+    for (int t = 0; t < static_cast<int>(m_tri.size()); ++t) {
+      if (contains(i, t)) continue;
+      element_integrals(x, -1, t, ei);
+      for (int a = 0; a < 3; ++a)
+        for (int m = 0; m < 9; ++m) D[m] -= ei.H[a][m];
+    }
+    m_rigid[i] = D;
+    m_has_rigid[i] = 1;
+  }
+}
+
+void BemOperator::set_rigid_body_terms(std::vector<Mat3> terms)
+{
+  if (static_cast<int>(terms.size()) != num_nodes()) throw std::invalid_argument("set_rigid_body_terms: one term per node expected");
+  m_rigid = std::move(terms);
+  m_has_rigid.assign(num_nodes(), 1);
+}
+
+bool BemOperator::has_rigid_body_term(int row) const { return m_has_rigid[row] != 0; }
+
+void BemOperator::elements_touching(const std::vector<int> &J, std::vector<int> &elems) const
+{
+  elems.clear();
+  for (int j : J)
+    for (const int *t = m_disc->support_begin(j); t != m_disc->support_end(j); ++t)
+      if (!m_elem_mark[*t]) {
+        m_elem_mark[*t] = 1;
+        elems.push_back(*t);
+      }
+  for (int t : elems) m_elem_mark[t] = 0;
+}
+
+void BemOperator::add_rigid_body(int row, const Mat3 &D, const std::vector<int> &J, double *Hrow, long ld) const
+{
+  const DofNode &node = m_disc->node(row);
+  auto add = [&](int j, double w) {
+    const int p = m_col_pos[j];
+    if (p < 0 || w == 0.0) return;
+    for (int k = 0; k < 3; ++k)
+      for (int c = 0; c < 3; ++c) Hrow[k * ld + 3 * p + c] += w * D[3 * k + c];
+  };
+  if (node.element < 0) return add(row, 1.0);
+  for (int a = 0; a < 3; ++a) add(m_disc->element_node(node.element, a), node.bary[a]);
+}
+
+void BemOperator::fill_hg(const std::vector<int> &I, const std::vector<int> &J, double *H, double *G, long ld) const
+{
+  for (std::size_t p = 0; p < J.size(); ++p) m_col_pos[J[p]] = static_cast<int>(p);
+  const bool all = static_cast<int>(J.size()) == num_nodes();
+  std::vector<int> elems;
+  elements_touching(J, elems);
+  ElementIntegrals ei;
+  for (std::size_t r = 0; r < I.size(); ++r) {
+    const int i = I[r];
+    if (!all && !m_has_rigid[i]) {
+      for (int j : J) m_col_pos[j] = -1;
+      throw std::logic_error("fill_hg: row " + std::to_string(i) + " has no rigid-body term");
+    }
+    double *Hr = H ? H + 3 * r * ld : nullptr, *Gr = G ? G + 3 * r * ld : nullptr;
+    for (int k = 0; k < 3; ++k) {
+      if (Hr) std::fill(Hr + k * ld, Hr + k * ld + 3 * J.size(), 0.0);
+      if (Gr) std::fill(Gr + k * ld, Gr + k * ld + 3 * J.size(), 0.0);
+    }
+    Mat3 D{};
+    const Vec3 &x = m_disc->node(i).point;
+    for (int t : elems) {
+      element_integrals(x, i, t, ei);
+      for (int a = 0; a < 3; ++a) {
+        const int p = m_col_pos[m_disc->element_node(t, a)];
+        if (p < 0) continue;
+        for (int k = 0; k < 3; ++k)
+          for (int c = 0; c < 3; ++c) {
+            if (Hr) Hr[k * ld + 3 * p + c] += ei.H[a][3 * k + c];
+            if (Gr) Gr[k * ld + 3 * p + c] += ei.G[a][3 * k + c];
+          }
+      }
+      if (all && !contains(i, t))
+        for (int a = 0; a < 3; ++a)
+          for (int m = 0; m < 9; ++m) D[m] -= ei.H[a][m];
+    }
+    if (Hr) add_rigid_body(i, all ? D : m_rigid[i], J, Hr, ld);
+  }
+  for (int j : J) m_col_pos[j] = -1;
+}
+
+void fill_system_block(const BemOperator &op, const SystemSelection &sel, const std::vector<int> &I, const std::vector<int> &J,
+                       double *A, long ld, double *rhs)
+{
+  const long nj = 3 * static_cast<long>(J.size());
+  const bool all = static_cast<int>(J.size()) == op.num_nodes();
+  if (rhs && !all) throw std::logic_error("fill_system_block: the right-hand side needs every column");
+  constexpr std::size_t chunk = 16; // rows per pass: bounded scratch, O(|J|)
+  std::vector<double> H(3 * chunk * nj), G(3 * chunk * nj);
+  for (std::size_t r0 = 0; r0 < I.size(); r0 += chunk) {
+    const std::vector<int> rows(I.begin() + r0, I.begin() + std::min(I.size(), r0 + chunk));
+    op.fill_hg(rows, J, H.data(), G.data(), nj);
+    for (std::size_t r = 0; r < 3 * rows.size(); ++r) {
+      const double *h = &H[r * nj], *g = &G[r * nj];
+      double *a = A + (3 * r0 + r) * ld, b = 0;
+      for (std::size_t p = 0; p < J.size(); ++p)
+        for (int c = 0; c < 3; ++c) {
+          const long q = 3 * static_cast<long>(p) + c;
+          const int j = J[p];
+          if (sel.displacement_known[j][c]) {
+            a[q] = -g[q];
+            b -= h[q] * sel.known[j][c];
+          } else {
+            a[q] = h[q];
+            b += g[q] * sel.known[j][c];
+          }
+        }
+      if (rhs) rhs[3 * r0 + r] = b;
+    }
+  }
+}
+
+} // namespace hssbem

@@ -1,1 +1,402 @@
-// placeholder: filled in by its module
+/// \file mesh_validate.cpp
+/// Topology checks of a closed triangulated surface and outward orientation of its components.
+
+#include "hssbem/bem/mesh.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <sstream>
+#include <unordered_map>
+
+namespace hssbem {
+namespace {
+
+constexpr double k_pi = 3.14159265358979323846;
+/// Relative size below which an area (times diag^2) or a volume (times diag^3) counts as zero.
+constexpr double k_degenerate = 1e-12;
+
+/// Undirected edge as one 64-bit key: lower index in the high half.
+std::uint64_t edge_key(int a, int b)
+{
+  const auto lo = static_cast<std::uint64_t>(static_cast<std::uint32_t>(std::min(a, b)));
+  const auto hi = static_cast<std::uint64_t>(static_cast<std::uint32_t>(std::max(a, b)));
+  return (lo << 32) | hi;
+}
+
+/// The triangles using one undirected edge; the first two are kept, the rest only counted.
+struct EdgeUse {
+  int count = 0;
+  int tri[2] = {-1, -1};
+  bool ascending[2] = {false, false}; ///< traversed from the lower to the higher vertex index
+};
+
+struct TripleHash {
+  std::size_t operator()(const std::array<int, 3> &k) const
+  {
+    std::uint64_t h = static_cast<std::uint32_t>(k[0]);
+    h = h * 0x9e3779b97f4a7c15ULL + static_cast<std::uint32_t>(k[1]);
+    h = (h ^ (h >> 29)) * 0xbf58476d1ce4e5b9ULL + static_cast<std::uint32_t>(k[2]);
+    return static_cast<std::size_t>(h ^ (h >> 32));
+  }
+};
+
+/// Axis-aligned bounding box.
+struct Box {
+  Vec3 lo{std::numeric_limits<double>::max(), std::numeric_limits<double>::max(),
+          std::numeric_limits<double>::max()};
+  Vec3 hi{-std::numeric_limits<double>::max(), -std::numeric_limits<double>::max(),
+          -std::numeric_limits<double>::max()};
+
+  void add(const Vec3 &x)
+  {
+    for (std::size_t i = 0; i < 3; ++i) {
+      lo[i] = std::min(lo[i], x[i]);
+      hi[i] = std::max(hi[i], x[i]);
+    }
+  }
+  bool contains(const Vec3 &x) const
+  {
+    for (std::size_t i = 0; i < 3; ++i)
+      if (x[i] < lo[i] || x[i] > hi[i])
+        return false;
+    return true;
+  }
+  double diagonal() const { return norm(hi - lo); }
+  Vec3 center() const { return 0.5 * (lo + hi); }
+};
+
+/// Solid angle subtended at p by triangle (a, b, c), signed by its orientation
+/// (Van Oosterom and Strackee, 1983).
+double solid_angle(const Vec3 &p, const Vec3 &a, const Vec3 &b, const Vec3 &c)
+{
+  const Vec3 x = a - p, y = b - p, z = c - p;
+  const double lx = norm(x), ly = norm(y), lz = norm(z);
+  const double numerator = dot(x, cross(y, z));
+  const double denominator = lx * ly * lz + dot(x, y) * lz + dot(x, z) * ly + dot(y, z) * lx;
+  return 2.0 * std::atan2(numerator, denominator);
+}
+
+std::string triple(const std::array<int, 3> &t)
+{
+  return "(" + std::to_string(t[0]) + ", " + std::to_string(t[1]) + ", " + std::to_string(t[2]) + ")";
+}
+
+std::string edge_text(int a, int b) { return "(" + std::to_string(a) + ", " + std::to_string(b) + ")"; }
+
+/// Runs the checks in order; each throws at the first fault it finds, in triangle order.
+class MeshValidator {
+public:
+  MeshValidator(SurfaceMesh &mesh, std::vector<std::string> &notices)
+      : m_mesh(mesh), m_notices(notices)
+  {
+  }
+
+  void run()
+  {
+    check_indices();
+    check_degenerate();
+    check_duplicates();
+    build_edges();
+    check_non_manifold_edges();
+    check_open_edges();
+    check_vertex_fans();
+    check_orientation();
+    find_components();
+    orient_components();
+    report_unused_vertices();
+  }
+
+private:
+  [[noreturn]] void fail(const std::string &what) const
+  {
+    throw MeshError("mesh '" + m_mesh.source + "': " + what);
+  }
+  void notice(const std::string &what) { m_notices.push_back("mesh '" + m_mesh.source + "': " + what); }
+
+  const EdgeUse &edge(int a, int b) const { return m_edges.find(edge_key(a, b))->second; }
+  int other_triangle(int a, int b, int t) const
+  {
+    const EdgeUse &e = edge(a, b);
+    return e.tri[0] == t ? e.tri[1] : e.tri[0];
+  }
+  const Vec3 &corner(int t, int k) const { return m_mesh.vertices[m_mesh.triangles[t][k]]; }
+
+  void check_indices();
+  void check_degenerate();
+  void check_duplicates();
+  void build_edges();
+  void check_non_manifold_edges();
+  void check_open_edges();
+  void check_vertex_fans();
+  int fan_size(int v, int start) const;
+  void check_orientation();
+  void find_components();
+  void orient_components();
+  double signed_volume(int c, const Vec3 &origin) const;
+  int nesting_depth(int c) const;
+  double winding_number(const Vec3 &p, int c) const;
+  void report_unused_vertices();
+
+  SurfaceMesh &m_mesh;
+  std::vector<std::string> &m_notices;
+  std::unordered_map<std::uint64_t, EdgeUse> m_edges;
+  std::vector<int> m_degree;                 ///< triangles per vertex
+  std::vector<int> m_first_triangle;         ///< some triangle of each vertex, -1 if unused
+  std::vector<std::vector<int>> m_components; ///< triangles of each component
+  std::vector<Box> m_component_box;
+};
+
+void MeshValidator::check_indices()
+{
+  const int n = m_mesh.num_vertices();
+  if (m_mesh.triangles.empty())
+    fail("no triangles (a surface mesh needs at least one closed triangulated surface)");
+  for (int t = 0; t < m_mesh.num_triangles(); ++t) {
+    const auto &tri = m_mesh.triangles[t];
+    for (int v : tri)
+      if (v < 0 || v >= n)
+        fail("triangle " + std::to_string(t) + " " + triple(tri) + " references vertex " +
+             std::to_string(v) + ", but the mesh has " + std::to_string(n) + " vertices");
+    if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2])
+      fail("triangle " + std::to_string(t) + " " + triple(tri) + " has a repeated vertex");
+  }
+}
+
+void MeshValidator::check_degenerate()
+{
+  Box box;
+  for (const auto &tri : m_mesh.triangles)
+    for (int v : tri)
+      box.add(m_mesh.vertices[v]);
+  const double threshold = k_degenerate * box.diagonal() * box.diagonal();
+  for (int t = 0; t < m_mesh.num_triangles(); ++t) {
+    const double area = m_mesh.triangle_area(t);
+    if (area <= threshold) {
+      std::ostringstream msg;
+      msg << "degenerate triangle " << t << " " << triple(m_mesh.triangles[t]) << ": area " << area
+          << " is at most 1e-12 x (bounding-box diagonal)^2 = " << threshold;
+      fail(msg.str());
+    }
+  }
+}
+
+void MeshValidator::check_duplicates()
+{
+  std::unordered_map<std::array<int, 3>, int, TripleHash> seen;
+  seen.reserve(m_mesh.triangles.size());
+  for (int t = 0; t < m_mesh.num_triangles(); ++t) {
+    std::array<int, 3> key = m_mesh.triangles[t];
+    std::sort(key.begin(), key.end());
+    const auto [it, inserted] = seen.emplace(key, t);
+    if (!inserted)
+      fail("duplicate triangle: triangles " + std::to_string(it->second) + " and " +
+           std::to_string(t) + " have the same vertices " + triple(key));
+  }
+}
+
+void MeshValidator::build_edges()
+{
+  m_edges.reserve(m_mesh.triangles.size() * 3 / 2 + 1);
+  m_degree.assign(m_mesh.vertices.size(), 0);
+  m_first_triangle.assign(m_mesh.vertices.size(), -1);
+  for (int t = 0; t < m_mesh.num_triangles(); ++t) {
+    const auto &tri = m_mesh.triangles[t];
+    for (int k = 0; k < 3; ++k) {
+      const int a = tri[k], b = tri[(k + 1) % 3];
+      EdgeUse &e = m_edges[edge_key(a, b)];
+      if (e.count < 2) {
+        e.tri[e.count] = t;
+        e.ascending[e.count] = a < b;
+      }
+      ++e.count;
+      if (m_first_triangle[a] < 0)
+        m_first_triangle[a] = t;
+      ++m_degree[a];
+    }
+  }
+}
+
+void MeshValidator::check_non_manifold_edges()
+{
+  for (int t = 0; t < m_mesh.num_triangles(); ++t) {
+    const auto &tri = m_mesh.triangles[t];
+    for (int k = 0; k < 3; ++k) {
+      const int a = std::min(tri[k], tri[(k + 1) % 3]), b = std::max(tri[k], tri[(k + 1) % 3]);
+      const EdgeUse &e = edge(a, b);
+      if (e.count <= 2)
+        continue;
+      std::string users;
+      for (int s = 0; s < m_mesh.num_triangles(); ++s) {
+        const auto &o = m_mesh.triangles[s];
+        if (std::count(o.begin(), o.end(), a) + std::count(o.begin(), o.end(), b) == 2)
+          users += (users.empty() ? "" : ", ") + std::to_string(s);
+      }
+      fail("non-manifold edge " + edge_text(a, b) + " is shared by " + std::to_string(e.count) +
+           " triangles (" + users + ")");
+    }
+  }
+}
+
+void MeshValidator::check_open_edges()
+{
+  for (int t = 0; t < m_mesh.num_triangles(); ++t) {
+    const auto &tri = m_mesh.triangles[t];
+    for (int k = 0; k < 3; ++k) {
+      const int a = std::min(tri[k], tri[(k + 1) % 3]), b = std::max(tri[k], tri[(k + 1) % 3]);
+      if (edge(a, b).count == 1)
+        fail("open surface: edge " + edge_text(a, b) + " belongs to only one triangle (" +
+             std::to_string(t) + ")");
+    }
+  }
+}
+
+void MeshValidator::check_vertex_fans()
+{
+  for (int v = 0; v < m_mesh.num_vertices(); ++v) {
+    if (m_first_triangle[v] < 0)
+      continue;
+    const int size = fan_size(v, m_first_triangle[v]);
+    if (size != m_degree[v])
+      fail("non-manifold vertex " + std::to_string(v) + ": its " + std::to_string(m_degree[v]) +
+           " triangles form more than one fan (the fan through triangle " +
+           std::to_string(m_first_triangle[v]) + " holds " + std::to_string(size) +
+           "), e.g. two surfaces touching at a point");
+  }
+}
+
+/// Number of triangles met walking around v from `start` across the edges at v, back to `start`.
+/// Every edge is shared by exactly two triangles here, so the walk closes.
+int MeshValidator::fan_size(int v, int start) const
+{
+  int t = start;
+  int entry = -1; // the vertex of t on the edge we came in through
+  int size = 0;
+  do {
+    const auto &tri = m_mesh.triangles[t];
+    int exit = -1;
+    for (int w : tri)
+      if (w != v && w != entry && exit < 0)
+        exit = w;
+    t = other_triangle(v, exit, t);
+    entry = exit;
+    ++size;
+  } while (t != start && size <= m_degree[v]);
+  return size;
+}
+
+void MeshValidator::check_orientation()
+{
+  for (int t = 0; t < m_mesh.num_triangles(); ++t) {
+    const auto &tri = m_mesh.triangles[t];
+    for (int k = 0; k < 3; ++k) {
+      const int a = tri[k], b = tri[(k + 1) % 3];
+      const EdgeUse &e = edge(a, b);
+      if (e.ascending[0] == e.ascending[1])
+        fail("inconsistent orientation: triangles " + std::to_string(e.tri[0]) + " and " +
+             std::to_string(e.tri[1]) + " both traverse edge " + edge_text(a, b) +
+             " in the same direction (reorder the vertices of one of them)");
+    }
+  }
+}
+
+void MeshValidator::find_components()
+{
+  std::vector<int> component(m_mesh.triangles.size(), -1);
+  std::vector<int> stack;
+  for (int seed = 0; seed < m_mesh.num_triangles(); ++seed) {
+    if (component[seed] >= 0)
+      continue;
+    const int c = static_cast<int>(m_components.size());
+    m_components.emplace_back();
+    m_component_box.emplace_back();
+    component[seed] = c;
+    stack.assign(1, seed);
+    while (!stack.empty()) {
+      const int t = stack.back();
+      stack.pop_back();
+      m_components[c].push_back(t);
+      const auto &tri = m_mesh.triangles[t];
+      for (int k = 0; k < 3; ++k) {
+        m_component_box[c].add(m_mesh.vertices[tri[k]]);
+        const int s = other_triangle(tri[k], tri[(k + 1) % 3], t);
+        if (component[s] < 0) {
+          component[s] = c;
+          stack.push_back(s);
+        }
+      }
+    }
+    std::sort(m_components[c].begin(), m_components[c].end());
+  }
+}
+
+void MeshValidator::orient_components()
+{
+  for (int c = 0; c < static_cast<int>(m_components.size()); ++c) {
+    const auto &tris = m_components[c];
+    const double diag = m_component_box[c].diagonal();
+    const double volume = signed_volume(c, m_component_box[c].center());
+    const std::string name =
+        "component " + std::to_string(c) + " (" + std::to_string(tris.size()) + " triangles";
+    if (std::abs(volume) <= k_degenerate * diag * diag * diag)
+      fail(name + ", first triangle " + std::to_string(tris.front()) + ") encloses no volume");
+    // A component inside an odd number of others bounds a cavity: its normals point into the
+    // cavity, which is out of the solid, so its signed volume is negative.
+    const bool cavity = nesting_depth(c) % 2 == 1;
+    if ((volume < 0) == cavity)
+      continue;
+    for (int t : tris)
+      std::swap(m_mesh.triangles[t][1], m_mesh.triangles[t][2]);
+    notice(name + (cavity ? ", cavity boundary" : "") + ") was oriented inward; flipped");
+  }
+}
+
+double MeshValidator::signed_volume(int c, const Vec3 &origin) const
+{
+  // Measured from a point near the component so large offsets do not cancel digits.
+  double six_volume = 0.0;
+  for (int t : m_components[c])
+    six_volume += dot(corner(t, 0) - origin, cross(corner(t, 1) - origin, corner(t, 2) - origin));
+  return six_volume / 6.0;
+}
+
+int MeshValidator::nesting_depth(int c) const
+{
+  // Components do not intersect, so any point of c tells whether all of c is inside another.
+  const int t = m_components[c].front();
+  const Vec3 p = (1.0 / 3.0) * (corner(t, 0) + corner(t, 1) + corner(t, 2));
+  int depth = 0;
+  for (int d = 0; d < static_cast<int>(m_components.size()); ++d)
+    if (d != c && m_component_box[d].contains(p) && std::abs(winding_number(p, d)) > 0.5)
+      ++depth;
+  return depth;
+}
+
+double MeshValidator::winding_number(const Vec3 &p, int c) const
+{
+  double total = 0.0;
+  for (int t : m_components[c])
+    total += solid_angle(p, corner(t, 0), corner(t, 1), corner(t, 2));
+  return total / (4.0 * k_pi);
+}
+
+void MeshValidator::report_unused_vertices()
+{
+  const auto unused = std::count(m_first_triangle.begin(), m_first_triangle.end(), -1);
+  if (unused == 0)
+    return;
+  const auto first = std::find(m_first_triangle.begin(), m_first_triangle.end(), -1);
+  notice(std::to_string(unused) + " of " + std::to_string(m_mesh.num_vertices()) +
+         " vertices are used by no triangle (first: vertex " +
+         std::to_string(first - m_first_triangle.begin()) + ")");
+}
+
+} // namespace
+
+void validate_and_orient(SurfaceMesh &mesh, std::vector<std::string> &notices)
+{
+  MeshValidator(mesh, notices).run();
+}
+
+} // namespace hssbem

@@ -1,1 +1,182 @@
-// placeholder: filled in by its module
+#include "hssbem/bem/quadrature.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace hssbem {
+
+namespace {
+
+// Symmetric triangle rules as {l0, l1, l2, weight}, weights summing to 1.
+const double rule3[3][4] = {
+  {2.0 / 3, 1.0 / 6, 1.0 / 6, 1.0 / 3}, {1.0 / 6, 2.0 / 3, 1.0 / 6, 1.0 / 3}, {1.0 / 6, 1.0 / 6, 2.0 / 3, 1.0 / 3}};
+
+// Radon's 7-point rule, exact for polynomials of degree 5.
+constexpr double s15 = 3.872983346207416885; // sqrt(15)
+constexpr double ra = (6.0 - s15) / 21.0, rb = (6.0 + s15) / 21.0;
+constexpr double wa = (155.0 - s15) / 1200.0, wb = (155.0 + s15) / 1200.0;
+const double rule7[7][4] = {
+  {1.0 / 3, 1.0 / 3, 1.0 / 3, 9.0 / 40},
+  {ra, ra, 1 - 2 * ra, wa}, {ra, 1 - 2 * ra, ra, wa}, {1 - 2 * ra, ra, ra, wa},
+  {rb, rb, 1 - 2 * rb, wb}, {rb, 1 - 2 * rb, rb, wb}, {1 - 2 * rb, rb, rb, wb}};
+
+/// Gauss-Legendre nodes and weights on [0, 1] by Newton's method on P_n.
+void gauss_legendre(int n, std::vector<double> &x, std::vector<double> &w)
+{
+  x.resize(n);
+  w.resize(n);
+  for (int i = 0; i < n; ++i) {
+    double z = std::cos(M_PI * (i + 0.75) / (n + 0.5)), dp = 1;
+    for (int it = 0; it < 100; ++it) {
+      double p0 = 1, p1 = z;
+      for (int k = 2; k <= n; ++k) {
+        const double p2 = ((2 * k - 1) * z * p1 - (k - 1) * p0) / k;
+        p0 = p1;
+        p1 = p2;
+      }
+      const double pn = n == 1 ? z : p1, pm = n == 1 ? 1 : p0;
+      dp = n * (z * pn - pm) / (z * z - 1);
+      const double dz = pn / dp;
+      z -= dz;
+      if (std::abs(dz) < 1e-16) break;
+    }
+    x[i] = 0.5 * (1 - z);
+    w[i] = 1.0 / ((1 - z * z) * dp * dp);
+  }
+}
+
+double diameter(const std::array<Vec3, 3> &p)
+{
+  return std::sqrt(std::max({dot(p[1] - p[0], p[1] - p[0]), dot(p[2] - p[1], p[2] - p[1]), dot(p[0] - p[2], p[0] - p[2])}));
+}
+
+double area_of(const std::array<Vec3, 3> &p) { return 0.5 * norm(cross(p[1] - p[0], p[2] - p[0])); }
+
+/// Add wt * Nu[a] * u*(x, y) to G[a] and wt * Np[a] * p*(x, y) to H[a].
+inline void accumulate(const KelvinConstants &k, const Vec3 &x, const Vec3 &y, const Vec3 &n, double wt, const double *Nu,
+                       const double *Np, ElementIntegrals &out)
+{
+  const double d0 = y[0] - x[0], d1 = y[1] - x[1], d2 = y[2] - x[2];
+  const double r2 = d0 * d0 + d1 * d1 + d2 * d2, inv_r = 1.0 / std::sqrt(r2);
+  const double g[3] = {d0 * inv_r, d1 * inv_r, d2 * inv_r};
+  const double drdn = g[0] * n[0] + g[1] * n[1] + g[2] * n[2];
+  const double su = wt * k.cu * inv_r, sp = wt * k.cp * inv_r * inv_r;
+  double U[9], P[9];
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      const double gg = g[i] * g[j], delta = i == j ? 1.0 : 0.0;
+      U[3 * i + j] = su * (k.cu_diag * delta + gg);
+      P[3 * i + j] = sp * (drdn * (k.one_m_2nu * delta + 3 * gg) - k.one_m_2nu * (g[i] * n[j] - g[j] * n[i]));
+    }
+  for (int a = 0; a < 3; ++a)
+    for (int m = 0; m < 9; ++m) {
+      out.G[a][m] += Nu[a] * U[m];
+      out.H[a][m] += Np[a] * P[m];
+    }
+}
+
+} // namespace
+
+KelvinConstants::KelvinConstants(const Material &m)
+{
+  cu = 1.0 / (16.0 * M_PI * m.mu() * (1.0 - m.nu));
+  cu_diag = 3.0 - 4.0 * m.nu;
+  cp = -1.0 / (8.0 * M_PI * (1.0 - m.nu));
+  one_m_2nu = 1.0 - 2.0 * m.nu;
+}
+
+void ElementIntegrals::clear()
+{
+  for (int a = 0; a < 3; ++a) {
+    G[a].fill(0.0);
+    H[a].fill(0.0);
+  }
+}
+
+ElementQuadrature::ElementQuadrature(const Material &material, const QuadratureOptions &options) : m_k(material), m_opt(options)
+{
+  gauss_legendre(m_opt.duffy_order, m_gl_x, m_gl_w);
+}
+
+template <int NQ>
+void ElementQuadrature::apply_rule(const Vec3 &x, const Sub &s, const Vec3 &n, const double (&rule)[NQ][4], ElementIntegrals &out) const
+{
+  const double A = area_of(s.p);
+  for (int q = 0; q < NQ; ++q) {
+    const double *l = rule[q];
+    Vec3 y;
+    double N[3];
+    for (int c = 0; c < 3; ++c) {
+      y[c] = l[0] * s.p[0][c] + l[1] * s.p[1][c] + l[2] * s.p[2][c];
+      N[c] = l[0] * s.b[0][c] + l[1] * s.b[1][c] + l[2] * s.b[2][c];
+    }
+    accumulate(m_k, x, y, n, A * l[3], N, N, out);
+  }
+}
+
+void ElementQuadrature::subdivide(const Vec3 &x, const Sub &s, const Vec3 &n, int depth, ElementIntegrals &out) const
+{
+  const Vec3 centre = (1.0 / 3) * (s.p[0] + s.p[1] + s.p[2]);
+  const double h = diameter(s.p), d = norm(x - centre);
+  if (d >= m_opt.far_ratio * h) return apply_rule(x, s, n, rule3, out);
+  if (d >= m_opt.near_ratio * h || depth >= m_opt.max_depth) return apply_rule(x, s, n, rule7, out);
+  Sub mid;
+  for (int k = 0; k < 3; ++k) {
+    mid.p[k] = 0.5 * (s.p[(k + 1) % 3] + s.p[(k + 2) % 3]);
+    for (int c = 0; c < 3; ++c) mid.b[k][c] = 0.5 * (s.b[(k + 1) % 3][c] + s.b[(k + 2) % 3][c]);
+  }
+  subdivide(x, mid, n, depth + 1, out);
+  for (int k = 0; k < 3; ++k) {
+    Sub child;
+    child.p = {s.p[k], mid.p[(k + 2) % 3], mid.p[(k + 1) % 3]};
+    child.b = {s.b[k], mid.b[(k + 2) % 3], mid.b[(k + 1) % 3]};
+    subdivide(x, child, n, depth + 1, out);
+  }
+}
+
+void ElementQuadrature::regular(const Vec3 &x, const Triangle &tri, ElementIntegrals &out) const
+{
+  Sub s{tri.p, {{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}}};
+  subdivide(x, s, tri.n, 0, out);
+}
+
+void ElementQuadrature::duffy(const Vec3 &x, const std::array<double, 3> &bx, const Sub &s, const Vec3 &n, ElementIntegrals &out) const
+{
+  // s.p[0] is the singular point; y = q0 + ξ(q1 - q0) + ξη(q2 - q1), dA = 2 A ξ dξ dη.
+  const double twoA = 2.0 * area_of(s.p);
+  const int m = m_opt.duffy_order;
+  for (int i = 0; i < m; ++i) {
+    const double xi = m_gl_x[i];
+    for (int j = 0; j < m; ++j) {
+      const double eta = m_gl_x[j], wt = twoA * xi * m_gl_w[i] * m_gl_w[j];
+      Vec3 y;
+      double N[3], Np[3];
+      for (int c = 0; c < 3; ++c) {
+        y[c] = s.p[0][c] + xi * (s.p[1][c] - s.p[0][c]) + xi * eta * (s.p[2][c] - s.p[1][c]);
+        N[c] = s.b[0][c] + xi * (s.b[1][c] - s.b[0][c]) + xi * eta * (s.b[2][c] - s.b[1][c]);
+        Np[c] = N[c] - bx[c];
+      }
+      accumulate(m_k, x, y, n, wt, N, Np, out);
+    }
+  }
+}
+
+void ElementQuadrature::singular(const Vec3 &x, const std::array<double, 3> &bx, const Triangle &tri, ElementIntegrals &out) const
+{
+  const std::array<std::array<double, 3>, 3> id = {{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}};
+  for (int k = 0; k < 3; ++k) {
+    const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
+    if (bx[k] > 1.0 - 1e-14) {
+      // The point is corner k: one sub-triangle, the whole triangle.
+      duffy(x, bx, Sub{{x, tri.p[k1], tri.p[k2]}, {bx, id[k1], id[k2]}}, tri.n, out);
+      return;
+    }
+  }
+  for (int k = 0; k < 3; ++k) {
+    const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
+    if (bx[k] < 1e-14) continue; // the sub-triangle opposite corner k collapses
+    duffy(x, bx, Sub{{x, tri.p[k1], tri.p[k2]}, {bx, id[k1], id[k2]}}, tri.n, out);
+  }
+}
+
+} // namespace hssbem

@@ -1,1 +1,91 @@
-// placeholder: filled in by its module
+/// \file xdmf.cpp
+/// XDMF sidecar text. Only the standard XDMF element and attribute names are used, because
+/// ParaView's readers (Xdmf2 and Xdmf3) silently ignore anything they do not know.
+#include "xdmf.hpp"
+
+#include <sstream>
+
+namespace hssbem::detail {
+
+namespace {
+
+/// XDMF describes element types by a (NumberType, Precision) pair.
+const char *number_type(XdmfNumber n)
+{
+  switch (n) {
+  case XdmfNumber::float64: return R"(NumberType="Float" Precision="8")";
+  case XdmfNumber::int32: return R"(NumberType="Int" Precision="4")";
+  case XdmfNumber::int8: return R"(NumberType="Char" Precision="1")";
+  }
+  return "";
+}
+
+std::string dimensions(const std::vector<std::size_t> &dims)
+{
+  std::ostringstream out;
+  for (std::size_t i = 0; i < dims.size(); ++i)
+    out << (i ? " " : "") << dims[i];
+  return out.str();
+}
+
+void put_data_item(std::ostream &out, const std::string &h5_name, const XdmfDataset &d,
+                   const char *indent)
+{
+  out << indent << R"(<DataItem Format="HDF" Dimensions=")" << dimensions(d.dims) << "\" "
+      << number_type(d.number) << ">" << xml_escape(h5_name) << ":" << xml_escape(d.path)
+      << "</DataItem>\n";
+}
+
+void put_attribute(std::ostream &out, const std::string &h5_name, const XdmfAttribute &a)
+{
+  out << R"(      <Attribute Name=")" << xml_escape(a.name) << R"(" AttributeType=")"
+      << a.attribute_type << R"(" Center=")" << a.center << "\">\n";
+  put_data_item(out, h5_name, a.data, "        ");
+  out << "      </Attribute>\n";
+}
+
+} // namespace
+
+std::string xml_escape(const std::string &text)
+{
+  std::string out;
+  out.reserve(text.size());
+  for (char c : text) {
+    switch (c) {
+    case '&': out += "&amp;"; break;
+    case '<': out += "&lt;"; break;
+    case '>': out += "&gt;"; break;
+    case '"': out += "&quot;"; break;
+    case '\'': out += "&apos;"; break;
+    default: out += c;
+    }
+  }
+  return out;
+}
+
+std::string xdmf_document(const XdmfGrid &grid)
+{
+  const XdmfDataset triangles{"/mesh/triangles", {grid.num_triangles, 3}, XdmfNumber::int32};
+  const XdmfDataset vertices{"/mesh/vertices", {grid.num_vertices, 3}, XdmfNumber::float64};
+  std::ostringstream out;
+  out << "<?xml version=\"1.0\" ?>\n"
+      << "<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n"
+      << "<Xdmf Version=\"3.0\" xmlns:xi=\"http://www.w3.org/2001/XInclude\">\n"
+      << "  <Domain>\n"
+      << "    <Grid Name=\"hssbem\" GridType=\"Uniform\">\n"
+      << R"(      <Topology TopologyType="Triangle" NumberOfElements=")" << grid.num_triangles
+      << "\">\n";
+  put_data_item(out, grid.h5_name, triangles, "        ");
+  out << "      </Topology>\n"
+      << "      <Geometry GeometryType=\"XYZ\">\n";
+  put_data_item(out, grid.h5_name, vertices, "        ");
+  out << "      </Geometry>\n";
+  for (const XdmfAttribute &a : grid.attributes)
+    put_attribute(out, grid.h5_name, a);
+  out << "    </Grid>\n"
+      << "  </Domain>\n"
+      << "</Xdmf>\n";
+  return out.str();
+}
+
+} // namespace hssbem::detail

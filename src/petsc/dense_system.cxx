@@ -1,1 +1,132 @@
-// placeholder: filled in by its module
+#include "hssbem/petsc/dense.h"
+#include "hssbem/petsc/log.h"
+
+#include <algorithm>
+#include <numeric>
+#include <vector>
+
+/* Rows (nodes) of this rank: a contiguous block, 3 dofs per node. */
+static PetscErrorCode OwnedNodes_Private(MPI_Comm comm, PetscInt nnodes, PetscInt *nstart, PetscInt *nlocal)
+{
+  PetscInt n = PETSC_DECIDE, N = nnodes;
+
+  PetscFunctionBegin;
+  PetscCall(PetscSplitOwnership(comm, &n, &N));
+  PetscCallMPI(MPI_Scan(&n, nstart, 1, MPIU_INT, MPI_SUM, comm));
+  *nstart -= n;
+  *nlocal = n;
+  PetscFunctionReturn(0);
+}
+
+/*@C
+  HssbemAssembleDense - Assembles the collocation matrix A and right-hand side b with the operator
+  primitive; each rank fills its own rows (column-major local storage of MATDENSE).
+
+  Level: intermediate
+@*/
+PetscErrorCode HssbemAssembleDense(MPI_Comm comm, const hssbem::BemOperator &op, const hssbem::SystemSelection &sel, Mat *A, Vec *b)
+{
+  const PetscInt nn = op.num_nodes(), N = 3 * nn;
+  PetscInt       nstart, nlocal;
+  PetscScalar   *a, *rhs;
+
+  PetscFunctionBegin;
+  PetscCall(PetscLogEventBegin(BEM_Assembly, 0, 0, 0, 0));
+  PetscCall(OwnedNodes_Private(comm, nn, &nstart, &nlocal));
+  PetscCall(MatCreateDense(comm, 3 * nlocal, 3 * nlocal, N, N, NULL, A));
+  PetscCall(MatSetBlockSize(*A, 3));
+  PetscCall(MatCreateVecs(*A, NULL, b));
+  PetscCall(MatDenseGetArrayWrite(*A, &a));
+  PetscCall(VecGetArrayWrite(*b, &rhs));
+  std::vector<int> J(nn);
+  std::iota(J.begin(), J.end(), 0);
+  const PetscInt      m = 3 * nlocal, chunk = 32;
+  std::vector<double> rows(3 * chunk * (size_t)N);
+  for (PetscInt r0 = 0; r0 < nlocal; r0 += chunk) {
+    std::vector<int> I(std::min(chunk, nlocal - r0));
+    std::iota(I.begin(), I.end(), (int)(nstart + r0));
+    PetscCallCXX(hssbem::fill_system_block(op, sel, I, J, rows.data(), N, rhs + 3 * r0));
+    for (size_t r = 0; r < 3 * I.size(); ++r)
+      for (PetscInt c = 0; c < N; ++c) a[(size_t)c * m + 3 * r0 + r] = rows[r * N + c];
+  }
+  PetscCall(VecRestoreArrayWrite(*b, &rhs));
+  PetscCall(MatDenseRestoreArrayWrite(*A, &a));
+  PetscCall(MatAssemblyBegin(*A, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatAssemblyEnd(*A, MAT_FINAL_ASSEMBLY));
+  PetscCall(PetscLogFlops(0.0));
+  PetscCall(PetscLogEventEnd(BEM_Assembly, 0, 0, 0, 0));
+  PetscFunctionReturn(0);
+}
+
+/* The format the factorization needs: MATDENSE LU works on one rank only, parallel dense LU is
+   ScaLAPACK's, and MUMPS takes AIJ. Krylov methods with point preconditioners keep MATDENSE. */
+static PetscErrorCode FactorMatType_Private(Mat A, MatType *type)
+{
+  char        pctype[64] = "lu", solver[64] = "";
+  PetscBool   set;
+  PetscMPIInt size;
+
+  PetscFunctionBegin;
+  *type = NULL;
+  PetscCallMPI(MPI_Comm_size(PetscObjectComm((PetscObject)A), &size));
+  PetscCall(PetscOptionsGetString(NULL, NULL, "-pc_type", pctype, sizeof(pctype), &set));
+  PetscCall(PetscOptionsGetString(NULL, NULL, "-pc_factor_mat_solver_type", solver, sizeof(solver), &set));
+  const std::string pc(pctype), st(solver);
+  if (pc != "lu" && pc != "cholesky" && pc != "ilu") PetscFunctionReturn(0);
+  if (st == "mumps" || st == "superlu_dist") *type = MATAIJ;
+  else if (st == "scalapack" || (st.empty() && size > 1)) *type = MATSCALAPACK;
+  PetscFunctionReturn(0);
+}
+
+/*@C
+  HssbemSolveDense - Solves A x = b with KSP; defaults are -ksp_type preonly -pc_type lu, and every
+  KSP/PC option applies. A diverged solve is an error.
+
+  Level: intermediate
+@*/
+PetscErrorCode HssbemSolveDense(Mat A, Vec b, Vec x, HssbemSolveInfo *info)
+{
+  KSP       ksp;
+  PC        pc;
+  Mat       F = NULL;
+  MatType   ftype;
+  Vec       r;
+  PetscReal bnorm, rnorm;
+  MatSolverType st = NULL;
+
+  PetscFunctionBegin;
+  PetscCall(PetscLogEventBegin(BEM_Solve, 0, 0, 0, 0));
+  PetscCall(FactorMatType_Private(A, &ftype));
+  if (ftype) PetscCall(MatConvert(A, ftype, MAT_INITIAL_MATRIX, &F));
+  PetscCall(KSPCreate(PetscObjectComm((PetscObject)A), &ksp));
+  PetscCall(KSPSetOperators(ksp, F ? F : A, F ? F : A));
+  PetscCall(KSPSetType(ksp, KSPPREONLY));
+  PetscCall(KSPGetPC(ksp, &pc));
+  PetscCall(PCSetType(pc, PCLU));
+  PetscCall(KSPSetFromOptions(ksp));
+  PetscCall(KSPSolve(ksp, b, x));
+  PetscCall(KSPGetConvergedReason(ksp, &info->reason));
+  PetscCall(KSPGetIterationNumber(ksp, &info->iterations));
+  {
+    KSPType kt;
+    PCType  pt;
+    PetscCall(KSPGetType(ksp, &kt));
+    PetscCall(PCGetType(pc, &pt));
+    info->ksp_type = kt;
+    info->pc_type  = pt;
+  }
+  PetscCall(PCFactorGetMatSolverType(pc, &st));
+  info->solver_type = st ? st : "";
+  PetscCall(VecDuplicate(b, &r));
+  PetscCall(MatMult(A, x, r));
+  PetscCall(VecAYPX(r, -1.0, b));
+  PetscCall(VecNorm(r, NORM_2, &rnorm));
+  PetscCall(VecNorm(b, NORM_2, &bnorm));
+  info->residual = bnorm > 0 ? rnorm / bnorm : rnorm;
+  PetscCall(VecDestroy(&r));
+  PetscCall(KSPDestroy(&ksp));
+  PetscCall(MatDestroy(&F));
+  PetscCall(PetscLogEventEnd(BEM_Solve, 0, 0, 0, 0));
+  PetscCheck(info->reason > 0, PetscObjectComm((PetscObject)A), PETSC_ERR_NOT_CONVERGED, "the linear solve failed: %s after %" PetscInt_FMT " iterations", KSPConvergedReasons[info->reason], info->iterations);
+  PetscFunctionReturn(0);
+}

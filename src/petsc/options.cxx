@@ -1,1 +1,90 @@
-// placeholder: filled in by its module
+#include "hssbem/petsc/options.h"
+
+#include <cstring>
+#include <string>
+
+static PetscErrorCode OptionString_Private(const char *key, const char *text, std::string *value, PetscOptionItems *PetscOptionsObject)
+{
+  char      buf[PETSC_MAX_PATH_LEN];
+  PetscBool set;
+
+  PetscFunctionBegin;
+  PetscCall(PetscStrncpy(buf, value->c_str(), sizeof(buf)));
+  PetscCall(PetscOptionsString(key, text, "", buf, buf, sizeof(buf), &set));
+  if (set) *value = buf;
+  PetscFunctionReturn(0);
+}
+
+/*@C
+  HssbemProcessOptions - Reads the driver's options; with -help, PETSc prints each with its default.
+
+  Options Database Keys:
++ -problem <file.json>        - problem file
+. -mesh <file>                - mesh file (overrides the problem file)
+. -E <real>, -nu <real>       - Young's modulus and Poisson's ratio (override the problem file)
+. -o <file.h5>                - result file (overrides the problem file)
+. -bem_feature_angle <deg>    - dihedral angle above which an edge is sharp (double nodes)
+. -bem_mat_type <dense>       - operator representation
+. -mat_bem_quad_order <n>     - Gauss points per direction on singular triangles
+. -mat_bem_near_ratio <r>     - subdivide triangles closer than r diameters
+. -mat_bem_far_ratio <r>      - 3-point rule beyond r diameters
+- -mat_bem_max_depth <n>      - subdivision levels for nearly singular triangles
+
+  Level: beginner
+@*/
+PetscErrorCode HssbemProcessOptions(MPI_Comm comm, HssbemAppOptions *opts)
+{
+  PetscBool set;
+
+  PetscFunctionBegin;
+  PetscCall(PetscOptionsHasHelp(NULL, &opts->help));
+  PetscOptionsBegin(comm, NULL, "hssbem: 3D linear elastostatics by the boundary element method", "hssbem");
+  PetscCall(OptionString_Private("-problem", "Problem file (JSON)", &opts->problem, PetscOptionsObject));
+  PetscCall(OptionString_Private("-mesh", "Mesh file (.msh, .stl, .off, .obj); overrides the problem file", &opts->mesh, PetscOptionsObject));
+  PetscCall(OptionString_Private("-o", "Result file (.h5); overrides the problem file", &opts->output, PetscOptionsObject));
+  PetscCall(PetscOptionsReal("-E", "Young's modulus; overrides the problem file", "", opts->E, &opts->E, &opts->has_E));
+  PetscCall(PetscOptionsReal("-nu", "Poisson's ratio; overrides the problem file", "", opts->nu, &opts->nu, &opts->has_nu));
+  PetscCall(PetscOptionsReal("-bem_feature_angle", "Dihedral angle (degrees) above which an edge is sharp", "", opts->feature_angle, &opts->feature_angle, NULL));
+  PetscCall(OptionString_Private("-bem_mat_type", "Operator representation: dense", &opts->mat_type, PetscOptionsObject));
+  PetscCall(PetscOptionsInt("-mat_bem_quad_order", "Gauss points per direction on singular triangles", "", opts->quad.duffy_order, &opts->quad.duffy_order, NULL));
+  PetscCall(PetscOptionsReal("-mat_bem_near_ratio", "Subdivide triangles closer than this many diameters", "", opts->quad.near_ratio, &opts->quad.near_ratio, NULL));
+  PetscCall(PetscOptionsReal("-mat_bem_far_ratio", "Use the 3-point rule beyond this many diameters", "", opts->quad.far_ratio, &opts->quad.far_ratio, NULL));
+  PetscCall(PetscOptionsInt("-mat_bem_max_depth", "Subdivision levels for nearly singular triangles", "", opts->quad.max_depth, &opts->quad.max_depth, &set));
+  PetscOptionsEnd();
+  PetscCheck(opts->mat_type == "dense", comm, PETSC_ERR_ARG_UNKNOWN_TYPE, "-bem_mat_type %s is not available; this build knows: dense", opts->mat_type.c_str());
+  PetscCheck(opts->quad.duffy_order >= 2 && opts->quad.duffy_order <= 64, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_bem_quad_order must lie in [2, 64]");
+  PetscCheck(opts->quad.near_ratio > 0 && opts->quad.far_ratio >= opts->quad.near_ratio, comm, PETSC_ERR_ARG_OUTOFRANGE, "need 0 < -mat_bem_near_ratio <= -mat_bem_far_ratio");
+  PetscCheck(opts->quad.max_depth >= 0 && opts->quad.max_depth <= 20, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_bem_max_depth must lie in [0, 20]");
+  PetscCheck(opts->feature_angle > 0 && opts->feature_angle < 180, comm, PETSC_ERR_ARG_OUTOFRANGE, "-bem_feature_angle must lie in (0, 180)");
+  PetscFunctionReturn(0);
+}
+
+/* Options that PETSc reads only at PetscFinalize() or that steer the run itself. */
+static PetscBool IsLateOption_Private(const char *name)
+{
+  static const char *late[] = {"log_view", "options_left", "help", "malloc_dump", "malloc_debug", "memory_view", "log_view_memory", "log_trace", "info", "malloc", "checkstack", "objects_dump", "fp_trap", "options_view", "history"};
+  for (const char *k : late)
+    if (!std::strcmp(name, k)) return PETSC_TRUE;
+  return PETSC_FALSE;
+}
+
+/*@C
+  HssbemCheckUnusedOptions - Errors out naming any option that no object has read (a typo such as
+  -ksp_rtoll would otherwise be ignored).
+
+  Level: developer
+@*/
+PetscErrorCode HssbemCheckUnusedOptions(MPI_Comm comm)
+{
+  PetscInt    n;
+  char      **names, **values;
+  std::string unused;
+
+  PetscFunctionBegin;
+  PetscCall(PetscOptionsLeftGet(NULL, &n, &names, &values));
+  for (PetscInt i = 0; i < n; ++i)
+    if (!IsLateOption_Private(names[i])) unused += std::string(unused.empty() ? "" : ", ") + "-" + names[i];
+  PetscCall(PetscOptionsLeftRestore(NULL, &n, &names, &values));
+  PetscCheck(unused.empty(), comm, PETSC_ERR_ARG_WRONG, "unknown or unused option(s): %s (run with -help to list the options)", unused.c_str());
+  PetscFunctionReturn(0);
+}

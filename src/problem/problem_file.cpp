@@ -1,1 +1,399 @@
-// placeholder: filled in by its module
+/// \file problem_file.cpp
+/// Reading the problem file (JSON with comments) into a ProblemSpec.
+///
+/// Every value is checked where it is read, and every message names the file and the JSON path of
+/// the value at fault (e.g. "boundary[2].where.box"). Row lists may hold 10^5 entries (the bulk
+/// form a contact detector hands over), so rows are converted in tight loops straight into
+/// std::vector<Vec3>; a path string is built only once something is wrong.
+#include "hssbem/problem/problem.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <climits>
+#include <cstdint>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <initializer_list>
+#include <limits>
+#include <set>
+#include <sstream>
+
+namespace hssbem {
+namespace {
+
+using json = nlohmann::json;
+
+/// Where a value sits: the file and the JSON path, for messages.
+struct Where {
+  const std::string &origin;
+  std::string path;
+
+  Where at(const std::string &key) const { return {origin, path.empty() ? key : path + "." + key}; }
+  Where at(std::size_t i) const { return {origin, path + "[" + std::to_string(i) + "]"}; }
+
+  [[noreturn]] void fail(const std::string &what) const
+  {
+    std::string msg = origin.empty() ? std::string() : origin + ": ";
+    throw ProblemError(msg + (path.empty() ? "" : path + ": ") + what);
+  }
+};
+
+std::string join(std::initializer_list<const char *> words)
+{
+  std::string s;
+  for (const char *w : words)
+    s += (s.empty() ? "" : ", ") + std::string(w);
+  return s;
+}
+
+/// Refuses non-objects and keys outside `known`: a misspelt key would otherwise be silently ignored.
+void check_keys(const json &j, const Where &w, std::initializer_list<const char *> known)
+{
+  if (!j.is_object())
+    w.fail(std::string("expected an object, got ") + j.type_name());
+  for (const auto &item : j.items()) {
+    bool ok = false;
+    for (const char *k : known)
+      ok = ok || item.key() == k;
+    if (!ok)
+      w.fail("unknown key '" + item.key() + "' (known: " + join(known) + ")");
+  }
+}
+
+/// A number (or null -> NaN when allowed); false for anything else. nlohmann refuses overflowing
+/// literals, so a stored number is always finite.
+bool try_number(const json &j, bool allow_null, double &out)
+{
+  if (j.is_number()) {
+    out = j.get<double>();
+    return std::isfinite(out);
+  }
+  if (allow_null && j.is_null()) {
+    out = std::numeric_limits<double>::quiet_NaN();
+    return true;
+  }
+  return false;
+}
+
+std::string number_error(const json &j, bool allow_null)
+{
+  if (j.is_number())
+    return "non-finite number";
+  return std::string(allow_null ? "expected a number or null" : "expected a number") + ", got " +
+         j.type_name();
+}
+
+double read_number(const json &j, const Where &w)
+{
+  double x = 0;
+  if (!try_number(j, false, x))
+    w.fail(number_error(j, false));
+  return x;
+}
+
+bool try_vec3(const json &j, bool allow_null, Vec3 &out)
+{
+  return j.is_array() && j.size() == 3 && try_number(j[0], allow_null, out[0]) &&
+         try_number(j[1], allow_null, out[1]) && try_number(j[2], allow_null, out[2]);
+}
+
+/// Says what is wrong with a value try_vec3 refused.
+[[noreturn]] void vec3_fail(const json &j, bool allow_null, const Where &w)
+{
+  if (!j.is_array())
+    w.fail(std::string("expected a 3-vector [x, y, z], got ") + j.type_name());
+  if (j.size() != 3)
+    w.fail("expected 3 components, got " + std::to_string(j.size()));
+  double x = 0;
+  for (std::size_t c = 0; c < 3; ++c)
+    if (!try_number(j[c], allow_null, x))
+      w.at(c).fail(number_error(j[c], allow_null));
+  w.fail("malformed 3-vector");
+}
+
+Vec3 read_vec3(const json &j, const Where &w, bool allow_null = false)
+{
+  Vec3 v{};
+  if (!try_vec3(j, allow_null, v))
+    vec3_fail(j, allow_null, w);
+  return v;
+}
+
+/// A non-empty list of 3-vectors; the hot loop of the bulk form.
+std::vector<Vec3> read_vec3_list(const json &j, const Where &w, bool allow_null)
+{
+  if (!j.is_array() || j.empty())
+    w.fail("expected a non-empty list of 3-vectors [[x, y, z], ...]");
+  std::vector<Vec3> rows(j.size());
+  for (std::size_t i = 0; i < rows.size(); ++i)
+    if (!try_vec3(j[i], allow_null, rows[i]))
+      vec3_fail(j[i], allow_null, w.at(i));
+  return rows;
+}
+
+/// Displacement / traction: one row [x, y, z] for the whole selection or a list of rows.
+std::vector<Vec3> read_rows(const json &j, const Where &w)
+{
+  if (!j.is_array() || j.empty())
+    w.fail("expected [x, y, z] or a list of rows [[x, y, z], ...]");
+  if (j.front().is_array())
+    return read_vec3_list(j, w, true);
+  return {read_vec3(j, w, true)};
+}
+
+/// Pressure: one number, or a list of numbers (null leaves that vertex as it was).
+std::vector<double> read_pressure(const json &j, const Where &w)
+{
+  if (!j.is_array())
+    return {read_number(j, w)};
+  if (j.empty())
+    w.fail("expected a number or a non-empty list of numbers");
+  std::vector<double> p(j.size());
+  for (std::size_t i = 0; i < p.size(); ++i)
+    if (!try_number(j[i], true, p[i]))
+      w.at(i).fail(number_error(j[i], true));
+  return p;
+}
+
+/// A non-negative index that fits an int; anything else is named in the message.
+int read_index(const json &j, const Where &w, const char *what)
+{
+  if (j.is_number_unsigned() && j.get<std::uint64_t>() <= static_cast<std::uint64_t>(INT_MAX))
+    return static_cast<int>(j.get<std::uint64_t>());
+  if (j.is_number_unsigned())
+    w.fail(std::string(what) + " " + j.dump() + " out of range");
+  if (j.is_number_integer())
+    w.fail(std::string(what) + " " + j.dump() + " is negative");
+  w.fail(std::string("expected an integer ") + what + ", got " + j.type_name());
+}
+
+void read_region(const json &j, const Where &w, Selector &s)
+{
+  s.kind = Selector::Kind::Region;
+  if (j.is_string()) {
+    s.region_name = j.get<std::string>();
+    if (s.region_name.empty())
+      w.fail("empty region name");
+    return;
+  }
+  if (!j.is_number_integer())
+    w.fail(std::string("expected a region name or a physical tag, got ") + j.type_name());
+  s.region_tag = read_index(j, w, "region tag");
+  if (s.region_tag == 0)
+    w.fail("region tag 0 is not a Gmsh physical tag (tags start at 1)");
+}
+
+void read_box(const json &j, const Where &w, Selector &s)
+{
+  if (!j.is_array() || j.size() != 2)
+    w.fail("expected [[xlo, ylo, zlo], [xhi, yhi, zhi]]");
+  s.kind = Selector::Kind::Box;
+  s.lo = read_vec3(j[0], w.at(0));
+  s.hi = read_vec3(j[1], w.at(1));
+  for (int c = 0; c < 3; ++c)
+    if (s.lo[c] > s.hi[c])
+      w.fail("lower corner exceeds upper corner in component " + std::to_string(c));
+}
+
+void read_sphere(const json &j, const Where &w, Selector &s)
+{
+  check_keys(j, w, {"center", "radius"});
+  if (!j.contains("center") || !j.contains("radius"))
+    w.fail("expected {\"center\": [x, y, z], \"radius\": r}");
+  s.kind = Selector::Kind::Sphere;
+  s.center = read_vec3(j["center"], w.at("center"));
+  s.radius = read_number(j["radius"], w.at("radius"));
+  if (s.radius < 0)
+    w.at("radius").fail("radius must not be negative");
+}
+
+void read_vertex_list(const json &j, const Where &w, Selector &s)
+{
+  if (!j.is_array() || j.empty())
+    w.fail("expected a non-empty list of vertex indices (0-based)");
+  s.kind = Selector::Kind::Vertices;
+  s.vertices.resize(j.size());
+  for (std::size_t i = 0; i < j.size(); ++i)
+    s.vertices[i] = read_index(j[i], w.at(i), "vertex index");
+}
+
+Selector read_selector(const json &j, const Where &w)
+{
+  Selector s;
+  if (j.is_string() && j.get<std::string>() == "all")
+    return s;
+  if (j.is_string())
+    w.fail("unknown selector '" + j.get<std::string>() + "' (expected \"all\" or an object)");
+  check_keys(j, w, {"region", "box", "sphere", "vertices"});
+  if (j.size() != 1)
+    w.fail("expected exactly one of region, box, sphere, vertices; got " + std::to_string(j.size()));
+  const auto item = j.items().begin();
+  const Where wk = w.at(item.key());
+  if (item.key() == "region")
+    read_region(item.value(), wk, s);
+  else if (item.key() == "box")
+    read_box(item.value(), wk, s);
+  else if (item.key() == "sphere")
+    read_sphere(item.value(), wk, s);
+  else
+    read_vertex_list(item.value(), wk, s);
+  return s;
+}
+
+BoundaryRule read_rule(const json &j, const Where &w)
+{
+  check_keys(j, w, {"where", "displacement", "traction", "pressure"});
+  if (!j.contains("where"))
+    w.fail("missing 'where' (a selector: \"all\", region, box, sphere or vertices)");
+  const int n = int(j.contains("displacement")) + int(j.contains("traction")) + int(j.contains("pressure"));
+  if (n != 1)
+    w.fail(std::string(n == 0 ? "needs" : "has more than") +
+           " one of 'displacement', 'traction', 'pressure' (give exactly one per rule)");
+  BoundaryRule rule;
+  rule.where = read_selector(j["where"], w.at("where"));
+  if (j.contains("pressure")) {
+    rule.kind = BoundaryRule::Kind::Pressure;
+    rule.pressure = read_pressure(j["pressure"], w.at("pressure"));
+    return rule;
+  }
+  const bool disp = j.contains("displacement");
+  rule.kind = disp ? BoundaryRule::Kind::Displacement : BoundaryRule::Kind::Traction;
+  const char *key = disp ? "displacement" : "traction";
+  rule.rows = read_rows(j[key], w.at(key));
+  return rule;
+}
+
+std::optional<double> optional_number(const json &j, const char *key, const Where &w)
+{
+  if (!j.contains(key))
+    return std::nullopt;
+  return read_number(j[key], w.at(key));
+}
+
+/// Keeps the values as given: the driver validates them after command-line overrides.
+void read_material(const json &j, const Where &w, ProblemSpec &spec)
+{
+  check_keys(j, w, {"E", "nu", "lambda", "mu"});
+  spec.E = optional_number(j, "E", w);
+  spec.nu = optional_number(j, "nu", w);
+  spec.lambda = optional_number(j, "lambda", w);
+  spec.mu = optional_number(j, "mu", w);
+  const bool young = spec.E || spec.nu, lame = spec.lambda || spec.mu;
+  if (young && lame)
+    w.fail("give either E and nu or lambda and mu, not both");
+  if (!young && !lame)
+    w.fail("expected {\"E\": .., \"nu\": ..} or {\"lambda\": .., \"mu\": ..}");
+  if (young && !(spec.E && spec.nu))
+    w.fail(spec.E ? "'E' given without 'nu'" : "'nu' given without 'E'");
+  if (lame && !(spec.lambda && spec.mu))
+    w.fail(spec.lambda ? "'lambda' given without 'mu'" : "'mu' given without 'lambda'");
+}
+
+std::string read_string(const json &j, const Where &w)
+{
+  if (!j.is_string() || j.get<std::string>().empty())
+    w.fail(std::string("expected a non-empty string, got ") + (j.is_string() ? "\"\"" : j.type_name()));
+  return j.get<std::string>();
+}
+
+/// Relative mesh paths are meant relative to the problem file, not to the run's cwd.
+std::string resolve_mesh_path(const std::string &mesh, const std::string &origin)
+{
+  const std::filesystem::path p(mesh);
+  if (p.is_absolute())
+    return mesh;
+  return (std::filesystem::path(origin).parent_path() / p).string();
+}
+
+/// nlohmann keeps only the last of duplicate keys, so a second "boundary" would silently drop the
+/// first one's rules: refuse duplicates while parsing.
+json::parser_callback_t duplicate_key_guard(std::vector<std::set<std::string>> &open, const Where &w)
+{
+  return [&open, &w](int, json::parse_event_t event, json &parsed) {
+    if (event == json::parse_event_t::object_start)
+      open.emplace_back();
+    else if (event == json::parse_event_t::object_end)
+      open.pop_back();
+    else if (event == json::parse_event_t::key && !open.back().insert(parsed.get<std::string>()).second)
+      w.fail("duplicate key '" + parsed.get<std::string>() + "'");
+    return true;
+  };
+}
+
+/// nlohmann's message without its "[json.exception.parse_error.101] " tag.
+std::string untagged(const json::exception &e)
+{
+  const std::string what = e.what();
+  const auto tag_end = what.find("] ");
+  return tag_end == std::string::npos ? what : what.substr(tag_end + 2);
+}
+
+json parse_json(const std::string &text, const Where &w)
+{
+  std::vector<std::set<std::string>> open;
+  try {
+    return json::parse(text, duplicate_key_guard(open, w), true, /*ignore_comments=*/true);
+  } catch (const json::parse_error &e) {
+    w.fail("malformed JSON (byte " + std::to_string(e.byte) + "): " + untagged(e));
+  } catch (const json::out_of_range &e) { // 1e999 overflows to infinity
+    w.fail("malformed JSON: " + untagged(e) + " (numbers must be finite)");
+  } catch (const json::exception &e) {
+    w.fail("malformed JSON: " + untagged(e));
+  }
+}
+
+void read_top_level(const json &j, const Where &w, ProblemSpec &spec)
+{
+  check_keys(j, w, {"mesh", "material", "boundary", "interior_points", "output"});
+  if (!j.contains("mesh"))
+    w.fail("missing 'mesh' (path of the surface mesh, relative to the problem file)");
+  if (!j.contains("material"))
+    w.fail("missing 'material' ({\"E\": .., \"nu\": ..} or {\"lambda\": .., \"mu\": ..})");
+  spec.mesh_path = resolve_mesh_path(read_string(j["mesh"], w.at("mesh")), spec.file);
+  read_material(j["material"], w.at("material"), spec);
+  if (j.contains("output"))
+    spec.output = read_string(j["output"], w.at("output"));
+  if (j.contains("interior_points") && !(j["interior_points"].is_array() && j["interior_points"].empty()))
+    spec.interior_points = read_vec3_list(j["interior_points"], w.at("interior_points"), false);
+}
+
+void read_boundary(const json &j, const Where &w, ProblemSpec &spec)
+{
+  if (!j.is_array())
+    w.fail(std::string("expected a list of rules, got ") + j.type_name());
+  spec.rules.reserve(j.size());
+  for (std::size_t i = 0; i < j.size(); ++i)
+    spec.rules.push_back(read_rule(j[i], w.at(i)));
+}
+
+} // namespace
+
+ProblemSpec parse_problem(const std::string &json_text, const std::string &origin)
+{
+  ProblemSpec spec;
+  spec.file = origin;
+  const Where top{spec.file, ""};
+  const json j = parse_json(json_text, top);
+  read_top_level(j, top, spec);
+  if (j.contains("boundary"))
+    read_boundary(j["boundary"], top.at("boundary"), spec);
+  return spec;
+}
+
+ProblemSpec read_problem(const std::string &path)
+{
+  std::ifstream in(path, std::ios::binary);
+  if (!in)
+    throw ProblemError("cannot open problem file '" + path + "'");
+  std::error_code ec; // a directory opens fine and then reads as an empty, "malformed" file
+  if (std::filesystem::is_directory(path, ec))
+    throw ProblemError("cannot open problem file '" + path + "': is a directory");
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad())
+    throw ProblemError("cannot read problem file '" + path + "'");
+  return parse_problem(text.str(), path);
+}
+
+} // namespace hssbem

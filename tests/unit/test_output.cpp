@@ -1,1 +1,514 @@
+/// \file test_output.cpp
+/// Result writer: every dataset and attribute read back through the HDF5 C API, the XDMF
+/// sidecar, atomic replacement and the clean-up after errors.
+#include "hssbem/io/hdf5_output.hpp"
+
 #include <gtest/gtest.h>
+#include <hdf5.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <sys/stat.h>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+using namespace hssbem;
+
+namespace {
+
+/// A distinct value for every (field, row, component), so a transposed or shifted array fails.
+double value(int field, std::size_t row, std::size_t k)
+{
+  return field * 100.0 + static_cast<double>(row) * 10.0 + static_cast<double>(k) + 0.25;
+}
+
+std::vector<Vec3> vectors(int field, std::size_t n)
+{
+  std::vector<Vec3> v(n);
+  for (std::size_t i = 0; i < n; ++i)
+    v[i] = {value(field, i, 0), value(field, i, 1), value(field, i, 2)};
+  return v;
+}
+
+/// A tetrahedron with every field filled.
+ResultData tetrahedron()
+{
+  ResultData d;
+  d.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  d.triangles = {{{0, 2, 1}}, {{0, 1, 3}}, {{0, 3, 2}}, {{1, 2, 3}}};
+  d.triangle_region = {7, 8, 9, 11};
+  d.sharp_vertex = {1, 0, 0, 1};
+  d.displacement = vectors(1, 4);
+  d.traction = vectors(2, 4);
+  d.traction_corner.resize(4);
+  for (std::size_t t = 0; t < 4; ++t)
+    for (std::size_t c = 0; c < 3; ++c)
+      d.traction_corner[t][c] = {value(3, t * 3 + c, 0), value(3, t * 3 + c, 1),
+                                 value(3, t * 3 + c, 2)};
+  d.displacement_prescribed = {{{true, false, true}}, {{false, false, false}},
+                               {{true, true, true}}, {{false, true, false}}};
+  d.reactions = {{"base", {1.5, -2.5, 3.5}}, {"top", {-4.5, 5.5, -6.5}}};
+  d.interior_points = vectors(4, 2);
+  d.interior_displacement = vectors(5, 2);
+  d.attributes_real = {{"E", 210e9}, {"nu", 0.3}};
+  d.attributes_int = {{"iterations", 42}, {"ranks", 4}};
+  d.attributes_str = {{"solver", "gmres"}, {"version", "0.1.0"}};
+  d.timings = {{"assembly", 1.25}, {"solve", 0.5}};
+  return d;
+}
+
+/// Owns an open HDF5 identifier in the reading code.
+struct Id {
+  hid_t id;
+  herr_t (*close)(hid_t);
+  ~Id()
+  {
+    if (id >= 0)
+      close(id);
+  }
+};
+
+/// A dataset read back: shape, stored type and values converted to `T`.
+template <class T> struct Read {
+  std::vector<hsize_t> dims;
+  H5T_class_t type_class = H5T_NO_CLASS;
+  std::size_t type_size = 0;
+  std::vector<T> values;
+};
+
+template <class T> Read<T> read_dataset(hid_t file, const std::string &name, hid_t mem_type)
+{
+  Read<T> r;
+  Id set{H5Dopen2(file, name.c_str(), H5P_DEFAULT), H5Dclose};
+  EXPECT_GE(set.id, 0) << name;
+  if (set.id < 0)
+    return r;
+  Id space{H5Dget_space(set.id), H5Sclose};
+  r.dims.resize(static_cast<std::size_t>(H5Sget_simple_extent_ndims(space.id)));
+  H5Sget_simple_extent_dims(space.id, r.dims.data(), nullptr);
+  Id type{H5Dget_type(set.id), H5Tclose};
+  r.type_class = H5Tget_class(type.id);
+  r.type_size = H5Tget_size(type.id);
+  r.values.resize(static_cast<std::size_t>(H5Sget_simple_extent_npoints(space.id)));
+  EXPECT_GE(H5Dread(set.id, mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, r.values.data()), 0);
+  return r;
+}
+
+bool exists(hid_t file, const std::string &name)
+{
+  return H5Lexists(file, name.c_str(), H5P_DEFAULT) > 0;
+}
+
+template <class T> T read_attribute(hid_t owner, const std::string &name, hid_t mem_type)
+{
+  T v{};
+  Id attr{H5Aopen(owner, name.c_str(), H5P_DEFAULT), H5Aclose};
+  EXPECT_GE(attr.id, 0) << name;
+  if (attr.id >= 0) {
+    EXPECT_GE(H5Aread(attr.id, mem_type, &v), 0) << name;
+  }
+  return v;
+}
+
+std::string read_string_attribute(hid_t owner, const std::string &name)
+{
+  Id attr{H5Aopen(owner, name.c_str(), H5P_DEFAULT), H5Aclose};
+  EXPECT_GE(attr.id, 0) << name;
+  Id type{H5Aget_type(attr.id), H5Tclose};
+  EXPECT_EQ(H5Tget_class(type.id), H5T_STRING);
+  EXPECT_TRUE(H5Tis_variable_str(type.id) > 0);
+  char *text = nullptr;
+  EXPECT_GE(H5Aread(attr.id, type.id, &text), 0);
+  std::string out = text ? text : "";
+  H5free_memory(text);
+  return out;
+}
+
+std::vector<double> flat(const std::vector<Vec3> &v)
+{
+  std::vector<double> out;
+  for (const Vec3 &x : v)
+    out.insert(out.end(), x.begin(), x.end());
+  return out;
+}
+
+std::string slurp(const fs::path &p)
+{
+  std::ifstream in(p);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+std::size_t occurrences(const std::string &text, const std::string &what)
+{
+  std::size_t n = 0;
+  for (std::size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1))
+    ++n;
+  return n;
+}
+
+class OutputTest : public ::testing::Test {
+protected:
+  void SetUp() override
+  {
+    const fs::path base = std::getenv("TMPDIR") ? std::getenv("TMPDIR") : "/tmp";
+    std::string pattern = (base / "hssbem-output-XXXXXX").string();
+    ASSERT_NE(::mkdtemp(pattern.data()), nullptr);
+    dir_ = pattern;
+    h5_ = (dir_ / "out.h5").string();
+    xdmf_ = (dir_ / "out.xdmf").string();
+  }
+  void TearDown() override
+  {
+    ::chmod(dir_.c_str(), 0700);
+    fs::remove_all(dir_);
+  }
+  /// Names in the test directory, sorted, so that leftovers show in a failure message.
+  std::vector<std::string> listing() const
+  {
+    std::vector<std::string> names;
+    for (const auto &entry : fs::directory_iterator(dir_))
+      names.push_back(entry.path().filename().string());
+    std::sort(names.begin(), names.end());
+    return names;
+  }
+  std::string temp_of(const std::string &file) const
+  {
+    return file + ".tmp." + std::to_string(static_cast<long long>(::getpid()));
+  }
+
+  fs::path dir_;
+  std::string h5_, xdmf_;
+};
+
+using Strings = std::vector<std::string>;
+
+TEST_F(OutputTest, MeshDatasetsHaveShapeTypeAndValues)
+{
+  const ResultData d = tetrahedron();
+  write_result(h5_, d);
+  Id file{H5Fopen(h5_.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose};
+  ASSERT_GE(file.id, 0);
+
+  const auto v = read_dataset<double>(file.id, "/mesh/vertices", H5T_NATIVE_DOUBLE);
+  EXPECT_EQ(v.dims, (std::vector<hsize_t>{4, 3}));
+  EXPECT_EQ(v.type_class, H5T_FLOAT);
+  EXPECT_EQ(v.type_size, 8u);
+  EXPECT_EQ(v.values, flat(d.vertices));
+
+  const auto t = read_dataset<int>(file.id, "/mesh/triangles", H5T_NATIVE_INT);
+  EXPECT_EQ(t.dims, (std::vector<hsize_t>{4, 3}));
+  EXPECT_EQ(t.type_class, H5T_INTEGER);
+  EXPECT_EQ(t.type_size, 4u);
+  EXPECT_EQ(t.values, (std::vector<int>{0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3}));
+
+  const auto r = read_dataset<int>(file.id, "/mesh/triangle_region", H5T_NATIVE_INT);
+  EXPECT_EQ(r.dims, (std::vector<hsize_t>{4}));
+  EXPECT_EQ(r.type_size, 4u);
+  EXPECT_EQ(r.values, d.triangle_region);
+
+  const auto s = read_dataset<int>(file.id, "/mesh/sharp_vertex", H5T_NATIVE_INT);
+  EXPECT_EQ(s.dims, (std::vector<hsize_t>{4}));
+  EXPECT_EQ(s.type_class, H5T_INTEGER);
+  EXPECT_EQ(s.type_size, 1u);
+  EXPECT_EQ(s.values, d.sharp_vertex);
+}
+
+TEST_F(OutputTest, FieldAndBoundaryDatasetsHaveShapeTypeAndValues)
+{
+  const ResultData d = tetrahedron();
+  write_result(h5_, d);
+  Id file{H5Fopen(h5_.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose};
+  ASSERT_GE(file.id, 0);
+
+  const auto u = read_dataset<double>(file.id, "/fields/displacement", H5T_NATIVE_DOUBLE);
+  EXPECT_EQ(u.dims, (std::vector<hsize_t>{4, 3}));
+  EXPECT_EQ(u.type_size, 8u);
+  EXPECT_EQ(u.values, flat(d.displacement));
+
+  const auto p = read_dataset<double>(file.id, "/fields/traction", H5T_NATIVE_DOUBLE);
+  EXPECT_EQ(p.dims, (std::vector<hsize_t>{4, 3}));
+  EXPECT_EQ(p.values, flat(d.traction));
+
+  const auto pc = read_dataset<double>(file.id, "/fields/traction_corner", H5T_NATIVE_DOUBLE);
+  EXPECT_EQ(pc.dims, (std::vector<hsize_t>{4, 3, 3}));
+  ASSERT_EQ(pc.values.size(), 36u);
+  for (std::size_t t = 0; t < 4; ++t)
+    for (std::size_t c = 0; c < 3; ++c)
+      for (std::size_t k = 0; k < 3; ++k)
+        EXPECT_EQ(pc.values[(t * 3 + c) * 3 + k], d.traction_corner[t][c][k]) << t << c << k;
+
+  const auto m = read_dataset<int>(file.id, "/bc/displacement_prescribed", H5T_NATIVE_INT);
+  EXPECT_EQ(m.dims, (std::vector<hsize_t>{4, 3}));
+  EXPECT_EQ(m.type_class, H5T_INTEGER);
+  EXPECT_EQ(m.type_size, 1u);
+  EXPECT_EQ(m.values, (std::vector<int>{1, 0, 1, 0, 0, 0, 1, 1, 1, 0, 1, 0}));
+}
+
+TEST_F(OutputTest, ReactionsAndInteriorDatasets)
+{
+  const ResultData d = tetrahedron();
+  write_result(h5_, d);
+  Id file{H5Fopen(h5_.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose};
+  ASSERT_GE(file.id, 0);
+
+  for (const auto &[region, force] : d.reactions) {
+    const auto r = read_dataset<double>(file.id, "/reactions/" + region, H5T_NATIVE_DOUBLE);
+    EXPECT_EQ(r.dims, (std::vector<hsize_t>{3})) << region;
+    EXPECT_EQ(r.type_size, 8u);
+    EXPECT_EQ(r.values, (std::vector<double>(force.begin(), force.end()))) << region;
+  }
+  Id reactions{H5Gopen2(file.id, "/reactions", H5P_DEFAULT), H5Gclose};
+  H5G_info_t info{};
+  ASSERT_GE(H5Gget_info(reactions.id, &info), 0);
+  EXPECT_EQ(info.nlinks, 2u);
+
+  const auto x = read_dataset<double>(file.id, "/interior/points", H5T_NATIVE_DOUBLE);
+  EXPECT_EQ(x.dims, (std::vector<hsize_t>{2, 3}));
+  EXPECT_EQ(x.values, flat(d.interior_points));
+  const auto u = read_dataset<double>(file.id, "/interior/displacement", H5T_NATIVE_DOUBLE);
+  EXPECT_EQ(u.dims, (std::vector<hsize_t>{2, 3}));
+  EXPECT_EQ(u.values, flat(d.interior_displacement));
+}
+
+TEST_F(OutputTest, RootAttributesAndTimings)
+{
+  const ResultData d = tetrahedron();
+  write_result(h5_, d);
+  Id file{H5Fopen(h5_.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose};
+  ASSERT_GE(file.id, 0);
+
+  for (const auto &[name, v] : d.attributes_real)
+    EXPECT_EQ(read_attribute<double>(file.id, name, H5T_NATIVE_DOUBLE), v) << name;
+  for (const auto &[name, v] : d.attributes_int)
+    EXPECT_EQ(read_attribute<long long>(file.id, name, H5T_NATIVE_LLONG), v) << name;
+  for (const auto &[name, v] : d.attributes_str)
+    EXPECT_EQ(read_string_attribute(file.id, name), v) << name;
+  Id iterations{H5Aopen(file.id, "iterations", H5P_DEFAULT), H5Aclose};
+  Id int_type{H5Aget_type(iterations.id), H5Tclose};
+  EXPECT_EQ(H5Tget_size(int_type.id), 8u);
+
+  Id timings{H5Gopen2(file.id, "/timings", H5P_DEFAULT), H5Gclose};
+  ASSERT_GE(timings.id, 0);
+  for (const auto &[phase, seconds] : d.timings)
+    EXPECT_EQ(read_attribute<double>(timings.id, phase, H5T_NATIVE_DOUBLE), seconds) << phase;
+  H5O_info_t info{};
+  ASSERT_GE(H5Oget_info2(timings.id, &info, H5O_INFO_NUM_ATTRS), 0);
+  EXPECT_EQ(info.num_attrs, 2u);
+  ASSERT_GE(H5Oget_info2(file.id, &info, H5O_INFO_NUM_ATTRS), 0);
+  EXPECT_EQ(info.num_attrs, 6u);
+}
+
+TEST_F(OutputTest, EmptyOptionalArraysAreSkipped)
+{
+  ResultData d = tetrahedron();
+  d.traction.clear();
+  d.traction_corner.clear();
+  d.displacement_prescribed.clear();
+  d.interior_points.clear();
+  d.interior_displacement.clear();
+  write_result(h5_, d);
+  Id file{H5Fopen(h5_.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose};
+  ASSERT_GE(file.id, 0);
+  EXPECT_TRUE(exists(file.id, "/fields/displacement"));
+  EXPECT_FALSE(exists(file.id, "/fields/traction"));
+  EXPECT_FALSE(exists(file.id, "/fields/traction_corner"));
+  EXPECT_FALSE(exists(file.id, "/bc/displacement_prescribed"));
+  EXPECT_FALSE(exists(file.id, "/interior"));
+  const std::string xdmf = slurp(xdmf_);
+  EXPECT_EQ(xdmf.find("/fields/traction"), std::string::npos) << xdmf;
+  EXPECT_EQ(xdmf.find("displacement_prescribed"), std::string::npos) << xdmf;
+}
+
+TEST_F(OutputTest, XdmfSidecarPointsIntoTheH5ByBasename)
+{
+  write_result(h5_, tetrahedron());
+  ASSERT_TRUE(fs::exists(xdmf_));
+  const std::string x = slurp(xdmf_);
+  EXPECT_EQ(x.rfind("<?xml", 0), 0u);
+  EXPECT_NE(x.find(R"(<Xdmf Version="3.0")"), std::string::npos);
+  EXPECT_NE(x.find(R"(<Grid Name="hssbem" GridType="Uniform">)"), std::string::npos);
+  EXPECT_NE(x.find(R"(<Topology TopologyType="Triangle" NumberOfElements="4">)"),
+            std::string::npos);
+  EXPECT_NE(x.find(R"(<Geometry GeometryType="XYZ">)"), std::string::npos);
+  for (const char *set : {"/mesh/triangles", "/mesh/vertices", "/fields/displacement",
+                          "/fields/traction", "/bc/displacement_prescribed",
+                          "/mesh/triangle_region"})
+    EXPECT_NE(x.find(std::string(">out.h5:") + set + "</DataItem>"), std::string::npos) << set;
+  EXPECT_EQ(x.find(dir_.string()), std::string::npos) << "reference must be relative";
+  EXPECT_EQ(occurrences(x, R"(Dimensions="4 3")"), 5u) << x;
+  EXPECT_NE(x.find(R"(<Attribute Name="triangle_region" AttributeType="Scalar" Center="Cell">)"),
+            std::string::npos);
+  EXPECT_NE(x.find(R"(<Attribute Name="displacement" AttributeType="Vector" Center="Node">)"),
+            std::string::npos);
+  EXPECT_EQ(occurrences(x, "<Attribute "), occurrences(x, "</Attribute>"));
+  EXPECT_EQ(occurrences(x, "<DataItem "), occurrences(x, "</DataItem>"));
+  EXPECT_NE(x.find("</Xdmf>"), std::string::npos);
+}
+
+TEST_F(OutputTest, XdmfNameReplacesAnyExtension)
+{
+  const std::string bare = (dir_ / "result").string();
+  write_result(bare, tetrahedron());
+  EXPECT_EQ(listing(), (Strings{"result", "result.xdmf"}));
+  EXPECT_NE(slurp(dir_ / "result.xdmf").find(">result:/mesh/vertices<"), std::string::npos);
+}
+
+TEST_F(OutputTest, NoTemporaryFileRemains)
+{
+  write_result(h5_, tetrahedron());
+  EXPECT_EQ(listing(), (Strings{"out.h5", "out.xdmf"}));
+}
+
+TEST_F(OutputTest, OverwritesAnExistingResult)
+{
+  write_result(h5_, tetrahedron());
+  ResultData d = tetrahedron();
+  d.displacement = vectors(9, 4);
+  d.traction.clear();
+  write_result(h5_, d);
+  EXPECT_EQ(listing(), (Strings{"out.h5", "out.xdmf"}));
+  Id file{H5Fopen(h5_.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose};
+  ASSERT_GE(file.id, 0);
+  EXPECT_EQ(read_dataset<double>(file.id, "/fields/displacement", H5T_NATIVE_DOUBLE).values,
+            flat(d.displacement));
+  EXPECT_FALSE(exists(file.id, "/fields/traction"));
+  EXPECT_EQ(slurp(xdmf_).find("/fields/traction"), std::string::npos);
+}
+
+TEST_F(OutputTest, CheckOutputPathAcceptsAWritableDirectory)
+{
+  EXPECT_NO_THROW(check_output_path(h5_));
+  EXPECT_TRUE(listing().empty()) << "the check must not create anything";
+}
+
+TEST_F(OutputTest, CheckOutputPathRejectsAMissingDirectory)
+{
+  const std::string path = (dir_ / "missing" / "out.h5").string();
+  try {
+    check_output_path(path);
+    FAIL() << "no exception";
+  } catch (const OutputError &e) {
+    EXPECT_EQ(std::string(e.what()).rfind("cannot write output '" + path + "': ", 0), 0u)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("does not exist"), std::string::npos) << e.what();
+  }
+}
+
+TEST_F(OutputTest, CheckOutputPathRejectsDirectories)
+{
+  EXPECT_THROW(check_output_path(dir_.string()), OutputError);
+  EXPECT_THROW(check_output_path(dir_.string() + "/"), OutputError);
+  fs::create_directory(dir_ / "out.xdmf");
+  EXPECT_THROW(check_output_path(h5_), OutputError) << "the sidecar's name is a directory";
+  EXPECT_THROW(check_output_path(""), OutputError);
+  EXPECT_THROW(check_output_path(xdmf_), OutputError) << "would collide with its sidecar";
+}
+
+TEST_F(OutputTest, CheckOutputPathRejectsAFileAsParent)
+{
+  std::ofstream(dir_ / "plain") << "x";
+  EXPECT_THROW(check_output_path((dir_ / "plain" / "out.h5").string()), OutputError);
+}
+
+TEST_F(OutputTest, CheckOutputPathRejectsAColonInTheFileName)
+{
+  EXPECT_THROW(check_output_path((dir_ / "run:1.h5").string()), OutputError);
+  fs::create_directory(dir_ / "a:b");
+  EXPECT_NO_THROW(check_output_path((dir_ / "a:b" / "out.h5").string()))
+      << "the sidecar names only the basename, so a colon in the directory is harmless";
+}
+
+TEST_F(OutputTest, WriteIntoAMissingDirectoryThrowsAndLeavesNothing)
+{
+  EXPECT_THROW(write_result((dir_ / "missing" / "out.h5").string(), tetrahedron()), OutputError);
+  EXPECT_TRUE(listing().empty());
+}
+
+TEST_F(OutputTest, WriteIntoAReadOnlyDirectoryThrowsAndLeavesNothing)
+{
+  if (::geteuid() == 0)
+    GTEST_SKIP() << "root can write into a read-only directory";
+  ASSERT_EQ(::chmod(dir_.c_str(), 0500), 0);
+  EXPECT_THROW(write_result(h5_, tetrahedron()), OutputError);
+  ::chmod(dir_.c_str(), 0700);
+  EXPECT_TRUE(listing().empty());
+}
+
+TEST_F(OutputTest, FailedCreateNamesThePathAndKeepsForeignEntries)
+{
+  // A directory on the temporary name makes H5Fcreate fail even for root.
+  fs::create_directory(temp_of(h5_));
+  try {
+    write_result(h5_, tetrahedron());
+    FAIL() << "no exception";
+  } catch (const OutputError &e) {
+    EXPECT_NE(std::string(e.what()).find("'" + h5_ + "'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("H5Fcreate"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(listing(), (Strings{"out.h5.tmp." + std::to_string(::getpid())}));
+}
+
+TEST_F(OutputTest, FailureInsideTheFileRemovesTheTemporaries)
+{
+  ResultData d = tetrahedron();
+  d.attributes_int["nu"] = 3; // clashes with the real attribute "nu"
+  try {
+    write_result(h5_, d);
+    FAIL() << "no exception";
+  } catch (const OutputError &e) {
+    EXPECT_NE(std::string(e.what()).find("'" + h5_ + "'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("attribute 'nu'"), std::string::npos) << e.what();
+  }
+  EXPECT_TRUE(listing().empty());
+}
+
+TEST_F(OutputTest, FailedWriteKeepsThePreviousResult)
+{
+  write_result(h5_, tetrahedron());
+  const std::string before = slurp(h5_);
+  ResultData d = tetrahedron();
+  d.attributes_str["E"] = "clash";
+  EXPECT_THROW(write_result(h5_, d), OutputError);
+  EXPECT_EQ(listing(), (Strings{"out.h5", "out.xdmf"}));
+  EXPECT_EQ(slurp(h5_), before);
+}
+
+TEST_F(OutputTest, InconsistentDataIsRejectedBeforeAnyFileIsCreated)
+{
+  ResultData short_field = tetrahedron();
+  short_field.displacement.pop_back();
+  EXPECT_THROW(write_result(h5_, short_field), OutputError);
+  ResultData bad_index = tetrahedron();
+  bad_index.triangles[2][1] = 4;
+  EXPECT_THROW(write_result(h5_, bad_index), OutputError);
+  ResultData no_regions = tetrahedron();
+  no_regions.triangle_region.clear();
+  EXPECT_THROW(write_result(h5_, no_regions), OutputError);
+  ResultData nested_name = tetrahedron();
+  nested_name.reactions["a/b"] = {0, 0, 0};
+  EXPECT_THROW(write_result(h5_, nested_name), OutputError);
+  EXPECT_THROW(write_result(h5_, ResultData{}), OutputError);
+  EXPECT_TRUE(listing().empty());
+}
+
+TEST_F(OutputTest, RestoresHdf5ErrorPrinting)
+{
+  H5E_auto2_t before = nullptr, after = nullptr;
+  void *data_before = nullptr, *data_after = nullptr;
+  ASSERT_GE(H5Eget_auto2(H5E_DEFAULT, &before, &data_before), 0);
+  ResultData d = tetrahedron();
+  d.attributes_int["nu"] = 3;
+  EXPECT_THROW(write_result(h5_, d), OutputError);
+  ASSERT_GE(H5Eget_auto2(H5E_DEFAULT, &after, &data_after), 0);
+  EXPECT_EQ(before, after);
+  EXPECT_EQ(data_before, data_after);
+}
+
+} // namespace

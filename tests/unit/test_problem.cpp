@@ -1,1 +1,494 @@
+/// \file test_problem.cpp
+/// Problem file parsing, boundary rules, node conditions and material validation.
+#include "hssbem/problem/problem.hpp"
+
 #include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <functional>
+#include <initializer_list>
+#include <string>
+
+using namespace hssbem;
+
+namespace {
+
+const std::string k_head = R"({"mesh": "m.msh", "material": {"E": 1000, "nu": 0.3}, )";
+
+/// A problem whose "boundary" is the given JSON list.
+std::string with_rules(const std::string &rules) { return k_head + "\"boundary\": " + rules + "}"; }
+
+std::vector<BoundaryRule> rules_of(const std::string &rules)
+{
+  return parse_problem(with_rules(rules), "problem.json").rules;
+}
+
+/// Unit cube [0,1]^3, vertex x + 2y + 4z, 12 outward triangles; the bottom face (z = 0) is
+/// physical group 1 "base", the rest 2 "body". Optionally one vertex used by no triangle.
+SurfaceMesh unit_cube(bool with_unused = false)
+{
+  SurfaceMesh m;
+  for (int v = 0; v < 8; ++v)
+    m.vertices.push_back({double(v & 1), double((v >> 1) & 1), double((v >> 2) & 1)});
+  for (int a = 0; a < 3; ++a)
+    for (int side = 0; side < 2; ++side) {
+      // quad (u, v) in axes (a+1, a+2) runs counter-clockwise about +e_a; reverse it at side 0
+      std::array<int, 4> q{};
+      const int uv[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+      for (int k = 0; k < 4; ++k)
+        q[k] = (side << a) | (uv[k][0] << ((a + 1) % 3)) | (uv[k][1] << ((a + 2) % 3));
+      if (side == 0)
+        std::swap(q[1], q[3]);
+      const int tag = (a == 2 && side == 0) ? 1 : 2;
+      m.triangles.push_back({q[0], q[1], q[2]});
+      m.triangles.push_back({q[0], q[2], q[3]});
+      m.triangle_region.insert(m.triangle_region.end(), 2, tag);
+    }
+  m.region_tags = {{"base", 1}, {"body", 2}};
+  if (with_unused)
+    m.vertices.push_back({0.5, 0.5, 0.5});
+  m.source = "cube";
+  return m;
+}
+
+/// Runs f, expects a ProblemError whose message contains every word.
+void expect_error(const std::function<void()> &f, std::initializer_list<const char *> words)
+{
+  try {
+    f();
+    ADD_FAILURE() << "no ProblemError; expected one mentioning " << *words.begin();
+  } catch (const ProblemError &e) {
+    const std::string msg = e.what();
+    for (const char *w : words)
+      EXPECT_NE(msg.find(w), std::string::npos) << "'" << w << "' not in: " << msg;
+  }
+}
+
+void expect_parse_error(const std::string &text, std::initializer_list<const char *> words)
+{
+  expect_error([&] { parse_problem(text, "problem.json"); }, words);
+}
+
+void expect_apply_error(const std::string &rules, std::initializer_list<const char *> words)
+{
+  const SurfaceMesh mesh = unit_cube(true);
+  expect_error([&] { apply_rules(rules_of(rules), mesh, "problem.json"); }, words);
+}
+
+VertexConditions apply_text(const std::string &rules, bool with_unused = false)
+{
+  return apply_rules(rules_of(rules), unit_cube(with_unused), "problem.json");
+}
+
+} // namespace
+
+// ---- parsing ---------------------------------------------------------------------------------
+
+TEST(ProblemFile, TopLevelKeysAndPaths)
+{
+  const std::string text = R"({
+    // comments are allowed
+    "mesh": "sphere.msh", /* block comments too */
+    "material": {"E": 1000.0, "nu": 0.3},
+    "boundary": [],
+    "interior_points": [[0, 0, 0], [0.5, -1, 2e-3]],
+    "output": "out/result.h5"
+  })";
+  const ProblemSpec spec = parse_problem(text, "/data/case/problem.json");
+  EXPECT_EQ(spec.file, "/data/case/problem.json");
+  EXPECT_EQ(spec.mesh_path, "/data/case/sphere.msh");
+  EXPECT_EQ(*spec.E, 1000.0);
+  EXPECT_EQ(*spec.nu, 0.3);
+  EXPECT_FALSE(spec.lambda || spec.mu);
+  ASSERT_EQ(spec.interior_points.size(), 2u);
+  EXPECT_EQ(spec.interior_points[1], (Vec3{0.5, -1, 2e-3}));
+  EXPECT_EQ(spec.output, "out/result.h5");
+  EXPECT_TRUE(spec.rules.empty());
+}
+
+TEST(ProblemFile, MeshPathResolution)
+{
+  const std::string lame = R"(, "material": {"lambda": 5, "mu": 2}})";
+  EXPECT_EQ(parse_problem(R"({"mesh": "m.msh")" + lame, "problem.json").mesh_path, "m.msh");
+  EXPECT_EQ(parse_problem(R"({"mesh": "../m.msh")" + lame, "a/b.json").mesh_path, "a/../m.msh");
+  EXPECT_EQ(parse_problem(R"({"mesh": "/abs/m.msh")" + lame, "a/b.json").mesh_path, "/abs/m.msh");
+  const ProblemSpec spec = parse_problem(R"({"mesh": "m.msh")" + lame, "p.json");
+  EXPECT_EQ(*spec.lambda, 5.0);
+  EXPECT_EQ(*spec.mu, 2.0);
+  EXPECT_FALSE(spec.E || spec.nu);
+  EXPECT_TRUE(spec.output.empty());
+  EXPECT_TRUE(spec.interior_points.empty());
+}
+
+TEST(ProblemFile, Selectors)
+{
+  const auto rules = rules_of(R"([
+    {"where": "all", "traction": [0, 0, 0]},
+    {"where": {"region": "clamp"}, "traction": [0, 0, 0]},
+    {"where": {"region": 7}, "traction": [0, 0, 0]},
+    {"where": {"box": [[-1, -2, 0.9], [1, 2, 3]]}, "traction": [0, 0, 0]},
+    {"where": {"sphere": {"center": [0, 0, 1], "radius": 0.3}}, "traction": [0, 0, 0]},
+    {"where": {"vertices": [0, 5, 9]}, "traction": [0, 0, 0]}
+  ])");
+  ASSERT_EQ(rules.size(), 6u);
+  EXPECT_EQ(rules[0].where.kind, Selector::Kind::All);
+  EXPECT_EQ(rules[1].where.kind, Selector::Kind::Region);
+  EXPECT_EQ(rules[1].where.region_name, "clamp");
+  EXPECT_EQ(rules[2].where.kind, Selector::Kind::Region);
+  EXPECT_TRUE(rules[2].where.region_name.empty());
+  EXPECT_EQ(rules[2].where.region_tag, 7);
+  EXPECT_EQ(rules[3].where.kind, Selector::Kind::Box);
+  EXPECT_EQ(rules[3].where.lo, (Vec3{-1, -2, 0.9}));
+  EXPECT_EQ(rules[3].where.hi, (Vec3{1, 2, 3}));
+  EXPECT_EQ(rules[4].where.kind, Selector::Kind::Sphere);
+  EXPECT_EQ(rules[4].where.center, (Vec3{0, 0, 1}));
+  EXPECT_EQ(rules[4].where.radius, 0.3);
+  EXPECT_EQ(rules[5].where.kind, Selector::Kind::Vertices);
+  EXPECT_EQ(rules[5].where.vertices, (std::vector<int>{0, 5, 9}));
+}
+
+TEST(ProblemFile, ValueForms)
+{
+  const auto rules = rules_of(R"([
+    {"where": "all", "displacement": [0, null, -0.05]},
+    {"where": "all", "traction": [[1, 0, 0], [null, 1, 0], [0, 0, 1]]},
+    {"where": "all", "pressure": 100},
+    {"where": "all", "pressure": [1, null, 3.5]}
+  ])");
+  ASSERT_EQ(rules.size(), 4u);
+  EXPECT_EQ(rules[0].kind, BoundaryRule::Kind::Displacement);
+  ASSERT_EQ(rules[0].rows.size(), 1u);
+  EXPECT_EQ(rules[0].rows[0][0], 0.0);
+  EXPECT_TRUE(std::isnan(rules[0].rows[0][1]));
+  EXPECT_EQ(rules[0].rows[0][2], -0.05);
+  EXPECT_EQ(rules[1].kind, BoundaryRule::Kind::Traction);
+  ASSERT_EQ(rules[1].rows.size(), 3u);
+  EXPECT_TRUE(std::isnan(rules[1].rows[1][0]));
+  EXPECT_EQ(rules[1].rows[2], (Vec3{0, 0, 1}));
+  EXPECT_EQ(rules[2].kind, BoundaryRule::Kind::Pressure);
+  EXPECT_EQ(rules[2].pressure, std::vector<double>{100});
+  ASSERT_EQ(rules[3].pressure.size(), 3u);
+  EXPECT_TRUE(std::isnan(rules[3].pressure[1]));
+  EXPECT_EQ(rules[3].pressure[2], 3.5);
+}
+
+TEST(ProblemFile, ReadFromDisk)
+{
+  const std::string path = testing::TempDir() + "hssbem_test_problem.json";
+  {
+    std::ofstream out(path);
+    out << R"({"mesh": "cube.msh", "material": {"E": 1, "nu": 0}})";
+  }
+  const ProblemSpec spec = read_problem(path);
+  EXPECT_EQ(spec.file, path);
+  EXPECT_EQ(spec.mesh_path, testing::TempDir() + "cube.msh");
+  std::remove(path.c_str());
+  expect_error([&] { read_problem(path); }, {"cannot open problem file", path.c_str()});
+}
+
+// ---- applying rules --------------------------------------------------------------------------
+
+TEST(BoundaryRules, DefaultIsTractionFree)
+{
+  const VertexConditions vc = apply_text("[]");
+  ASSERT_EQ(vc.value.size(), 8u);
+  for (int v = 0; v < 8; ++v) {
+    EXPECT_EQ(vc.displacement_prescribed[v], (std::array<bool, 3>{false, false, false}));
+    EXPECT_EQ(vc.value[v], (Vec3{0, 0, 0}));
+    EXPECT_TRUE(std::isnan(vc.pressure[v]));
+  }
+}
+
+TEST(BoundaryRules, RegionByNameAndTag)
+{
+  const VertexConditions by_name = apply_text(R"([{"where": {"region": "base"}, "displacement": [0, 0, 0]}])");
+  const VertexConditions by_tag = apply_text(R"([{"where": {"region": 1}, "displacement": [0, 0, 0]}])");
+  for (int v = 0; v < 8; ++v) {
+    const bool base = v < 4; // z = 0
+    EXPECT_EQ(by_name.displacement_prescribed[v][2], base) << v;
+    EXPECT_EQ(by_tag.displacement_prescribed[v], by_name.displacement_prescribed[v]) << v;
+  }
+}
+
+TEST(BoundaryRules, BoxAndSphereAreInclusive)
+{
+  // box face at z = 1 and sphere surface through vertex 7 = (1,1,1) both touch vertices exactly
+  const VertexConditions vc = apply_text(R"([
+    {"where": {"box": [[0, 0, 1], [1, 1, 1]]}, "displacement": [1, null, null]},
+    {"where": {"sphere": {"center": [1, 1, 2], "radius": 1}}, "displacement": [null, 2, null]}
+  ])");
+  for (int v = 0; v < 8; ++v) {
+    EXPECT_EQ(vc.displacement_prescribed[v][0], v >= 4) << v;
+    EXPECT_EQ(vc.displacement_prescribed[v][1], v == 7) << v;
+  }
+  EXPECT_EQ(vc.value[7], (Vec3{1, 2, 0}));
+}
+
+TEST(BoundaryRules, GeometricSelectorsSkipUnusedVertices)
+{
+  const VertexConditions vc = apply_text(R"([
+    {"where": {"sphere": {"center": [0.5, 0.5, 0.5], "radius": 10}}, "displacement": [1, 1, 1]}
+  ])", true);
+  ASSERT_EQ(vc.value.size(), 9u);
+  EXPECT_EQ(vc.displacement_prescribed[7][0], true);
+  EXPECT_EQ(vc.displacement_prescribed[8][0], false); // the unused centre vertex
+}
+
+TEST(BoundaryRules, AllRowsFollowMeshOrderIncludingUnused)
+{
+  std::string rows;
+  for (int v = 0; v < 9; ++v)
+    rows += (v ? ", [" : "[") + std::to_string(v) + ", null, " + std::to_string(-v) + "]";
+  const VertexConditions vc = apply_text(R"([{"where": "all", "traction": [)" + rows + "]}]", true);
+  for (int v = 0; v < 9; ++v) {
+    EXPECT_EQ(vc.value[v][0], v);
+    EXPECT_EQ(vc.value[v][1], 0.0); // null: traction-free as before
+    EXPECT_EQ(vc.value[v][2], -v);
+  }
+}
+
+TEST(BoundaryRules, VertexRowsFollowAscendingIndex)
+{
+  const VertexConditions vc = apply_text(R"([
+    {"where": {"vertices": [2, 5, 6]}, "displacement": [[1, 1, 1], [2, 2, 2], [3, 3, 3]]},
+    {"where": {"vertices": [6, 0]}, "traction": [9, null, null]}
+  ])");
+  EXPECT_EQ(vc.value[2], (Vec3{1, 1, 1}));
+  EXPECT_EQ(vc.value[5], (Vec3{2, 2, 2}));
+  EXPECT_EQ(vc.value[6], (Vec3{9, 3, 3}));
+  EXPECT_EQ(vc.value[0], (Vec3{9, 0, 0}));
+  EXPECT_EQ(vc.displacement_prescribed[6], (std::array<bool, 3>{false, true, true}));
+}
+
+TEST(BoundaryRules, LaterRulesWinPerComponentAndNullKeeps)
+{
+  const VertexConditions vc = apply_text(R"([
+    {"where": "all", "displacement": [0, 0, 0]},
+    {"where": {"box": [[0, 0, 1], [1, 1, 1]]}, "traction": [null, 5, null]},
+    {"where": {"vertices": [7]}, "displacement": [null, null, -0.05]}
+  ])");
+  // vertex 0 is not on top: all three displacements from rule 0
+  EXPECT_EQ(vc.displacement_prescribed[0], (std::array<bool, 3>{true, true, true}));
+  // vertex 7: x from rule 0, y from rule 1 (traction), z from rule 2
+  EXPECT_EQ(vc.displacement_prescribed[7], (std::array<bool, 3>{true, false, true}));
+  EXPECT_EQ(vc.value[7], (Vec3{0, 5, -0.05}));
+}
+
+TEST(BoundaryRules, PressureFlagsAndOverride)
+{
+  const VertexConditions vc = apply_text(R"([
+    {"where": "all", "displacement": [1, 1, 1]},
+    {"where": {"region": "body"}, "pressure": 100},
+    {"where": {"vertices": [4]}, "displacement": [null, null, 0]},
+    {"where": {"vertices": [5]}, "displacement": [0, 0, 0]},
+    {"where": {"vertices": [6, 7]}, "pressure": [null, 7]}
+  ])");
+  EXPECT_EQ(vc.from_pressure[4], (std::array<bool, 3>{true, true, false}));
+  EXPECT_EQ(vc.displacement_prescribed[4], (std::array<bool, 3>{false, false, true}));
+  EXPECT_EQ(vc.pressure[4], 100.0);
+  EXPECT_TRUE(std::isnan(vc.pressure[5])); // no component left to pressure
+  EXPECT_EQ(vc.pressure[6], 100.0);        // null in the list: kept
+  EXPECT_EQ(vc.pressure[7], 7.0);
+  EXPECT_EQ(vc.from_pressure[7], (std::array<bool, 3>{true, true, true}));
+}
+
+TEST(BoundaryRules, BulkRowsForHundredThousandVertices)
+{
+  const int nx = 400, ny = 250, n = nx * ny; // flat grid: enough for selection and rows
+  SurfaceMesh mesh;
+  mesh.vertices.reserve(n);
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i)
+      mesh.vertices.push_back({double(i), double(j), 0});
+  for (int j = 0; j + 1 < ny; ++j)
+    for (int i = 0; i + 1 < nx; ++i) {
+      const int a = j * nx + i;
+      mesh.triangles.push_back({a, a + 1, a + nx + 1});
+      mesh.triangles.push_back({a, a + nx + 1, a + nx});
+    }
+  std::string text = k_head + R"("boundary": [{"where": "all", "displacement": [)";
+  text.reserve(text.size() + 40 * std::size_t(n));
+  for (int v = 0; v < n; ++v)
+    text += (v ? ",[" : "[") + std::to_string(v % 7 * 0.001) + (v % 3 ? ",null," : ",0,") +
+            std::to_string(-v) + "]";
+  text += "]}]}";
+  const ProblemSpec spec = parse_problem(text, "bulk.json");
+  ASSERT_EQ(spec.rules.at(0).rows.size(), std::size_t(n));
+  const VertexConditions vc = apply_rules(spec.rules, mesh, spec.file);
+  for (int v : {0, 1, 2, 3, 12345, n - 1}) {
+    EXPECT_EQ(vc.displacement_prescribed[v], (std::array<bool, 3>{true, v % 3 == 0, true})) << v;
+    EXPECT_NEAR(vc.value[v][0], v % 7 * 0.001, 1e-12);
+    EXPECT_EQ(vc.value[v][2], -v);
+  }
+}
+
+// ---- node conditions -------------------------------------------------------------------------
+
+TEST(NodeConditions, PressureIsMinusPTimesGroupNormal)
+{
+  const SurfaceMesh mesh = unit_cube();
+  const Discretization disc(mesh, 30.0);
+  ASSERT_EQ(disc.num_nodes(), 24); // every cube corner has three smooth groups
+  const VertexConditions vc = apply_rules(rules_of(R"([
+    {"where": "all", "pressure": 100},
+    {"where": {"region": "base"}, "displacement": [null, null, 0]}
+  ])"), mesh, "problem.json");
+  const NodeConditions nc = node_conditions(vc, disc);
+  ASSERT_EQ(nc.value.size(), 24u);
+  const Vec3 centre{0.5, 0.5, 0.5};
+  for (int i = 0; i < disc.num_nodes(); ++i) {
+    const DofNode &node = disc.node(i);
+    EXPECT_NEAR(norm(node.normal), 1.0, 1e-12);
+    EXPECT_GT(dot(node.normal, mesh.vertices[node.vertex] - centre), 0); // outward
+    const bool base = node.vertex < 4;
+    EXPECT_EQ(nc.displacement_prescribed[i], (std::array<bool, 3>{false, false, base}));
+    for (int c = 0; c < 3; ++c)
+      EXPECT_NEAR(nc.value[i][c], (base && c == 2) ? 0.0 : -100.0 * node.normal[c], 1e-12);
+  }
+  EXPECT_EQ(nc.num_displacement_prescribed(), 4 * 3); // 4 base vertices x 3 nodes, z only
+}
+
+// ---- errors ----------------------------------------------------------------------------------
+
+TEST(ProblemErrors, Selection)
+{
+  expect_apply_error(R"([{"where": "all", "traction": [0, 0, 0]},
+    {"where": {"box": [[5, 5, 5], [6, 6, 6]]}, "displacement": [0, 0, 0]}])",
+                     {"problem.json: boundary[1]: selects no vertex"});
+  expect_apply_error(R"([{"where": {"region": "base"}, "displacement": [[0,0,0],[0,0,0],[0,0,0]]}])",
+                     {"boundary[0]", "'displacement' has 3 rows but the selection has 4 vertices"});
+  expect_apply_error(R"([{"where": "all", "pressure": [1, 2]}])",
+                     {"boundary[0]", "'pressure' has 2 values but the selection has 9 vertices"});
+  expect_apply_error(R"([{"where": {"vertices": [1200]}, "traction": [0, 0, 0]}])",
+                     {"boundary[0]", "vertex index 1200 out of range (mesh has 9 vertices)"});
+  expect_apply_error(R"([{"where": {"region": "clmap"}, "traction": [0, 0, 0]}])",
+                     {"boundary[0]", "unknown region 'clmap' (known: base, body)"});
+  expect_apply_error(R"([{"where": {"region": 7}, "traction": [0, 0, 0]}])",
+                     {"boundary[0]", "unknown region 7"});
+  expect_apply_error(R"([{"where": {"vertices": [3, 3]}, "traction": [0, 0, 0]}])",
+                     {"boundary[0]", "vertex index 3 listed twice"});
+  expect_apply_error(R"([{"where": {"vertices": [3, 1]}, "traction": [[0, 0, 0], [1, 1, 1]]}])",
+                     {"boundary[0]", "ascending order", "'traction'"});
+}
+
+TEST(ProblemErrors, UnknownKeys)
+{
+  expect_parse_error(k_head + R"("boundry": []})", {"problem.json: ", "unknown key 'boundry'"});
+  expect_parse_error(with_rules(R"([{"where": "all", "displacment": [0, 0, 0]}])"),
+                     {"boundary[0]", "unknown key 'displacment'"});
+  expect_parse_error(with_rules(R"([{"where": {"regoin": "a"}, "traction": [0, 0, 0]}])"),
+                     {"boundary[0].where", "unknown key 'regoin'"});
+  expect_parse_error(with_rules(R"([{"where": {"sphere": {"centre": [0,0,0], "radius": 1}},
+                     "traction": [0, 0, 0]}])"), {"boundary[0].where.sphere", "unknown key 'centre'"});
+  expect_parse_error(R"({"mesh": "m", "material": {"E": 1, "nu": 0.3, "G": 2}})",
+                     {"material", "unknown key 'G'"});
+  expect_parse_error(R"({"mesh": "m", "material": {"E": 1, "nu": 0.3}, "mesh": "n"})",
+                     {"duplicate key 'mesh'"});
+}
+
+TEST(ProblemErrors, RuleShape)
+{
+  expect_parse_error(with_rules(R"([{"where": "all"}])"),
+                     {"boundary[0]", "needs one of 'displacement', 'traction', 'pressure'"});
+  expect_parse_error(with_rules(R"([{"where": "all", "traction": [0,0,0], "pressure": 1}])"),
+                     {"boundary[0]", "more than one of"});
+  expect_parse_error(with_rules(R"([{"traction": [0, 0, 0]}])"), {"boundary[0]", "missing 'where'"});
+  expect_parse_error(with_rules(R"([{"where": "everything", "traction": [0, 0, 0]}])"),
+                     {"boundary[0].where", "unknown selector 'everything'"});
+  expect_parse_error(with_rules(R"([{"where": {"box": [[0,0,0],[1,1,1]], "vertices": [1]},
+                     "traction": [0, 0, 0]}])"), {"boundary[0].where", "exactly one of"});
+}
+
+TEST(ProblemErrors, WrongTypes)
+{
+  expect_parse_error(R"({"mesh": 5, "material": {"E": 1, "nu": 0.3}})", {"mesh", "non-empty string"});
+  expect_parse_error(k_head + R"("boundary": {}})", {"boundary", "list of rules"});
+  expect_parse_error(with_rules(R"([{"where": "all", "displacement": "zero"}])"),
+                     {"boundary[0].displacement", "expected [x, y, z]"});
+  expect_parse_error(with_rules(R"([{"where": "all", "traction": [[0,0,0], [0,"1",0]]}])"),
+                     {"boundary[0].traction[1][1]", "expected a number or null, got string"});
+  expect_parse_error(with_rules(R"([{"where": "all", "traction": [[0,0,0], [0,0]]}])"),
+                     {"boundary[0].traction[1]", "expected 3 components, got 2"});
+  expect_parse_error(with_rules(R"([{"where": "all", "pressure": "high"}])"),
+                     {"boundary[0].pressure", "expected a number"});
+  expect_parse_error(with_rules(R"([{"where": {"vertices": [1.5]}, "traction": [0,0,0]}])"),
+                     {"boundary[0].where.vertices[0]", "expected an integer vertex index"});
+  expect_parse_error(with_rules(R"([{"where": {"vertices": [-2]}, "traction": [0,0,0]}])"),
+                     {"boundary[0].where.vertices[0]", "vertex index -2 is negative"});
+  expect_parse_error(with_rules(R"([{"where": {"box": [[0,0,0]]}, "traction": [0,0,0]}])"),
+                     {"boundary[0].where.box", "expected [[xlo, ylo, zlo], [xhi, yhi, zhi]]"});
+  expect_parse_error(with_rules(R"([{"where": {"box": [[0,0,2],[1,1,1]]}, "traction": [0,0,0]}])"),
+                     {"boundary[0].where.box", "lower corner exceeds upper corner"});
+  expect_parse_error(with_rules(R"([{"where": {"sphere": {"center": [0,0,0], "radius": -1}},
+                     "traction": [0,0,0]}])"), {"sphere.radius", "negative"});
+  expect_parse_error(with_rules(R"([{"where": {"region": true}, "traction": [0,0,0]}])"),
+                     {"boundary[0].where.region", "region name or a physical tag"});
+  expect_parse_error(k_head + R"("interior_points": [0, 0, 0]})",
+                     {"interior_points[0]", "expected a 3-vector"});
+  expect_parse_error(k_head + R"("interior_points": [[0, null, 0]]})",
+                     {"interior_points[0][1]", "expected a number, got null"});
+  expect_parse_error("[1, 2]", {"problem.json: expected an object, got array"});
+}
+
+TEST(ProblemErrors, MissingAndMaterial)
+{
+  expect_parse_error(R"({"material": {"E": 1, "nu": 0.3}})", {"problem.json", "missing 'mesh'"});
+  expect_parse_error(R"({"mesh": "m"})", {"problem.json", "missing 'material'"});
+  expect_parse_error(R"({"mesh": "m", "material": {"E": 1, "nu": 0.3, "mu": 1}})",
+                     {"material", "not both"});
+  expect_parse_error(R"({"mesh": "m", "material": {"E": 1}})", {"material", "'E' given without 'nu'"});
+  expect_parse_error(R"({"mesh": "m", "material": {"mu": 1}})",
+                     {"material", "'mu' given without 'lambda'"});
+  expect_parse_error(R"({"mesh": "m", "material": {}})", {"material", "expected {\"E\""});
+  expect_parse_error(R"({"mesh": "m", "material": {"E": "1", "nu": 0.3}})",
+                     {"material.E", "expected a number, got string"});
+}
+
+TEST(ProblemErrors, MalformedJsonAndNonFinite)
+{
+  expect_parse_error("{\"mesh\": \"m\",\n \"material\": }", {"problem.json", "malformed JSON", "line 2"});
+  expect_parse_error("{\"mesh\": \"m\"", {"malformed JSON", "byte"});
+  expect_parse_error(with_rules(R"([{"where": "all", "pressure": 1e999}])"),
+                     {"problem.json", "malformed JSON", "1e999", "finite"});
+  expect_parse_error(with_rules(R"([{"where": "all", "pressure": NaN}])"), {"malformed JSON"});
+}
+
+// ---- material --------------------------------------------------------------------------------
+
+TEST(Material, YoungValidation)
+{
+  const Material m = Material::from_young(1000, 0.49);
+  EXPECT_EQ(m.E, 1000);
+  EXPECT_EQ(m.nu, 0.49);
+  EXPECT_NO_THROW(Material::from_young(1, -0.99));
+  const auto message = [](double E, double nu) {
+    try {
+      Material::from_young(E, nu);
+    } catch (const std::invalid_argument &e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_EQ(message(1, 0.5),
+            "invalid material: nu = 0.5 must satisfy -1 < nu < 0.5 (nu = 0.5 is incompressible, not supported)");
+  EXPECT_EQ(message(1, -1), "invalid material: nu = -1 must satisfy -1 < nu < 0.5");
+  EXPECT_NE(message(0, 0.3).find("E = 0 must be positive"), std::string::npos);
+  EXPECT_NE(message(-5, 0.3).find("E = -5"), std::string::npos);
+  EXPECT_NE(message(1, NAN).find("nu = nan"), std::string::npos);
+}
+
+TEST(Material, LameRoundTrip)
+{
+  const Material m = Material::from_young(1000, 0.3);
+  const Material back = Material::from_lame(m.lambda(), m.mu());
+  EXPECT_NEAR(back.E, 1000, 1e-9);
+  EXPECT_NEAR(back.nu, 0.3, 1e-14);
+  const Material l = Material::from_lame(0, 2); // lambda = 0: nu = 0, E = 2 mu
+  EXPECT_EQ(l.nu, 0);
+  EXPECT_EQ(l.E, 4);
+  EXPECT_THROW(Material::from_lame(1, 0), std::invalid_argument);
+  EXPECT_THROW(Material::from_lame(-1, 1), std::invalid_argument); // nu = -1
+  EXPECT_THROW(Material::from_lame(1e20, 1), std::invalid_argument); // nu rounds to 0.5
+}

@@ -7,6 +7,7 @@
 #include <map>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace hssbem {
@@ -44,5 +45,49 @@ SurfaceMesh read_mesh(const std::string &path);
 /// and a notice is appended to `notices`. Vertices used by no triangle are allowed and reported.
 /// Throws MeshError naming the edge, vertex or triangle at fault.
 void validate_and_orient(SurfaceMesh &mesh, std::vector<std::string> &notices);
+
+/// Internals shared by the mesh readers (src/bem/mesh*.cpp); not part of the public interface.
+namespace detail {
+
+/// Whole file as bytes. Throws MeshError "cannot open mesh file '<path>'".
+std::string read_file_bytes(const std::string &path);
+
+/// Walks a text buffer line by line, splitting each line into whitespace-separated tokens, and
+/// turns parse failures into MeshError "<path>:<line>: <what>".
+class LineReader {
+public:
+  /// `comment` starts a comment running to the end of the line ('\0': no comments).
+  LineReader(const std::string &text, const std::string &path, char comment = '\0');
+  /// Advance to the next line; false at the end of the text (tokens() is then empty).
+  bool next();
+  /// Advance to the next line that has tokens; false at the end of the text.
+  bool next_nonblank();
+  const std::vector<std::string_view> &tokens() const { return m_tokens; }
+  std::string_view token(std::size_t i) const;   ///< fails when the line is shorter
+  std::string_view line() const { return m_line; } ///< current line without its comment
+  int line_number() const { return m_line_number; }
+  const std::string &path() const { return m_path; }
+  double real(std::size_t i) const;               ///< token i as a floating-point number
+  long long integer(std::size_t i) const;          ///< token i as an integer
+  /// Fail unless the line has between `lo` and `hi` tokens; `what` names the record.
+  void expect_tokens(std::size_t lo, std::size_t hi, const char *what) const;
+  [[noreturn]] void fail(const std::string &what) const;
+
+private:
+  std::string_view m_text;
+  std::string m_path;
+  char m_comment;
+  std::size_t m_pos = 0;
+  int m_line_number = 0;
+  std::string_view m_line;
+  std::vector<std::string_view> m_tokens;
+};
+
+SurfaceMesh read_msh(const std::string &path);  ///< Gmsh ASCII 2.2 / 4.1
+SurfaceMesh read_stl(const std::string &path);  ///< ASCII or binary STL
+SurfaceMesh read_off(const std::string &path);  ///< OFF (polygons fan-triangulated)
+SurfaceMesh read_obj(const std::string &path);  ///< Wavefront OBJ (v and f records)
+
+} // namespace detail
 
 } // namespace hssbem

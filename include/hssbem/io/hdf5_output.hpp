@@ -37,12 +37,18 @@ struct ResultData {
 };
 
 /// Check that `path` can be written (directory exists and is writable) before any work is done.
-/// Throws OutputError naming the path.
+/// Also refused: a path that is a directory, or whose sidecar name is one; a `.xdmf` path (it
+/// would be its own sidecar); a file name containing ':' (XDMF cannot refer to it).
+/// Throws OutputError "cannot write output '<path>': <reason>".
 void check_output_path(const std::string &path);
 
 /// Write `path` (HDF5) and `path` with extension .xdmf beside it. Both are written under temporary
 /// names and renamed when complete, so a crash never leaves a file that looks complete.
-/// Throws OutputError.
+/// Layout: /mesh/{vertices, triangles, triangle_region, sharp_vertex}, /fields/{displacement,
+/// traction, traction_corner}, /bc/displacement_prescribed, /reactions/<region>,
+/// /interior/{points, displacement}, root attributes, /timings attributes; empty optional
+/// arrays are skipped. Arrays that are not empty must have one entry per vertex (triangle).
+/// Throws OutputError; on error no temporary file is left and an existing result is untouched.
 void write_result(const std::string &path, const ResultData &data);
 
 } // namespace hssbem

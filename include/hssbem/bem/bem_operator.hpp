@@ -1,0 +1,75 @@
+/// \file bem_operator.hpp
+/// The one primitive: blocks H(I, J), G(I, J) and A(I, J) of the collocation system.
+///
+/// Rows are collocation points (one per dof node), columns dof nodes; each node has 3 rows and 3
+/// columns (components). Somigliana's identity at collocation point x_i reads
+///   Σ_j H(i, j) u_j = Σ_j G(i, j) t_j,
+/// with G(i, j) = ∫ u*(x_i, y) N_j(y) dΓ and H(i, j) = ∫ p*(x_i, y) (N_j(y) - w_j(x_i)) dΓ, where
+/// w_j(x_i) interpolates u at x_i. The free term and the principal value never appear: a rigid
+/// translation gives zero traction, so they equal minus the integral of p* over the triangles that
+/// do not contain x_i. That sum, D_i = -Σ_{e ∌ x_i} ∫_e p*, is the "rigid-body term" of row i.
+#pragma once
+
+#include "hssbem/bem/discretization.hpp"
+#include "hssbem/bem/kelvin.hpp"
+#include "hssbem/bem/quadrature.hpp"
+
+#include <vector>
+
+namespace hssbem {
+
+class BemOperator {
+public:
+  BemOperator(const Discretization &disc, const Material &material, const QuadratureOptions &options = {});
+  BemOperator(const BemOperator &) = delete;
+  BemOperator &operator=(const BemOperator &) = delete;
+
+  const Discretization &discretization() const { return *m_disc; }
+  const Material &material() const { return m_material; }
+  int num_nodes() const { return m_disc->num_nodes(); }
+
+  /// Rigid-body terms of the given rows by direct summation over all triangles (O(rows · nt)).
+  void compute_rigid_body_terms(const std::vector<int> &rows);
+  /// Install rigid-body terms computed elsewhere (e.g. by a fast matvec), one per node.
+  void set_rigid_body_terms(std::vector<Mat3> terms);
+  bool has_rigid_body_term(int row) const;
+  const Mat3 &rigid_body_term(int row) const { return m_rigid[row]; }
+
+  /// H(I, J) and G(I, J), row-major with leading dimension ld (>= 3|J|); either may be null.
+  /// Rows of I need their rigid-body terms (compute_rigid_body_terms) unless J holds every node,
+  /// in which case they are summed on the way. Not thread-safe (uses scratch space).
+  void fill_hg(const std::vector<int> &I, const std::vector<int> &J, double *H, double *G, long ld) const;
+
+  /// Integrals of triangle t for a collocation point (or an interior point when `row` < 0).
+  void element_integrals(const Vec3 &x, int row, int t, ElementIntegrals &out) const;
+  const Triangle &triangle(int t) const { return m_tri[t]; }
+
+private:
+  bool contains(int row, int t) const;
+  void elements_touching(const std::vector<int> &J, std::vector<int> &elems) const;
+  void add_rigid_body(int row, const Mat3 &D, const std::vector<int> &J, double *Hrow, long ld) const;
+
+  const Discretization *m_disc;
+  Material m_material;
+  ElementQuadrature m_quad;
+  std::vector<Triangle> m_tri;
+  std::vector<Mat3> m_rigid;
+  std::vector<char> m_has_rigid;
+  mutable std::vector<int> m_col_pos;   ///< scratch: node -> column position in J, or -1
+  mutable std::vector<char> m_elem_mark; ///< scratch
+};
+
+/// Which unknown each (node, component) carries, and the known values: the selection E_S of
+/// A = K E_S with K = [H, -G].
+struct SystemSelection {
+  std::vector<std::array<bool, 3>> displacement_known; ///< true: u known, t unknown (column -G)
+  std::vector<Vec3> known;                             ///< the known value of each component
+};
+
+/// A(I, J) (row-major, ld) for a selection: column (j, c) is H(:, j c) where u is unknown and
+/// -G(:, j c) where t is unknown. When `rhs` is not null and J holds every node, also
+/// rhs(I) = Σ_known -H u + G t. Rigid-body terms as in fill_hg.
+void fill_system_block(const BemOperator &op, const SystemSelection &sel, const std::vector<int> &I, const std::vector<int> &J,
+                       double *A, long ld, double *rhs);
+
+} // namespace hssbem

@@ -1,0 +1,41 @@
+/// \file post.hpp
+/// From the solution vector to fields per vertex, reactions per region and interior displacements.
+#pragma once
+
+#include "hssbem/bem/bem_operator.hpp"
+
+#include <map>
+#include <string>
+#include <vector>
+
+namespace hssbem {
+
+/// Displacement and traction at every dof node.
+struct NodalSolution {
+  std::vector<Vec3> u, t;
+};
+
+/// Merge the unknowns x (3 per node, node order) with the known values of the selection.
+NodalSolution split_unknowns(const SystemSelection &sel, const std::vector<double> &x);
+
+/// Per mesh vertex: the mean over the vertex's dof nodes (NaN for a vertex used by no triangle).
+std::vector<Vec3> vertex_average(const Discretization &disc, const std::vector<Vec3> &nodal);
+
+/// Traction of triangle t at its corner c (double nodes make it jump across sharp features).
+std::vector<std::array<Vec3, 3>> corner_values(const Discretization &disc, const std::vector<Vec3> &nodal);
+
+/// Integral of the traction over each region (keyed by region name, or tag when unnamed) and over
+/// the whole surface ("total").
+std::map<std::string, Vec3> reactions(const Discretization &disc, const std::vector<Vec3> &t);
+
+/// Lumped area of each dof node (integral of its shape function).
+std::vector<double> node_areas(const Discretization &disc);
+
+/// Somigliana's identity at interior points: u(x) = ∫ u* t - ∫ p* u.
+std::vector<Vec3> interior_displacement(const BemOperator &op, const NodalSolution &s, const std::vector<Vec3> &points);
+
+/// Free term c(x) = -∫ p* over the surface: the identity inside the body, zero outside. Used to
+/// refuse interior points that lie outside (or too close to the surface to be integrated).
+double inside_indicator(const BemOperator &op, const Vec3 &x);
+
+} // namespace hssbem

@@ -1,0 +1,73 @@
+/// \file quadrature.hpp
+/// Integrals of Kelvin's kernels times P1 shape functions over one flat triangle.
+///
+/// Three regimes, chosen per (collocation point, triangle):
+/// - the point lies on the triangle: Duffy transformation on sub-triangles with apex at the point
+///   (the 1/r of u*, and p* times (N_a - w_a), become smooth);
+/// - the point is near (distance / diameter below `near_ratio`): the triangle is split in four,
+///   recursively, up to `max_depth` levels;
+/// - otherwise a symmetric rule: 7 points (degree 5), or 3 points (degree 2) beyond `far_ratio`.
+#pragma once
+
+#include "hssbem/bem/geometry.hpp"
+#include "hssbem/bem/kelvin.hpp"
+
+#include <array>
+#include <vector>
+
+namespace hssbem {
+
+/// Quadrature settings (options -mat_bem_*).
+struct QuadratureOptions {
+  int duffy_order = 8;      ///< Gauss-Legendre points per direction on singular triangles
+  double near_ratio = 3.0;  ///< subdivide while distance/diameter is below this
+  double far_ratio = 20.0;  ///< 3-point rule beyond this distance/diameter
+  int max_depth = 10;       ///< subdivision levels for nearly singular triangles
+};
+
+/// Kernel constants of one material.
+struct KelvinConstants {
+  double cu, cu_diag; ///< u* = cu/r [cu_diag δ + r_i r_j]
+  double cp, one_m_2nu; ///< p* = cp/r² [...]
+  explicit KelvinConstants(const Material &m);
+};
+
+/// A flat triangle: corners, unit normal, area.
+struct Triangle {
+  std::array<Vec3, 3> p;
+  Vec3 n;
+  double area;
+};
+
+/// Integrals of one triangle for one collocation point: for each corner a, the 3x3 matrices
+/// G[a] = ∫ u* N_a and H[a] = ∫ p* (N_a - w_a) (row-major, row = load direction).
+struct ElementIntegrals {
+  std::array<Mat3, 3> G, H;
+  void clear();
+};
+
+class ElementQuadrature {
+public:
+  ElementQuadrature(const Material &material, const QuadratureOptions &options);
+
+  /// Integrals over `tri` for a point x not on it. w_a = 0.
+  void regular(const Vec3 &x, const Triangle &tri, ElementIntegrals &out) const;
+  /// Integrals over `tri` for a point x on it with barycentric coordinates `bx`; the p* part is
+  /// integrated against N_a - bx[a] (the rigid-body subtraction keeps it weakly singular).
+  void singular(const Vec3 &x, const std::array<double, 3> &bx, const Triangle &tri, ElementIntegrals &out) const;
+
+  const QuadratureOptions &options() const { return m_opt; }
+
+private:
+  struct Sub { std::array<Vec3, 3> p; std::array<std::array<double, 3>, 3> b; };
+  void subdivide(const Vec3 &x, const Sub &s, const Vec3 &n, int depth, ElementIntegrals &out) const;
+  template <int NQ>
+  void apply_rule(const Vec3 &x, const Sub &s, const Vec3 &n, const double (&rule)[NQ][4], ElementIntegrals &out) const;
+  void duffy(const Vec3 &x, const std::array<double, 3> &bx, const Sub &s, const Vec3 &n, ElementIntegrals &out) const;
+
+  KelvinConstants m_k;
+  QuadratureOptions m_opt;
+  std::vector<double> m_gl_x, m_gl_w; ///< Gauss-Legendre on [0, 1]
+};
+
+} // namespace hssbem

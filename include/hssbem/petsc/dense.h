@@ -1,0 +1,21 @@
+/* The dense path: the collocation matrix assembled into a distributed PETSc dense matrix and
+   solved with KSP (LU on one rank; ScaLAPACK or MUMPS on more; any Krylov method). */
+#pragma once
+
+#include "hssbem/bem/bem_operator.hpp"
+
+#include <petscksp.h>
+
+/* Outcome of a solve, for the result file. */
+struct HssbemSolveInfo {
+  PetscInt           iterations = 0;
+  PetscReal          residual   = 0; /* ||b - A x|| / ||b|| with the assembled A */
+  KSPConvergedReason reason     = KSP_CONVERGED_ITERATING;
+  std::string        ksp_type, pc_type, solver_type;
+};
+
+/* Assemble A and b = -K E_known (rows split by node across the ranks of comm, 3 rows per node). */
+PetscErrorCode HssbemAssembleDense(MPI_Comm comm, const hssbem::BemOperator &op, const hssbem::SystemSelection &sel, Mat *A, Vec *b);
+
+/* Solve A x = b with a KSP configured from the options database (default: preonly + LU). */
+PetscErrorCode HssbemSolveDense(Mat A, Vec b, Vec x, HssbemSolveInfo *info);

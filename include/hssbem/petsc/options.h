@@ -1,0 +1,25 @@
+/* Application options of the hssbem driver, read from the PETSc options database. */
+#pragma once
+
+#include "hssbem/bem/quadrature.hpp"
+
+#include <petscsys.h>
+#include <string>
+
+/* Everything the command line can set besides the KSP/PC options; unset optionals mean "take the
+   problem file's value". */
+struct HssbemAppOptions {
+  std::string problem, mesh, output;
+  PetscBool   has_E = PETSC_FALSE, has_nu = PETSC_FALSE;
+  PetscReal   E = 0, nu = 0;
+  PetscReal   feature_angle = 40.0;   /* degrees: dihedral angle above which an edge is sharp */
+  std::string mat_type = "dense";    /* -bem_mat_type */
+  hssbem::QuadratureOptions quad;    /* -mat_bem_* */
+  PetscBool   help = PETSC_FALSE;
+};
+
+/* Read -problem, -mesh, -E, -nu, -o, -bem_feature_angle, -bem_mat_type, -mat_bem_*; -help lists them. */
+PetscErrorCode HssbemProcessOptions(MPI_Comm comm, HssbemAppOptions *opts);
+
+/* Error out (PETSC_ERR_ARG_WRONG) on options nobody used, naming them: typos must not pass silently. */
+PetscErrorCode HssbemCheckUnusedOptions(MPI_Comm comm);

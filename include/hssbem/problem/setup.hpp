@@ -1,0 +1,47 @@
+/// \file setup.hpp
+/// From a problem file (and command-line overrides) to everything the solver needs: validated
+/// mesh, material, dof nodes and the boundary-condition selection, with rigid modes handled.
+#pragma once
+
+#include "hssbem/bem/bem_operator.hpp"
+#include "hssbem/problem/problem.hpp"
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace hssbem {
+
+/// Values given on the command line; they win over the problem file.
+struct ProblemOverrides {
+  std::optional<std::string> mesh, output;
+  std::optional<double> E, nu;
+  double feature_angle_deg = 40.0;
+};
+
+struct ProblemSetup {
+  ProblemSpec spec;
+  std::unique_ptr<SurfaceMesh> mesh;         ///< owned on the heap: disc points into it
+  std::unique_ptr<Discretization> disc;
+  Material material;
+  VertexConditions vertex_bc;
+  SystemSelection selection;
+  /// Pure-traction problems: six displacement components pinned to zero (their tractions become
+  /// unknowns); the rigid motion is removed from the result afterwards.
+  std::vector<std::pair<int, int>> pins;
+  std::vector<std::string> notices;
+  std::string output;
+};
+
+/// Read, validate and prepare. Throws MeshError, ProblemError, ConstraintError or
+/// std::invalid_argument (material), each naming the file and the item at fault.
+ProblemSetup setup_problem(const std::string &problem_file, const ProblemOverrides &overrides);
+
+/// Same, from a parsed specification (tests build one in code).
+ProblemSetup setup_problem(ProblemSpec spec, const ProblemOverrides &overrides);
+
+/// Relative load imbalance above which a pure-traction problem is refused.
+constexpr double max_load_imbalance = 1e-2;
+
+} // namespace hssbem

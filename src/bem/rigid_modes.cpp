@@ -1,0 +1,138 @@
+#include "hssbem/bem/rigid_modes.hpp"
+#include "hssbem/core/lapack.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+namespace hssbem {
+
+namespace lapack {
+int syev(int n, double *a, double *w)
+{
+  int info = 0, lwork = -1;
+  double query = 0;
+  dsyev_("V", "U", &n, a, &n, w, &query, &lwork, &info);
+  lwork = static_cast<int>(query);
+  std::vector<double> work(std::max(1, lwork));
+  dsyev_("V", "U", &n, a, &n, w, work.data(), &lwork, &info);
+  return info;
+}
+int gesv(int n, int nrhs, double *a, double *b)
+{
+  int info = 0;
+  std::vector<int> piv(n);
+  dgesv_(&n, &nrhs, a, &n, piv.data(), b, &n, &info);
+  return info;
+}
+} // namespace lapack
+
+namespace {
+
+struct Frame {
+  Vec3 centre{};
+  double size = 1; ///< body radius, so rotations and translations are measured alike
+};
+
+Frame frame_of(const Discretization &disc)
+{
+  Frame f;
+  for (const auto &n : disc.nodes()) f.centre = f.centre + n.point;
+  f.centre = (1.0 / std::max(1, disc.num_nodes())) * f.centre;
+  double r = 0;
+  for (const auto &n : disc.nodes()) r = std::max(r, norm(n.point - f.centre));
+  f.size = r > 0 ? r : 1;
+  return f;
+}
+
+/// Component c of rigid mode m at x: translations e_m, rotations e_(m-3) × (x - centre) / size.
+double mode(const Frame &f, int m, const Vec3 &x, int c)
+{
+  if (m < 3) return m == c ? 1.0 : 0.0;
+  Vec3 axis{};
+  axis[m - 3] = 1;
+  return cross(axis, (1.0 / f.size) * (x - f.centre))[c];
+}
+
+std::string describe(const double *v)
+{
+  static const char *names[6] = {"translation x", "translation y", "translation z", "rotation about x", "rotation about y", "rotation about z"};
+  std::string s;
+  for (int m = 0; m < 6; ++m)
+    if (std::abs(v[m]) > 0.3) s += (s.empty() ? "" : " + ") + std::string(names[m]);
+  return s;
+}
+
+} // namespace
+
+ConstraintReport analyse_constraints(const Discretization &disc, const std::vector<std::array<bool, 3>> &known)
+{
+  const Frame f = frame_of(disc);
+  double gram[36] = {0}, w[6];
+  for (int i = 0; i < disc.num_nodes(); ++i)
+    for (int c = 0; c < 3; ++c) {
+      if (!known[i][c]) continue;
+      double row[6];
+      for (int m = 0; m < 6; ++m) row[m] = mode(f, m, disc.node(i).point, c);
+      for (int a = 0; a < 6; ++a)
+        for (int b = 0; b < 6; ++b) gram[6 * a + b] += row[a] * row[b];
+    }
+  lapack::syev(6, gram, w);
+  ConstraintReport rep;
+  const double top = std::max(w[5], 1e-300);
+  for (int m = 0; m < 6; ++m) {
+    if (w[m] > 1e-10 * top && w[5] > 0) ++rep.rank;
+    else rep.free_modes.push_back(describe(gram + 6 * m));
+  }
+  return rep;
+}
+
+std::vector<std::pair<int, int>> choose_pins(const Discretization &disc)
+{
+  const Frame f = frame_of(disc);
+  auto farthest = [&](auto &&dist) {
+    int best = 0;
+    for (int i = 1; i < disc.num_nodes(); ++i)
+      if (dist(disc.node(i).point) > dist(disc.node(best).point)) best = i;
+    return best;
+  };
+  const int a = farthest([&](const Vec3 &x) { return norm(x - f.centre); });
+  const Vec3 pa = disc.node(a).point;
+  const int b = farthest([&](const Vec3 &x) { return norm(x - pa); });
+  const Vec3 ab = normalized(disc.node(b).point - pa);
+  const int c = farthest([&](const Vec3 &x) { return norm(cross(ab, x - pa)); });
+  const Vec3 normal = normalized(cross(ab, disc.node(c).point - pa));
+  // b: the two axes least aligned with ab; c: the axis most aligned with the plane normal.
+  int along = 0, across = 0;
+  for (int k = 1; k < 3; ++k) {
+    if (std::abs(ab[k]) > std::abs(ab[along])) along = k;
+    if (std::abs(normal[k]) > std::abs(normal[across])) across = k;
+  }
+  std::vector<std::pair<int, int>> pins = {{a, 0}, {a, 1}, {a, 2}};
+  for (int k = 0; k < 3; ++k)
+    if (k != along) pins.push_back({b, k});
+  pins.push_back({c, across});
+  return pins;
+}
+
+std::array<double, 6> remove_rigid_motion(const Discretization &disc, std::vector<Vec3> &u)
+{
+  const Frame f = frame_of(disc);
+  double normal[36] = {0}, rhs[6] = {0};
+  for (int i = 0; i < disc.num_nodes(); ++i)
+    for (int c = 0; c < 3; ++c) {
+      double row[6];
+      for (int m = 0; m < 6; ++m) row[m] = mode(f, m, disc.node(i).point, c);
+      for (int a = 0; a < 6; ++a) {
+        rhs[a] += row[a] * u[i][c];
+        for (int b = 0; b < 6; ++b) normal[6 * a + b] += row[a] * row[b];
+      }
+    }
+  lapack::gesv(6, 1, normal, rhs);
+  for (int i = 0; i < disc.num_nodes(); ++i)
+    for (int c = 0; c < 3; ++c)
+      for (int m = 0; m < 6; ++m) u[i][c] -= rhs[m] * mode(f, m, disc.node(i).point, c);
+  return {rhs[0], rhs[1], rhs[2], rhs[3] / f.size, rhs[4] / f.size, rhs[5] / f.size};
+}
+
+} // namespace hssbem

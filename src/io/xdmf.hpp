@@ -1,0 +1,43 @@
+/// \file xdmf.hpp
+/// Private to the result writer: the XDMF sidecar text that points ParaView into the HDF5 file.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace hssbem::detail {
+
+/// Element type of an HDF5 dataset, as XDMF names it.
+enum class XdmfNumber { float64, int32, int8 };
+
+/// One HDF5 dataset the sidecar refers to.
+struct XdmfDataset {
+  std::string path;                ///< absolute path inside the HDF5 file, e.g. /mesh/vertices
+  std::vector<std::size_t> dims;   ///< dataset shape, slowest dimension first
+  XdmfNumber number = XdmfNumber::float64;
+};
+
+/// A field shown in ParaView: AttributeType is "Scalar" or "Vector", Center "Node" or "Cell".
+struct XdmfAttribute {
+  std::string name;
+  std::string attribute_type;
+  std::string center;
+  XdmfDataset data;
+};
+
+/// A single triangle mesh with its fields, all stored in one HDF5 file.
+struct XdmfGrid {
+  std::string h5_name;   ///< how the sidecar names the HDF5 file: its basename, so the pair can move
+  std::size_t num_vertices = 0;
+  std::size_t num_triangles = 0;
+  std::vector<XdmfAttribute> attributes;
+};
+
+/// The XDMF 3 document for `grid`: one Uniform grid, Triangle topology, XYZ geometry.
+std::string xdmf_document(const XdmfGrid &grid);
+
+/// `text` with the five XML special characters replaced by entities.
+std::string xml_escape(const std::string &text);
+
+} // namespace hssbem::detail

@@ -1,0 +1,180 @@
+#include "hssbem/petsc/run.h"
+#include "hssbem/bem/post.hpp"
+#include "hssbem/bem/rigid_modes.hpp"
+#include "hssbem/io/hdf5_output.hpp"
+#include "hssbem/petsc/dense.h"
+#include "hssbem/petsc/log.h"
+#include "hssbem/petsc/options.h"
+
+#include <petsctime.h>
+
+#include <map>
+#include <string>
+
+namespace {
+
+/* Wall-clock seconds per phase, for the result file. */
+struct PhaseTimer {
+  std::map<std::string, double> seconds;
+  PetscLogDouble start = 0;
+  void begin() { PetscTime(&start); }
+  void end(const std::string &name)
+  {
+    PetscLogDouble now;
+    PetscTime(&now);
+    seconds[name] += now - start;
+  }
+};
+
+hssbem::ProblemSetup SetUp(MPI_Comm comm, const std::string &file, const hssbem::ProblemOverrides &ov)
+{
+  PetscCallAbort(comm, PetscLogEventBegin(BEM_Mesh, 0, 0, 0, 0));
+  try {
+    hssbem::ProblemSetup s = hssbem::setup_problem(file, ov);
+    if (!s.output.empty()) hssbem::check_output_path(s.output);
+    PetscCallAbort(comm, PetscLogEventEnd(BEM_Mesh, 0, 0, 0, 0));
+    return s;
+  } catch (...) {
+    PetscCallAbort(comm, PetscLogEventEnd(BEM_Mesh, 0, 0, 0, 0));
+    throw;
+  }
+}
+
+void CheckInteriorPoints(const hssbem::BemOperator &op, const hssbem::ProblemSpec &spec)
+{
+  for (std::size_t p = 0; p < spec.interior_points.size(); ++p) {
+    const double c = hssbem::inside_indicator(op, spec.interior_points[p]);
+    if (std::abs(c - 1.0) > 0.05) {
+      const auto &x = spec.interior_points[p];
+      throw hssbem::ProblemError(spec.file + ": interior_points[" + std::to_string(p) + "] = (" + std::to_string(x[0]) + ", " + std::to_string(x[1]) + ", " + std::to_string(x[2]) +
+                                 ") is not inside the body (or too close to its surface)");
+    }
+  }
+}
+
+/* The whole solution vector on rank 0 (empty elsewhere). */
+PetscErrorCode GatherToZero(Vec x, std::vector<double> *out)
+{
+  VecScatter         sc;
+  Vec                x0;
+  PetscInt           n;
+  const PetscScalar *a;
+
+  PetscFunctionBegin;
+  PetscCall(VecScatterCreateToZero(x, &sc, &x0));
+  PetscCall(VecScatterBegin(sc, x, x0, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecScatterEnd(sc, x, x0, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecGetLocalSize(x0, &n));
+  PetscCall(VecGetArrayRead(x0, &a));
+  out->assign(a, a + n);
+  PetscCall(VecRestoreArrayRead(x0, &a));
+  PetscCall(VecScatterDestroy(&sc));
+  PetscCall(VecDestroy(&x0));
+  PetscFunctionReturn(0);
+}
+
+void FillResult(const hssbem::ProblemSetup &s, const hssbem::BemOperator &op, const std::vector<double> &x, hssbem::ResultData &r)
+{
+  using namespace hssbem;
+  const Discretization &disc = *s.disc;
+  NodalSolution sol = split_unknowns(s.selection, x);
+  if (!s.pins.empty()) remove_rigid_motion(disc, sol.u);
+  r.vertices = s.mesh->vertices;
+  r.triangles = s.mesh->triangles;
+  r.triangle_region = s.mesh->triangle_region;
+  r.displacement = vertex_average(disc, sol.u);
+  r.traction = vertex_average(disc, sol.t);
+  r.traction_corner = corner_values(disc, sol.t);
+  r.displacement_prescribed = s.vertex_bc.displacement_prescribed;
+  r.sharp_vertex.resize(s.mesh->vertices.size());
+  for (int v = 0; v < s.mesh->num_vertices(); ++v) r.sharp_vertex[v] = disc.node_count(v) > 1;
+  r.reactions = reactions(disc, sol.t);
+  r.interior_points = s.spec.interior_points;
+  PetscCallAbort(PETSC_COMM_SELF, PetscLogEventBegin(BEM_Interior, 0, 0, 0, 0));
+  r.interior_displacement = interior_displacement(op, sol, s.spec.interior_points);
+  PetscCallAbort(PETSC_COMM_SELF, PetscLogEventEnd(BEM_Interior, 0, 0, 0, 0));
+}
+
+void Describe(const hssbem::ProblemSetup &s, const HssbemSolveInfo &info, PetscMPIInt size, hssbem::ResultData &r)
+{
+  r.attributes_real = {{"E", s.material.E}, {"nu", s.material.nu}, {"lambda", s.material.lambda()}, {"mu", s.material.mu()},
+                       {"residual", info.residual}, {"feature_angle_deg", s.disc->feature_angle_deg()}};
+  r.attributes_int = {{"iterations", info.iterations}, {"ranks", size}, {"num_dofs", 3 * s.disc->num_nodes()},
+                      {"num_nodes", s.disc->num_nodes()}, {"num_sharp_vertices", s.disc->num_sharp_vertices()},
+                      {"pinned_components", (long long)s.pins.size()}};
+  char petsc_version[128];
+  PetscCallAbort(PETSC_COMM_SELF, PetscGetVersion(petsc_version, sizeof(petsc_version)));
+  r.attributes_str = {{"solver", "dense"}, {"ksp_type", info.ksp_type}, {"pc_type", info.pc_type}, {"mat_solver_type", info.solver_type},
+                      {"converged_reason", KSPConvergedReasons[info.reason]}, {"version", HSSBEM_VERSION}, {"petsc_version", petsc_version},
+                      {"problem_file", s.spec.file}, {"mesh_file", s.spec.mesh_path}};
+}
+
+} // namespace
+
+/*@C
+  HssbemRun - Solves one problem file end to end on comm: set up (mesh, material, boundary
+  conditions), assemble the dense collocation system, solve with KSP, post-process and write.
+
+  Level: beginner
+@*/
+PetscErrorCode HssbemRun(MPI_Comm comm, const std::string &problem_file, const hssbem::ProblemOverrides &overrides, const hssbem::QuadratureOptions &quad)
+{
+  PhaseTimer     timer;
+  PetscMPIInt    rank, size;
+  Mat            A;
+  Vec            b, x;
+  HssbemSolveInfo info;
+
+  PetscFunctionBegin;
+  PetscCallMPI(MPI_Comm_rank(comm, &rank));
+  PetscCallMPI(MPI_Comm_size(comm, &size));
+  timer.begin();
+  hssbem::ProblemSetup s = SetUp(comm, problem_file, overrides);
+  for (const auto &n : s.notices) PetscCall(PetscPrintf(comm, "hssbem: notice: %s\n", n.c_str()));
+  hssbem::BemOperator op(*s.disc, s.material, quad);
+  CheckInteriorPoints(op, s.spec);
+  timer.end("setup");
+  PetscCall(PetscPrintf(comm, "hssbem: %s: %d vertices, %d triangles, %d dof nodes (%d sharp vertices), %d unknowns, %d ranks\n", s.spec.mesh_path.c_str(), s.mesh->num_vertices(),
+                        s.mesh->num_triangles(), s.disc->num_nodes(), s.disc->num_sharp_vertices(), 3 * s.disc->num_nodes(), size));
+  timer.begin();
+  PetscCall(HssbemAssembleDense(comm, op, s.selection, &A, &b));
+  timer.end("assembly");
+  timer.begin();
+  PetscCall(MatCreateVecs(A, &x, NULL));
+  PetscCall(HssbemSolveDense(A, b, x, &info));
+  timer.end("solve");
+  PetscCall(PetscPrintf(comm, "hssbem: solved with %s/%s%s%s: %" PetscInt_FMT " iterations, relative residual %.3e\n", info.ksp_type.c_str(), info.pc_type.c_str(),
+                        info.solver_type.empty() ? "" : "/", info.solver_type.c_str(), info.iterations, (double)info.residual));
+  PetscCall(HssbemCheckUnusedOptions(comm));
+  std::vector<double> xall;
+  PetscCall(GatherToZero(x, &xall));
+  PetscCall(MatDestroy(&A));
+  PetscCall(VecDestroy(&b));
+  PetscCall(VecDestroy(&x));
+  int failed = 0;
+  std::string message;
+  if (rank == 0) {
+    try {
+      hssbem::ResultData r;
+      timer.begin();
+      PetscCall(PetscLogEventBegin(BEM_Post, 0, 0, 0, 0));
+      FillResult(s, op, xall, r);
+      PetscCall(PetscLogEventEnd(BEM_Post, 0, 0, 0, 0));
+      timer.end("post");
+      Describe(s, info, size, r);
+      r.timings = timer.seconds;
+      if (!s.output.empty()) {
+        PetscCall(PetscLogEventBegin(BEM_Output, 0, 0, 0, 0));
+        hssbem::write_result(s.output, r);
+        PetscCall(PetscLogEventEnd(BEM_Output, 0, 0, 0, 0));
+        PetscCall(PetscPrintf(PETSC_COMM_SELF, "hssbem: wrote %s\n", s.output.c_str()));
+      }
+    } catch (const std::exception &e) {
+      failed = 1;
+      message = e.what();
+    }
+  }
+  PetscCallMPI(MPI_Bcast(&failed, 1, MPI_INT, 0, comm));
+  if (failed) throw std::runtime_error(rank == 0 ? message : std::string("output failed on rank 0"));
+  PetscFunctionReturn(0);
+}

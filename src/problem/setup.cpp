@@ -1,0 +1,86 @@
+#include "hssbem/problem/setup.hpp"
+#include "hssbem/bem/post.hpp"
+#include "hssbem/bem/rigid_modes.hpp"
+
+#include <cstdio>
+
+namespace hssbem {
+
+namespace {
+
+Material material_of(const ProblemSpec &spec, const ProblemOverrides &o)
+{
+  double E = 0, nu = 0;
+  if (spec.lambda && spec.mu) {
+    const Material m = Material::from_lame(*spec.lambda, *spec.mu);
+    E = m.E, nu = m.nu;
+  }
+  if (spec.E) E = *spec.E;
+  if (spec.nu) nu = *spec.nu;
+  if (o.E) E = *o.E;
+  if (o.nu) nu = *o.nu;
+  return Material::from_young(E, nu);
+}
+
+SystemSelection selection_of(const NodeConditions &nc)
+{
+  return SystemSelection{nc.displacement_prescribed, nc.value};
+}
+
+std::string format(const char *fmt, double a, double b)
+{
+  char buf[256];
+  std::snprintf(buf, sizeof(buf), fmt, a, b);
+  return buf;
+}
+
+/// Pure traction: refuse an unbalanced load, otherwise pin six components.
+void pin_rigid_modes(ProblemSetup &s)
+{
+  const auto imbalance = load_imbalance(*s.disc, s.selection.known);
+  if (imbalance[0] > max_load_imbalance || imbalance[1] > max_load_imbalance)
+    throw ConstraintError(s.spec.file + ": no displacement is prescribed anywhere and the load is not balanced " +
+                          format("(resultant force %.2g, moment %.2g of the total load); prescribe displacements to hold the body", imbalance[0], imbalance[1]));
+  s.pins = choose_pins(*s.disc);
+  for (const auto &[node, c] : s.pins) {
+    s.selection.displacement_known[node][c] = true;
+    s.selection.known[node][c] = 0.0;
+  }
+  s.notices.push_back("no displacement is prescribed: pure traction problem; six components pinned, rigid motion removed from the result");
+}
+
+void handle_rigid_modes(ProblemSetup &s)
+{
+  const ConstraintReport rep = analyse_constraints(*s.disc, s.selection.displacement_known);
+  if (rep.rank == 6) return;
+  if (rep.rank == 0) return pin_rigid_modes(s);
+  std::string free;
+  for (const auto &m : rep.free_modes) free += (free.empty() ? "" : "; ") + m;
+  throw ConstraintError(s.spec.file + ": the prescribed displacements leave the body free to move (" + free +
+                        "); prescribe displacements that fix all six rigid motions, or none at all for a balanced pure-traction problem");
+}
+
+} // namespace
+
+ProblemSetup setup_problem(ProblemSpec spec, const ProblemOverrides &o)
+{
+  ProblemSetup s;
+  s.spec = std::move(spec);
+  if (o.mesh) s.spec.mesh_path = *o.mesh;
+  s.output = o.output ? *o.output : s.spec.output;
+  s.material = material_of(s.spec, o);
+  s.mesh = std::make_unique<SurfaceMesh>(read_mesh(s.spec.mesh_path));
+  validate_and_orient(*s.mesh, s.notices);
+  s.disc = std::make_unique<Discretization>(*s.mesh, o.feature_angle_deg);
+  s.vertex_bc = apply_rules(s.spec.rules, *s.mesh, s.spec.file);
+  s.selection = selection_of(node_conditions(s.vertex_bc, *s.disc));
+  handle_rigid_modes(s);
+  return s;
+}
+
+ProblemSetup setup_problem(const std::string &problem_file, const ProblemOverrides &o)
+{
+  return setup_problem(read_problem(problem_file), o);
+}
+
+} // namespace hssbem

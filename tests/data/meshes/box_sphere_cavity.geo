@@ -1,0 +1,10 @@
+SetFactory("OpenCASCADE");
+Box(1) = {0, 0, 0, 2, 2, 2};
+Sphere(2) = {1, 1, 1, 0.5};
+BooleanDifference(3) = { Volume{1}; Delete; }{ Volume{2}; Delete; };
+s() = Boundary{ Volume{3}; };
+Physical Surface("outer", 11) = {s(0), s(1), s(2), s(3), s(4), s(5)};
+Physical Surface("cavity", 12) = {s(6)};
+Physical Volume("solid", 20) = {3};
+Mesh.MeshSizeMin = 0.6;
+Mesh.MeshSizeMax = 0.6;
