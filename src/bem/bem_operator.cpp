@@ -1,6 +1,7 @@
 #include "hssbem/bem/bem_operator.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
@@ -95,6 +96,11 @@ void BemOperator::add_rigid_body(int row, const Mat3 &D, const std::vector<int> 
 
 void BemOperator::fill_hg(const std::vector<int> &I, const std::vector<int> &J, double *H, double *G, long ld) const
 {
+  fill_hg(I, J, H, G, ld, nullptr, 0);
+}
+
+void BemOperator::fill_hg(const std::vector<int> &I, const std::vector<int> &J, double *H, double *G, long ld, double *Gn, long ldn) const
+{
   for (std::size_t p = 0; p < J.size(); ++p) m_col_pos[J[p]] = static_cast<int>(p);
   const bool all = static_cast<int>(J.size()) == num_nodes();
   std::vector<int> elems;
@@ -106,10 +112,11 @@ void BemOperator::fill_hg(const std::vector<int> &I, const std::vector<int> &J, 
       for (int j : J) m_col_pos[j] = -1;
       throw std::logic_error("fill_hg: row " + std::to_string(i) + " has no rigid-body term");
     }
-    double *Hr = H ? H + 3 * r * ld : nullptr, *Gr = G ? G + 3 * r * ld : nullptr;
+    double *Hr = H ? H + 3 * r * ld : nullptr, *Gr = G ? G + 3 * r * ld : nullptr, *Gnr = Gn ? Gn + 3 * r * ldn : nullptr;
     for (int k = 0; k < 3; ++k) {
       if (Hr) std::fill(Hr + k * ld, Hr + k * ld + 3 * J.size(), 0.0);
       if (Gr) std::fill(Gr + k * ld, Gr + k * ld + 3 * J.size(), 0.0);
+      if (Gnr) std::fill(Gnr + k * ldn, Gnr + k * ldn + J.size(), 0.0);
     }
     Mat3 D{};
     const Vec3 &x = m_disc->node(i).point;
@@ -122,6 +129,7 @@ void BemOperator::fill_hg(const std::vector<int> &I, const std::vector<int> &J, 
           for (int c = 0; c < 3; ++c) {
             if (Hr) Hr[k * ld + 3 * p + c] += ei.H[a][3 * k + c];
             if (Gr) Gr[k * ld + 3 * p + c] += ei.G[a][3 * k + c];
+            if (Gnr) Gnr[k * ldn + p] += ei.G[a][3 * k + c] * m_tri[t].n[c];
           }
       }
       if (all && !contains(i, t))
@@ -139,26 +147,30 @@ void fill_system_block(const BemOperator &op, const SystemSelection &sel, const 
   const long nj = 3 * static_cast<long>(J.size());
   const bool all = static_cast<int>(J.size()) == op.num_nodes();
   if (rhs && !all) throw std::logic_error("fill_system_block: the right-hand side needs every column");
+  const bool pressure = rhs && !sel.pressure.empty();
   constexpr std::size_t chunk = 16; // rows per pass: bounded scratch, O(|J|)
-  std::vector<double> H(3 * chunk * nj), G(3 * chunk * nj);
+  std::vector<double> H(3 * chunk * nj), G(3 * chunk * nj), Gn(pressure ? 3 * chunk * J.size() : 0);
   for (std::size_t r0 = 0; r0 < I.size(); r0 += chunk) {
     const std::vector<int> rows(I.begin() + r0, I.begin() + std::min(I.size(), r0 + chunk));
-    op.fill_hg(rows, J, H.data(), G.data(), nj);
+    op.fill_hg(rows, J, H.data(), G.data(), nj, pressure ? Gn.data() : nullptr, static_cast<long>(J.size()));
     for (std::size_t r = 0; r < 3 * rows.size(); ++r) {
       const double *h = &H[r * nj], *g = &G[r * nj];
       double *a = A + (3 * r0 + r) * ld, b = 0;
-      for (std::size_t p = 0; p < J.size(); ++p)
+      for (std::size_t p = 0; p < J.size(); ++p) {
+        const int j = J[p];
+        const bool by_pressure = pressure && !std::isnan(sel.pressure[j]);
+        if (by_pressure) b -= sel.pressure[j] * Gn[r * J.size() + p];
         for (int c = 0; c < 3; ++c) {
           const long q = 3 * static_cast<long>(p) + c;
-          const int j = J[p];
           if (sel.displacement_known[j][c]) {
             a[q] = -g[q];
             b -= h[q] * sel.known[j][c];
           } else {
             a[q] = h[q];
-            b += g[q] * sel.known[j][c];
+            if (!by_pressure) b += g[q] * sel.known[j][c];
           }
         }
+      }
       if (rhs) rhs[3 * r0 + r] = b;
     }
   }

@@ -92,6 +92,8 @@ bool LineReader::next()
   if (end == std::string_view::npos)
     end = m_text.size();
   m_line = m_text.substr(m_pos, end - m_pos);
+  if (!m_line.empty() && m_line.back() == '\r') // files written on Windows
+    m_line.remove_suffix(1);
   m_pos = end + 1;
   ++m_line_number;
   if (m_comment != '\0')

@@ -177,9 +177,8 @@ private:
   void facet()
   {
     enter(StlState::solid, StlState::facet, "facet");
-    // The stored normal is ignored (orientation comes from the corner order) but must parse.
-    for (std::size_t i = 2; i < m_in.tokens().size(); ++i)
-      m_in.real(i);
+    // The stored normal is not read: orientation comes from the corner order, and exporters
+    // write "nan" normals for slivers, which would otherwise reject a usable file.
     m_count = 0;
   }
 

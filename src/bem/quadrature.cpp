@@ -161,6 +161,21 @@ void ElementQuadrature::duffy(const Vec3 &x, const std::array<double, 3> &bx, co
   }
 }
 
+void ElementQuadrature::duffy_split(const Vec3 &x, const std::array<double, 3> &bx, const Sub &s, const Vec3 &n, ElementIntegrals &out) const
+{
+  // Split at the foot of the altitude from the singular point: each half then spans at most a
+  // right angle and its distance to the point is monotone along the edge, so the angular
+  // integrand stays smooth even when the point is close to the opposite edge.
+  const Vec3 e = s.p[2] - s.p[1];
+  const double f = dot(x - s.p[1], e) / dot(e, e);
+  if (f <= 0.02 || f >= 0.98) return duffy(x, bx, s, n, out);
+  const Vec3 foot = s.p[1] + f * e;
+  std::array<double, 3> bf;
+  for (int c = 0; c < 3; ++c) bf[c] = s.b[1][c] + f * (s.b[2][c] - s.b[1][c]);
+  duffy(x, bx, Sub{{x, s.p[1], foot}, {bx, s.b[1], bf}}, n, out);
+  duffy(x, bx, Sub{{x, foot, s.p[2]}, {bx, bf, s.b[2]}}, n, out);
+}
+
 void ElementQuadrature::singular(const Vec3 &x, const std::array<double, 3> &bx, const Triangle &tri, ElementIntegrals &out) const
 {
   const std::array<std::array<double, 3>, 3> id = {{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}};
@@ -168,14 +183,14 @@ void ElementQuadrature::singular(const Vec3 &x, const std::array<double, 3> &bx,
     const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
     if (bx[k] > 1.0 - 1e-14) {
       // The point is corner k: one sub-triangle, the whole triangle.
-      duffy(x, bx, Sub{{x, tri.p[k1], tri.p[k2]}, {bx, id[k1], id[k2]}}, tri.n, out);
+      duffy_split(x, bx, Sub{{x, tri.p[k1], tri.p[k2]}, {bx, id[k1], id[k2]}}, tri.n, out);
       return;
     }
   }
   for (int k = 0; k < 3; ++k) {
     const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
     if (bx[k] < 1e-14) continue; // the sub-triangle opposite corner k collapses
-    duffy(x, bx, Sub{{x, tri.p[k1], tri.p[k2]}, {bx, id[k1], id[k2]}}, tri.n, out);
+    duffy_split(x, bx, Sub{{x, tri.p[k1], tri.p[k2]}, {bx, id[k1], id[k2]}}, tri.n, out);
   }
 }
 

@@ -87,32 +87,28 @@ ConstraintReport analyse_constraints(const Discretization &disc, const std::vect
   return rep;
 }
 
-std::vector<std::pair<int, int>> choose_pins(const Discretization &disc)
+std::vector<double> orthonormal_rigid_modes(const Discretization &disc)
 {
   const Frame f = frame_of(disc);
-  auto farthest = [&](auto &&dist) {
-    int best = 0;
-    for (int i = 1; i < disc.num_nodes(); ++i)
-      if (dist(disc.node(i).point) > dist(disc.node(best).point)) best = i;
-    return best;
-  };
-  const int a = farthest([&](const Vec3 &x) { return norm(x - f.centre); });
-  const Vec3 pa = disc.node(a).point;
-  const int b = farthest([&](const Vec3 &x) { return norm(x - pa); });
-  const Vec3 ab = normalized(disc.node(b).point - pa);
-  const int c = farthest([&](const Vec3 &x) { return norm(cross(ab, x - pa)); });
-  const Vec3 normal = normalized(cross(ab, disc.node(c).point - pa));
-  // b: the two axes least aligned with ab; c: the axis most aligned with the plane normal.
-  int along = 0, across = 0;
-  for (int k = 1; k < 3; ++k) {
-    if (std::abs(ab[k]) > std::abs(ab[along])) along = k;
-    if (std::abs(normal[k]) > std::abs(normal[across])) across = k;
-  }
-  std::vector<std::pair<int, int>> pins = {{a, 0}, {a, 1}, {a, 2}};
-  for (int k = 0; k < 3; ++k)
-    if (k != along) pins.push_back({b, k});
-  pins.push_back({c, across});
-  return pins;
+  const int n = 3 * disc.num_nodes();
+  std::vector<double> Q(static_cast<std::size_t>(n) * 6);
+  for (int i = 0; i < disc.num_nodes(); ++i)
+    for (int c = 0; c < 3; ++c)
+      for (int m = 0; m < 6; ++m) Q[(3 * static_cast<std::size_t>(i) + c) * 6 + m] = mode(f, m, disc.node(i).point, c);
+  // Modified Gram-Schmidt, twice for safety: six columns, any size.
+  for (int pass = 0; pass < 2; ++pass)
+    for (int m = 0; m < 6; ++m) {
+      for (int k = 0; k < m; ++k) {
+        double d = 0;
+        for (int r = 0; r < n; ++r) d += Q[r * 6 + m] * Q[r * 6 + k];
+        for (int r = 0; r < n; ++r) Q[r * 6 + m] -= d * Q[r * 6 + k];
+      }
+      double s = 0;
+      for (int r = 0; r < n; ++r) s += Q[r * 6 + m] * Q[r * 6 + m];
+      s = 1.0 / std::sqrt(s);
+      for (int r = 0; r < n; ++r) Q[r * 6 + m] *= s;
+    }
+  return Q;
 }
 
 std::array<double, 6> remove_rigid_motion(const Discretization &disc, std::vector<Vec3> &u)

@@ -1,5 +1,6 @@
 #include "hssbem/petsc/dense.h"
 #include "hssbem/petsc/log.h"
+#include "hssbem/bem/rigid_modes.hpp"
 
 #include <algorithm>
 #include <numeric>
@@ -18,13 +19,26 @@ static PetscErrorCode OwnedNodes_Private(MPI_Comm comm, PetscInt nnodes, PetscIn
   PetscFunctionReturn(0);
 }
 
+/* rows(r, :) += c Q(row0 + r, :) Q^T for nrows rows of width N (row-major). */
+static void AddRigidRegularization_Private(const std::vector<double> &Q, PetscInt row0, size_t nrows, PetscInt N, double *rows)
+{
+  const double c = hssbem::rigid_regularization_weight;
+  for (size_t r = 0; r < nrows; ++r) {
+    const double *q = &Q[(row0 + r) * 6];
+    for (PetscInt j = 0; j < N; ++j) {
+      const double *qj = &Q[(size_t)j * 6];
+      rows[r * N + j] += c * (q[0] * qj[0] + q[1] * qj[1] + q[2] * qj[2] + q[3] * qj[3] + q[4] * qj[4] + q[5] * qj[5]);
+    }
+  }
+}
+
 /*@C
   HssbemAssembleDense - Assembles the collocation matrix A and right-hand side b with the operator
   primitive; each rank fills its own rows (column-major local storage of MATDENSE).
 
   Level: intermediate
 @*/
-PetscErrorCode HssbemAssembleDense(MPI_Comm comm, const hssbem::BemOperator &op, const hssbem::SystemSelection &sel, Mat *A, Vec *b)
+PetscErrorCode HssbemAssembleDense(MPI_Comm comm, const hssbem::BemOperator &op, const hssbem::SystemSelection &sel, const std::vector<double> *rigid_modes, Mat *A, Vec *b)
 {
   const PetscInt nn = op.num_nodes(), N = 3 * nn;
   PetscInt       nstart, nlocal;
@@ -46,6 +60,7 @@ PetscErrorCode HssbemAssembleDense(MPI_Comm comm, const hssbem::BemOperator &op,
     std::vector<int> I(std::min(chunk, nlocal - r0));
     std::iota(I.begin(), I.end(), (int)(nstart + r0));
     PetscCallCXX(hssbem::fill_system_block(op, sel, I, J, rows.data(), N, rhs + 3 * r0));
+    if (rigid_modes) AddRigidRegularization_Private(*rigid_modes, 3 * (nstart + r0), 3 * I.size(), N, rows.data());
     for (size_t r = 0; r < 3 * I.size(); ++r)
       for (PetscInt c = 0; c < N; ++c) a[(size_t)c * m + 3 * r0 + r] = rows[r * N + c];
   }
@@ -78,6 +93,39 @@ static PetscErrorCode FactorMatType_Private(Mat A, MatType *type)
   PetscFunctionReturn(0);
 }
 
+/* to := from, for vectors with the same global size and different layouts (ScaLAPACK picks its own). */
+static PetscErrorCode CopyAcrossLayouts_Private(Vec from, Vec to)
+{
+  PetscInt   lo, hi;
+  IS         is;
+  VecScatter sc;
+
+  PetscFunctionBegin;
+  PetscCall(VecGetOwnershipRange(to, &lo, &hi));
+  PetscCall(ISCreateStride(PetscObjectComm((PetscObject)to), hi - lo, lo, 1, &is));
+  PetscCall(VecScatterCreate(from, is, to, NULL, &sc));
+  PetscCall(VecScatterBegin(sc, from, to, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecScatterEnd(sc, from, to, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecScatterDestroy(&sc));
+  PetscCall(ISDestroy(&is));
+  PetscFunctionReturn(0);
+}
+
+/* Solve with vectors in the operator's layout, copying in and out when it differs from A's. */
+static PetscErrorCode KSPSolveInLayout_Private(KSP ksp, Mat op, Vec b, Vec x)
+{
+  Vec bo, xo;
+
+  PetscFunctionBegin;
+  PetscCall(MatCreateVecs(op, &xo, &bo));
+  PetscCall(CopyAcrossLayouts_Private(b, bo));
+  PetscCall(KSPSolve(ksp, bo, xo));
+  PetscCall(CopyAcrossLayouts_Private(xo, x));
+  PetscCall(VecDestroy(&bo));
+  PetscCall(VecDestroy(&xo));
+  PetscFunctionReturn(0);
+}
+
 /*@C
   HssbemSolveDense - Solves A x = b with KSP; defaults are -ksp_type preonly -pc_type lu, and every
   KSP/PC option applies. A diverged solve is an error.
@@ -104,7 +152,8 @@ PetscErrorCode HssbemSolveDense(Mat A, Vec b, Vec x, HssbemSolveInfo *info)
   PetscCall(KSPGetPC(ksp, &pc));
   PetscCall(PCSetType(pc, PCLU));
   PetscCall(KSPSetFromOptions(ksp));
-  PetscCall(KSPSolve(ksp, b, x));
+  if (F) PetscCall(KSPSolveInLayout_Private(ksp, F, b, x));
+  else PetscCall(KSPSolve(ksp, b, x));
   PetscCall(KSPGetConvergedReason(ksp, &info->reason));
   PetscCall(KSPGetIterationNumber(ksp, &info->iterations));
   {

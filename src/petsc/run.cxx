@@ -52,8 +52,8 @@ void CheckInteriorPoints(const hssbem::BemOperator &op, const hssbem::ProblemSpe
   }
 }
 
-/* The whole solution vector on rank 0 (empty elsewhere). */
-PetscErrorCode GatherToZero(Vec x, std::vector<double> *out)
+/* The whole solution vector on rank 0 (empty elsewhere), or on every rank. */
+PetscErrorCode Gather(Vec x, PetscBool to_all, std::vector<double> *out)
 {
   VecScatter         sc;
   Vec                x0;
@@ -61,7 +61,8 @@ PetscErrorCode GatherToZero(Vec x, std::vector<double> *out)
   const PetscScalar *a;
 
   PetscFunctionBegin;
-  PetscCall(VecScatterCreateToZero(x, &sc, &x0));
+  if (to_all) PetscCall(VecScatterCreateToAll(x, &sc, &x0));
+  else PetscCall(VecScatterCreateToZero(x, &sc, &x0));
   PetscCall(VecScatterBegin(sc, x, x0, INSERT_VALUES, SCATTER_FORWARD));
   PetscCall(VecScatterEnd(sc, x, x0, INSERT_VALUES, SCATTER_FORWARD));
   PetscCall(VecGetLocalSize(x0, &n));
@@ -78,14 +79,14 @@ void FillResult(const hssbem::ProblemSetup &s, const hssbem::BemOperator &op, co
   using namespace hssbem;
   const Discretization &disc = *s.disc;
   NodalSolution sol = split_unknowns(s.selection, x);
-  if (!s.pins.empty()) remove_rigid_motion(disc, sol.u);
+  if (s.pure_traction) remove_rigid_motion(disc, sol.u);
   r.vertices = s.mesh->vertices;
   r.triangles = s.mesh->triangles;
   r.triangle_region = s.mesh->triangle_region;
   r.displacement = vertex_average(disc, sol.u);
   r.traction = vertex_average(disc, sol.t);
   r.traction_corner = corner_values(disc, sol.t);
-  r.displacement_prescribed = s.vertex_bc.displacement_prescribed;
+  r.displacement_prescribed = s.vertex_displacement_prescribed;
   r.sharp_vertex.resize(s.mesh->vertices.size());
   for (int v = 0; v < s.mesh->num_vertices(); ++v) r.sharp_vertex[v] = disc.node_count(v) > 1;
   r.reactions = reactions(disc, sol.t);
@@ -101,7 +102,7 @@ void Describe(const hssbem::ProblemSetup &s, const HssbemSolveInfo &info, PetscM
                        {"residual", info.residual}, {"feature_angle_deg", s.disc->feature_angle_deg()}};
   r.attributes_int = {{"iterations", info.iterations}, {"ranks", size}, {"num_dofs", 3 * s.disc->num_nodes()},
                       {"num_nodes", s.disc->num_nodes()}, {"num_sharp_vertices", s.disc->num_sharp_vertices()},
-                      {"pinned_components", (long long)s.pins.size()}};
+                      {"pure_traction", (long long)s.pure_traction}};
   char petsc_version[128];
   PetscCallAbort(PETSC_COMM_SELF, PetscGetVersion(petsc_version, sizeof(petsc_version)));
   r.attributes_str = {{"solver", "dense"}, {"ksp_type", info.ksp_type}, {"pc_type", info.pc_type}, {"mat_solver_type", info.solver_type},
@@ -112,6 +113,38 @@ void Describe(const hssbem::ProblemSetup &s, const HssbemSolveInfo &info, PetscM
 } // namespace
 
 /*@C
+  HssbemSolveSetup - Assembles and solves the dense system of a prepared problem; the unknowns (3 per
+  dof node, node order) come back on rank 0, or on every rank with to_all.
+
+  Level: intermediate
+@*/
+PetscErrorCode HssbemSolveSetup(MPI_Comm comm, const hssbem::ProblemSetup &s, const hssbem::BemOperator &op, PetscBool to_all, std::vector<double> *x_out, HssbemSolveInfo *info,
+                                std::map<std::string, double> *seconds)
+{
+  PhaseTimer timer;
+  Mat        A;
+  Vec        b, x;
+
+  PetscFunctionBegin;
+  timer.begin();
+  std::vector<double> modes;
+  if (s.pure_traction) modes = hssbem::orthonormal_rigid_modes(*s.disc);
+  PetscCall(HssbemAssembleDense(comm, op, s.selection, s.pure_traction ? &modes : nullptr, &A, &b));
+  timer.end("assembly");
+  timer.begin();
+  PetscCall(MatCreateVecs(A, &x, NULL));
+  PetscCall(HssbemSolveDense(A, b, x, info));
+  timer.end("solve");
+  PetscCall(Gather(x, to_all, x_out));
+  PetscCall(MatDestroy(&A));
+  PetscCall(VecDestroy(&b));
+  PetscCall(VecDestroy(&x));
+  if (seconds)
+    for (const auto &[k, v] : timer.seconds) (*seconds)[k] += v;
+  PetscFunctionReturn(0);
+}
+
+/*@C
   HssbemRun - Solves one problem file end to end on comm: set up (mesh, material, boundary
   conditions), assemble the dense collocation system, solve with KSP, post-process and write.
 
@@ -119,10 +152,8 @@ void Describe(const hssbem::ProblemSetup &s, const HssbemSolveInfo &info, PetscM
 @*/
 PetscErrorCode HssbemRun(MPI_Comm comm, const std::string &problem_file, const hssbem::ProblemOverrides &overrides, const hssbem::QuadratureOptions &quad)
 {
-  PhaseTimer     timer;
-  PetscMPIInt    rank, size;
-  Mat            A;
-  Vec            b, x;
+  PhaseTimer      timer;
+  PetscMPIInt     rank, size;
   HssbemSolveInfo info;
 
   PetscFunctionBegin;
@@ -136,21 +167,11 @@ PetscErrorCode HssbemRun(MPI_Comm comm, const std::string &problem_file, const h
   timer.end("setup");
   PetscCall(PetscPrintf(comm, "hssbem: %s: %d vertices, %d triangles, %d dof nodes (%d sharp vertices), %d unknowns, %d ranks\n", s.spec.mesh_path.c_str(), s.mesh->num_vertices(),
                         s.mesh->num_triangles(), s.disc->num_nodes(), s.disc->num_sharp_vertices(), 3 * s.disc->num_nodes(), size));
-  timer.begin();
-  PetscCall(HssbemAssembleDense(comm, op, s.selection, &A, &b));
-  timer.end("assembly");
-  timer.begin();
-  PetscCall(MatCreateVecs(A, &x, NULL));
-  PetscCall(HssbemSolveDense(A, b, x, &info));
-  timer.end("solve");
+  std::vector<double> xall;
+  PetscCall(HssbemSolveSetup(comm, s, op, PETSC_FALSE, &xall, &info, &timer.seconds));
   PetscCall(PetscPrintf(comm, "hssbem: solved with %s/%s%s%s: %" PetscInt_FMT " iterations, relative residual %.3e\n", info.ksp_type.c_str(), info.pc_type.c_str(),
                         info.solver_type.empty() ? "" : "/", info.solver_type.c_str(), info.iterations, (double)info.residual));
   PetscCall(HssbemCheckUnusedOptions(comm));
-  std::vector<double> xall;
-  PetscCall(GatherToZero(x, &xall));
-  PetscCall(MatDestroy(&A));
-  PetscCall(VecDestroy(&b));
-  PetscCall(VecDestroy(&x));
   int failed = 0;
   std::string message;
   if (rank == 0) {

@@ -283,6 +283,63 @@ NodeConditions node_conditions(const VertexConditions &vc, const Discretization 
   return nc;
 }
 
+namespace {
+
+/// Whether a rule reaches dof node i of a selected vertex. Displacement is continuous, so it
+/// reaches every node of the vertex; a traction given on a region acts only on the nodes whose
+/// smooth group has a triangle in that region (the copy of an edge vertex on a neighbouring face
+/// keeps its own traction).
+bool reaches(const BoundaryRule &rule, int region, const Discretization &disc, int i)
+{
+  if (rule.kind == BoundaryRule::Kind::Displacement || region < 0) return true;
+  const auto &tr = disc.mesh().triangle_region;
+  for (const int *t = disc.support_begin(i); t != disc.support_end(i); ++t)
+    if (*t < static_cast<int>(tr.size()) && tr[*t] == region) return true;
+  return false;
+}
+
+void apply_to_node(const BoundaryRule &rule, std::size_t k, const DofNode &node, NodeConditions &nc, int i)
+{
+  if (rule.kind == BoundaryRule::Kind::Pressure) {
+    const double p = rule.pressure[rule.pressure.size() == 1 ? 0 : k];
+    if (std::isnan(p)) return;
+    nc.displacement_prescribed[i] = {false, false, false};
+    nc.value[i] = -p * node.normal;
+    nc.pressure[i] = p;
+    return;
+  }
+  const Vec3 &row = rule.rows[rule.rows.size() == 1 ? 0 : k];
+  for (int c = 0; c < 3; ++c)
+    if (!std::isnan(row[c])) {
+      nc.pressure[i] = k_nan; // no longer a pure pressure node: its nodal traction stands
+      nc.displacement_prescribed[i][c] = rule.kind == BoundaryRule::Kind::Displacement;
+      nc.value[i][c] = row[c];
+    }
+}
+
+} // namespace
+
+NodeConditions apply_rules(const std::vector<BoundaryRule> &rules, const Discretization &disc, const std::string &origin)
+{
+  const SurfaceMesh &mesh = disc.mesh();
+  const MeshView view = make_view(mesh);
+  NodeConditions nc;
+  nc.displacement_prescribed.assign(disc.num_nodes(), {false, false, false});
+  nc.value.assign(disc.num_nodes(), {0, 0, 0});
+  nc.pressure.assign(disc.num_nodes(), k_nan);
+  for (std::size_t r = 0; r < rules.size(); ++r) {
+    const RuleContext ctx{origin, r};
+    const std::vector<int> sel = select(rules[r], view, ctx);
+    if (sel.empty()) ctx.fail("selects no vertex");
+    check_value_count(rules[r], sel.size(), ctx);
+    const int region = rules[r].where.kind == Selector::Kind::Region ? region_tag(rules[r].where, mesh, ctx) : -1;
+    for (std::size_t k = 0; k < sel.size(); ++k)
+      for (int i = disc.first_node(sel[k]); i < disc.first_node(sel[k]) + disc.node_count(sel[k]); ++i)
+        if (reaches(rules[r], region, disc, i)) apply_to_node(rules[r], k, disc.node(i), nc, i);
+  }
+  return nc;
+}
+
 int NodeConditions::num_displacement_prescribed() const
 {
   int n = 0;

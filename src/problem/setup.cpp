@@ -24,7 +24,7 @@ Material material_of(const ProblemSpec &spec, const ProblemOverrides &o)
 
 SystemSelection selection_of(const NodeConditions &nc)
 {
-  return SystemSelection{nc.displacement_prescribed, nc.value};
+  return SystemSelection{nc.displacement_prescribed, nc.value, nc.pressure};
 }
 
 std::string format(const char *fmt, double a, double b)
@@ -34,26 +34,22 @@ std::string format(const char *fmt, double a, double b)
   return buf;
 }
 
-/// Pure traction: refuse an unbalanced load, otherwise pin six components.
-void pin_rigid_modes(ProblemSetup &s)
+/// Pure traction: refuse an unbalanced load; the solver regularises along the rigid modes.
+void accept_pure_traction(ProblemSetup &s)
 {
   const auto imbalance = load_imbalance(*s.disc, s.selection.known);
   if (imbalance[0] > max_load_imbalance || imbalance[1] > max_load_imbalance)
     throw ConstraintError(s.spec.file + ": no displacement is prescribed anywhere and the load is not balanced " +
                           format("(resultant force %.2g, moment %.2g of the total load); prescribe displacements to hold the body", imbalance[0], imbalance[1]));
-  s.pins = choose_pins(*s.disc);
-  for (const auto &[node, c] : s.pins) {
-    s.selection.displacement_known[node][c] = true;
-    s.selection.known[node][c] = 0.0;
-  }
-  s.notices.push_back("no displacement is prescribed: pure traction problem; six components pinned, rigid motion removed from the result");
+  s.pure_traction = true;
+  s.notices.push_back("no displacement is prescribed: pure traction problem; rigid motions are regularised and removed from the result");
 }
 
 void handle_rigid_modes(ProblemSetup &s)
 {
   const ConstraintReport rep = analyse_constraints(*s.disc, s.selection.displacement_known);
   if (rep.rank == 6) return;
-  if (rep.rank == 0) return pin_rigid_modes(s);
+  if (rep.rank == 0) return accept_pure_traction(s);
   std::string free;
   for (const auto &m : rep.free_modes) free += (free.empty() ? "" : "; ") + m;
   throw ConstraintError(s.spec.file + ": the prescribed displacements leave the body free to move (" + free +
@@ -72,8 +68,11 @@ ProblemSetup setup_problem(ProblemSpec spec, const ProblemOverrides &o)
   s.mesh = std::make_unique<SurfaceMesh>(read_mesh(s.spec.mesh_path));
   validate_and_orient(*s.mesh, s.notices);
   s.disc = std::make_unique<Discretization>(*s.mesh, o.feature_angle_deg);
-  s.vertex_bc = apply_rules(s.spec.rules, *s.mesh, s.spec.file);
-  s.selection = selection_of(node_conditions(s.vertex_bc, *s.disc));
+  const NodeConditions nc = apply_rules(s.spec.rules, *s.disc, s.spec.file);
+  s.selection = selection_of(nc);
+  s.vertex_displacement_prescribed.assign(s.mesh->vertices.size(), {false, false, false});
+  for (int v = 0; v < s.mesh->num_vertices(); ++v)
+    if (s.disc->node_count(v) > 0) s.vertex_displacement_prescribed[v] = nc.displacement_prescribed[s.disc->first_node(v)];
   handle_rigid_modes(s);
   return s;
 }

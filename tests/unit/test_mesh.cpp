@@ -722,6 +722,12 @@ TEST_F(MeshFiles, ValidationNamesTheFileAndReportsUnusedVertices)
   EXPECT_HAS(notices[0], "flipped");
   EXPECT_HAS(notices[1], "1 of 9 vertices are used by no triangle (first: vertex 8)");
 
+  SurfaceMesh nested = read_mesh(write("nested.stl", stl_binary(merge(cube(4.0), cube(1.0, {1, 1, 1})))));
+  const auto flips = validate(nested);
+  ASSERT_EQ(flips.size(), 1u);
+  EXPECT_HAS(flips[0], "nested.stl': component 1 (12 triangles, cavity boundary) was oriented inward");
+  EXPECT_NEAR(signed_volume(nested, range(12, 24)), -1.0, 1e-9);
+
   Shape open = cube();
   open.tris.pop_back();
   SurfaceMesh o = read_mesh(write("open.stl", stl_ascii(open)));

@@ -39,6 +39,9 @@ public:
   /// Rows of I need their rigid-body terms (compute_rigid_body_terms) unless J holds every node,
   /// in which case they are summed on the way. Not thread-safe (uses scratch space).
   void fill_hg(const std::vector<int> &I, const std::vector<int> &J, double *H, double *G, long ld) const;
+  /// As fill_hg, and also Gn(I, J) = Σ_e ∫_e u* N_j n_e (3|I| × |J|, leading dimension ldn): the
+  /// response to a unit pressure field N_j carried by flat triangle normals.
+  void fill_hg(const std::vector<int> &I, const std::vector<int> &J, double *H, double *G, long ld, double *Gn, long ldn) const;
 
   /// Integrals of triangle t for a collocation point (or an interior point when `row` < 0).
   void element_integrals(const Vec3 &x, int row, int t, ElementIntegrals &out) const;
@@ -64,6 +67,9 @@ private:
 struct SystemSelection {
   std::vector<std::array<bool, 3>> displacement_known; ///< true: u known, t unknown (column -G)
   std::vector<Vec3> known;                             ///< the known value of each component
+  /// Optional, per node: pressure p (NaN if none). Such nodes load each triangle with -p n_e
+  /// (its own flat normal) instead of the interpolated nodal traction `known`.
+  std::vector<double> pressure;
 };
 
 /// A(I, J) (row-major, ld) for a selection: column (j, c) is H(:, j c) where u is unknown and

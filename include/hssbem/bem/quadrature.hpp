@@ -63,6 +63,7 @@ private:
   void subdivide(const Vec3 &x, const Sub &s, const Vec3 &n, int depth, ElementIntegrals &out) const;
   template <int NQ>
   void apply_rule(const Vec3 &x, const Sub &s, const Vec3 &n, const double (&rule)[NQ][4], ElementIntegrals &out) const;
+  void duffy_split(const Vec3 &x, const std::array<double, 3> &bx, const Sub &s, const Vec3 &n, ElementIntegrals &out) const;
   void duffy(const Vec3 &x, const std::array<double, 3> &bx, const Sub &s, const Vec3 &n, ElementIntegrals &out) const;
 
   KelvinConstants m_k;

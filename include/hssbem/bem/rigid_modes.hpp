@@ -1,6 +1,6 @@
 /// \file rigid_modes.hpp
-/// The six rigid-body modes: how well a set of prescribed displacements constrains them, pins for
-/// pure-traction problems, and removal of a rigid motion from a displacement field.
+/// The six rigid-body modes: how well a set of prescribed displacements constrains them, the
+/// regularisation of pure-traction problems, and removal of a rigid motion from a displacement field.
 #pragma once
 
 #include "hssbem/bem/discretization.hpp"
@@ -25,8 +25,14 @@ struct ConstraintReport {
 /// Rank of the prescribed displacement components on the rigid modes of the body.
 ConstraintReport analyse_constraints(const Discretization &disc, const std::vector<std::array<bool, 3>> &displacement_known);
 
-/// Six (node, component) pins at three far-apart nodes that together fix every rigid mode.
-std::vector<std::pair<int, int>> choose_pins(const Discretization &disc);
+/// The six rigid modes at the dof nodes as orthonormal columns: row-major (3 · nodes) × 6. A
+/// pure-traction system H u = b is singular along them; H + c Φ Φᵀ is not, and its solution
+/// differs from a solution of H u = b (projected on the range of H) by a rigid motion only.
+std::vector<double> orthonormal_rigid_modes(const Discretization &disc);
+
+/// Weight c of the rank-6 regularisation: the free term of a smooth boundary point, so the modes
+/// get eigenvalues of the size of the rest of H's spectrum.
+constexpr double rigid_regularization_weight = 0.5;
 
 /// Subtract the least-squares rigid motion from u (one Vec3 per dof node); returns the motion's
 /// translation and rotation as {tx, ty, tz, wx, wy, wz} about the nodes' centroid.

@@ -14,8 +14,10 @@ struct HssbemSolveInfo {
   std::string        ksp_type, pc_type, solver_type;
 };
 
-/* Assemble A and b = -K E_known (rows split by node across the ranks of comm, 3 rows per node). */
-PetscErrorCode HssbemAssembleDense(MPI_Comm comm, const hssbem::BemOperator &op, const hssbem::SystemSelection &sel, Mat *A, Vec *b);
+/* Assemble A and b = -K E_known (rows split by node across the ranks of comm, 3 rows per node).
+   With rigid_modes (orthonormal, row-major 3n x 6, see orthonormal_rigid_modes()), A gets
+   + rigid_regularization_weight * Q Q^T: the pure-traction regularisation. */
+PetscErrorCode HssbemAssembleDense(MPI_Comm comm, const hssbem::BemOperator &op, const hssbem::SystemSelection &sel, const std::vector<double> *rigid_modes, Mat *A, Vec *b);
 
 /* Solve A x = b with a KSP configured from the options database (default: preonly + LU). */
 PetscErrorCode HssbemSolveDense(Mat A, Vec b, Vec x, HssbemSolveInfo *info);

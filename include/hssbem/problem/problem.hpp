@@ -75,8 +75,17 @@ VertexConditions apply_rules(const std::vector<BoundaryRule> &rules, const Surfa
 struct NodeConditions {
   std::vector<std::array<bool, 3>> displacement_prescribed;
   std::vector<Vec3> value;
+  /// Pressure p of nodes whose three components come from a pressure rule (NaN otherwise): the
+  /// solver loads their triangles with -p n of each flat triangle, exact on the polyhedron.
+  std::vector<double> pressure;
   int num_displacement_prescribed() const;
 };
 NodeConditions node_conditions(const VertexConditions &vc, const Discretization &disc);
+
+/// Apply the rules straight to dof nodes (what the solver uses). As apply_rules, except that a
+/// traction or pressure rule on a region reaches only the nodes of a sharp vertex whose smooth
+/// group has a triangle in the region, so a load on one face of a cube leaves the neighbouring
+/// faces' copies of the edge vertices as they were. Same errors as apply_rules.
+NodeConditions apply_rules(const std::vector<BoundaryRule> &rules, const Discretization &disc, const std::string &origin);
 
 } // namespace hssbem

@@ -25,11 +25,11 @@ struct ProblemSetup {
   std::unique_ptr<SurfaceMesh> mesh;         ///< owned on the heap: disc points into it
   std::unique_ptr<Discretization> disc;
   Material material;
-  VertexConditions vertex_bc;
+  std::vector<std::array<bool, 3>> vertex_displacement_prescribed; ///< per mesh vertex, for output
   SystemSelection selection;
-  /// Pure-traction problems: six displacement components pinned to zero (their tractions become
-  /// unknowns); the rigid motion is removed from the result afterwards.
-  std::vector<std::pair<int, int>> pins;
+  /// Pure traction (no displacement prescribed, balanced load): the system is regularised along
+  /// the rigid modes and the rigid motion is removed from the result.
+  bool pure_traction = false;
   std::vector<std::string> notices;
   std::string output;
 };

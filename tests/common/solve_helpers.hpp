@@ -1,0 +1,84 @@
+// Solve a problem given in code through the library's dense path, for verification tests.
+#pragma once
+
+#include "hssbem/bem/post.hpp"
+#include "hssbem/bem/rigid_modes.hpp"
+#include "hssbem/petsc/run.h"
+#include "hssbem/problem/setup.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+namespace hssbem::testing {
+
+struct Solved {
+  ProblemSetup setup;
+  NodalSolution sol;
+};
+
+inline std::string mesh_file(const std::string &name) { return std::string(HSSBEM_MESHES) + "/" + name; }
+
+inline BoundaryRule rule(BoundaryRule::Kind kind, Selector where, std::vector<Vec3> rows)
+{
+  BoundaryRule r;
+  r.kind = kind;
+  r.where = std::move(where);
+  r.rows = std::move(rows);
+  return r;
+}
+
+inline Selector all_vertices() { return Selector{}; }
+
+inline Selector region(const std::string &name)
+{
+  Selector s;
+  s.kind = Selector::Kind::Region;
+  s.region_name = name;
+  return s;
+}
+
+inline Selector vertices(std::vector<int> v)
+{
+  Selector s;
+  s.kind = Selector::Kind::Vertices;
+  s.vertices = std::move(v);
+  return s;
+}
+
+inline ProblemSpec spec_for(const std::string &mesh, double E, double nu)
+{
+  ProblemSpec spec;
+  spec.file = "test:" + mesh;
+  spec.mesh_path = mesh_file(mesh);
+  spec.E = E;
+  spec.nu = nu;
+  return spec;
+}
+
+/// Solve on PETSC_COMM_WORLD; rigid motion removed when the problem was pinned.
+inline Solved solve(ProblemSpec spec, const QuadratureOptions &quad = {})
+{
+  Solved out{setup_problem(std::move(spec), ProblemOverrides{}), {}};
+  BemOperator op(*out.setup.disc, out.setup.material, quad);
+  std::vector<double> x;
+  HssbemSolveInfo info;
+  PetscCallAbort(PETSC_COMM_WORLD, HssbemSolveSetup(PETSC_COMM_WORLD, out.setup, op, PETSC_TRUE, &x, &info, nullptr));
+  out.sol = split_unknowns(out.setup.selection, x);
+  if (out.setup.pure_traction) remove_rigid_motion(*out.setup.disc, out.sol.u);
+  return out;
+}
+
+/// Relative L2 difference after removing the least-squares rigid motion of (a - b) (for
+/// pure-traction problems, whose answer is defined up to a rigid motion).
+inline double rel_error_modulo_rigid(const Discretization &disc, std::vector<Vec3> a, const std::vector<Vec3> &b)
+{
+  for (std::size_t i = 0; i < a.size(); ++i) a[i] = a[i] - b[i];
+  remove_rigid_motion(disc, a);
+  double num = 0, den = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) num += dot(a[i], a[i]), den += dot(b[i], b[i]);
+  return std::sqrt(num / den);
+}
+
+} // namespace hssbem::testing
