@@ -473,6 +473,17 @@ def gen_hollow_sphere(outdir, log):
         check_normals_star(f"hollow_sphere_l{lev} outer", V, T[outer], np.zeros(3), +1)
         check_normals_star(f"hollow_sphere_l{lev} inner", V, T[~outer], np.zeros(3), -1)
         T, reg = save(outdir, f"hollow_sphere_l{lev}.msh", V, T, reg, ["outer", "inner"], [+1, -1], log)
+    # The Lame check is limited by the flat facets of the small inner sphere: a companion mesh with
+    # its cavity as finely resolved (relative to its radius) as the outer surface, and then some.
+    Vo, To = sphere_mesh_count(1.0, 2000)
+    Vi, Ti = sphere_mesh_count(0.5, 2400)
+    Ti = Ti[:, [0, 2, 1]]
+    V = np.vstack([Vo, Vi])
+    T = np.vstack([To, Ti + len(Vo)])
+    reg = np.concatenate([np.zeros(len(To), int), np.ones(len(Ti), int)])
+    check_normals_star("hollow_sphere_fine outer", V, T[reg == 0], np.zeros(3), +1)
+    check_normals_star("hollow_sphere_fine inner", V, T[reg == 1], np.zeros(3), -1)
+    save(outdir, "hollow_sphere_fine.msh", V, T, reg, ["outer", "inner"], [+1, -1], log)
 
 
 def cube_mesh(n):

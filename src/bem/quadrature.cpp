@@ -52,28 +52,45 @@ double diameter(const std::array<Vec3, 3> &p)
 
 double area_of(const std::array<Vec3, 3> &p) { return 0.5 * norm(cross(p[1] - p[0], p[2] - p[0])); }
 
-/// Add wt * Nu[a] * u*(x, y) to G[a] and wt * Np[a] * p*(x, y) to H[a].
-inline void accumulate(const KelvinConstants &k, const Vec3 &x, const Vec3 &y, const Vec3 &n, double wt, const double *Nu,
-                       const double *Np, ElementIntegrals &out)
-{
-  const double d0 = y[0] - x[0], d1 = y[1] - x[1], d2 = y[2] - x[2];
-  const double r2 = d0 * d0 + d1 * d1 + d2 * d2, inv_r = 1.0 / std::sqrt(r2);
-  const double g[3] = {d0 * inv_r, d1 * inv_r, d2 * inv_r};
-  const double drdn = g[0] * n[0] + g[1] * n[1] + g[2] * n[2];
-  const double su = wt * k.cu * inv_r, sp = wt * k.cp * inv_r * inv_r;
-  double U[9], P[9];
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) {
-      const double gg = g[i] * g[j], delta = i == j ? 1.0 : 0.0;
-      U[3 * i + j] = su * (k.cu_diag * delta + gg);
-      P[3 * i + j] = sp * (drdn * (k.one_m_2nu * delta + 3 * gg) - k.one_m_2nu * (g[i] * n[j] - g[j] * n[i]));
+/// Shape-weighted kernel sums of one triangle, in the few numbers that define them: u* is
+/// symmetric (6 entries); p* is a symmetric part (6) plus an antisymmetric part (3). Expanded into
+/// 3x3 blocks once per triangle, not once per quadrature point.
+struct KernelSums {
+  double u[3][6] = {}, s[3][6] = {}, a[3][3] = {};
+
+  /// Add the kernels at y (weight wt) times the shape values Nu (for u*) and Np (for p*).
+  inline void add(const KelvinConstants &k, const Vec3 &x, const Vec3 &y, const Vec3 &n, double wt, const double *Nu, const double *Np)
+  {
+    const double d0 = y[0] - x[0], d1 = y[1] - x[1], d2 = y[2] - x[2];
+    const double inv_r = 1.0 / std::sqrt(d0 * d0 + d1 * d1 + d2 * d2);
+    const double g0 = d0 * inv_r, g1 = d1 * inv_r, g2 = d2 * inv_r;
+    const double drdn = g0 * n[0] + g1 * n[1] + g2 * n[2];
+    const double su = wt * k.cu * inv_r, sp = wt * k.cp * inv_r * inv_r, ts = sp * drdn, ta = -sp * k.one_m_2nu;
+    const double U[6] = {su * (k.cu_diag + g0 * g0), su * (k.cu_diag + g1 * g1), su * (k.cu_diag + g2 * g2), su * g0 * g1, su * g0 * g2, su * g1 * g2};
+    const double S[6] = {ts * (k.one_m_2nu + 3 * g0 * g0), ts * (k.one_m_2nu + 3 * g1 * g1), ts * (k.one_m_2nu + 3 * g2 * g2),
+                         3 * ts * g0 * g1, 3 * ts * g0 * g2, 3 * ts * g1 * g2};
+    const double A[3] = {ta * (g0 * n[1] - g1 * n[0]), ta * (g0 * n[2] - g2 * n[0]), ta * (g1 * n[2] - g2 * n[1])};
+    for (int c = 0; c < 3; ++c) {
+      for (int m = 0; m < 6; ++m) u[c][m] += Nu[c] * U[m];
+      for (int m = 0; m < 6; ++m) s[c][m] += Np[c] * S[m];
+      for (int m = 0; m < 3; ++m) a[c][m] += Np[c] * A[m];
     }
-  for (int a = 0; a < 3; ++a)
-    for (int m = 0; m < 9; ++m) {
-      out.G[a][m] += Nu[a] * U[m];
-      out.H[a][m] += Np[a] * P[m];
+  }
+
+  /// Add the sums to the 3x3 blocks of `out` (row-major; (0,1) holds entry 01, (1,0) its mirror).
+  void expand_into(ElementIntegrals &out) const
+  {
+    for (int c = 0; c < 3; ++c) {
+      const double *U = u[c], *S = s[c], *A = a[c];
+      const double G[9] = {U[0], U[3], U[4], U[3], U[1], U[5], U[4], U[5], U[2]};
+      const double H[9] = {S[0], S[3] + A[0], S[4] + A[1], S[3] - A[0], S[1], S[5] + A[2], S[4] - A[1], S[5] - A[2], S[2]};
+      for (int m = 0; m < 9; ++m) {
+        out.G[c][m] += G[m];
+        out.H[c][m] += H[m];
+      }
     }
-}
+  }
+};
 
 } // namespace
 
@@ -101,17 +118,52 @@ ElementQuadrature::ElementQuadrature(const Material &material, const QuadratureO
 template <int NQ>
 void ElementQuadrature::apply_rule(const Vec3 &x, const Sub &s, const Vec3 &n, const double (&rule)[NQ][4], ElementIntegrals &out) const
 {
+  // Structure of arrays over the quadrature points so that each step vectorises.
   const double A = area_of(s.p);
+  double g[3][NQ], N[3][NQ], su[NQ], ts[NQ], ta[NQ];
   for (int q = 0; q < NQ; ++q) {
     const double *l = rule[q];
-    Vec3 y;
-    double N[3];
+    double d[3];
     for (int c = 0; c < 3; ++c) {
-      y[c] = l[0] * s.p[0][c] + l[1] * s.p[1][c] + l[2] * s.p[2][c];
-      N[c] = l[0] * s.b[0][c] + l[1] * s.b[1][c] + l[2] * s.b[2][c];
+      d[c] = l[0] * s.p[0][c] + l[1] * s.p[1][c] + l[2] * s.p[2][c] - x[c];
+      N[c][q] = l[0] * s.b[0][c] + l[1] * s.b[1][c] + l[2] * s.b[2][c];
     }
-    accumulate(m_k, x, y, n, A * l[3], N, N, out);
+    const double inv_r = 1.0 / std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]), w = A * l[3];
+    for (int c = 0; c < 3; ++c) g[c][q] = d[c] * inv_r;
+    const double sp = w * m_k.cp * inv_r * inv_r;
+    su[q] = w * m_k.cu * inv_r;
+    ts[q] = sp * (g[0][q] * n[0] + g[1][q] * n[1] + g[2][q] * n[2]);
+    ta[q] = -sp * m_k.one_m_2nu;
   }
+  double K[15][NQ];
+  for (int q = 0; q < NQ; ++q) {
+    const double g0 = g[0][q], g1 = g[1][q], g2 = g[2][q];
+    K[0][q] = su[q] * (m_k.cu_diag + g0 * g0);
+    K[1][q] = su[q] * (m_k.cu_diag + g1 * g1);
+    K[2][q] = su[q] * (m_k.cu_diag + g2 * g2);
+    K[3][q] = su[q] * g0 * g1;
+    K[4][q] = su[q] * g0 * g2;
+    K[5][q] = su[q] * g1 * g2;
+    K[6][q] = ts[q] * (m_k.one_m_2nu + 3 * g0 * g0);
+    K[7][q] = ts[q] * (m_k.one_m_2nu + 3 * g1 * g1);
+    K[8][q] = ts[q] * (m_k.one_m_2nu + 3 * g2 * g2);
+    K[9][q] = 3 * ts[q] * g0 * g1;
+    K[10][q] = 3 * ts[q] * g0 * g2;
+    K[11][q] = 3 * ts[q] * g1 * g2;
+    K[12][q] = ta[q] * (g0 * n[1] - g1 * n[0]);
+    K[13][q] = ta[q] * (g0 * n[2] - g2 * n[0]);
+    K[14][q] = ta[q] * (g1 * n[2] - g2 * n[1]);
+  }
+  KernelSums sums;
+  for (int c = 0; c < 3; ++c)
+    for (int m = 0; m < 15; ++m) {
+      double acc = 0;
+      for (int q = 0; q < NQ; ++q) acc += N[c][q] * K[m][q];
+      if (m < 6) sums.u[c][m] = acc;
+      else if (m < 12) sums.s[c][m - 6] = acc;
+      else sums.a[c][m - 12] = acc;
+    }
+  sums.expand_into(out);
 }
 
 void ElementQuadrature::subdivide(const Vec3 &x, const Sub &s, const Vec3 &n, int depth, ElementIntegrals &out) const
@@ -145,6 +197,7 @@ void ElementQuadrature::duffy(const Vec3 &x, const std::array<double, 3> &bx, co
   // s.p[0] is the singular point; y = q0 + ξ(q1 - q0) + ξη(q2 - q1), dA = 2 A ξ dξ dη.
   const double twoA = 2.0 * area_of(s.p);
   const int m = m_opt.duffy_order;
+  KernelSums sums;
   for (int i = 0; i < m; ++i) {
     const double xi = m_gl_x[i];
     for (int j = 0; j < m; ++j) {
@@ -156,9 +209,10 @@ void ElementQuadrature::duffy(const Vec3 &x, const std::array<double, 3> &bx, co
         N[c] = s.b[0][c] + xi * (s.b[1][c] - s.b[0][c]) + xi * eta * (s.b[2][c] - s.b[1][c]);
         Np[c] = N[c] - bx[c];
       }
-      accumulate(m_k, x, y, n, wt, N, Np, out);
+      sums.add(m_k, x, y, n, wt, N, Np);
     }
   }
+  sums.expand_into(out);
 }
 
 void ElementQuadrature::duffy_split(const Vec3 &x, const std::array<double, 3> &bx, const Sub &s, const Vec3 &n, ElementIntegrals &out) const

@@ -61,8 +61,8 @@ PetscErrorCode HssbemAssembleDense(MPI_Comm comm, const hssbem::BemOperator &op,
     std::iota(I.begin(), I.end(), (int)(nstart + r0));
     PetscCallCXX(hssbem::fill_system_block(op, sel, I, J, rows.data(), N, rhs + 3 * r0));
     if (rigid_modes) AddRigidRegularization_Private(*rigid_modes, 3 * (nstart + r0), 3 * I.size(), N, rows.data());
-    for (size_t r = 0; r < 3 * I.size(); ++r)
-      for (PetscInt c = 0; c < N; ++c) a[(size_t)c * m + 3 * r0 + r] = rows[r * N + c];
+    for (PetscInt c = 0; c < N; ++c) // column-major destination: consecutive writes per column
+      for (size_t r = 0; r < 3 * I.size(); ++r) a[(size_t)c * m + 3 * r0 + r] = rows[r * N + c];
   }
   PetscCall(VecRestoreArrayWrite(*b, &rhs));
   PetscCall(MatDenseRestoreArrayWrite(*A, &a));

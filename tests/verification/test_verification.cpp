@@ -78,7 +78,7 @@ INSTANTIATE_TEST_SUITE_P(Verification, SpherePressure, ::testing::Values(0.3, 0.
 TEST(Verification, HollowSphereMatchesLame)
 {
   const double E = 1000.0, nu = 0.3, p = 100.0, a = 0.5, b = 1.0;
-  ProblemSpec spec = spec_for("hollow_sphere_l1.msh", E, nu);
+  ProblemSpec spec = spec_for("hollow_sphere_fine.msh", E, nu);
   BoundaryRule r;
   r.kind = Kind::Pressure;
   r.where = region("inner");

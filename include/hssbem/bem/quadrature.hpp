@@ -21,7 +21,7 @@ namespace hssbem {
 struct QuadratureOptions {
   int duffy_order = 8;      ///< Gauss-Legendre points per direction on singular triangles
   double near_ratio = 3.0;  ///< subdivide while distance/diameter is below this
-  double far_ratio = 20.0;  ///< 3-point rule beyond this distance/diameter
+  double far_ratio = 8.0;   ///< 3-point rule beyond this distance/diameter
   int max_depth = 10;       ///< subdivision levels for nearly singular triangles
 };
 
