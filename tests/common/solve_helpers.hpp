@@ -11,7 +11,7 @@
 #include <cmath>
 #include <string>
 
-namespace hssbem::testing {
+namespace hssbem::test {
 
 struct Solved {
   ProblemSetup setup;
@@ -81,4 +81,4 @@ inline double rel_error_modulo_rigid(const Discretization &disc, std::vector<Vec
   return std::sqrt(num / den);
 }
 
-} // namespace hssbem::testing
+} // namespace hssbem::test

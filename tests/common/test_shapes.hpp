@@ -9,7 +9,7 @@
 #include <map>
 #include <utility>
 
-namespace hssbem::testing {
+namespace hssbem::test {
 
 /// Icosahedron refined `levels` times, projected on the sphere of radius r (outward normals).
 inline SurfaceMesh icosphere(int levels, double r = 1.0, Vec3 centre = {0, 0, 0})
@@ -113,4 +113,4 @@ struct KelvinField {
   }
 };
 
-} // namespace hssbem::testing
+} // namespace hssbem::test

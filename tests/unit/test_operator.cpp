@@ -9,8 +9,8 @@
 #include <numeric>
 
 using namespace hssbem;
-using hssbem::testing::icosphere;
-using hssbem::testing::KelvinField;
+using hssbem::test::icosphere;
+using hssbem::test::KelvinField;
 
 namespace {
 
@@ -60,7 +60,7 @@ double kelvin_dirichlet_error(int levels)
   const Discretization disc(mesh, 40.0);
   const Material mat{1000.0, 0.3};
   BemOperator op(disc, mat);
-  const KelvinField k{mat, {1.6, 0.4, 0.3}, {1.0, -2.0, 0.5}};
+  const KelvinField k{mat, {1.2, 0.9, 1.0}, {1.0, -2.0, 0.5}};
   Dense d = dense_hg(op);
   std::vector<double> u(d.n), t(d.n);
   for (int i = 0; i < disc.num_nodes(); ++i) {
@@ -99,7 +99,7 @@ TEST(Operator, RigidMotionsGiveNoTraction)
   double rmax = 0, umax = 0;
   for (int i = 0; i < d.n; ++i) rmax = std::max(rmax, std::abs(r[i])), umax = std::max(umax, std::abs(rot[i]));
   // the diagonal block is ~0.5; a rotation must be annihilated to quadrature/geometry accuracy
-  EXPECT_LT(rmax / umax, 2e-2);
+  EXPECT_LT(rmax / umax, 1e-4);
   EXPECT_GT(scale, 0.3);
 }
 
@@ -107,6 +107,56 @@ TEST(Operator, KelvinDirichletConverges)
 {
   const double e1 = kelvin_dirichlet_error(2), e2 = kelvin_dirichlet_error(3);
   std::printf("kelvin dirichlet traction error: %.3e %.3e order %.2f\n", e1, e2, std::log2(e1 / e2));
-  EXPECT_LT(e2, 2e-2);
+  EXPECT_LT(e2, 2.5e-2);
   EXPECT_GT(std::log2(e1 / e2), 1.5);
+}
+
+TEST(Operator, BlocksEqualTheFullMatrixWithSharpNodes)
+{
+  const SurfaceMesh mesh = hssbem::test::unit_cube(2);
+  const Discretization disc(mesh, 40.0);
+  BemOperator op(disc, Material{1000.0, 0.3});
+  const Dense d = dense_hg(op);
+  op.compute_rigid_body_terms(iota(disc.num_nodes()));
+  const std::vector<int> I = {0, 5, 7, 12, disc.num_nodes() - 1}, J = {1, 5, 9, 12, 20, 21};
+  const long ld = 3 * J.size();
+  std::vector<double> H(3 * I.size() * ld), G(H.size());
+  op.fill_hg(I, J, H.data(), G.data(), ld);
+  double err = 0, scale = 0;
+  for (std::size_t r = 0; r < 3 * I.size(); ++r)
+    for (std::size_t c = 0; c < 3 * J.size(); ++c) {
+      const size_t R = 3 * I[r / 3] + r % 3, C = 3 * J[c / 3] + c % 3;
+      err = std::max({err, std::abs(H[r * ld + c] - d.H[R * d.n + C]), std::abs(G[r * ld + c] - d.G[R * d.n + C])});
+      scale = std::max({scale, std::abs(d.H[R * d.n + C]), std::abs(d.G[R * d.n + C])});
+    }
+  EXPECT_LT(err, 1e-13 * scale);
+  EXPECT_GT(scale, 0.0);
+}
+
+TEST(Operator, SystemColumnsAreHWhereUIsUnknownAndMinusGWhereTIs)
+{
+  const SurfaceMesh mesh = icosphere(1);
+  const Discretization disc(mesh, 40.0);
+  BemOperator op(disc, Material{1000.0, 0.3});
+  const Dense d = dense_hg(op);
+  SystemSelection sel{std::vector<std::array<bool, 3>>(disc.num_nodes()), std::vector<Vec3>(disc.num_nodes()), {}};
+  for (int i = 0; i < disc.num_nodes(); ++i)
+    for (int c = 0; c < 3; ++c) {
+      sel.displacement_known[i][c] = (i * 3 + c) % 7 < 3; // a mixed pattern
+      sel.known[i][c] = std::sin(1.0 + i + 0.3 * c);
+    }
+  std::vector<double> A(size_t(d.n) * d.n), b(d.n);
+  fill_system_block(op, sel, iota(disc.num_nodes()), iota(disc.num_nodes()), A.data(), d.n, b.data());
+  double err = 0;
+  for (int r = 0; r < d.n; ++r) {
+    double br = 0;
+    for (int c = 0; c < d.n; ++c) {
+      const bool uk = sel.displacement_known[c / 3][c % 3];
+      const double expect = uk ? -d.G[size_t(r) * d.n + c] : d.H[size_t(r) * d.n + c];
+      err = std::max(err, std::abs(A[size_t(r) * d.n + c] - expect));
+      br += uk ? -d.H[size_t(r) * d.n + c] * sel.known[c / 3][c % 3] : d.G[size_t(r) * d.n + c] * sel.known[c / 3][c % 3];
+    }
+    err = std::max(err, std::abs(b[r] - br));
+  }
+  EXPECT_LT(err, 1e-12);
 }

@@ -8,7 +8,7 @@
 #include <cstdio>
 
 using namespace hssbem;
-using namespace hssbem::testing;
+using namespace hssbem::test;
 
 namespace {
 

@@ -1,0 +1,852 @@
+#!/usr/bin/python3
+"""Command-line tests of the hssbem driver: bad input must fail cleanly, good input must work.
+
+Usage:
+    /usr/bin/python3 test_cli.py --driver PATH/hssbem --meshes REPO/meshes [--mpiexec mpiexec]
+                                 [unittest arguments, e.g. a class name such as MeshTopologyTests]
+
+Every failure case writes its inputs into a fresh temporary directory, runs the driver there
+(serially and without mpirun unless the case is about ranks) with `-o <tmp>/out.h5`, and asserts
+  * a non-zero exit status,
+  * that stdout + stderr name the problem (file, line, index, key or option at fault),
+  * that no result (*.h5, *.xdmf) and no temporary file (*.tmp.*) was left in the directory.
+The positive cases check the default example's result file with h5py, the acceptance of an
+inward-oriented mesh, -help, and that every shipped example runs.
+
+h5py and numpy are needed: on Debian use /usr/bin/python3 (python3-h5py, python3-numpy).
+"""
+
+import argparse
+import glob
+import json
+import os
+import random
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import unittest
+
+DRIVER = None
+MESHES = None
+MPIEXEC = None
+
+# A single failing case must not hang the suite; the largest example takes a few seconds.
+TIMEOUT_ERROR = 120
+TIMEOUT_RUN = 300
+
+ENV = dict(os.environ)
+ENV.setdefault("OMPI_ALLOW_RUN_AS_ROOT", "1")
+ENV.setdefault("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+ENV.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+# ---------------------------------------------------------------------------------------------
+# Small meshes written by hand
+
+# Unit cube [0,1]^3: vertex i has coordinates given by its bits (x = bit 0, y = bit 1, z = bit 2).
+CUBE_VERTICES = [(float(i & 1), float((i >> 1) & 1), float((i >> 2) & 1)) for i in range(8)]
+# Two triangles per face, right-hand normals pointing out of the cube.
+CUBE_TRIANGLES = [
+    (0, 2, 3), (0, 3, 1),  # z = 0, normal -z
+    (4, 5, 7), (4, 7, 6),  # z = 1, normal +z
+    (0, 1, 5), (0, 5, 4),  # y = 0, normal -y
+    (2, 6, 7), (2, 7, 3),  # y = 1, normal +y
+    (0, 4, 6), (0, 6, 2),  # x = 0, normal -x
+    (1, 3, 7), (1, 7, 5),  # x = 1, normal +x
+]
+
+
+def off_text(vertices, triangles):
+    lines = ["OFF", "%d %d 0" % (len(vertices), len(triangles))]
+    lines += ["%.17g %.17g %.17g" % tuple(v) for v in vertices]
+    lines += ["3 %d %d %d" % tuple(t) for t in triangles]
+    return "\n".join(lines) + "\n"
+
+
+def tetrahedron(offset, base):
+    """A closed, outward tetrahedron with vertex indices starting at `base`."""
+    ox, oy, oz = offset
+    verts = [(ox, oy, oz), (ox + 1, oy, oz), (ox, oy + 1, oz), (ox, oy, oz + 1)]
+    tris = [(0, 2, 1), (0, 1, 3), (0, 3, 2), (1, 2, 3)]
+    return verts, [tuple(base + i for i in t) for t in tris]
+
+
+def flipped(tri):
+    return (tri[0], tri[2], tri[1])
+
+
+# ---------------------------------------------------------------------------------------------
+# Helpers
+
+
+class Result:
+    def __init__(self, cmd, proc):
+        self.cmd = cmd
+        self.returncode = proc.returncode
+        self.stdout = proc.stdout
+        self.stderr = proc.stderr
+        self.output = proc.stdout + "\n" + proc.stderr
+
+    def describe(self):
+        return "command: %s\nexit status: %s\n--- stdout ---\n%s\n--- stderr ---\n%s" % (
+            " ".join(self.cmd), self.returncode, self.stdout.strip(), self.stderr.strip())
+
+
+class CliTestCase(unittest.TestCase):
+    """A fresh temporary directory per test, helpers to write inputs and run the driver."""
+
+    maxDiff = None
+
+    def setUp(self):
+        self.tmp = tempfile.mkdtemp(prefix="hssbem-cli-")
+        self.out = os.path.join(self.tmp, "out.h5")
+
+    def tearDown(self):
+        # Restore permissions a test may have removed, so that the directory can be deleted.
+        for root, dirs, files in os.walk(self.tmp):
+            for name in dirs + files:
+                try:
+                    os.chmod(os.path.join(root, name), 0o700)
+                except OSError:
+                    pass
+        shutil.rmtree(self.tmp, ignore_errors=True)
+
+    # --- inputs ---
+
+    def path(self, name):
+        return os.path.join(self.tmp, name)
+
+    def write(self, name, content):
+        mode = "wb" if isinstance(content, bytes) else "w"
+        with open(self.path(name), mode) as f:
+            f.write(content)
+        return self.path(name)
+
+    def write_cube(self, name="cube.off", triangles=None, vertices=None):
+        return self.write(name, off_text(vertices or CUBE_VERTICES,
+                                         CUBE_TRIANGLES if triangles is None else triangles))
+
+    def copy_mesh(self, name):
+        """Copy a shipped mesh into the temp dir; returns its file name there."""
+        shutil.copy(os.path.join(MESHES, name), self.path(name))
+        return name
+
+    def problem(self, mesh="cube.off", material=None, boundary=None, name="problem.json",
+                **extra):
+        """Write a problem file; the defaults give a valid, balanced pure-traction problem."""
+        spec = {"mesh": mesh, "material": material or {"E": 1000.0, "nu": 0.3}}
+        spec["boundary"] = boundary if boundary is not None else [
+            {"where": "all", "pressure": 10.0}]
+        spec.update(extra)
+        return self.write(name, json.dumps(spec, indent=2))
+
+    def cube_l0_problem(self, boundary, **kw):
+        """A problem on the shipped cube_l0.msh (regions x0..z1; vertex 0 = (0,0,0))."""
+        return self.problem(mesh=self.copy_mesh("cube_l0.msh"), boundary=boundary, **kw)
+
+    # --- running ---
+
+    def run_driver(self, *args, np=None, timeout=TIMEOUT_ERROR, cwd=None):
+        cmd = [DRIVER] + [str(a) for a in args]
+        if np is not None:
+            cmd = [MPIEXEC, "-n", str(np), "--oversubscribe"] + cmd
+        proc = subprocess.run(cmd, cwd=cwd or self.tmp, env=ENV, stdout=subprocess.PIPE,
+                              stderr=subprocess.PIPE, universal_newlines=True,
+                              errors="replace", timeout=timeout)
+        return Result(cmd, proc)
+
+    def run_problem(self, problem="problem.json", *args, **kw):
+        return self.run_driver("-problem", problem, "-o", self.out, *args, **kw)
+
+    # --- assertions ---
+
+    def leftovers(self):
+        found = []
+        for root, dirs, files in os.walk(self.tmp):
+            for name in files + dirs:
+                if (name.endswith(".h5") or name.endswith(".xdmf") or ".tmp." in name):
+                    found.append(os.path.relpath(os.path.join(root, name), self.tmp))
+        return sorted(found)
+
+    def assertFailsCleanly(self, result, *patterns):
+        """Non-zero exit, every pattern (regex, case-insensitive) in the output, no files left."""
+        if os.environ.get("HSSBEM_CLI_SHOW"):  # for reviewing the messages by eye
+            sys.stderr.write("\n[%s] exit %s: %s\n" % (self.id().split(".", 1)[1],
+                             result.returncode, result.output.strip()[:600]))
+        self.assertNotEqual(result.returncode, 0,
+                            "expected a non-zero exit status\n" + result.describe())
+        for p in patterns:
+            self.assertRegex(result.output, re.compile(p, re.IGNORECASE | re.DOTALL),
+                             "the message does not name the problem (%r)\n%s"
+                             % (p, result.describe()))
+        self.assertEqual(self.leftovers(), [],
+                         "output or temporary files left behind\n" + result.describe())
+        # A crash (signal) is not a clean failure.
+        self.assertGreater(result.returncode, 0, "killed by a signal\n" + result.describe())
+        self.assertNotRegex(result.output, r"Segmentation|Caught signal|core dumped",
+                            "the driver crashed\n" + result.describe())
+
+    def assertErrorLine(self, result):
+        """The driver's own error line (not a PETSc error block) is present."""
+        self.assertRegex(result.output, r"hssbem: error: ",
+                         "no 'hssbem: error:' line\n" + result.describe())
+
+    def assertSucceeds(self, result, *outputs):
+        self.assertEqual(result.returncode, 0, "expected exit status 0\n" + result.describe())
+        for o in outputs:
+            self.assertTrue(os.path.isfile(o), "missing output %s\n%s" % (o, result.describe()))
+        tmp_files = [f for f in self.leftovers() if ".tmp." in f]
+        self.assertEqual(tmp_files, [], "temporary files left behind\n" + result.describe())
+
+
+# ---------------------------------------------------------------------------------------------
+# Command line and problem file
+
+
+class CommandLineTests(CliTestCase):
+    def test_missing_problem_option(self):
+        self.write_cube()
+        r = self.run_driver("-o", self.out)
+        self.assertFailsCleanly(r, r"-problem")
+        self.assertErrorLine(r)
+
+    def test_missing_problem_file(self):
+        r = self.run_problem("no_such_problem.json")
+        self.assertFailsCleanly(r, r"no_such_problem\.json")
+        self.assertErrorLine(r)
+
+    def test_unknown_option_typo(self):
+        self.write_cube()
+        self.problem()
+        r = self.run_problem("problem.json", "-ksp_rtoll", "1e-8")
+        self.assertFailsCleanly(r, r"-ksp_rtoll")
+
+    def test_unknown_option_bogus(self):
+        self.write_cube()
+        self.problem()
+        r = self.run_problem("problem.json", "-bogus_option", "1")
+        self.assertFailsCleanly(r, r"-bogus_option")
+
+    def test_malformed_json(self):
+        self.write_cube()
+        self.write("problem.json", '{"mesh": "cube.off", "material": {"E": 1000, "nu": 0.3},\n'
+                                   ' "boundary": [{"where": "all", "pressure": 10}\n}\n')
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"problem\.json", r"malformed JSON|parse|syntax")
+        self.assertErrorLine(r)
+
+    def test_empty_problem_file(self):
+        self.write("problem.json", "")
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"problem\.json")
+        self.assertErrorLine(r)
+
+    def test_unknown_top_level_key(self):
+        self.write_cube()
+        self.problem(materail={"E": 1.0})
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"problem\.json", r"unknown key 'materail'")
+        self.assertErrorLine(r)
+
+    def test_unknown_key_in_rule(self):
+        self.write_cube()
+        self.problem(boundary=[{"where": "all", "presure": 10.0}])
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"problem\.json", r"boundary\[0\]", r"presure")
+        self.assertErrorLine(r)
+
+    def test_output_in_nonexistent_directory(self):
+        self.write_cube()
+        self.problem()
+        target = os.path.join(self.tmp, "no_such_dir", "out.h5")
+        r = self.run_driver("-problem", "problem.json", "-o", target)
+        self.assertFailsCleanly(r, r"no_such_dir")
+        self.assertErrorLine(r)
+        self.assertFalse(os.path.exists(os.path.join(self.tmp, "no_such_dir")))
+
+    def test_output_in_nonexistent_directory_from_problem_file(self):
+        self.write_cube()
+        self.problem(output="missing_dir/result.h5")
+        r = self.run_driver("-problem", "problem.json")
+        self.assertFailsCleanly(r, r"missing_dir")
+        self.assertErrorLine(r)
+
+    def test_help(self):
+        r = self.run_driver("-help")
+        self.assertEqual(r.returncode, 0, r.describe())
+        self.assertNotRegex(r.output, r"hssbem: error", r.describe())
+        # Each driver option with its default, in PETSc's "-key <now default : formerly ...>" form.
+        for key in ("problem", "mesh", "E", "nu", "o"):
+            self.assertRegex(r.output, r"(?m)^\s*-%s <" % re.escape(key),
+                             "-help does not list -%s with its default\n%s" % (key, r.describe()))
+        self.assertEqual(self.leftovers(), [])
+
+
+# ---------------------------------------------------------------------------------------------
+# Mesh files that cannot be read
+
+
+class MeshFileTests(CliTestCase):
+    def test_missing_mesh_file(self):
+        self.problem(mesh="no_such_mesh.msh")
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"no_such_mesh\.msh", r"cannot open|no such file|not found")
+        self.assertErrorLine(r)
+
+    def test_missing_mesh_file_from_command_line(self):
+        self.write_cube()
+        self.problem()
+        r = self.run_problem("problem.json", "-mesh", self.path("absent.off"))
+        self.assertFailsCleanly(r, r"absent\.off")
+        self.assertErrorLine(r)
+
+    def test_mesh_path_is_a_directory(self):
+        os.mkdir(self.path("dir.msh"))
+        self.problem(mesh="dir.msh")
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"dir\.msh", r"directory")
+        self.assertErrorLine(r)
+
+    @unittest.skipIf(hasattr(os, "geteuid") and os.geteuid() == 0,
+                     "root reads files of mode 000")
+    def test_unreadable_mesh_file(self):
+        self.write_cube()
+        os.chmod(self.path("cube.off"), 0)
+        self.problem()
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"cube\.off", r"permission denied|cannot open")
+        self.assertErrorLine(r)
+
+    def test_garbage_msh_random_bytes(self):
+        rng = random.Random(12345)
+        self.write("garbage.msh", bytes(rng.randrange(256) for _ in range(4096)))
+        self.problem(mesh="garbage.msh")
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"garbage\.msh")
+        self.assertErrorLine(r)
+
+    def test_garbage_off_text(self):
+        self.write("garbage.off", "this is not a mesh\njust some words 1 2 3\n")
+        self.problem(mesh="garbage.off")
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"garbage\.off:1\b", r"OFF")
+        self.assertErrorLine(r)
+
+    def test_garbage_stl_random_bytes(self):
+        rng = random.Random(777)
+        self.write("garbage.stl", bytes(rng.randrange(256) for _ in range(1000)))
+        self.problem(mesh="garbage.stl")
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"garbage\.stl")
+        self.assertErrorLine(r)
+
+    def test_garbage_obj_text(self):
+        self.write("garbage.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 banana\n")
+        self.problem(mesh="garbage.obj")
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"garbage\.obj:4\b", r"banana")
+        self.assertErrorLine(r)
+
+    def test_unknown_mesh_extension(self):
+        self.write("mesh.vtk", "# vtk DataFile Version 3.0\n")
+        self.problem(mesh="mesh.vtk")
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"mesh\.vtk", r"\.vtk")
+        self.assertErrorLine(r)
+
+    def truncated_sphere(self, at_line_end):
+        """sphere_l0.msh cut in the middle of $Elements; returns the last line number kept."""
+        with open(os.path.join(MESHES, "sphere_l0.msh")) as f:
+            text = f.read()
+        start = text.index("$Elements")
+        end = text.index("$EndElements")
+        cut = (start + end) // 2 + 3
+        if at_line_end:
+            cut = text.index("\n", cut) + 1
+        self.write("cut.msh", text[:cut])
+        self.problem(mesh="cut.msh")
+        return text[:cut].rstrip("\n").count("\n") + 1
+
+    def test_truncated_msh_mid_line(self):
+        last = self.truncated_sphere(at_line_end=False)
+        r = self.run_problem()
+        # The partial last line is where the reader stops.
+        self.assertFailsCleanly(r, r"cut\.msh:%d\b" % last, r"element")
+        self.assertErrorLine(r)
+
+    def test_truncated_msh_at_line_end(self):
+        last = self.truncated_sphere(at_line_end=True)
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"cut\.msh:%d\b" % last, r"truncated", r"\$Elements")
+        self.assertErrorLine(r)
+
+    def test_empty_mesh_file(self):
+        self.write("empty.msh", "")
+        self.problem(mesh="empty.msh")
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"empty\.msh")
+        self.assertErrorLine(r)
+
+
+# ---------------------------------------------------------------------------------------------
+# Meshes that read fine but are not a closed, manifold, consistently oriented surface
+
+
+class MeshTopologyTests(CliTestCase):
+    def test_open_surface(self):
+        self.write_cube(triangles=CUBE_TRIANGLES[:-1])  # 11 triangles: one hole
+        self.problem()
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"cube\.off", r"open surface", r"edge \(\d+, \d+\)")
+        self.assertErrorLine(r)
+
+    def test_non_manifold_edge(self):
+        # Two closed tetrahedra sharing the edge (0, 1): four triangles on that edge.
+        va, ta = tetrahedron((0.0, 0.0, 0.0), 0)
+        # The second one is the first turned by 180 degrees about the x axis: it keeps vertices
+        # 0 = (0,0,0) and 1 = (1,0,0) and adds 4 = (0,-1,0) and 5 = (0,0,-1).
+        vb = [(0.0, -1.0, 0.0), (0.0, 0.0, -1.0)]
+        tb = [(0, 4, 1), (0, 1, 5), (0, 5, 4), (1, 4, 5)]
+        self.write("nonmanifold.off", off_text(va + vb, ta + tb))
+        self.problem(mesh="nonmanifold.off")
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"nonmanifold\.off", r"non-manifold", r"edge \(0, 1\)")
+        self.assertErrorLine(r)
+
+    def test_non_manifold_vertex(self):
+        # Two closed tetrahedra touching at vertex 0 = (0,0,0): the second is the first
+        # reflected through the origin (so its triangles are reversed to stay outward).
+        va, ta = tetrahedron((0.0, 0.0, 0.0), 0)
+        vb = [(-1.0, 0.0, 0.0), (0.0, -1.0, 0.0), (0.0, 0.0, -1.0)]  # vertices 4, 5, 6
+        index = {0: 0, 1: 4, 2: 5, 3: 6}
+        tb = [tuple(index[i] for i in flipped(t)) for t in tetrahedron((0, 0, 0), 0)[1]]
+        self.write("touching.off", off_text(va + vb, ta + tb))
+        self.problem(mesh="touching.off")
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"touching\.off", r"non-manifold", r"vertex 0\b")
+        self.assertErrorLine(r)
+
+    def test_inconsistent_orientation(self):
+        tris = list(CUBE_TRIANGLES)
+        tris[5] = flipped(tris[5])
+        self.write_cube(triangles=tris)
+        self.problem()
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"cube\.off", r"inconsistent orientation",
+                                r"triangles (\d+ and 5|5 and \d+)\b")
+        self.assertErrorLine(r)
+
+    def test_degenerate_triangle(self):
+        # Vertex 8 is the midpoint of edge (0, 1); triangle (0, 3, 1) becomes (0, 3, 8) + (8, 3, 1)
+        # and the zero-area triangle (8, 1, 0) closes the seam with (0, 1, 5).
+        verts = CUBE_VERTICES + [(0.5, 0.0, 0.0)]
+        tris = list(CUBE_TRIANGLES)
+        tris[1] = (0, 3, 8)
+        tris.insert(2, (8, 3, 1))
+        tris.append((8, 1, 0))
+        self.write_cube(name="sliver.off", vertices=verts, triangles=tris)
+        self.problem(mesh="sliver.off")
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"sliver\.off", r"degenerate", r"triangle %d\b" % (len(tris) - 1))
+        self.assertErrorLine(r)
+
+    def test_repeated_vertex_in_triangle(self):
+        tris = list(CUBE_TRIANGLES)
+        tris[3] = (4, 7, 7)
+        self.write_cube(triangles=tris)
+        self.problem()
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"cube\.off", r"triangle 3\b", r"repeated vertex")
+        self.assertErrorLine(r)
+
+    def test_duplicate_triangle(self):
+        tris = CUBE_TRIANGLES + [CUBE_TRIANGLES[4]]
+        self.write_cube(triangles=tris)
+        self.problem()
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"cube\.off", r"duplicate", r"triangles 4 and 12\b")
+        self.assertErrorLine(r)
+
+    def test_duplicate_triangle_reversed(self):
+        tris = CUBE_TRIANGLES + [flipped(CUBE_TRIANGLES[7])]
+        self.write_cube(triangles=tris)
+        self.problem()
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"cube\.off", r"duplicate", r"triangles 7 and 12\b")
+        self.assertErrorLine(r)
+
+    def test_vertex_index_out_of_range_in_mesh(self):
+        tris = list(CUBE_TRIANGLES)
+        tris[2] = (4, 5, 8)  # the file has 8 vertices: 0..7
+        self.write_cube(triangles=tris)
+        self.problem()
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"cube\.off:\d+", r"vertex 8\b")
+        self.assertErrorLine(r)
+
+    def test_inward_oriented_mesh_is_accepted(self):
+        self.write_cube(triangles=[flipped(t) for t in CUBE_TRIANGLES])
+        self.problem()
+        r = self.run_problem(timeout=TIMEOUT_RUN)
+        self.assertSucceeds(r, self.out, self.path("out.xdmf"))
+        self.assertRegex(r.output, r"(?i)notice[^\n]*inward",
+                         "no notice about the inward orientation\n" + r.describe())
+
+
+# ---------------------------------------------------------------------------------------------
+# Material
+
+
+class MaterialTests(CliTestCase):
+    def setUp(self):
+        super().setUp()
+        self.write_cube()
+
+    def check_file(self, material, *patterns):
+        self.problem(material=material)
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"invalid material", *patterns)
+        self.assertErrorLine(r)
+
+    def check_cli(self, option, value, *patterns):
+        self.problem()
+        r = self.run_problem("problem.json", option, value)
+        self.assertFailsCleanly(r, r"invalid material", *patterns)
+        self.assertErrorLine(r)
+
+    def test_nu_one_half_in_file(self):
+        self.check_file({"E": 1000.0, "nu": 0.5}, r"\bnu = 0\.5\b", r"incompressible")
+
+    def test_nu_above_one_half_in_file(self):
+        self.check_file({"E": 1000.0, "nu": 0.6}, r"\bnu = 0\.6\b")
+
+    def test_nu_minus_one_in_file(self):
+        self.check_file({"E": 1000.0, "nu": -1.0}, r"\bnu = -1\b")
+
+    def test_E_zero_in_file(self):
+        self.check_file({"E": 0.0, "nu": 0.3}, r"\bE = 0\b")
+
+    def test_E_negative_in_file(self):
+        self.check_file({"E": -5.0, "nu": 0.3}, r"\bE = -5\b")
+
+    def test_mu_zero_in_file(self):
+        self.check_file({"lambda": 1000.0, "mu": 0.0}, r"\bmu = 0\b")
+
+    def test_nu_one_half_on_command_line(self):
+        self.check_cli("-nu", "0.5", r"\bnu = 0\.5\b", r"incompressible")
+
+    def test_nu_above_one_half_on_command_line(self):
+        self.check_cli("-nu", "0.6", r"\bnu = 0\.6\b")
+
+    def test_nu_minus_one_on_command_line(self):
+        self.check_cli("-nu", "-1", r"\bnu = -1\b")
+
+    def test_E_zero_on_command_line(self):
+        self.check_cli("-E", "0", r"\bE = 0\b")
+
+    def test_E_negative_on_command_line(self):
+        self.check_cli("-E", "-1e3", r"\bE = -1000\b")
+
+    def test_material_missing_nu(self):
+        self.problem(material={"E": 1000.0})
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"problem\.json", r"material", r"nu")
+        self.assertErrorLine(r)
+
+
+# ---------------------------------------------------------------------------------------------
+# Boundary rules that do not fit the mesh
+
+
+class BoundaryRuleTests(CliTestCase):
+    def test_rule_selects_no_vertex(self):
+        self.write_cube()
+        self.problem(boundary=[{"where": "all", "pressure": 10.0},
+                               {"where": {"box": [[5, 5, 5], [6, 6, 6]]}, "traction": [1, 0, 0]}])
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"problem\.json", r"boundary\[1\]", r"selects no vertex")
+        self.assertErrorLine(r)
+
+    def test_sphere_selects_no_vertex(self):
+        self.write_cube()
+        self.problem(boundary=[{"where": {"sphere": {"center": [0.5, 0.5, 0.5], "radius": 0.1}},
+                                "displacement": [0, 0, 0]}])
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"boundary\[0\]", r"selects no vertex")
+        self.assertErrorLine(r)
+
+    def test_vertex_index_out_of_range(self):
+        self.write_cube()
+        self.problem(boundary=[{"where": "all", "pressure": 10.0},
+                               {"where": {"vertices": [0, 8]}, "displacement": [0, 0, 0]}])
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"problem\.json", r"boundary\[1\]", r"vertex index 8\b",
+                                r"out of range")
+        self.assertErrorLine(r)
+
+    def test_negative_vertex_index(self):
+        self.write_cube()
+        self.problem(boundary=[{"where": {"vertices": [-1]}, "displacement": [0, 0, 0]}])
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"problem\.json", r"boundary\[0\]", r"-1", r"negative")
+        self.assertErrorLine(r)
+
+    def test_row_count_mismatch(self):
+        self.write_cube()
+        self.problem(boundary=[{"where": {"vertices": [0, 1, 2]},
+                                "displacement": [[0, 0, 0], [0, 0, 0]]}])
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"problem\.json", r"boundary\[0\]", r"\b2 rows\b",
+                                r"\b3 vertices\b")
+        self.assertErrorLine(r)
+
+    def test_pressure_count_mismatch(self):
+        self.write_cube()
+        self.problem(boundary=[{"where": "all", "pressure": [1.0, 2.0, 3.0]}])
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"problem\.json", r"boundary\[0\]", r"\b3 values\b",
+                                r"\b8 vertices\b")
+        self.assertErrorLine(r)
+
+    def test_unknown_region_name(self):
+        self.cube_l0_problem([{"where": {"region": "z0"}, "displacement": [0, 0, 0]},
+                              {"where": {"region": "top_face"}, "traction": [0, 0, 1]}])
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"problem\.json", r"boundary\[1\]",
+                                r"unknown region 'top_face'", r"z1")
+        self.assertErrorLine(r)
+
+    def test_unknown_region_tag(self):
+        self.cube_l0_problem([{"where": {"region": 42}, "displacement": [0, 0, 0]}])
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"boundary\[0\]", r"unknown region 42\b")
+        self.assertErrorLine(r)
+
+    def test_region_on_mesh_without_regions(self):
+        self.write_cube()
+        self.problem(boundary=[{"where": {"region": "z0"}, "displacement": [0, 0, 0]}])
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"boundary\[0\]", r"region 'z0'")
+        self.assertErrorLine(r)
+
+    def test_rule_with_two_values(self):
+        self.write_cube()
+        self.problem(boundary=[{"where": "all", "pressure": 1.0, "traction": [0, 0, 1]}])
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"problem\.json", r"boundary\[0\]")
+        self.assertErrorLine(r)
+
+    def test_interior_point_outside(self):
+        self.write_cube()
+        self.problem(interior_points=[[0.5, 0.5, 0.5], [2.0, 0.5, 0.5]])
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"problem\.json", r"interior_points\[1\]")
+        self.assertErrorLine(r)
+
+
+# ---------------------------------------------------------------------------------------------
+# Bodies the solver cannot hold
+
+
+class ConstraintTests(CliTestCase):
+    def test_one_vertex_fixed_rotations_free(self):
+        # Vertex 0 of sphere_l0 (the pole (0,0,1)) fully fixed, traction on the southern cap:
+        # the body can still rotate about the pole.
+        self.problem(mesh=self.copy_mesh("sphere_l0.msh"),
+                     boundary=[{"where": {"region": "south"}, "traction": [0, 0, -10.0]},
+                               {"where": {"vertices": [0]}, "displacement": [0, 0, 0]}])
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"problem\.json", r"free to move|rigid|unconstrained",
+                                r"rotat")
+        self.assertErrorLine(r)
+
+    def test_one_corner_vertex_fixed_rotations_free(self):
+        # Vertex 0 = corner (0,0,0) of cube_l0 fully fixed, traction on the top face: held at one
+        # point only, the body can still rotate (and the load's moment about that point is not
+        # balanced). The corner is a sharp vertex, so it carries several dof nodes; fixing them
+        # all still holds the body at a single point of the surface.
+        self.cube_l0_problem([{"where": {"vertices": [0]}, "displacement": [0, 0, 0]},
+                              {"where": {"region": "z1"}, "traction": [0, 0, 10.0]}])
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"problem\.json", r"free to move|rigid|unconstrained",
+                                r"rotat")
+        self.assertErrorLine(r)
+
+    def test_rollers_only_translation_free(self):
+        # u_z = 0 on z0 only: translations in x and y (and rotation about z) stay free.
+        self.cube_l0_problem([{"where": {"region": "z0"}, "displacement": [None, None, 0]},
+                              {"where": {"region": "z1"}, "traction": [0, 0, 10.0]}])
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"problem\.json", r"free to move|rigid|unconstrained",
+                                r"translat")
+        self.assertErrorLine(r)
+
+    def test_pure_traction_unbalanced_pressure(self):
+        # Pressure on one face only: a net force, nothing holds the body.
+        self.cube_l0_problem([{"where": {"region": "x0"}, "pressure": 100.0}])
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"problem\.json", r"not balanced|unbalanced|imbalance")
+        self.assertErrorLine(r)
+
+    def test_pure_traction_unbalanced_traction(self):
+        self.write_cube()
+        self.problem(boundary=[{"where": "all", "traction": [0, 0, 5.0]}])
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"problem\.json", r"not balanced|unbalanced|imbalance")
+        self.assertErrorLine(r)
+
+
+# ---------------------------------------------------------------------------------------------
+# Errors at several ranks
+
+
+class ParallelTests(CliTestCase):
+    def setUp(self):
+        super().setUp()
+        if not MPIEXEC:
+            self.skipTest("no mpiexec given (--mpiexec)")
+
+    def test_bad_material_two_ranks(self):
+        self.write_cube()
+        self.problem(material={"E": 1000.0, "nu": 0.5})
+        r = self.run_problem(np=2)
+        self.assertFailsCleanly(r, r"invalid material", r"\bnu = 0\.5\b")
+        self.assertErrorLine(r)
+
+    def test_unbalanced_load_two_ranks(self):
+        self.cube_l0_problem([{"where": {"region": "x0"}, "pressure": 100.0}])
+        r = self.run_problem(np=2)
+        self.assertFailsCleanly(r, r"problem\.json", r"not balanced|unbalanced|imbalance")
+        self.assertErrorLine(r)
+
+    def test_unknown_option_two_ranks(self):
+        self.write_cube()
+        self.problem()
+        r = self.run_problem("problem.json", "-bogus_option", "1", np=2)
+        self.assertFailsCleanly(r, r"-bogus_option")
+
+    def test_unwritable_output_two_ranks(self):
+        self.write_cube()
+        self.problem()
+        r = self.run_driver("-problem", "problem.json", "-o", self.path("nodir/out.h5"), np=2)
+        self.assertFailsCleanly(r, r"nodir")
+        self.assertErrorLine(r)
+
+    def test_cube_two_ranks(self):
+        self.write_cube()
+        self.problem()
+        r = self.run_problem(np=2, timeout=TIMEOUT_RUN)
+        self.assertSucceeds(r, self.out, self.path("out.xdmf"))
+
+
+# ---------------------------------------------------------------------------------------------
+# The default example and its result file
+
+
+class DefaultExampleTests(CliTestCase):
+    def test_sphere_pressure_result_file(self):
+        import h5py
+        import numpy as np
+
+        problem = os.path.join(MESHES, "examples", "sphere_pressure.json")
+        r = self.run_driver("-problem", problem, "-o", "X.h5", timeout=TIMEOUT_RUN)
+        h5 = self.path("X.h5")
+        self.assertSucceeds(r, h5, self.path("X.xdmf"))
+        self.assertNotRegex(r.output, r"hssbem: error", r.describe())
+
+        with h5py.File(h5, "r") as f:
+            def shape(name):
+                self.assertIn(name, f, "dataset %s missing" % name)
+                self.assertIsInstance(f[name], h5py.Dataset, name)
+                return f[name].shape
+
+            nv, c = shape("/mesh/vertices")
+            self.assertEqual(c, 3)
+            nt, c = shape("/mesh/triangles")
+            self.assertEqual(c, 3)
+            self.assertEqual((nv, nt), (998, 1992))  # sphere_l1, see meshes/README.md
+            self.assertEqual(shape("/fields/displacement"), (nv, 3))
+            self.assertEqual(shape("/fields/traction"), (nv, 3))
+            self.assertEqual(shape("/fields/traction_corner"), (nt, 3, 3))
+            self.assertEqual(shape("/bc/displacement_prescribed"), (nv, 3))
+            self.assertIn("/interior", f)
+            ip = shape("/interior/displacement")
+            self.assertEqual(ip, (5, 3))  # five interior points in the example
+
+            for key in ("E", "nu", "solver", "iterations", "residual", "ranks", "version"):
+                self.assertIn(key, f.attrs, "root attribute %s missing" % key)
+            self.assertAlmostEqual(float(f.attrs["E"]), 1000.0)
+            self.assertAlmostEqual(float(f.attrs["nu"]), 0.3)
+            self.assertEqual(int(f.attrs["ranks"]), 1)
+            self.assertLess(float(f.attrs["residual"]), 1e-6)
+            self.assertIn("/timings", f)
+            self.assertGreater(len(f["/timings"].attrs), 0, "/timings has no attributes")
+
+            # A physical sanity check: uniform compression u = -0.04 x (meshes/README.md).
+            x = f["/mesh/vertices"][()]
+            u = f["/fields/displacement"][()]
+            self.assertTrue(np.all(np.isfinite(u)))
+            self.assertLess(np.max(np.abs(u + 0.04 * x)), 0.04 * 0.05)
+            self.assertFalse(np.any(f["/bc/displacement_prescribed"][()]))
+
+    def test_output_from_problem_file_is_relative_to_cwd(self):
+        shutil.copy(os.path.join(MESHES, "cube_l0.msh"), self.path("cube_l0.msh"))
+        problem = os.path.join(MESHES, "examples", "cube_tension.json")
+        work = self.path("run")
+        os.mkdir(work)
+        r = self.run_driver("-problem", problem, "-mesh", self.path("cube_l0.msh"), cwd=work,
+                            timeout=TIMEOUT_RUN)
+        self.assertSucceeds(r, os.path.join(work, "cube_tension.h5"),
+                            os.path.join(work, "cube_tension.xdmf"))
+
+
+# ---------------------------------------------------------------------------------------------
+# Every shipped example runs (methods added in main(), one per meshes/examples/*.json)
+
+
+class ExampleTests(CliTestCase):
+    pass
+
+
+def add_example_tests():
+    for problem in sorted(glob.glob(os.path.join(MESHES, "examples", "*.json"))):
+        stem = os.path.splitext(os.path.basename(problem))[0]
+
+        def test(self, problem=problem):
+            # Run from the temp dir without -o: the example's own output lands there.
+            r = self.run_driver("-problem", problem, timeout=TIMEOUT_RUN)
+            self.assertEqual(r.returncode, 0, "expected exit status 0\n" + r.describe())
+            results = [f for f in self.leftovers() if f.endswith(".h5")]
+            self.assertEqual(len(results), 1, "expected one result file, found %s\n%s"
+                             % (self.leftovers(), r.describe()))
+            xdmf = os.path.splitext(results[0])[0] + ".xdmf"
+            self.assertTrue(os.path.isfile(self.path(xdmf)), r.describe())
+            self.assertEqual([f for f in self.leftovers() if ".tmp." in f], [])
+
+        test.__name__ = "test_" + re.sub(r"\W", "_", stem)
+        test.__doc__ = None
+        setattr(ExampleTests, test.__name__, test)
+
+
+def main():
+    global DRIVER, MESHES, MPIEXEC
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--driver", required=True, help="path of the hssbem executable")
+    parser.add_argument("--meshes", required=True, help="the repository's meshes/ directory")
+    parser.add_argument("--mpiexec", default=shutil.which("mpiexec") or "",
+                        help="MPI launcher for the multi-rank cases")
+    args, rest = parser.parse_known_args()
+    DRIVER = os.path.abspath(args.driver)
+    MESHES = os.path.abspath(args.meshes)
+    MPIEXEC = args.mpiexec
+    if not os.access(DRIVER, os.X_OK):
+        parser.error("driver %s is not an executable" % DRIVER)
+    if not os.path.isdir(os.path.join(MESHES, "examples")):
+        parser.error("%s has no examples/ directory" % MESHES)
+    add_example_tests()
+    unittest.main(argv=[sys.argv[0]] + rest, verbosity=1)
+
+
+if __name__ == "__main__":
+    main()
