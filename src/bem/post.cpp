@@ -72,11 +72,11 @@ std::array<double, 2> load_imbalance(const Discretization &disc, const std::vect
 {
   const std::vector<double> area = node_areas(disc);
   Vec3 centre{}, F{}, M{};
-  for (const auto &n : disc.nodes()) centre = centre + n.point;
+  for (int i = 0; i < disc.num_nodes(); ++i) centre = centre + disc.node_position(i);
   centre = (1.0 / std::max(1, disc.num_nodes())) * centre;
   double fscale = 0, mscale = 0;
   for (int i = 0; i < disc.num_nodes(); ++i) {
-    const Vec3 arm = disc.node(i).point - centre, f = area[i] * t[i];
+    const Vec3 arm = disc.node_position(i) - centre, f = area[i] * t[i];
     F = F + f;
     M = M + cross(arm, f);
     fscale += norm(f);

@@ -37,10 +37,10 @@ struct Frame {
 Frame frame_of(const Discretization &disc)
 {
   Frame f;
-  for (const auto &n : disc.nodes()) f.centre = f.centre + n.point;
+  for (int i = 0; i < disc.num_nodes(); ++i) f.centre = f.centre + disc.node_position(i);
   f.centre = (1.0 / std::max(1, disc.num_nodes())) * f.centre;
   double r = 0;
-  for (const auto &n : disc.nodes()) r = std::max(r, norm(n.point - f.centre));
+  for (int i = 0; i < disc.num_nodes(); ++i) r = std::max(r, norm(disc.node_position(i) - f.centre));
   f.size = r > 0 ? r : 1;
   return f;
 }
@@ -73,7 +73,7 @@ ConstraintReport analyse_constraints(const Discretization &disc, const std::vect
     for (int c = 0; c < 3; ++c) {
       if (!known[i][c]) continue;
       double row[6];
-      for (int m = 0; m < 6; ++m) row[m] = mode(f, m, disc.node(i).point, c);
+      for (int m = 0; m < 6; ++m) row[m] = mode(f, m, disc.node_position(i), c);
       for (int a = 0; a < 6; ++a)
         for (int b = 0; b < 6; ++b) gram[6 * a + b] += row[a] * row[b];
     }
@@ -94,7 +94,7 @@ std::vector<double> orthonormal_rigid_modes(const Discretization &disc)
   std::vector<double> Q(static_cast<std::size_t>(n) * 6);
   for (int i = 0; i < disc.num_nodes(); ++i)
     for (int c = 0; c < 3; ++c)
-      for (int m = 0; m < 6; ++m) Q[(3 * static_cast<std::size_t>(i) + c) * 6 + m] = mode(f, m, disc.node(i).point, c);
+      for (int m = 0; m < 6; ++m) Q[(3 * static_cast<std::size_t>(i) + c) * 6 + m] = mode(f, m, disc.node_position(i), c);
   // Modified Gram-Schmidt, twice for safety: six columns, any size.
   for (int pass = 0; pass < 2; ++pass)
     for (int m = 0; m < 6; ++m) {
@@ -118,7 +118,7 @@ std::array<double, 6> remove_rigid_motion(const Discretization &disc, std::vecto
   for (int i = 0; i < disc.num_nodes(); ++i)
     for (int c = 0; c < 3; ++c) {
       double row[6];
-      for (int m = 0; m < 6; ++m) row[m] = mode(f, m, disc.node(i).point, c);
+      for (int m = 0; m < 6; ++m) row[m] = mode(f, m, disc.node_position(i), c);
       for (int a = 0; a < 6; ++a) {
         rhs[a] += row[a] * u[i][c];
         for (int b = 0; b < 6; ++b) normal[6 * a + b] += row[a] * row[b];
@@ -127,7 +127,7 @@ std::array<double, 6> remove_rigid_motion(const Discretization &disc, std::vecto
   lapack::gesv(6, 1, normal, rhs);
   for (int i = 0; i < disc.num_nodes(); ++i)
     for (int c = 0; c < 3; ++c)
-      for (int m = 0; m < 6; ++m) u[i][c] -= rhs[m] * mode(f, m, disc.node(i).point, c);
+      for (int m = 0; m < 6; ++m) u[i][c] -= rhs[m] * mode(f, m, disc.node_position(i), c);
   return {rhs[0], rhs[1], rhs[2], rhs[3] / f.size, rhs[4] / f.size, rhs[5] / f.size};
 }
 

@@ -41,7 +41,7 @@ static void AddRigidRegularization_Private(const std::vector<double> &Q, PetscIn
 PetscErrorCode HssbemAssembleDense(MPI_Comm comm, const hssbem::BemOperator &op, const hssbem::SystemSelection &sel, const std::vector<double> *rigid_modes, Mat *A, Vec *b)
 {
   const PetscInt nn = op.num_nodes(), N = 3 * nn;
-  PetscInt       nstart, nlocal;
+  PetscInt       nstart = 0, nlocal = 0;
   PetscScalar   *a, *rhs;
 
   PetscFunctionBegin;
@@ -127,14 +127,33 @@ static PetscErrorCode KSPSolveInLayout_Private(KSP ksp, Mat op, Vec b, Vec x)
 }
 
 /*@C
-  HssbemSolveDense - Solves A x = b with KSP; defaults are -ksp_type preonly -pc_type lu, and every
-  KSP/PC option applies. A diverged solve is an error.
+  HssbemKSPCreate - Creates the main solver (no prefix) with the defaults -ksp_type preonly
+  -pc_type lu and applies the options database, before there is a matrix, so that option errors
+  surface before the expensive assembly.
 
   Level: intermediate
 @*/
-PetscErrorCode HssbemSolveDense(Mat A, Vec b, Vec x, HssbemSolveInfo *info)
+PetscErrorCode HssbemKSPCreate(MPI_Comm comm, KSP *ksp)
 {
-  KSP       ksp;
+  PC pc;
+
+  PetscFunctionBegin;
+  PetscCall(KSPCreate(comm, ksp));
+  PetscCall(KSPSetType(*ksp, KSPPREONLY));
+  PetscCall(KSPGetPC(*ksp, &pc));
+  PetscCall(PCSetType(pc, PCLU));
+  PetscCall(KSPSetFromOptions(*ksp));
+  PetscFunctionReturn(0);
+}
+
+/*@C
+  HssbemSolveDense - Solves A x = b with a KSP from HssbemKSPCreate(); the matrix is converted to
+  the format its factorization needs. A diverged solve is an error.
+
+  Level: intermediate
+@*/
+PetscErrorCode HssbemSolveDense(KSP ksp, Mat A, Vec b, Vec x, HssbemSolveInfo *info)
+{
   PC        pc;
   Mat       F = NULL;
   MatType   ftype;
@@ -146,12 +165,8 @@ PetscErrorCode HssbemSolveDense(Mat A, Vec b, Vec x, HssbemSolveInfo *info)
   PetscCall(PetscLogEventBegin(BEM_Solve, 0, 0, 0, 0));
   PetscCall(FactorMatType_Private(A, &ftype));
   if (ftype) PetscCall(MatConvert(A, ftype, MAT_INITIAL_MATRIX, &F));
-  PetscCall(KSPCreate(PetscObjectComm((PetscObject)A), &ksp));
   PetscCall(KSPSetOperators(ksp, F ? F : A, F ? F : A));
-  PetscCall(KSPSetType(ksp, KSPPREONLY));
   PetscCall(KSPGetPC(ksp, &pc));
-  PetscCall(PCSetType(pc, PCLU));
-  PetscCall(KSPSetFromOptions(ksp));
   if (F) PetscCall(KSPSolveInLayout_Private(ksp, F, b, x));
   else PetscCall(KSPSolve(ksp, b, x));
   PetscCall(KSPGetConvergedReason(ksp, &info->reason));
@@ -173,7 +188,6 @@ PetscErrorCode HssbemSolveDense(Mat A, Vec b, Vec x, HssbemSolveInfo *info)
   PetscCall(VecNorm(b, NORM_2, &bnorm));
   info->residual = bnorm > 0 ? rnorm / bnorm : rnorm;
   PetscCall(VecDestroy(&r));
-  PetscCall(KSPDestroy(&ksp));
   PetscCall(MatDestroy(&F));
   PetscCall(PetscLogEventEnd(BEM_Solve, 0, 0, 0, 0));
   PetscCheck(info->reason > 0, PetscObjectComm((PetscObject)A), PETSC_ERR_NOT_CONVERGED, "the linear solve failed: %s after %" PetscInt_FMT " iterations", KSPConvergedReasons[info->reason], info->iterations);

@@ -42,8 +42,8 @@ PetscErrorCode HssbemProcessOptions(MPI_Comm comm, HssbemAppOptions *opts)
   PetscCall(OptionString_Private("-problem", "Problem file (JSON)", &opts->problem, PetscOptionsObject));
   PetscCall(OptionString_Private("-mesh", "Mesh file (.msh, .stl, .off, .obj); overrides the problem file", &opts->mesh, PetscOptionsObject));
   PetscCall(OptionString_Private("-o", "Result file (.h5); overrides the problem file", &opts->output, PetscOptionsObject));
-  PetscCall(PetscOptionsReal("-E", "Young's modulus; overrides the problem file", "", opts->E, &opts->E, &opts->has_E));
-  PetscCall(PetscOptionsReal("-nu", "Poisson's ratio; overrides the problem file", "", opts->nu, &opts->nu, &opts->has_nu));
+  PetscCall(PetscOptionsReal("-E", "Young's modulus (default: the problem file's)", "", opts->E, &opts->E, &opts->has_E));
+  PetscCall(PetscOptionsReal("-nu", "Poisson's ratio (default: the problem file's)", "", opts->nu, &opts->nu, &opts->has_nu));
   PetscCall(PetscOptionsReal("-bem_feature_angle", "Dihedral angle (degrees) above which an edge is sharp", "", opts->feature_angle, &opts->feature_angle, NULL));
   PetscCall(OptionString_Private("-bem_mat_type", "Operator representation: dense", &opts->mat_type, PetscOptionsObject));
   PetscCall(PetscOptionsInt("-mat_bem_quad_order", "Gauss points per direction on singular triangles", "", opts->quad.duffy_order, &opts->quad.duffy_order, NULL));
@@ -68,13 +68,20 @@ static PetscBool IsLateOption_Private(const char *name)
   return PETSC_FALSE;
 }
 
+/* Options read only during or after KSPSolve()/MatAssemblyEnd() (viewers and reports). */
+static PetscBool IsSolveTimeOption_Private(const char *name)
+{
+  const std::string n(name);
+  return (n.find("view") != std::string::npos || n.find("converged_reason") != std::string::npos) ? PETSC_TRUE : PETSC_FALSE;
+}
+
 /*@C
   HssbemCheckUnusedOptions - Errors out naming any option that no object has read (a typo such as
   -ksp_rtoll would otherwise be ignored).
 
   Level: developer
 @*/
-PetscErrorCode HssbemCheckUnusedOptions(MPI_Comm comm)
+PetscErrorCode HssbemCheckUnusedOptions(MPI_Comm comm, PetscBool before_solve)
 {
   PetscInt    n;
   char      **names, **values;
@@ -83,7 +90,7 @@ PetscErrorCode HssbemCheckUnusedOptions(MPI_Comm comm)
   PetscFunctionBegin;
   PetscCall(PetscOptionsLeftGet(NULL, &n, &names, &values));
   for (PetscInt i = 0; i < n; ++i)
-    if (!IsLateOption_Private(names[i])) unused += std::string(unused.empty() ? "" : ", ") + "-" + names[i];
+    if (!IsLateOption_Private(names[i]) && !(before_solve && IsSolveTimeOption_Private(names[i]))) unused += std::string(unused.empty() ? "" : ", ") + "-" + names[i];
   PetscCall(PetscOptionsLeftRestore(NULL, &n, &names, &values));
   PetscCheck(unused.empty(), comm, PETSC_ERR_ARG_WRONG, "unknown or unused option(s): %s (run with -help to list the options)", unused.c_str());
   PetscFunctionReturn(0);

@@ -122,10 +122,13 @@ PetscErrorCode HssbemSolveSetup(MPI_Comm comm, const hssbem::ProblemSetup &s, co
                                 std::map<std::string, double> *seconds)
 {
   PhaseTimer timer;
+  KSP        ksp;
   Mat        A;
   Vec        b, x;
 
   PetscFunctionBegin;
+  PetscCall(HssbemKSPCreate(comm, &ksp));
+  PetscCall(HssbemCheckUnusedOptions(comm, PETSC_TRUE));
   timer.begin();
   std::vector<double> modes;
   if (s.pure_traction) modes = hssbem::orthonormal_rigid_modes(*s.disc);
@@ -133,9 +136,10 @@ PetscErrorCode HssbemSolveSetup(MPI_Comm comm, const hssbem::ProblemSetup &s, co
   timer.end("assembly");
   timer.begin();
   PetscCall(MatCreateVecs(A, &x, NULL));
-  PetscCall(HssbemSolveDense(A, b, x, info));
+  PetscCall(HssbemSolveDense(ksp, A, b, x, info));
   timer.end("solve");
   PetscCall(Gather(x, to_all, x_out));
+  PetscCall(KSPDestroy(&ksp));
   PetscCall(MatDestroy(&A));
   PetscCall(VecDestroy(&b));
   PetscCall(VecDestroy(&x));
@@ -171,7 +175,7 @@ PetscErrorCode HssbemRun(MPI_Comm comm, const std::string &problem_file, const h
   PetscCall(HssbemSolveSetup(comm, s, op, PETSC_FALSE, &xall, &info, &timer.seconds));
   PetscCall(PetscPrintf(comm, "hssbem: solved with %s/%s%s%s: %" PetscInt_FMT " iterations, relative residual %.3e\n", info.ksp_type.c_str(), info.pc_type.c_str(),
                         info.solver_type.empty() ? "" : "/", info.solver_type.c_str(), info.iterations, (double)info.residual));
-  PetscCall(HssbemCheckUnusedOptions(comm));
+  PetscCall(HssbemCheckUnusedOptions(comm, PETSC_FALSE));
   int failed = 0;
   std::string message;
   if (rank == 0) {

@@ -3,6 +3,7 @@
 #include "hssbem/bem/rigid_modes.hpp"
 
 #include <cstdio>
+#include <stdexcept>
 
 namespace hssbem {
 
@@ -19,7 +20,12 @@ Material material_of(const ProblemSpec &spec, const ProblemOverrides &o)
   if (spec.nu) nu = *spec.nu;
   if (o.E) E = *o.E;
   if (o.nu) nu = *o.nu;
-  return Material::from_young(E, nu);
+  try {
+    return Material::from_young(E, nu);
+  } catch (const std::invalid_argument &e) {
+    const std::string from = std::string(" (E from ") + (o.E ? "-E" : spec.file) + ", nu from " + (o.nu ? "-nu" : spec.file) + ")";
+    throw std::invalid_argument(e.what() + from);
+  }
 }
 
 SystemSelection selection_of(const NodeConditions &nc)

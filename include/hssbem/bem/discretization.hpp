@@ -35,6 +35,9 @@ public:
   const SurfaceMesh &mesh() const { return *m_mesh; }
   int num_nodes() const { return static_cast<int>(m_nodes.size()); }
   const DofNode &node(int i) const { return m_nodes[i]; }
+  /// Where node i's values live: its vertex (a double node is only collocated elsewhere). Rigid
+  /// motions, moments and exact solutions are evaluated here.
+  const Vec3 &node_position(int i) const { return m_mesh->vertices[m_nodes[i].vertex]; }
   const std::vector<DofNode> &nodes() const { return m_nodes; }
   /// dof node at corner c of triangle t
   int element_node(int t, int c) const { return m_element_nodes[t][c]; }

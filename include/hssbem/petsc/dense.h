@@ -19,5 +19,8 @@ struct HssbemSolveInfo {
    + rigid_regularization_weight * Q Q^T: the pure-traction regularisation. */
 PetscErrorCode HssbemAssembleDense(MPI_Comm comm, const hssbem::BemOperator &op, const hssbem::SystemSelection &sel, const std::vector<double> *rigid_modes, Mat *A, Vec *b);
 
-/* Solve A x = b with a KSP configured from the options database (default: preonly + LU). */
-PetscErrorCode HssbemSolveDense(Mat A, Vec b, Vec x, HssbemSolveInfo *info);
+/* The main KSP (no prefix): preonly + LU by default, then the options database. */
+PetscErrorCode HssbemKSPCreate(MPI_Comm comm, KSP *ksp);
+
+/* Solve A x = b with that KSP (converting A for parallel LU or MUMPS as needed). */
+PetscErrorCode HssbemSolveDense(KSP ksp, Mat A, Vec b, Vec x, HssbemSolveInfo *info);

@@ -21,5 +21,7 @@ struct HssbemAppOptions {
 /* Read -problem, -mesh, -E, -nu, -o, -bem_feature_angle, -bem_mat_type, -mat_bem_*; -help lists them. */
 PetscErrorCode HssbemProcessOptions(MPI_Comm comm, HssbemAppOptions *opts);
 
-/* Error out (PETSC_ERR_ARG_WRONG) on options nobody used, naming them: typos must not pass silently. */
-PetscErrorCode HssbemCheckUnusedOptions(MPI_Comm comm);
+/* Error out (PETSC_ERR_ARG_WRONG) on options nobody used, naming them: typos must not pass silently.
+   With before_solve, options that are only read during or after the solve (viewers, converged
+   reason) are let through; the final check after the solve catches everything. */
+PetscErrorCode HssbemCheckUnusedOptions(MPI_Comm comm, PetscBool before_solve);
