@@ -111,16 +111,25 @@ static PetscErrorCode CopyAcrossLayouts_Private(Vec from, Vec to)
   PetscFunctionReturn(0);
 }
 
-/* Solve with vectors in the operator's layout, copying in and out when it differs from A's. */
-static PetscErrorCode KSPSolveInLayout_Private(KSP ksp, Mat op, Vec b, Vec x)
+/* Solve with vectors in the operator's layout (ScaLAPACK picks its own), copying in and out;
+   the relative residual ||b - A x|| / ||b|| is measured there too. */
+static PetscErrorCode KSPSolveInLayout_Private(KSP ksp, Mat op, Vec b, Vec x, PetscReal *residual)
 {
-  Vec bo, xo;
+  Vec       bo, xo, r;
+  PetscReal bnorm, rnorm;
 
   PetscFunctionBegin;
   PetscCall(MatCreateVecs(op, &xo, &bo));
   PetscCall(CopyAcrossLayouts_Private(b, bo));
   PetscCall(KSPSolve(ksp, bo, xo));
   PetscCall(CopyAcrossLayouts_Private(xo, x));
+  PetscCall(VecDuplicate(bo, &r));
+  PetscCall(MatMult(op, xo, r));
+  PetscCall(VecAYPX(r, -1.0, bo));
+  PetscCall(VecNorm(r, NORM_2, &rnorm));
+  PetscCall(VecNorm(bo, NORM_2, &bnorm));
+  *residual = bnorm > 0 ? rnorm / bnorm : rnorm;
+  PetscCall(VecDestroy(&r));
   PetscCall(VecDestroy(&bo));
   PetscCall(VecDestroy(&xo));
   PetscFunctionReturn(0);
@@ -147,28 +156,24 @@ PetscErrorCode HssbemKSPCreate(MPI_Comm comm, KSP *ksp)
 }
 
 /*@C
-  HssbemSolveDense - Solves A x = b with a KSP from HssbemKSPCreate(); the matrix is converted to
-  the format its factorization needs. A diverged solve is an error.
+  HssbemSolveDense - Solves A x = b with a KSP from HssbemKSPCreate(); A is converted in place to
+  the format its factorization needs (so no second copy stays alive). A diverged solve is an error.
 
   Level: intermediate
 @*/
-PetscErrorCode HssbemSolveDense(KSP ksp, Mat A, Vec b, Vec x, HssbemSolveInfo *info)
+PetscErrorCode HssbemSolveDense(KSP ksp, Mat *A, Vec b, Vec x, HssbemSolveInfo *info)
 {
-  PC        pc;
-  Mat       F = NULL;
-  MatType   ftype;
-  Vec       r;
-  PetscReal bnorm, rnorm;
+  PC            pc;
+  MatType       ftype;
   MatSolverType st = NULL;
 
   PetscFunctionBegin;
   PetscCall(PetscLogEventBegin(BEM_Solve, 0, 0, 0, 0));
-  PetscCall(FactorMatType_Private(A, &ftype));
-  if (ftype) PetscCall(MatConvert(A, ftype, MAT_INITIAL_MATRIX, &F));
-  PetscCall(KSPSetOperators(ksp, F ? F : A, F ? F : A));
+  PetscCall(FactorMatType_Private(*A, &ftype));
+  if (ftype) PetscCall(MatConvert(*A, ftype, MAT_INPLACE_MATRIX, A));
+  PetscCall(KSPSetOperators(ksp, *A, *A));
   PetscCall(KSPGetPC(ksp, &pc));
-  if (F) PetscCall(KSPSolveInLayout_Private(ksp, F, b, x));
-  else PetscCall(KSPSolve(ksp, b, x));
+  PetscCall(KSPSolveInLayout_Private(ksp, *A, b, x, &info->residual));
   PetscCall(KSPGetConvergedReason(ksp, &info->reason));
   PetscCall(KSPGetIterationNumber(ksp, &info->iterations));
   {
@@ -181,15 +186,7 @@ PetscErrorCode HssbemSolveDense(KSP ksp, Mat A, Vec b, Vec x, HssbemSolveInfo *i
   }
   PetscCall(PCFactorGetMatSolverType(pc, &st));
   info->solver_type = st ? st : "";
-  PetscCall(VecDuplicate(b, &r));
-  PetscCall(MatMult(A, x, r));
-  PetscCall(VecAYPX(r, -1.0, b));
-  PetscCall(VecNorm(r, NORM_2, &rnorm));
-  PetscCall(VecNorm(b, NORM_2, &bnorm));
-  info->residual = bnorm > 0 ? rnorm / bnorm : rnorm;
-  PetscCall(VecDestroy(&r));
-  PetscCall(MatDestroy(&F));
   PetscCall(PetscLogEventEnd(BEM_Solve, 0, 0, 0, 0));
-  PetscCheck(info->reason > 0, PetscObjectComm((PetscObject)A), PETSC_ERR_NOT_CONVERGED, "the linear solve failed: %s after %" PetscInt_FMT " iterations", KSPConvergedReasons[info->reason], info->iterations);
+  PetscCheck(info->reason > 0, PetscObjectComm((PetscObject)*A), PETSC_ERR_NOT_CONVERGED, "the linear solve failed: %s after %" PetscInt_FMT " iterations", KSPConvergedReasons[info->reason], info->iterations);
   PetscFunctionReturn(0);
 }

@@ -135,8 +135,8 @@ PetscErrorCode HssbemSolveSetup(MPI_Comm comm, const hssbem::ProblemSetup &s, co
   PetscCall(HssbemAssembleDense(comm, op, s.selection, s.pure_traction ? &modes : nullptr, &A, &b));
   timer.end("assembly");
   timer.begin();
-  PetscCall(MatCreateVecs(A, &x, NULL));
-  PetscCall(HssbemSolveDense(ksp, A, b, x, info));
+  PetscCall(VecDuplicate(b, &x));
+  PetscCall(HssbemSolveDense(ksp, &A, b, x, info));
   timer.end("solve");
   PetscCall(Gather(x, to_all, x_out));
   PetscCall(KSPDestroy(&ksp));

@@ -22,5 +22,6 @@ PetscErrorCode HssbemAssembleDense(MPI_Comm comm, const hssbem::BemOperator &op,
 /* The main KSP (no prefix): preonly + LU by default, then the options database. */
 PetscErrorCode HssbemKSPCreate(MPI_Comm comm, KSP *ksp);
 
-/* Solve A x = b with that KSP (converting A for parallel LU or MUMPS as needed). */
-PetscErrorCode HssbemSolveDense(KSP ksp, Mat A, Vec b, Vec x, HssbemSolveInfo *info);
+/* Solve A x = b with that KSP; A is converted in place when the factorization needs another
+   format (ScaLAPACK for parallel LU, AIJ for MUMPS). */
+PetscErrorCode HssbemSolveDense(KSP ksp, Mat *A, Vec b, Vec x, HssbemSolveInfo *info);
