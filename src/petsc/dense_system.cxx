@@ -16,7 +16,7 @@ static PetscErrorCode OwnedNodes_Private(MPI_Comm comm, PetscInt nnodes, PetscIn
   PetscCallMPI(MPI_Scan(&n, nstart, 1, MPIU_INT, MPI_SUM, comm));
   *nstart -= n;
   *nlocal = n;
-  PetscFunctionReturn(0);
+  PetscFunctionReturn(PETSC_SUCCESS);
 }
 
 /* rows(r, :) += c Q(row0 + r, :) Q^T for nrows rows of width N (row-major). */
@@ -70,7 +70,7 @@ PetscErrorCode HssbemAssembleDense(MPI_Comm comm, const hssbem::BemOperator &op,
   PetscCall(MatAssemblyEnd(*A, MAT_FINAL_ASSEMBLY));
   PetscCall(PetscLogFlops(0.0));
   PetscCall(PetscLogEventEnd(BEM_Assembly, 0, 0, 0, 0));
-  PetscFunctionReturn(0);
+  PetscFunctionReturn(PETSC_SUCCESS);
 }
 
 /* The format the factorization needs: MATDENSE LU works on one rank only, parallel dense LU is
@@ -87,10 +87,10 @@ static PetscErrorCode FactorMatType_Private(Mat A, MatType *type)
   PetscCall(PetscOptionsGetString(NULL, NULL, "-pc_type", pctype, sizeof(pctype), &set));
   PetscCall(PetscOptionsGetString(NULL, NULL, "-pc_factor_mat_solver_type", solver, sizeof(solver), &set));
   const std::string pc(pctype), st(solver);
-  if (pc != "lu" && pc != "cholesky" && pc != "ilu") PetscFunctionReturn(0);
+  if (pc != "lu" && pc != "cholesky" && pc != "ilu") PetscFunctionReturn(PETSC_SUCCESS);
   if (st == "mumps" || st == "superlu_dist") *type = MATAIJ;
   else if (st == "scalapack" || (st.empty() && size > 1)) *type = MATSCALAPACK;
-  PetscFunctionReturn(0);
+  PetscFunctionReturn(PETSC_SUCCESS);
 }
 
 /* to := from, for vectors with the same global size and different layouts (ScaLAPACK picks its own). */
@@ -108,7 +108,7 @@ static PetscErrorCode CopyAcrossLayouts_Private(Vec from, Vec to)
   PetscCall(VecScatterEnd(sc, from, to, INSERT_VALUES, SCATTER_FORWARD));
   PetscCall(VecScatterDestroy(&sc));
   PetscCall(ISDestroy(&is));
-  PetscFunctionReturn(0);
+  PetscFunctionReturn(PETSC_SUCCESS);
 }
 
 /* Solve with vectors in the operator's layout (ScaLAPACK picks its own), copying in and out;
@@ -132,7 +132,7 @@ static PetscErrorCode KSPSolveInLayout_Private(KSP ksp, Mat op, Vec b, Vec x, Pe
   PetscCall(VecDestroy(&r));
   PetscCall(VecDestroy(&bo));
   PetscCall(VecDestroy(&xo));
-  PetscFunctionReturn(0);
+  PetscFunctionReturn(PETSC_SUCCESS);
 }
 
 /*@C
@@ -152,7 +152,7 @@ PetscErrorCode HssbemKSPCreate(MPI_Comm comm, KSP *ksp)
   PetscCall(KSPGetPC(*ksp, &pc));
   PetscCall(PCSetType(pc, PCLU));
   PetscCall(KSPSetFromOptions(*ksp));
-  PetscFunctionReturn(0);
+  PetscFunctionReturn(PETSC_SUCCESS);
 }
 
 /*@C
@@ -188,5 +188,5 @@ PetscErrorCode HssbemSolveDense(KSP ksp, Mat *A, Vec b, Vec x, HssbemSolveInfo *
   info->solver_type = st ? st : "";
   PetscCall(PetscLogEventEnd(BEM_Solve, 0, 0, 0, 0));
   PetscCheck(info->reason > 0, PetscObjectComm((PetscObject)*A), PETSC_ERR_NOT_CONVERGED, "the linear solve failed: %s after %" PetscInt_FMT " iterations", KSPConvergedReasons[info->reason], info->iterations);
-  PetscFunctionReturn(0);
+  PetscFunctionReturn(PETSC_SUCCESS);
 }

@@ -12,7 +12,7 @@ static PetscErrorCode OptionString_Private(const char *key, const char *text, st
   PetscCall(PetscStrncpy(buf, value->c_str(), sizeof(buf)));
   PetscCall(PetscOptionsString(key, text, "", buf, buf, sizeof(buf), &set));
   if (set) *value = buf;
-  PetscFunctionReturn(0);
+  PetscFunctionReturn(PETSC_SUCCESS);
 }
 
 /*@C
@@ -56,7 +56,7 @@ PetscErrorCode HssbemProcessOptions(MPI_Comm comm, HssbemAppOptions *opts)
   PetscCheck(opts->quad.near_ratio > 0 && opts->quad.far_ratio >= opts->quad.near_ratio, comm, PETSC_ERR_ARG_OUTOFRANGE, "need 0 < -mat_bem_near_ratio <= -mat_bem_far_ratio");
   PetscCheck(opts->quad.max_depth >= 0 && opts->quad.max_depth <= 20, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_bem_max_depth must lie in [0, 20]");
   PetscCheck(opts->feature_angle > 0 && opts->feature_angle < 180, comm, PETSC_ERR_ARG_OUTOFRANGE, "-bem_feature_angle must lie in (0, 180)");
-  PetscFunctionReturn(0);
+  PetscFunctionReturn(PETSC_SUCCESS);
 }
 
 /* Options that PETSc reads only at PetscFinalize() or that steer the run itself. */
@@ -93,5 +93,5 @@ PetscErrorCode HssbemCheckUnusedOptions(MPI_Comm comm, PetscBool before_solve)
     if (!IsLateOption_Private(names[i]) && !(before_solve && IsSolveTimeOption_Private(names[i]))) unused += std::string(unused.empty() ? "" : ", ") + "-" + names[i];
   PetscCall(PetscOptionsLeftRestore(NULL, &n, &names, &values));
   PetscCheck(unused.empty(), comm, PETSC_ERR_ARG_WRONG, "unknown or unused option(s): %s (run with -help to list the options)", unused.c_str());
-  PetscFunctionReturn(0);
+  PetscFunctionReturn(PETSC_SUCCESS);
 }

@@ -14,7 +14,7 @@ PetscErrorCode HssbemFinalizePackage(void)
 {
   PetscFunctionBegin;
   HssbemPackageInitialized = PETSC_FALSE;
-  PetscFunctionReturn(0);
+  PetscFunctionReturn(PETSC_SUCCESS);
 }
 
 /*@C
@@ -26,7 +26,7 @@ PetscErrorCode HssbemFinalizePackage(void)
 PetscErrorCode HssbemInitializePackage(void)
 {
   PetscFunctionBegin;
-  if (HssbemPackageInitialized) PetscFunctionReturn(0);
+  if (HssbemPackageInitialized) PetscFunctionReturn(PETSC_SUCCESS);
   HssbemPackageInitialized = PETSC_TRUE;
   PetscCall(PetscClassIdRegister("hssbem", &HSSBEM_CLASSID));
   PetscCall(PetscLogEventRegister("BEMMesh", HSSBEM_CLASSID, &BEM_Mesh));
@@ -38,5 +38,5 @@ PetscErrorCode HssbemInitializePackage(void)
   PetscCall(PetscLogEventRegister(" BEMInterior", HSSBEM_CLASSID, &BEM_Interior));
   PetscCall(PetscLogEventRegister("BEMOutput", HSSBEM_CLASSID, &BEM_Output));
   PetscCall(PetscRegisterFinalize(HssbemFinalizePackage));
-  PetscFunctionReturn(0);
+  PetscFunctionReturn(PETSC_SUCCESS);
 }

@@ -71,7 +71,7 @@ PetscErrorCode Gather(Vec x, PetscBool to_all, std::vector<double> *out)
   PetscCall(VecRestoreArrayRead(x0, &a));
   PetscCall(VecScatterDestroy(&sc));
   PetscCall(VecDestroy(&x0));
-  PetscFunctionReturn(0);
+  PetscFunctionReturn(PETSC_SUCCESS);
 }
 
 void FillResult(const hssbem::ProblemSetup &s, const hssbem::BemOperator &op, const std::vector<double> &x, hssbem::ResultData &r)
@@ -145,7 +145,7 @@ PetscErrorCode HssbemSolveSetup(MPI_Comm comm, const hssbem::ProblemSetup &s, co
   PetscCall(VecDestroy(&x));
   if (seconds)
     for (const auto &[k, v] : timer.seconds) (*seconds)[k] += v;
-  PetscFunctionReturn(0);
+  PetscFunctionReturn(PETSC_SUCCESS);
 }
 
 /*@C
@@ -201,5 +201,5 @@ PetscErrorCode HssbemRun(MPI_Comm comm, const std::string &problem_file, const h
   }
   PetscCallMPI(MPI_Bcast(&failed, 1, MPI_INT, 0, comm));
   if (failed) throw std::runtime_error(rank == 0 ? message : std::string("output failed on rank 0"));
-  PetscFunctionReturn(0);
+  PetscFunctionReturn(PETSC_SUCCESS);
 }

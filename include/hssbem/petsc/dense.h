@@ -2,6 +2,8 @@
    solved with KSP (LU on one rank; ScaLAPACK or MUMPS on more; any Krylov method). */
 #pragma once
 
+#include "hssbem/petsc/compat.h"
+
 #include "hssbem/bem/bem_operator.hpp"
 
 #include <petscksp.h>

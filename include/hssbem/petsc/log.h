@@ -1,6 +1,8 @@
 /* Log events and class id of hssbem, registered by HssbemInitializePackage(). */
 #pragma once
 
+#include "hssbem/petsc/compat.h"
+
 #include <petscsys.h>
 
 PETSC_EXTERN PetscClassId  HSSBEM_CLASSID;

@@ -1,6 +1,8 @@
 /* Application options of the hssbem driver, read from the PETSc options database. */
 #pragma once
 
+#include "hssbem/petsc/compat.h"
+
 #include "hssbem/bem/quadrature.hpp"
 
 #include <petscsys.h>

@@ -1,6 +1,8 @@
 /* One batch solve, from problem file to result file: what the hssbem driver runs. */
 #pragma once
 
+#include "hssbem/petsc/compat.h"
+
 #include "hssbem/bem/quadrature.hpp"
 #include "hssbem/petsc/dense.h"
 #include "hssbem/problem/setup.hpp"
