@@ -18,8 +18,12 @@ BemOperator::BemOperator(const Discretization &disc, const Material &material, c
   }
   m_rigid.assign(disc.num_nodes(), Mat3{});
   m_has_rigid.assign(disc.num_nodes(), 0);
-  m_col_pos.assign(disc.num_nodes(), -1);
-  m_elem_mark.assign(mesh.triangles.size(), 0);
+  m_workspace = std::make_unique<Workspace>(*this);
+}
+
+BemOperator::Workspace::Workspace(const BemOperator &op)
+  : col_pos(op.num_nodes(), -1), elem_mark(op.m_tri.size(), 0)
+{
 }
 
 bool BemOperator::contains(int row, int t) const
@@ -69,23 +73,23 @@ void BemOperator::set_rigid_body_terms(std::vector<Mat3> terms)
 
 bool BemOperator::has_rigid_body_term(int row) const { return m_has_rigid[row] != 0; }
 
-void BemOperator::elements_touching(const std::vector<int> &J, std::vector<int> &elems) const
+void BemOperator::elements_touching(const std::vector<int> &J, Workspace &ws) const
 {
-  elems.clear();
+  ws.elems.clear();
   for (int j : J)
     for (const int *t = m_disc->support_begin(j); t != m_disc->support_end(j); ++t)
-      if (!m_elem_mark[*t]) {
-        m_elem_mark[*t] = 1;
-        elems.push_back(*t);
+      if (!ws.elem_mark[*t]) {
+        ws.elem_mark[*t] = 1;
+        ws.elems.push_back(*t);
       }
-  for (int t : elems) m_elem_mark[t] = 0;
+  for (int t : ws.elems) ws.elem_mark[t] = 0;
 }
 
-void BemOperator::add_rigid_body(int row, const Mat3 &D, const std::vector<int> &J, double *Hrow, long ld) const
+void BemOperator::add_rigid_body(int row, const Mat3 &D, const std::vector<int> &col_pos, double *Hrow, long ld) const
 {
   const DofNode &node = m_disc->node(row);
   auto add = [&](int j, double w) {
-    const int p = m_col_pos[j];
+    const int p = col_pos[j];
     if (p < 0 || w == 0.0) return;
     for (int k = 0; k < 3; ++k)
       for (int c = 0; c < 3; ++c) Hrow[k * ld + 3 * p + c] += w * D[3 * k + c];
@@ -96,20 +100,20 @@ void BemOperator::add_rigid_body(int row, const Mat3 &D, const std::vector<int> 
 
 void BemOperator::fill_hg(const std::vector<int> &I, const std::vector<int> &J, double *H, double *G, long ld) const
 {
-  fill_hg(I, J, H, G, ld, nullptr, 0);
+  fill_hg(I, J, H, G, ld, nullptr, 0, *m_workspace);
 }
 
-void BemOperator::fill_hg(const std::vector<int> &I, const std::vector<int> &J, double *H, double *G, long ld, double *Gn, long ldn) const
+void BemOperator::fill_hg(const std::vector<int> &I, const std::vector<int> &J, double *H, double *G, long ld, double *Gn, long ldn, Workspace &ws) const
 {
-  for (std::size_t p = 0; p < J.size(); ++p) m_col_pos[J[p]] = static_cast<int>(p);
+  std::vector<int> &col_pos = ws.col_pos;
+  for (std::size_t p = 0; p < J.size(); ++p) col_pos[J[p]] = static_cast<int>(p);
   const bool all = static_cast<int>(J.size()) == num_nodes();
-  std::vector<int> elems;
-  elements_touching(J, elems);
+  elements_touching(J, ws);
   ElementIntegrals ei;
   for (std::size_t r = 0; r < I.size(); ++r) {
     const int i = I[r];
     if (!all && !m_has_rigid[i]) {
-      for (int j : J) m_col_pos[j] = -1;
+      for (int j : J) col_pos[j] = -1;
       throw std::logic_error("fill_hg: row " + std::to_string(i) + " has no rigid-body term");
     }
     double *Hr = H ? H + 3 * r * ld : nullptr, *Gr = G ? G + 3 * r * ld : nullptr, *Gnr = Gn ? Gn + 3 * r * ldn : nullptr;
@@ -120,10 +124,10 @@ void BemOperator::fill_hg(const std::vector<int> &I, const std::vector<int> &J, 
     }
     Mat3 D{};
     const Vec3 &x = m_disc->node(i).point;
-    for (int t : elems) {
+    for (int t : ws.elems) {
       element_integrals(x, i, t, ei);
       for (int a = 0; a < 3; ++a) {
-        const int p = m_col_pos[m_disc->element_node(t, a)];
+        const int p = col_pos[m_disc->element_node(t, a)];
         if (p < 0) continue;
         for (int k = 0; k < 3; ++k)
           for (int c = 0; c < 3; ++c) {
@@ -136,13 +140,20 @@ void BemOperator::fill_hg(const std::vector<int> &I, const std::vector<int> &J, 
         for (int a = 0; a < 3; ++a)
           for (int m = 0; m < 9; ++m) D[m] -= ei.H[a][m];
     }
-    if (Hr) add_rigid_body(i, all ? D : m_rigid[i], J, Hr, ld);
+    if (Hr) add_rigid_body(i, all ? D : m_rigid[i], col_pos, Hr, ld);
   }
-  for (int j : J) m_col_pos[j] = -1;
+  for (int j : J) col_pos[j] = -1;
 }
 
 void fill_system_block(const BemOperator &op, const SystemSelection &sel, const std::vector<int> &I, const std::vector<int> &J,
                        double *A, long ld, double *rhs)
+{
+  BemOperator::Workspace ws(op);
+  fill_system_block(op, sel, I, J, A, ld, rhs, ws);
+}
+
+void fill_system_block(const BemOperator &op, const SystemSelection &sel, const std::vector<int> &I, const std::vector<int> &J,
+                       double *A, long ld, double *rhs, BemOperator::Workspace &ws)
 {
   const long nj = 3 * static_cast<long>(J.size());
   const bool all = static_cast<int>(J.size()) == op.num_nodes();
@@ -152,7 +163,7 @@ void fill_system_block(const BemOperator &op, const SystemSelection &sel, const 
   std::vector<double> H(3 * chunk * nj), G(3 * chunk * nj), Gn(pressure ? 3 * chunk * J.size() : 0);
   for (std::size_t r0 = 0; r0 < I.size(); r0 += chunk) {
     const std::vector<int> rows(I.begin() + r0, I.begin() + std::min(I.size(), r0 + chunk));
-    op.fill_hg(rows, J, H.data(), G.data(), nj, pressure ? Gn.data() : nullptr, static_cast<long>(J.size()));
+    op.fill_hg(rows, J, H.data(), G.data(), nj, pressure ? Gn.data() : nullptr, static_cast<long>(J.size()), ws);
     for (std::size_t r = 0; r < 3 * rows.size(); ++r) {
       const double *h = &H[r * nj], *g = &G[r * nj];
       double *a = A + (3 * r0 + r) * ld, b = 0;

@@ -3,6 +3,8 @@
 #include "hssbem/bem/rigid_modes.hpp"
 
 #include <algorithm>
+#include <exception>
+#include <string>
 #include <numeric>
 #include <vector>
 
@@ -32,6 +34,45 @@ static void AddRigidRegularization_Private(const std::vector<double> &Q, PetscIn
   }
 }
 
+/* Rows [nstart, nstart + nlocal) (nodes) into the column-major local block a (3 nlocal x 3 nn) and
+   rhs. Chunks of rows are independent: threads share them, each with its own operator workspace. */
+static PetscErrorCode FillLocalRows_Private(const hssbem::BemOperator &op, const hssbem::SystemSelection &sel, const std::vector<double> *rigid_modes, PetscInt nstart, PetscInt nlocal,
+                                            PetscScalar *a, PetscScalar *rhs)
+{
+  const PetscInt nn = op.num_nodes(), N = 3 * nn, m = 3 * nlocal, chunk = 16;
+  std::vector<int> J(nn);
+  bool             failed = false;
+  std::string      message;
+
+  PetscFunctionBegin;
+  std::iota(J.begin(), J.end(), 0);
+#pragma omp parallel
+  {
+    hssbem::BemOperator::Workspace ws(op);
+    std::vector<double>            rows(3 * chunk * (size_t)N);
+#pragma omp for schedule(dynamic, 1)
+    for (PetscInt r0 = 0; r0 < nlocal; r0 += chunk) {
+      std::vector<int> I(std::min(chunk, nlocal - r0));
+      std::iota(I.begin(), I.end(), (int)(nstart + r0));
+      try { // no PETSc error handling inside the parallel region: remember and report after it
+        hssbem::fill_system_block(op, sel, I, J, rows.data(), N, rhs + 3 * r0, ws);
+      } catch (const std::exception &e) {
+#pragma omp critical
+        {
+          failed  = true;
+          message = e.what();
+        }
+        continue;
+      }
+      if (rigid_modes) AddRigidRegularization_Private(*rigid_modes, 3 * (nstart + r0), 3 * I.size(), N, rows.data());
+      for (PetscInt c = 0; c < N; ++c) // column-major destination: consecutive writes per column
+        for (size_t r = 0; r < 3 * I.size(); ++r) a[(size_t)c * m + 3 * r0 + r] = rows[r * N + c];
+    }
+  }
+  PetscCheck(!failed, PETSC_COMM_SELF, PETSC_ERR_LIB, "assembly failed: %s", message.c_str());
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 /*@C
   HssbemAssembleDense - Assembles the collocation matrix A and right-hand side b with the operator
   primitive; each rank fills its own rows (column-major local storage of MATDENSE).
@@ -52,18 +93,7 @@ PetscErrorCode HssbemAssembleDense(MPI_Comm comm, const hssbem::BemOperator &op,
   PetscCall(MatCreateVecs(*A, NULL, b));
   PetscCall(MatDenseGetArrayWrite(*A, &a));
   PetscCall(VecGetArrayWrite(*b, &rhs));
-  std::vector<int> J(nn);
-  std::iota(J.begin(), J.end(), 0);
-  const PetscInt      m = 3 * nlocal, chunk = 32;
-  std::vector<double> rows(3 * chunk * (size_t)N);
-  for (PetscInt r0 = 0; r0 < nlocal; r0 += chunk) {
-    std::vector<int> I(std::min(chunk, nlocal - r0));
-    std::iota(I.begin(), I.end(), (int)(nstart + r0));
-    PetscCallCXX(hssbem::fill_system_block(op, sel, I, J, rows.data(), N, rhs + 3 * r0));
-    if (rigid_modes) AddRigidRegularization_Private(*rigid_modes, 3 * (nstart + r0), 3 * I.size(), N, rows.data());
-    for (PetscInt c = 0; c < N; ++c) // column-major destination: consecutive writes per column
-      for (size_t r = 0; r < 3 * I.size(); ++r) a[(size_t)c * m + 3 * r0 + r] = rows[r * N + c];
-  }
+  PetscCall(FillLocalRows_Private(op, sel, rigid_modes, nstart, nlocal, a, rhs));
   PetscCall(VecRestoreArrayWrite(*b, &rhs));
   PetscCall(MatDenseRestoreArrayWrite(*A, &a));
   PetscCall(MatAssemblyBegin(*A, MAT_FINAL_ASSEMBLY));

@@ -14,12 +14,26 @@
 #include "hssbem/bem/kelvin.hpp"
 #include "hssbem/bem/quadrature.hpp"
 
+#include <memory>
 #include <vector>
 
 namespace hssbem {
 
 class BemOperator {
 public:
+  /// Scratch space of block evaluations. The operator itself is read-only during fill_hg, so
+  /// threads may evaluate blocks concurrently, each with its own workspace.
+  class Workspace {
+  public:
+    explicit Workspace(const BemOperator &op);
+
+  private:
+    friend class BemOperator;
+    std::vector<int> col_pos;   ///< node -> column position in J, or -1 (kept at -1 between calls)
+    std::vector<char> elem_mark; ///< triangle already listed (kept at 0 between calls)
+    std::vector<int> elems;      ///< triangles touching the columns
+  };
+
   BemOperator(const Discretization &disc, const Material &material, const QuadratureOptions &options = {});
   BemOperator(const BemOperator &) = delete;
   BemOperator &operator=(const BemOperator &) = delete;
@@ -37,11 +51,13 @@ public:
 
   /// H(I, J) and G(I, J), row-major with leading dimension ld (>= 3|J|); either may be null.
   /// Rows of I need their rigid-body terms (compute_rigid_body_terms) unless J holds every node,
-  /// in which case they are summed on the way. Not thread-safe (uses scratch space).
+  /// in which case they are summed on the way. This overload uses the operator's own workspace
+  /// and is not thread-safe; pass a Workspace per thread for concurrent calls.
   void fill_hg(const std::vector<int> &I, const std::vector<int> &J, double *H, double *G, long ld) const;
   /// As fill_hg, and also Gn(I, J) = Σ_e ∫_e u* N_j n_e (3|I| × |J|, leading dimension ldn): the
-  /// response to a unit pressure field N_j carried by flat triangle normals.
-  void fill_hg(const std::vector<int> &I, const std::vector<int> &J, double *H, double *G, long ld, double *Gn, long ldn) const;
+  /// response to a unit pressure field N_j carried by flat triangle normals. Thread-safe with
+  /// one workspace per thread.
+  void fill_hg(const std::vector<int> &I, const std::vector<int> &J, double *H, double *G, long ld, double *Gn, long ldn, Workspace &ws) const;
 
   /// Integrals of triangle t for a collocation point (or an interior point when `row` < 0).
   void element_integrals(const Vec3 &x, int row, int t, ElementIntegrals &out) const;
@@ -49,8 +65,8 @@ public:
 
 private:
   bool contains(int row, int t) const;
-  void elements_touching(const std::vector<int> &J, std::vector<int> &elems) const;
-  void add_rigid_body(int row, const Mat3 &D, const std::vector<int> &J, double *Hrow, long ld) const;
+  void elements_touching(const std::vector<int> &J, Workspace &ws) const;
+  void add_rigid_body(int row, const Mat3 &D, const std::vector<int> &col_pos, double *Hrow, long ld) const;
 
   const Discretization *m_disc;
   Material m_material;
@@ -58,8 +74,7 @@ private:
   std::vector<Triangle> m_tri;
   std::vector<Mat3> m_rigid;
   std::vector<char> m_has_rigid;
-  mutable std::vector<int> m_col_pos;   ///< scratch: node -> column position in J, or -1
-  mutable std::vector<char> m_elem_mark; ///< scratch
+  mutable std::unique_ptr<Workspace> m_workspace; ///< for the overload without a workspace
 };
 
 /// Which unknown each (node, component) carries, and the known values: the selection E_S of
@@ -77,5 +92,8 @@ struct SystemSelection {
 /// rhs(I) = Σ_known -H u + G t. Rigid-body terms as in fill_hg.
 void fill_system_block(const BemOperator &op, const SystemSelection &sel, const std::vector<int> &I, const std::vector<int> &J,
                        double *A, long ld, double *rhs);
+/// Same, thread-safe with one workspace per thread.
+void fill_system_block(const BemOperator &op, const SystemSelection &sel, const std::vector<int> &I, const std::vector<int> &J,
+                       double *A, long ld, double *rhs, BemOperator::Workspace &ws);
 
 } // namespace hssbem

@@ -1,11 +1,19 @@
 /// \file lapack.hpp
 /// The few BLAS/LAPACK routines the core calls (Fortran ABI, 32-bit integers as in Debian's
 /// reference and OpenBLAS builds). The core does not go through PETSc for them.
+///
+/// The hidden character-length arguments of the Fortran ABI are omitted throughout: every
+/// character argument here is a single letter, which the routines read as such. Where PETSc's
+/// petscblaslapack.h declares the same routine (dgemm_, dtrsm_), the declaration here matches it
+/// exactly, so a translation unit may include both headers.
 #pragma once
 
 extern "C" {
 void dsyev_(const char *jobz, const char *uplo, const int *n, double *a, const int *lda, double *w, double *work, const int *lwork, int *info);
 void dgesv_(const int *n, const int *nrhs, double *a, const int *lda, int *ipiv, double *b, const int *ldb, int *info);
+void dgeqp3_(const int *m, const int *n, double *a, const int *lda, int *jpvt, double *tau, double *work, const int *lwork, int *info);
+void dtrsm_(const char *side, const char *uplo, const char *transa, const char *diag, const int *m, const int *n, const double *alpha, const double *a, const int *lda, double *b, const int *ldb);
+void dgemm_(const char *transa, const char *transb, const int *m, const int *n, const int *k, const double *alpha, const double *a, const int *lda, const double *b, const int *ldb, const double *beta, double *c, const int *ldc);
 }
 
 namespace hssbem::lapack {
@@ -14,5 +22,15 @@ namespace hssbem::lapack {
 int syev(int n, double *a, double *w);
 /// Solve A X = B in place (column-major); returns LAPACK's info.
 int gesv(int n, int nrhs, double *a, double *b);
+
+/// Column-pivoted QR A P = Q R of the m×n matrix a (column-major, leading dimension lda), in
+/// place as dgeqp3 leaves it. jpvt (n entries) and tau (min(m,n) entries) are outputs; every
+/// column is free (jpvt is zeroed here) and jpvt is 1-based, as LAPACK returns it. The workspace
+/// is queried and allocated inside. Returns LAPACK's info.
+int geqp3(int m, int n, double *a, int lda, int *jpvt, double *tau);
+/// B ← alpha op(A)⁻¹ B (side 'L') or B ← alpha B op(A)⁻¹ (side 'R') with A triangular (dtrsm).
+void trsm(char side, char uplo, char transa, char diag, int m, int n, double alpha, const double *a, int lda, double *b, int ldb);
+/// C ← alpha op(A) op(B) + beta C, C m×n, inner dimension k (dgemm).
+void gemm(char transa, char transb, int m, int n, int k, double alpha, const double *a, int lda, const double *b, int ldb, double beta, double *c, int ldc);
 
 } // namespace hssbem::lapack

@@ -1,0 +1,250 @@
+#include "hssbem/core/cluster_tree.hpp"
+#include "hssbem/core/lapack.hpp"
+
+#include <algorithm>
+#include <climits>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+namespace hssbem {
+
+namespace {
+
+/// Projection of a point on the splitting axis and its node index: the index breaks ties, so
+/// that the order is strict and the median split is unique even for coincident points.
+using Key = std::pair<double, int>;
+
+void check_points(const std::vector<Vec3> &points, const ClusterTreeOptions &opts)
+{
+  if (points.empty()) throw std::invalid_argument("ClusterTree: no points");
+  if (points.size() > static_cast<std::size_t>(INT_MAX))
+    throw std::invalid_argument("ClusterTree: more points than an int can index");
+  if (opts.leaf_size < 1)
+    throw std::invalid_argument("ClusterTree: leaf_size must be >= 1, got " + std::to_string(opts.leaf_size));
+  for (std::size_t i = 0; i < points.size(); ++i)
+    for (double x : points[i])
+      if (!std::isfinite(x)) throw std::invalid_argument("ClusterTree: point " + std::to_string(i) + " is not finite");
+}
+
+/// Start of each part's block in cluster order (size nparts + 1). Throws for a malformed
+/// partition: wrong length, a label outside [0, nparts) or an empty part.
+std::vector<int> part_offsets(const std::vector<int> &part, int nparts, std::size_t n)
+{
+  if (nparts < 1) throw std::invalid_argument("ClusterTree: nparts must be >= 1, got " + std::to_string(nparts));
+  if (part.size() != n)
+    throw std::invalid_argument("ClusterTree: partition has " + std::to_string(part.size()) + " entries for " +
+                                std::to_string(n) + " points");
+  std::vector<int> offsets(nparts + 1, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (part[i] < 0 || part[i] >= nparts)
+      throw std::invalid_argument("ClusterTree: point " + std::to_string(i) + " has part " + std::to_string(part[i]) +
+                                  ", outside [0, " + std::to_string(nparts) + ")");
+    ++offsets[part[i] + 1];
+  }
+  for (int p = 0; p < nparts; ++p) {
+    if (offsets[p + 1] == 0) throw std::invalid_argument("ClusterTree: part " + std::to_string(p) + " is empty");
+    offsets[p + 1] += offsets[p];
+  }
+  return offsets;
+}
+
+/// Nodes grouped by part (counting sort: parts in numbering order, ascending node index within).
+std::vector<int> order_by_part(const std::vector<int> &part, std::vector<int> next)
+{
+  std::vector<int> perm(part.size());
+  for (std::size_t i = 0; i < part.size(); ++i) perm[next[part[i]]++] = static_cast<int>(i);
+  return perm;
+}
+
+bool is_power_of_two(int k) { return k > 0 && (k & (k - 1)) == 0; }
+
+/// Where to cut the parts [p0, p1) into two non-empty halves: in the middle for a power-of-two
+/// count (so that 2^k parts form one complete level), else where the point counts of the halves
+/// differ least (the first such cut).
+int split_parts(const std::vector<int> &offsets, int p0, int p1)
+{
+  if (is_power_of_two(p1 - p0)) return p0 + (p1 - p0) / 2;
+  int best = p0 + 1;
+  long long best_gap = LLONG_MAX;
+  for (int k = p0 + 1; k < p1; ++k) {
+    const long long gap = std::llabs(2LL * offsets[k] - offsets[p0] - offsets[p1]);
+    if (gap < best_gap) best = k, best_gap = gap;
+  }
+  return best;
+}
+
+Vec3 mean_of(const std::vector<Vec3> &points, const int *idx, int m)
+{
+  Vec3 mean{};
+  for (int i = 0; i < m; ++i) mean = mean + points[idx[i]];
+  return (1.0 / m) * mean;
+}
+
+/// Unit eigenvector of the largest eigenvalue of the points' covariance, signed so that its
+/// largest component is positive (LAPACK's sign is arbitrary; this keeps "left" meaningful).
+/// For a degenerate set (coincident points) any unit vector is returned; the split then falls
+/// back on node indices.
+Vec3 principal_axis(const std::vector<Vec3> &points, const int *idx, int m, const Vec3 &mean)
+{
+  double a[9] = {}; // column-major, upper triangle used
+  for (int i = 0; i < m; ++i) {
+    const Vec3 d = points[idx[i]] - mean;
+    for (int c = 0; c < 3; ++c)
+      for (int r = 0; r <= c; ++r) a[r + 3 * c] += d[r] * d[c];
+  }
+  double w[3];
+  if (lapack::syev(3, a, w) != 0) throw std::runtime_error("ClusterTree: dsyev failed on a 3x3 covariance");
+  Vec3 v = {a[6], a[7], a[8]}; // eigenvalues ascend: the last column is the principal axis
+  int big = 0;
+  for (int k = 1; k < 3; ++k)
+    if (std::abs(v[k]) > std::abs(v[big])) big = k;
+  return v[big] < 0 ? -1.0 * v : v;
+}
+
+/// Reorder idx[0, m) so that its first m/2 entries are the nodes with the smallest projections on
+/// the principal axis (ties by node index). `keys` is scratch of at least m entries.
+void median_split(const std::vector<Vec3> &points, int *idx, int m, std::vector<Key> &keys)
+{
+  const Vec3 mean = mean_of(points, idx, m);
+  const Vec3 axis = principal_axis(points, idx, m, mean);
+  for (int i = 0; i < m; ++i) keys[i] = {dot(points[idx[i]] - mean, axis), idx[i]};
+  std::nth_element(keys.begin(), keys.begin() + m / 2, keys.begin() + m);
+  for (int i = 0; i < m; ++i) idx[i] = keys[i].second;
+}
+
+} // namespace
+
+ClusterTree::ClusterTree(const std::vector<Vec3> &points, const ClusterTreeOptions &opts) : m_opts(opts)
+{
+  check_points(points, opts);
+  build(points, std::vector<int>(points.size(), 0), 1);
+}
+
+ClusterTree::ClusterTree(const std::vector<Vec3> &points, const std::vector<int> &part, int nparts,
+                         const ClusterTreeOptions &opts)
+    : m_opts(opts)
+{
+  check_points(points, opts);
+  build(points, part, nparts);
+}
+
+void ClusterTree::build(const std::vector<Vec3> &points, const std::vector<int> &part, int nparts)
+{
+  const std::vector<int> offsets = part_offsets(part, nparts, points.size());
+  m_perm = order_by_part(part, offsets);
+  m_part_cluster.assign(nparts, -1);
+  std::vector<Key> keys(points.size());
+  // Breadth first: children are appended behind the clusters still to be visited, so levels come
+  // out consecutive. parts[c] is the range of parts under cluster c, empty below a part.
+  m_clusters.assign(1, Cluster{0, static_cast<int>(points.size())});
+  std::vector<std::pair<int, int>> parts{{0, nparts}};
+  for (int c = 0; c < num_clusters(); ++c) {
+    fit_bounds(c, points);
+    const auto [p0, p1] = parts[c];
+    if (p1 - p0 > 1) {
+      const int k = split_parts(offsets, p0, p1);
+      add_children(c, offsets[k]);
+      parts.push_back({p0, k});
+      parts.push_back({k, p1});
+      continue;
+    }
+    if (p1 - p0 == 1) m_part_cluster[p0] = c;
+    const Cluster &cl = m_clusters[c];
+    if (cl.size() <= m_opts.leaf_size) {
+      finish_leaf(c);
+      continue;
+    }
+    median_split(points, m_perm.data() + cl.begin, cl.size(), keys);
+    add_children(c, cl.begin + cl.size() / 2);
+    parts.push_back({p0, p0});
+    parts.push_back({p0, p0});
+  }
+  m_iperm.assign(m_perm.size(), 0);
+  for (int k = 0; k < num_points(); ++k) m_iperm[m_perm[k]] = k;
+  index_levels_and_leaves();
+}
+
+/// Append the children [begin, split) and [split, end) of cluster c.
+void ClusterTree::add_children(int c, int split)
+{
+  const int left = num_clusters();
+  const Cluster parent = m_clusters[c]; // copy: push_back may reallocate
+  for (auto [b, e] : {std::pair<int, int>{parent.begin, split}, std::pair<int, int>{split, parent.end}}) {
+    Cluster child;
+    child.begin = b;
+    child.end = e;
+    child.parent = c;
+    child.level = parent.level + 1;
+    m_clusters.push_back(child);
+  }
+  m_clusters[c].left = left;
+  m_clusters[c].right = left + 1;
+}
+
+/// Bounding box, its centre and the radius of the sphere around that centre holding the points.
+void ClusterTree::fit_bounds(int c, const std::vector<Vec3> &points)
+{
+  Cluster &cl = m_clusters[c];
+  cl.lo = cl.hi = points[m_perm[cl.begin]];
+  for (int k = cl.begin + 1; k < cl.end; ++k) {
+    const Vec3 &x = points[m_perm[k]];
+    for (int d = 0; d < 3; ++d) {
+      cl.lo[d] = std::min(cl.lo[d], x[d]);
+      cl.hi[d] = std::max(cl.hi[d], x[d]);
+    }
+  }
+  cl.centre = 0.5 * (cl.lo + cl.hi);
+  double r2 = 0;
+  for (int k = cl.begin; k < cl.end; ++k) {
+    const Vec3 d = points[m_perm[k]] - cl.centre;
+    r2 = std::max(r2, dot(d, d));
+  }
+  cl.radius = std::sqrt(r2);
+}
+
+/// Within a leaf the order is free; ascending node index makes the permutation independent of how
+/// nth_element arranged the halves, and keeps mesh neighbours close in memory.
+void ClusterTree::finish_leaf(int c)
+{
+  const Cluster &cl = m_clusters[c];
+  std::sort(m_perm.begin() + cl.begin, m_perm.begin() + cl.end);
+}
+
+void ClusterTree::index_levels_and_leaves()
+{
+  m_levels.clear();
+  m_leaves.clear();
+  for (int c = 0; c < num_clusters(); ++c) {
+    const int l = m_clusters[c].level;
+    if (l >= levels()) m_levels.resize(l + 1);
+    m_levels[l].push_back(c);
+    if (is_leaf(c)) m_leaves.push_back(c);
+  }
+  std::sort(m_leaves.begin(), m_leaves.end(),
+            [this](int a, int b) { return m_clusters[a].begin < m_clusters[b].begin; });
+}
+
+void ClusterTree::to_cluster_order(const double *in, double *out, int block) const
+{
+  if (block < 1) throw std::invalid_argument("ClusterTree::to_cluster_order: block must be >= 1");
+  const std::size_t b = static_cast<std::size_t>(block);
+  for (std::size_t k = 0; k < m_perm.size(); ++k) std::copy_n(in + b * m_perm[k], b, out + b * k);
+}
+
+void ClusterTree::to_mesh_order(const double *in, double *out, int block) const
+{
+  if (block < 1) throw std::invalid_argument("ClusterTree::to_mesh_order: block must be >= 1");
+  const std::size_t b = static_cast<std::size_t>(block);
+  for (std::size_t k = 0; k < m_perm.size(); ++k) std::copy_n(in + b * k, b, out + b * m_perm[k]);
+}
+
+bool ClusterTree::admissible(int a, int b, double eta) const
+{
+  if (!(eta >= 0)) throw std::invalid_argument("ClusterTree::admissible: eta must be >= 0");
+  const Cluster &ca = m_clusters[a], &cb = m_clusters[b];
+  return norm(ca.centre - cb.centre) > (1 + eta) * (ca.radius + cb.radius);
+}
+
+} // namespace hssbem
