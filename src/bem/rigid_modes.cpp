@@ -7,26 +7,6 @@
 
 namespace hssbem {
 
-namespace lapack {
-int syev(int n, double *a, double *w)
-{
-  int info = 0, lwork = -1;
-  double query = 0;
-  dsyev_("V", "U", &n, a, &n, w, &query, &lwork, &info);
-  lwork = static_cast<int>(query);
-  std::vector<double> work(std::max(1, lwork));
-  dsyev_("V", "U", &n, a, &n, w, work.data(), &lwork, &info);
-  return info;
-}
-int gesv(int n, int nrhs, double *a, double *b)
-{
-  int info = 0;
-  std::vector<int> piv(n);
-  dgesv_(&n, &nrhs, a, &n, piv.data(), b, &n, &info);
-  return info;
-}
-} // namespace lapack
-
 namespace {
 
 struct Frame {

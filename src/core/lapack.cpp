@@ -1,5 +1,4 @@
-// Thin wrappers over the Fortran BLAS/LAPACK routines declared in lapack.hpp (syev and gesv
-// live in bem/rigid_modes.cpp).
+// Thin wrappers over the Fortran BLAS/LAPACK routines declared in lapack.hpp.
 #include "hssbem/core/lapack.hpp"
 
 #include <algorithm>
@@ -29,6 +28,25 @@ void trsm(char side, char uplo, char transa, char diag, int m, int n, double alp
 void gemm(char transa, char transb, int m, int n, int k, double alpha, const double *a, int lda, const double *b, int ldb, double beta, double *c, int ldc)
 {
   dgemm_(&transa, &transb, &m, &n, &k, &alpha, a, &lda, b, &ldb, &beta, c, &ldc);
+}
+
+int syev(int n, double *a, double *w)
+{
+  int info = 0, lwork = -1;
+  double query = 0;
+  dsyev_("V", "U", &n, a, &n, w, &query, &lwork, &info);
+  lwork = static_cast<int>(query);
+  std::vector<double> work(std::max(1, lwork));
+  dsyev_("V", "U", &n, a, &n, w, work.data(), &lwork, &info);
+  return info;
+}
+
+int gesv(int n, int nrhs, double *a, double *b)
+{
+  int info = 0;
+  std::vector<int> piv(n);
+  dgesv_(&n, &nrhs, a, &n, piv.data(), b, &n, &info);
+  return info;
 }
 
 } // namespace hssbem::lapack

@@ -109,7 +109,7 @@ public:
 private:
   void build(const std::vector<Vec3> &points, const std::vector<int> &part, int nparts);
   void add_children(int c, int split);
-  void fit_bounds(int c, const std::vector<Vec3> &points);
+  void fit_bounds(int c, const Vec3 *x);
   void finish_leaf(int c);
   void index_levels_and_leaves();
 
