@@ -98,6 +98,29 @@ void BemOperator::add_rigid_body(int row, const Mat3 &D, const std::vector<int> 
   for (int a = 0; a < 3; ++a) add(m_disc->element_node(node.element, a), node.bary[a]);
 }
 
+void BemOperator::BlockRows::zero(std::size_t ncols) const
+{
+  for (int k = 0; k < 3; ++k) {
+    if (H) std::fill(H + k * ld, H + k * ld + 3 * ncols, 0.0);
+    if (G) std::fill(G + k * ld, G + k * ld + 3 * ncols, 0.0);
+    if (Gn) std::fill(Gn + k * ldn, Gn + k * ldn + ncols, 0.0);
+  }
+}
+
+void BemOperator::scatter(int t, const ElementIntegrals &ei, const std::vector<int> &col_pos, const BlockRows &out) const
+{
+  for (int a = 0; a < 3; ++a) {
+    const int p = col_pos[m_disc->element_node(t, a)];
+    if (p < 0) continue; // this corner's node is not a column of the block
+    for (int k = 0; k < 3; ++k)
+      for (int c = 0; c < 3; ++c) {
+        if (out.H) out.H[k * out.ld + 3 * p + c] += ei.H[a][3 * k + c];
+        if (out.G) out.G[k * out.ld + 3 * p + c] += ei.G[a][3 * k + c];
+        if (out.Gn) out.Gn[k * out.ldn + p] += ei.G[a][3 * k + c] * m_tri[t].n[c];
+      }
+  }
+}
+
 void BemOperator::fill_hg(const std::vector<int> &I, const std::vector<int> &J, double *H, double *G, long ld) const
 {
   fill_hg(I, J, H, G, ld, nullptr, 0, *m_workspace);
@@ -116,31 +139,18 @@ void BemOperator::fill_hg(const std::vector<int> &I, const std::vector<int> &J, 
       for (int j : J) col_pos[j] = -1;
       throw std::logic_error("fill_hg: row " + std::to_string(i) + " has no rigid-body term");
     }
-    double *Hr = H ? H + 3 * r * ld : nullptr, *Gr = G ? G + 3 * r * ld : nullptr, *Gnr = Gn ? Gn + 3 * r * ldn : nullptr;
-    for (int k = 0; k < 3; ++k) {
-      if (Hr) std::fill(Hr + k * ld, Hr + k * ld + 3 * J.size(), 0.0);
-      if (Gr) std::fill(Gr + k * ld, Gr + k * ld + 3 * J.size(), 0.0);
-      if (Gnr) std::fill(Gnr + k * ldn, Gnr + k * ldn + J.size(), 0.0);
-    }
+    BlockRows out{H ? H + 3 * r * ld : nullptr, G ? G + 3 * r * ld : nullptr, Gn ? Gn + 3 * r * ldn : nullptr, ld, ldn};
+    out.zero(J.size());
     Mat3 D{};
     const Vec3 &x = m_disc->node(i).point;
     for (int t : ws.elems) {
       element_integrals(x, i, t, ei);
-      for (int a = 0; a < 3; ++a) {
-        const int p = col_pos[m_disc->element_node(t, a)];
-        if (p < 0) continue;
-        for (int k = 0; k < 3; ++k)
-          for (int c = 0; c < 3; ++c) {
-            if (Hr) Hr[k * ld + 3 * p + c] += ei.H[a][3 * k + c];
-            if (Gr) Gr[k * ld + 3 * p + c] += ei.G[a][3 * k + c];
-            if (Gnr) Gnr[k * ldn + p] += ei.G[a][3 * k + c] * m_tri[t].n[c];
-          }
-      }
+      scatter(t, ei, col_pos, out);
       if (all && !contains(i, t))
         for (int a = 0; a < 3; ++a)
           for (int m = 0; m < 9; ++m) D[m] -= ei.H[a][m];
     }
-    if (Hr) add_rigid_body(i, all ? D : m_rigid[i], col_pos, Hr, ld);
+    if (out.H) add_rigid_body(i, all ? D : m_rigid[i], col_pos, out.H, ld);
   }
   for (int j : J) col_pos[j] = -1;
 }

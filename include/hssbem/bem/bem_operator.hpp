@@ -50,6 +50,7 @@ public:
   const Mat3 &rigid_body_term(int row) const { return m_rigid[row]; }
 
   /// H(I, J) and G(I, J), row-major with leading dimension ld (>= 3|J|); either may be null.
+  /// I and J hold distinct node indices (J holding every node is recognised by its size).
   /// Rows of I need their rigid-body terms (compute_rigid_body_terms) unless J holds every node,
   /// in which case they are summed on the way. This overload uses the operator's own workspace
   /// and is not thread-safe; pass a Workspace per thread for concurrent calls.
@@ -65,6 +66,13 @@ public:
 
 private:
   bool contains(int row, int t) const;
+  /// The three rows of one collocation point in the outputs of fill_hg (null: not wanted).
+  struct BlockRows {
+    double *H, *G, *Gn;
+    long ld, ldn;
+    void zero(std::size_t ncols) const;
+  };
+  void scatter(int t, const ElementIntegrals &ei, const std::vector<int> &col_pos, const BlockRows &out) const;
   void elements_touching(const std::vector<int> &J, Workspace &ws) const;
   void add_rigid_body(int row, const Mat3 &D, const std::vector<int> &col_pos, double *Hrow, long ld) const;
 
