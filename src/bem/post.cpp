@@ -1,5 +1,4 @@
 #include "hssbem/bem/post.hpp"
-#include "hssbem/bem/rigid_modes.hpp"
 
 #include <cmath>
 #include <limits>
@@ -66,23 +65,6 @@ std::vector<double> node_areas(const Discretization &disc)
   for (int e = 0; e < disc.mesh().num_triangles(); ++e)
     for (int c = 0; c < 3; ++c) a[disc.element_node(e, c)] += disc.mesh().triangle_area(e) / 3.0;
   return a;
-}
-
-std::array<double, 2> load_imbalance(const Discretization &disc, const std::vector<Vec3> &t)
-{
-  const std::vector<double> area = node_areas(disc);
-  Vec3 centre{}, F{}, M{};
-  for (int i = 0; i < disc.num_nodes(); ++i) centre = centre + disc.node_position(i);
-  centre = (1.0 / std::max(1, disc.num_nodes())) * centre;
-  double fscale = 0, mscale = 0;
-  for (int i = 0; i < disc.num_nodes(); ++i) {
-    const Vec3 arm = disc.node_position(i) - centre, f = area[i] * t[i];
-    F = F + f;
-    M = M + cross(arm, f);
-    fscale += norm(f);
-    mscale += norm(arm) * norm(f);
-  }
-  return {fscale > 0 ? norm(F) / fscale : 0.0, mscale > 0 ? norm(M) / mscale : 0.0};
 }
 
 std::vector<Vec3> interior_displacement(const BemOperator &op, const NodalSolution &s, const std::vector<Vec3> &points)

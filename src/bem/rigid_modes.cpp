@@ -1,4 +1,5 @@
 #include "hssbem/bem/rigid_modes.hpp"
+#include "hssbem/bem/post.hpp"
 #include "hssbem/core/lapack.hpp"
 
 #include <algorithm>
@@ -109,6 +110,22 @@ std::array<double, 6> remove_rigid_motion(const Discretization &disc, std::vecto
     for (int c = 0; c < 3; ++c)
       for (int m = 0; m < 6; ++m) u[i][c] -= rhs[m] * mode(f, m, disc.node_position(i), c);
   return {rhs[0], rhs[1], rhs[2], rhs[3] / f.size, rhs[4] / f.size, rhs[5] / f.size};
+}
+
+std::array<double, 2> load_imbalance(const Discretization &disc, const std::vector<Vec3> &t)
+{
+  const std::vector<double> area = node_areas(disc);
+  const Vec3 centre = frame_of(disc).centre;
+  Vec3 F{}, M{};
+  double fscale = 0, mscale = 0;
+  for (int i = 0; i < disc.num_nodes(); ++i) {
+    const Vec3 arm = disc.node_position(i) - centre, f = area[i] * t[i];
+    F = F + f;
+    M = M + cross(arm, f);
+    fscale += norm(f);
+    mscale += norm(arm) * norm(f);
+  }
+  return {fscale > 0 ? norm(F) / fscale : 0.0, mscale > 0 ? norm(M) / mscale : 0.0};
 }
 
 } // namespace hssbem

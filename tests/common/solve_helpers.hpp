@@ -57,6 +57,23 @@ inline ProblemSpec spec_for(const std::string &mesh, double E, double nu)
   return spec;
 }
 
+/// Mixed problem for Kelvin's solution k on a sphere mesh: traction (with the exact sphere
+/// normal) on every vertex, then displacement on the vertices with z >= 0.
+template <class Field>
+ProblemSpec kelvin_mixed_spec(const std::string &mesh, const Field &k)
+{
+  const SurfaceMesh m = read_mesh(mesh_file(mesh));
+  ProblemSpec spec = spec_for(mesh, k.mat.E, k.mat.nu);
+  std::vector<Vec3> t_rows, u_rows;
+  std::vector<int> upper;
+  for (int v = 0; v < m.num_vertices(); ++v) {
+    t_rows.push_back(k.traction(m.vertices[v], normalized(m.vertices[v])));
+    if (m.vertices[v][2] >= 0) upper.push_back(v), u_rows.push_back(k.displacement(m.vertices[v]));
+  }
+  spec.rules = {rule(BoundaryRule::Kind::Traction, all_vertices(), t_rows), rule(BoundaryRule::Kind::Displacement, vertices(upper), u_rows)};
+  return spec;
+}
+
 /// Solve on PETSC_COMM_WORLD; rigid motion removed when the problem was pinned.
 inline Solved solve(ProblemSpec spec, const QuadratureOptions &quad = {})
 {

@@ -13,18 +13,8 @@ namespace {
 /// Kelvin's field, displacement on the northern half and traction elsewhere (sphere_l0).
 ProblemSpec kelvin_mixed()
 {
-  const Material mat{1000.0, 0.3};
-  const KelvinField k{mat, {1.2, 0.9, 1.0}, {1.0, -2.0, 0.5}};
-  const SurfaceMesh m = read_mesh(mesh_file("sphere_l0.msh"));
-  ProblemSpec spec = spec_for("sphere_l0.msh", mat.E, mat.nu);
-  std::vector<Vec3> t_rows, u_rows;
-  std::vector<int> upper;
-  for (int v = 0; v < m.num_vertices(); ++v) {
-    t_rows.push_back(k.traction(m.vertices[v], normalized(m.vertices[v])));
-    if (m.vertices[v][2] >= 0) upper.push_back(v), u_rows.push_back(k.displacement(m.vertices[v]));
-  }
-  spec.rules = {rule(BoundaryRule::Kind::Traction, all_vertices(), t_rows), rule(BoundaryRule::Kind::Displacement, vertices(upper), u_rows)};
-  return spec;
+  const KelvinField k{Material{1000.0, 0.3}, {1.2, 0.9, 1.0}, {1.0, -2.0, 0.5}};
+  return kelvin_mixed_spec("sphere_l0.msh", k);
 }
 
 /// Solve on PETSC_COMM_SELF with default LU: the serial reference, on every rank.

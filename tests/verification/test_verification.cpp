@@ -21,16 +21,7 @@ double kelvin_mixed_error(const std::string &mesh, std::vector<double> *interior
 {
   const Material mat{1000.0, 0.3};
   const KelvinField k{mat, {1.2, 0.9, 1.0}, {1.0, -2.0, 0.5}};
-  const SurfaceMesh m = read_mesh(mesh_file(mesh));
-  ProblemSpec spec = spec_for(mesh, mat.E, mat.nu);
-  std::vector<Vec3> t_rows, u_rows;
-  std::vector<int> upper;
-  for (int v = 0; v < m.num_vertices(); ++v) {
-    t_rows.push_back(k.traction(m.vertices[v], normalized(m.vertices[v])));
-    if (m.vertices[v][2] >= 0) upper.push_back(v), u_rows.push_back(k.displacement(m.vertices[v]));
-  }
-  spec.rules = {rule(Kind::Traction, all_vertices(), t_rows), rule(Kind::Displacement, vertices(upper), u_rows)};
-  const Solved s = solve(spec);
+  const Solved s = solve(kelvin_mixed_spec(mesh, k));
   double num = 0, den = 0;
   for (int i = 0; i < s.setup.disc->num_nodes(); ++i) {
     const Vec3 x = s.setup.disc->node_position(i);
