@@ -24,7 +24,7 @@ normally exact as the peak is held through the LU; with one rank it is the wait4
 Uses numpy and h5py (matplotlib for --plot): run with Debian's /usr/bin/python3.
 
 Examples
-  benchmarks/bench_dense.py --hssbem /tmp/build-bench/bin/hssbem --quick
+  benchmarks/bench_dense.py --hssbem build/bin/hssbem --quick
   benchmarks/bench_dense.py --hssbem BIN --csv out/bench/dense.csv --plot out/bench/dense.png
   benchmarks/bench_dense.py --hssbem BIN --sizes 3000,6000 --ranks 1 --repeat 3 --threads 1
 """
