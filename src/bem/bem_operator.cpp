@@ -8,7 +8,7 @@
 namespace hssbem {
 
 BemOperator::BemOperator(const Discretization &disc, const Material &material, const QuadratureOptions &options)
-  : m_disc(&disc), m_material(material), m_quad(material, options)
+  : m_disc(&disc), m_material(material), m_quad_options(options), m_quad(material, options)
 {
   const SurfaceMesh &mesh = disc.mesh();
   m_tri.resize(mesh.triangles.size());
@@ -128,14 +128,61 @@ void BemOperator::fill_hg(const std::vector<int> &I, const std::vector<int> &J, 
 
 void BemOperator::fill_hg(const std::vector<int> &I, const std::vector<int> &J, double *H, double *G, long ld, double *Gn, long ldn, Workspace &ws) const
 {
+  fill_rows(I, J, H, G, ld, Gn, ldn, ws, Rigid::with);
+}
+
+void BemOperator::fill_hg_without_rigid(const std::vector<int> &I, const std::vector<int> &J, double *H, double *G, long ld, double *Gn, long ldn,
+                                        Workspace &ws) const
+{
+  fill_rows(I, J, H, G, ld, Gn, ldn, ws, Rigid::without);
+}
+
+void BemOperator::fill_hg_at_points(const std::vector<Vec3> &X, const std::vector<int> &J, double *H, double *G, long ld, double *Gn, long ldn,
+                                    Workspace &ws) const
+{
   std::vector<int> &col_pos = ws.col_pos;
   for (std::size_t p = 0; p < J.size(); ++p) col_pos[J[p]] = static_cast<int>(p);
-  const bool all = static_cast<int>(J.size()) == num_nodes();
+  elements_touching(J, ws);
+  ElementIntegrals ei;
+  for (std::size_t r = 0; r < X.size(); ++r) {
+    BlockRows out{H ? H + 3 * r * ld : nullptr, G ? G + 3 * r * ld : nullptr, Gn ? Gn + 3 * r * ldn : nullptr, ld, ldn};
+    out.zero(J.size());
+    for (int t : ws.elems) {
+      element_integrals(X[r], -1, t, ei);
+      scatter(t, ei, col_pos, out);
+    }
+  }
+  for (int j : J) col_pos[j] = -1;
+}
+
+int BemOperator::rigid_body_columns(int row, int cols[3], double weights[3]) const
+{
+  const DofNode &node = m_disc->node(row);
+  if (node.element < 0) {
+    cols[0] = row;
+    weights[0] = 1.0;
+    return 1;
+  }
+  int n = 0;
+  for (int a = 0; a < 3; ++a)
+    if (node.bary[a] != 0.0) {
+      cols[n] = m_disc->element_node(node.element, a);
+      weights[n++] = node.bary[a];
+    }
+  return n;
+}
+
+void BemOperator::fill_rows(const std::vector<int> &I, const std::vector<int> &J, double *H, double *G, long ld, double *Gn, long ldn, Workspace &ws,
+                            Rigid rigid) const
+{
+  std::vector<int> &col_pos = ws.col_pos;
+  for (std::size_t p = 0; p < J.size(); ++p) col_pos[J[p]] = static_cast<int>(p);
+  const bool all = rigid == Rigid::with && static_cast<int>(J.size()) == num_nodes();
   elements_touching(J, ws);
   ElementIntegrals ei;
   for (std::size_t r = 0; r < I.size(); ++r) {
     const int i = I[r];
-    if (!all && !m_has_rigid[i]) {
+    if (rigid == Rigid::with && !all && !m_has_rigid[i]) {
       for (int j : J) col_pos[j] = -1;
       throw std::logic_error("fill_hg: row " + std::to_string(i) + " has no rigid-body term");
     }
@@ -150,7 +197,7 @@ void BemOperator::fill_hg(const std::vector<int> &I, const std::vector<int> &J, 
         for (int a = 0; a < 3; ++a)
           for (int m = 0; m < 9; ++m) D[m] -= ei.H[a][m];
     }
-    if (out.H) add_rigid_body(i, all ? D : m_rigid[i], col_pos, out.H, ld);
+    if (out.H && rigid == Rigid::with) add_rigid_body(i, all ? D : m_rigid[i], col_pos, out.H, ld);
   }
   for (int j : J) col_pos[j] = -1;
 }

@@ -170,7 +170,7 @@ void ElementQuadrature::subdivide(const Vec3 &x, const Sub &s, const Vec3 &n, in
 {
   const Vec3 centre = (1.0 / 3) * (s.p[0] + s.p[1] + s.p[2]);
   const double h = diameter(s.p), d = norm(x - centre);
-  if (d >= m_opt.far_ratio * h) return apply_rule(x, s, n, rule3, out);
+  if (m_opt.far_ratio > 0 && d >= m_opt.far_ratio * h) return apply_rule(x, s, n, rule3, out);
   if (d >= m_opt.near_ratio * h || depth >= m_opt.max_depth) return apply_rule(x, s, n, rule7, out);
   Sub mid;
   for (int k = 0; k < 3; ++k) {

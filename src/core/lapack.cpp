@@ -27,6 +27,12 @@ void trsm(char side, char uplo, char transa, char diag, int m, int n, double alp
 
 void gemm(char transa, char transb, int m, int n, int k, double alpha, const double *a, int lda, const double *b, int ldb, double beta, double *c, int ldc)
 {
+  if (m == 0 || n == 0) return;
+  if (k == 0) { // nothing to multiply; dgemm would also reject a zero leading dimension
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < m; ++i) c[i + static_cast<long>(j) * ldc] = beta == 0.0 ? 0.0 : beta * c[i + static_cast<long>(j) * ldc];
+    return;
+  }
   dgemm_(&transa, &transb, &m, &n, &k, &alpha, a, &lda, b, &ldb, &beta, c, &ldc);
 }
 
@@ -47,6 +53,73 @@ int gesv(int n, int nrhs, double *a, double *b)
   std::vector<int> piv(n);
   dgesv_(&n, &nrhs, a, &n, piv.data(), b, &n, &info);
   return info;
+}
+
+namespace {
+/// Run a LAPACK routine that takes a workspace: query its size, then call it for real.
+template <class F> int with_workspace(F &&call)
+{
+  int info = 0, lwork = -1;
+  double query = 0;
+  call(&query, &lwork, &info);
+  if (info != 0) return info;
+  lwork = std::max(1, static_cast<int>(query + 0.5));
+  std::vector<double> work(static_cast<std::size_t>(lwork));
+  call(work.data(), &lwork, &info);
+  return info;
+}
+} // namespace
+
+int geqrf(int m, int n, double *a, int lda, double *tau)
+{
+  if (m == 0 || n == 0) return 0;
+  return with_workspace([&](double *w, int *lw, int *info) { dgeqrf_(&m, &n, a, &lda, tau, w, lw, info); });
+}
+
+int gelqf(int m, int n, double *a, int lda, double *tau)
+{
+  if (m == 0 || n == 0) return 0;
+  return with_workspace([&](double *w, int *lw, int *info) { dgelqf_(&m, &n, a, &lda, tau, w, lw, info); });
+}
+
+int ormqr(char side, char trans, int m, int n, int k, const double *a, int lda, const double *tau, double *c, int ldc)
+{
+  if (m == 0 || n == 0 || k == 0) return 0;
+  return with_workspace([&](double *w, int *lw, int *info) { dormqr_(&side, &trans, &m, &n, &k, a, &lda, tau, c, &ldc, w, lw, info); });
+}
+
+int ormlq(char side, char trans, int m, int n, int k, const double *a, int lda, const double *tau, double *c, int ldc)
+{
+  if (m == 0 || n == 0 || k == 0) return 0;
+  return with_workspace([&](double *w, int *lw, int *info) { dormlq_(&side, &trans, &m, &n, &k, a, &lda, tau, c, &ldc, w, lw, info); });
+}
+
+int getrf(int n, double *a, int lda, int *ipiv)
+{
+  if (n == 0) return 0;
+  int info = 0;
+  dgetrf_(&n, &n, a, &lda, ipiv, &info);
+  return info;
+}
+
+int getrs(char trans, int n, int nrhs, const double *a, int lda, const int *ipiv, double *b, int ldb)
+{
+  if (n == 0 || nrhs == 0) return 0;
+  int info = 0;
+  dgetrs_(&trans, &n, &nrhs, a, &lda, ipiv, b, &ldb, &info);
+  return info;
+}
+
+void gemv(char trans, int m, int n, double alpha, const double *a, int lda, const double *x, double beta, double *y)
+{
+  const int one = 1;
+  const int ny = trans == 'N' ? m : n;
+  if (ny == 0) return;
+  if (m == 0 || n == 0) {
+    for (int i = 0; i < ny; ++i) y[i] = beta == 0.0 ? 0.0 : beta * y[i];
+    return;
+  }
+  dgemv_(&trans, &m, &n, &alpha, a, &lda, x, &one, &beta, y, &one);
 }
 
 } // namespace hssbem::lapack

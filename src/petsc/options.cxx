@@ -27,7 +27,7 @@ static PetscErrorCode OptionString_Private(const char *key, const char *text, st
 . -bem_mat_type <dense>       - operator representation
 . -mat_bem_quad_order <n>     - Gauss points per direction on singular triangles
 . -mat_bem_near_ratio <r>     - subdivide triangles closer than r diameters
-. -mat_bem_far_ratio <r>      - 3-point rule beyond r diameters
+. -mat_bem_far_ratio <r>      - 3-point rule beyond r diameters (0: never, the default)
 - -mat_bem_max_depth <n>      - subdivision levels for nearly singular triangles
 
   Level: beginner
@@ -48,12 +48,13 @@ PetscErrorCode HssbemProcessOptions(MPI_Comm comm, HssbemAppOptions *opts)
   PetscCall(OptionString_Private("-bem_mat_type", "Operator representation: dense", &opts->mat_type, PetscOptionsObject));
   PetscCall(PetscOptionsInt("-mat_bem_quad_order", "Gauss points per direction on singular triangles", "", opts->quad.duffy_order, &opts->quad.duffy_order, NULL));
   PetscCall(PetscOptionsReal("-mat_bem_near_ratio", "Subdivide triangles closer than this many diameters", "", opts->quad.near_ratio, &opts->quad.near_ratio, NULL));
-  PetscCall(PetscOptionsReal("-mat_bem_far_ratio", "Use the 3-point rule beyond this many diameters", "", opts->quad.far_ratio, &opts->quad.far_ratio, NULL));
+  PetscCall(PetscOptionsReal("-mat_bem_far_ratio", "Use the 3-point rule beyond this many diameters (0: never)", "", opts->quad.far_ratio, &opts->quad.far_ratio, NULL));
   PetscCall(PetscOptionsInt("-mat_bem_max_depth", "Subdivision levels for nearly singular triangles", "", opts->quad.max_depth, &opts->quad.max_depth, &set));
   PetscOptionsEnd();
   PetscCheck(opts->mat_type == "dense", comm, PETSC_ERR_ARG_UNKNOWN_TYPE, "-bem_mat_type %s is not available; this build knows: dense", opts->mat_type.c_str());
   PetscCheck(opts->quad.duffy_order >= 2 && opts->quad.duffy_order <= 64, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_bem_quad_order must lie in [2, 64]");
-  PetscCheck(opts->quad.near_ratio > 0 && opts->quad.far_ratio >= opts->quad.near_ratio, comm, PETSC_ERR_ARG_OUTOFRANGE, "need 0 < -mat_bem_near_ratio <= -mat_bem_far_ratio");
+  PetscCheck(opts->quad.near_ratio > 0 && (opts->quad.far_ratio == 0 || opts->quad.far_ratio >= opts->quad.near_ratio), comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "need -mat_bem_near_ratio > 0 and -mat_bem_far_ratio either 0 (off) or at least -mat_bem_near_ratio");
   PetscCheck(opts->quad.max_depth >= 0 && opts->quad.max_depth <= 20, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_bem_max_depth must lie in [0, 20]");
   PetscCheck(opts->feature_angle > 0 && opts->feature_angle < 180, comm, PETSC_ERR_ARG_OUTOFRANGE, "-bem_feature_angle must lie in (0, 180)");
   PetscFunctionReturn(PETSC_SUCCESS);

@@ -40,6 +40,7 @@ public:
 
   const Discretization &discretization() const { return *m_disc; }
   const Material &material() const { return m_material; }
+  const QuadratureOptions &quadrature_options() const { return m_quad_options; }
   int num_nodes() const { return m_disc->num_nodes(); }
 
   /// Rigid-body terms of the given rows by direct summation over all triangles (O(rows · nt)).
@@ -59,6 +60,19 @@ public:
   /// response to a unit pressure field N_j carried by flat triangle normals. Thread-safe with
   /// one workspace per thread.
   void fill_hg(const std::vector<int> &I, const std::vector<int> &J, double *H, double *G, long ld, double *Gn, long ldn, Workspace &ws) const;
+  /// As fill_hg, but H(I, J) without the rigid-body terms (whatever J holds): the part of H that
+  /// quadrature gives. The HSS path compresses this and adds the terms once a fast matvec of it
+  /// against the translations has produced them.
+  void fill_hg_without_rigid(const std::vector<int> &I, const std::vector<int> &J, double *H, double *G, long ld, double *Gn, long ldn,
+                             Workspace &ws) const;
+  /// The same integrals with arbitrary points X as rows (points off the surface, e.g. proxy
+  /// points around a cluster): 3|X| rows, no rigid-body term. Thread-safe with a workspace.
+  void fill_hg_at_points(const std::vector<Vec3> &X, const std::vector<int> &J, double *H, double *G, long ld, double *Gn, long ldn,
+                         Workspace &ws) const;
+  /// Columns j of the rigid-body term of row i and their weights w_j(x_i) (one column, weight 1,
+  /// for a node collocated at its vertex; the corners of its triangle for a moved node): the
+  /// term adds w_j(x_i) D_i to block (i, j) of H.
+  int rigid_body_columns(int row, int cols[3], double weights[3]) const;
 
   /// Integrals of triangle t for a collocation point (or an interior point when `row` < 0).
   void element_integrals(const Vec3 &x, int row, int t, ElementIntegrals &out) const;
@@ -74,10 +88,14 @@ private:
   };
   void scatter(int t, const ElementIntegrals &ei, const std::vector<int> &col_pos, const BlockRows &out) const;
   void elements_touching(const std::vector<int> &J, Workspace &ws) const;
+  enum class Rigid { with, without };
+  void fill_rows(const std::vector<int> &I, const std::vector<int> &J, double *H, double *G, long ld, double *Gn, long ldn, Workspace &ws,
+                 Rigid rigid) const;
   void add_rigid_body(int row, const Mat3 &D, const std::vector<int> &col_pos, double *Hrow, long ld) const;
 
   const Discretization *m_disc;
   Material m_material;
+  QuadratureOptions m_quad_options;
   ElementQuadrature m_quad;
   std::vector<Triangle> m_tri;
   std::vector<Mat3> m_rigid;

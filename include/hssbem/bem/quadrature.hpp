@@ -6,7 +6,8 @@
 ///   (the 1/r of u*, and p* times (N_a - w_a), become smooth);
 /// - the point is near (distance / diameter below `near_ratio`): the triangle is split in four,
 ///   recursively, up to `max_depth` levels;
-/// - otherwise a symmetric rule: 7 points (degree 5), or 3 points (degree 2) beyond `far_ratio`.
+/// - otherwise a symmetric rule: 7 points (degree 5), or optionally 3 points (degree 2) beyond
+///   `far_ratio` (dense path only).
 #pragma once
 
 #include "hssbem/bem/geometry.hpp"
@@ -21,7 +22,10 @@ namespace hssbem {
 struct QuadratureOptions {
   int duffy_order = 8;      ///< Gauss-Legendre points per direction on singular triangles
   double near_ratio = 3.0;  ///< subdivide while distance/diameter is below this
-  double far_ratio = 8.0;   ///< 3-point rule beyond this distance/diameter
+  /// 3-point rule beyond this distance/diameter; 0 (the default): never. The HSS path needs 0:
+  /// with one rule everywhere beyond near_ratio, each column of the discrete operator is a fixed
+  /// sum of point sources outside its near zone, which proxy surfaces capture to any tolerance.
+  double far_ratio = 0.0;
   int max_depth = 10;       ///< subdivision levels for nearly singular triangles
 };
 

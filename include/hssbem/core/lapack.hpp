@@ -13,6 +13,13 @@ void dsyev_(const char *jobz, const char *uplo, const int *n, double *a, const i
 void dgesv_(const int *n, const int *nrhs, double *a, const int *lda, int *ipiv, double *b, const int *ldb, int *info);
 void dgeqp3_(const int *m, const int *n, double *a, const int *lda, int *jpvt, double *tau, double *work, const int *lwork, int *info);
 void dtrsm_(const char *side, const char *uplo, const char *transa, const char *diag, const int *m, const int *n, const double *alpha, const double *a, const int *lda, double *b, const int *ldb);
+void dgeqrf_(const int *m, const int *n, double *a, const int *lda, double *tau, double *work, const int *lwork, int *info);
+void dgelqf_(const int *m, const int *n, double *a, const int *lda, double *tau, double *work, const int *lwork, int *info);
+void dormqr_(const char *side, const char *trans, const int *m, const int *n, const int *k, const double *a, const int *lda, const double *tau, double *c, const int *ldc, double *work, const int *lwork, int *info);
+void dormlq_(const char *side, const char *trans, const int *m, const int *n, const int *k, const double *a, const int *lda, const double *tau, double *c, const int *ldc, double *work, const int *lwork, int *info);
+void dgetrf_(const int *m, const int *n, double *a, const int *lda, int *ipiv, int *info);
+void dgetrs_(const char *trans, const int *n, const int *nrhs, const double *a, const int *lda, const int *ipiv, double *b, const int *ldb, int *info);
+void dgemv_(const char *trans, const int *m, const int *n, const double *alpha, const double *a, const int *lda, const double *x, const int *incx, const double *beta, double *y, const int *incy);
 void dgemm_(const char *transa, const char *transb, const int *m, const int *n, const int *k, const double *alpha, const double *a, const int *lda, const double *b, const int *ldb, const double *beta, double *c, const int *ldc);
 }
 
@@ -33,4 +40,18 @@ void trsm(char side, char uplo, char transa, char diag, int m, int n, double alp
 /// C ← alpha op(A) op(B) + beta C, C m×n, inner dimension k (dgemm).
 void gemm(char transa, char transb, int m, int n, int k, double alpha, const double *a, int lda, const double *b, int ldb, double beta, double *c, int ldc);
 
+/// QR (dgeqrf) of the m×n matrix a in place; tau gets min(m, n) entries. Returns info.
+int geqrf(int m, int n, double *a, int lda, double *tau);
+/// LQ (dgelqf) of the m×n matrix a in place; tau gets min(m, n) entries. Returns info.
+int gelqf(int m, int n, double *a, int lda, double *tau);
+/// C ← op(Q) C or C op(Q) with Q from geqrf (k reflectors stored in a). Returns info.
+int ormqr(char side, char trans, int m, int n, int k, const double *a, int lda, const double *tau, double *c, int ldc);
+/// C ← op(Q) C or C op(Q) with Q from gelqf (k reflectors stored in the rows of a). Returns info.
+int ormlq(char side, char trans, int m, int n, int k, const double *a, int lda, const double *tau, double *c, int ldc);
+/// LU with partial pivoting of the n×n matrix a (dgetrf); ipiv gets n entries. Returns info.
+int getrf(int n, double *a, int lda, int *ipiv);
+/// Solve with the factors of getrf: B ← op(A)⁻¹ B for nrhs columns. Returns info.
+int getrs(char trans, int n, int nrhs, const double *a, int lda, const int *ipiv, double *b, int ldb);
+/// y ← alpha op(A) x + beta y with A m×n (dgemv); unit strides.
+void gemv(char trans, int m, int n, double alpha, const double *a, int lda, const double *x, double beta, double *y);
 } // namespace hssbem::lapack

@@ -1,0 +1,57 @@
+/// \file bem_compression.hpp
+/// Entries-only HSS compression of the BEM operator K = [H, G] (DESIGN §3, §5).
+///
+/// K has 3 rows per dof node (collocation point) and, per node, 6 columns: the 3 of H (slots
+/// 0–2) and the 3 of G (slots 3–5), optionally a 7th, Gn (slot 6: the response to a unit pressure
+/// carried by facet normals, for pressure loads). Any boundary-condition pattern then gives the
+/// system matrix A = K E_S (column (j, c) is H's where u is unknown and −G's where t is unknown)
+/// without evaluating a kernel again.
+///
+/// Construction, bottom-up over the cluster tree (one level at a time, clusters in parallel):
+///  - the row skeleton of a cluster τ comes from an interpolative decomposition (ID) of its
+///    candidate rows against (a) Kelvin point sources at proxy points on a sphere of radius
+///    proxy_ratio·r_τ around τ, standing in for every source outside that sphere, and (b) the true
+///    entries of the active columns of the other clusters whose quadrature can reach inside it;
+///  - the column skeleton likewise, against the fields of τ's columns at the proxy points and
+///    the true entries of the active rows inside the proxy sphere;
+///  - the proxy spheres are large enough that everything outside sees each triangle of τ through
+///    the same regular quadrature rule (near_ratio diameters; the 3-point far rule must be off),
+///    so the discrete operator, not just the continuous one, is captured to the tolerance;
+///  - candidates of an inner cluster are its children's skeletons (nested bases); skeleton
+///    couplings and leaf blocks are true entries.
+/// No N×N array is formed; memory is O(N·r).
+///
+/// The rigid-body terms of H (DESIGN §2) are not integrated: the compressed H without them is
+/// applied to the three translations, and the result, which must vanish for the full H, gives
+/// them (D_i = −Σ_j H⁰(i, j)). A node collocated inside a triangle spreads its term over that
+/// triangle's corner nodes; such rows and columns are kept in the skeletons wherever the
+/// coupling crosses a cluster boundary, so the terms land in true-entry blocks.
+#pragma once
+
+#include "hssbem/bem/bem_operator.hpp"
+#include "hssbem/hss/hss_matrix.hpp"
+
+namespace hssbem {
+
+/// Parameters of the HSS compression (filled from -mat_hss_* options by the PETSc layer).
+struct HssOptions {
+  double rel_tol = 1e-6;      ///< relative tolerance of each interpolative decomposition
+  int max_rank = -1;          ///< cap on each skeleton; negative: none
+  int leaf_size = 64;         ///< dof nodes per leaf cluster (at most)
+  double proxy_ratio = 1.5;   ///< proxy sphere radius / cluster radius (> 1)
+  int proxy_points = 0;       ///< points on each proxy sphere; 0: chosen from rel_tol
+  bool pressure_columns = false; ///< also compress Gn (slot 6), for pressure loads
+};
+
+/// Number of proxy points used for a tolerance when HssOptions::proxy_points is 0.
+int default_proxy_points(double rel_tol);
+
+/// Compress K = [H, G] (and Gn if asked) of `op` at the given accuracy, rigid-body terms
+/// included (computed by fast matvecs). The operator's quadrature must have far_ratio = 0.
+/// Throws std::invalid_argument for bad options.
+HssMatrix compress_bem_operator(const BemOperator &op, const HssOptions &options);
+
+/// Columns per node of the compressed K (6, or 7 with pressure columns).
+inline int k_columns_per_node(bool pressure_columns) { return pressure_columns ? 7 : 6; }
+
+} // namespace hssbem

@@ -1,0 +1,88 @@
+/// \file hss_matrix.hpp
+/// A hierarchically semi-separable (HSS) matrix with nested bases in interpolative form.
+///
+/// Rows and columns follow one ClusterTree: point k of cluster order carries `row_block` rows
+/// (3 displacement components) and `col_block` columns (for K = [H, G(, Gn)] of the BEM: 6 or 7).
+/// Global row r = row_block·k + c and global column q = col_block·k + s, both in cluster order.
+///
+/// Every cluster τ except the root has
+///  - row skeleton S_τ (global rows) and U_τ: its candidate rows ≈ U_τ · (those rows at S_τ),
+///    away from τ's diagonal block. Candidate rows are all rows of a leaf, and the children's
+///    skeletons (left then right) for an inner cluster, so U of an inner cluster is the usual
+///    HSS transfer matrix. U is an interpolation matrix: the identity on the skeleton rows;
+///  - column skeleton and V_τ the same way for columns: K(outside, candidates) ≈
+///    K(outside, skeleton) · V_τᵀ.
+/// A leaf stores its diagonal block D_τ = K(rows, columns); an inner cluster with children a, b
+/// stores the true entries B_ab = K(S_a, C_b) and B_ba = K(S_b, C_a) between the children's row
+/// skeletons S and column skeletons C. Then, with nested bases,
+///     K(a, b) ≈ U_a B_ab V_bᵀ,
+/// and the whole matrix is applied in O(N·r) operations (apply()).
+#pragma once
+
+#include "hssbem/core/cluster_tree.hpp"
+#include "hssbem/core/dense_matrix.hpp"
+
+#include <cstddef>
+#include <vector>
+
+namespace hssbem {
+
+/// One cluster's generators (see the file comment).
+struct HssCluster {
+  std::vector<int> row_skel; ///< global rows, cluster order (empty for the root)
+  std::vector<int> col_skel; ///< global columns, cluster order (empty for the root)
+  DenseMatrix U;             ///< candidate rows × |row_skel|
+  DenseMatrix V;             ///< candidate columns × |col_skel|
+  DenseMatrix D;             ///< leaf: its rows × its columns
+  DenseMatrix B12, B21;      ///< inner: K(row_skel(left), col_skel(right)), K(row_skel(right), col_skel(left))
+};
+
+/// Rank and memory figures per tree level, and work counters.
+struct HssLevelStats {
+  int clusters = 0;
+  int max_row_rank = 0, max_col_rank = 0;
+  double mean_row_rank = 0, mean_col_rank = 0;
+};
+
+struct HssStats {
+  std::vector<HssLevelStats> levels; ///< index = tree level (0 = root)
+  std::size_t memory_bytes = 0;      ///< generators, skeleton lists and diagonal blocks
+  long long entries_evaluated = 0;   ///< operator entries computed (near field, proxies, couplings, leaves)
+  double time_tree = 0, time_near_field = 0, time_ids = 0, time_couplings = 0, time_leaves = 0, time_rigid = 0; ///< seconds
+  int proxy_points = 0;
+  int max_row_rank() const;
+  int max_col_rank() const;
+};
+
+class HssMatrix {
+public:
+  HssMatrix(ClusterTree tree, int row_block, int col_block);
+
+  const ClusterTree &tree() const { return m_tree; }
+  int row_block() const { return m_row_block; }
+  int col_block() const { return m_col_block; }
+  int num_rows() const { return m_row_block * m_tree.num_points(); }
+  int num_cols() const { return m_col_block * m_tree.num_points(); }
+  HssCluster &cluster(int i) { return m_clusters[i]; }
+  const HssCluster &cluster(int i) const { return m_clusters[i]; }
+  /// Candidate rows of cluster c (global, cluster order): a leaf's rows, or the children's skeletons.
+  std::vector<int> candidate_rows(int c) const;
+  std::vector<int> candidate_cols(int c) const;
+
+  /// Y = K X for nrhs columns, both in cluster order, column-major: X is num_cols() × nrhs with
+  /// leading dimension ldx, Y num_rows() × nrhs with leading dimension ldy. O(N·r) per column.
+  void apply(const double *X, int ldx, double *Y, int ldy, int nrhs = 1) const;
+
+  /// Recompute rank and memory figures (levels, memory_bytes) from the generators.
+  void update_stats();
+  HssStats &stats() { return m_stats; }
+  const HssStats &stats() const { return m_stats; }
+
+private:
+  ClusterTree m_tree;
+  int m_row_block, m_col_block;
+  std::vector<HssCluster> m_clusters;
+  HssStats m_stats;
+};
+
+} // namespace hssbem

@@ -1,0 +1,39 @@
+/// \file kernel_blocks.hpp
+/// Entries of K = [H, G(, Gn)] addressed by global row and column indices in cluster order, the
+/// index space of the HSS engine (see hss_matrix.hpp). The rigid-body terms of H are not included.
+#pragma once
+
+#include "hssbem/bem/bem_operator.hpp"
+#include "hssbem/core/cluster_tree.hpp"
+
+#include <vector>
+
+namespace hssbem {
+
+class KernelBlocks {
+public:
+  /// `col_block` columns per node: 6 (H, G) or 7 (H, G, Gn).
+  KernelBlocks(const BemOperator &op, const ClusterTree &tree, int col_block);
+
+  /// out(r, q) = K(rows[r], cols[q]), stored at out[r·rs + q·cs]. Thread-safe with one
+  /// workspace per thread.
+  void block(const std::vector<int> &rows, const std::vector<int> &cols, double *out, long rs, long cs, BemOperator::Workspace &ws) const;
+  /// out(3p + c, q) = component c at point X[p] of the field of column cols[q], stored at
+  /// out[(3p + c)·rs + q·cs].
+  void at_points(const std::vector<Vec3> &X, const std::vector<int> &cols, double *out, long rs, long cs, BemOperator::Workspace &ws) const;
+
+private:
+  struct Columns {
+    std::vector<int> nodes;       ///< distinct nodes, mesh order
+    std::vector<int> node_of, slot_of; ///< per requested column: index into nodes, slot 0..col_block-1
+  };
+  Columns split_columns(const std::vector<int> &cols) const;
+  void scatter(const Columns &J, std::size_t nrows, const std::vector<int> *row_node, const std::vector<int> *row_comp, const std::vector<double> &H,
+               const std::vector<double> &G, const std::vector<double> &Gn, double *out, long rs, long cs) const;
+
+  const BemOperator &m_op;
+  const ClusterTree &m_tree;
+  int m_w;
+};
+
+} // namespace hssbem

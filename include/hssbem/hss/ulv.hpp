@@ -1,0 +1,74 @@
+/// \file ulv.hpp
+/// ULV-type direct factorization of the system matrix A = K E_S held in HSS form (DESIGN §6).
+///
+/// The pattern S (which of u or t is unknown per dof) turns the compressed K = [H, G(, Gn)]
+/// into the HSS generators of A with no kernel evaluation: leaf blocks and leaf column bases keep
+/// the H columns where u is unknown and minus the G columns where t is unknown; transfer matrices
+/// and skeleton couplings are shared with K. Then, bottom-up (Chandrasekaran–Gu–Pals, in the form
+/// of Xia et al.), each cluster with m active unknowns and row rank k < m
+///  - compresses its row basis, Û = Q [Ũ; 0], so that m − k rows of Qᵀ A no longer couple to
+///    the rest of the matrix;
+///  - factors those rows as [L 0] P (LQ) and eliminates m − k unknowns with the triangular L;
+///  - hands k unknowns, rows and bases up; siblings merge into the parent's dense block.
+/// The small root block is factored by LU with partial pivoting. Row and column ranks may differ.
+/// Cost: about Σ_clusters m³ for the factorization and Σ m·k per solve; all transforms are
+/// orthogonal except the triangular L and the root LU.
+#pragma once
+
+#include "hssbem/hss/hss_matrix.hpp"
+
+#include <array>
+#include <stdexcept>
+#include <vector>
+
+namespace hssbem {
+
+/// A pivot (or the root LU) broke down: the matrix is singular to working precision at this
+/// compression. The PETSc layer reports it as a preconditioner failure.
+class HssBreakdown : public std::runtime_error {
+public:
+  using std::runtime_error::runtime_error;
+};
+
+class UlvFactorization {
+public:
+  /// Factor A = K E_S. `displacement_known` (mesh order, per node and component): true where u is
+  /// known and t unknown (column −G), false where u is unknown (column H). K must outlive this
+  /// object (its transfer matrices and couplings are used, not copied). Throws HssBreakdown.
+  UlvFactorization(const HssMatrix &K, const std::vector<std::array<bool, 3>> &displacement_known);
+
+  /// Solve A x = b in place: b (3N values, cluster order) becomes x.
+  void solve(double *b) const;
+
+  /// Bytes held by the factors.
+  std::size_t memory_bytes() const;
+  /// Largest dense block factored (the root's or a merged cluster's).
+  int max_front() const { return m_max_front; }
+
+private:
+  struct Node {
+    int m = 0;               ///< active unknowns
+    int kr = 0;              ///< row rank (rows still coupled after the elimination)
+    bool eliminated = false; ///< m > kr: m − kr unknowns eliminated here
+    DenseMatrix qr;          ///< Householder vectors of Û (m × kr)
+    std::vector<double> tau_q;
+    DenseMatrix lq;          ///< Householder vectors of the decoupled rows, and L ((m−kr) × m)
+    std::vector<double> tau_p;
+    DenseMatrix Xce;         ///< coupled rows × eliminated unknowns (kr × (m−kr))
+    DenseMatrix Ve;          ///< column basis rows of the eliminated unknowns ((m−kr) × kc)
+    DenseMatrix Ut;          ///< reduced row basis (r × kr), r = kr if eliminated, else m
+    DenseMatrix Vt;          ///< reduced column basis (r × kc)
+    DenseMatrix Dt;          ///< reduced diagonal block (r × r), only until the parent merges
+  };
+  int reduced_size(int c) const { return m_nodes[c].eliminated ? m_nodes[c].kr : m_nodes[c].m; }
+  void factor_cluster(int c, DenseMatrix D, DenseMatrix U, DenseMatrix V);
+  void merge_children(int c, DenseMatrix &D, DenseMatrix &U, DenseMatrix &V);
+
+  const HssMatrix &m_K;
+  std::vector<Node> m_nodes;
+  DenseMatrix m_root_lu;
+  std::vector<int> m_root_piv;
+  int m_max_front = 0;
+};
+
+} // namespace hssbem

@@ -1,0 +1,146 @@
+// HSS matrix: generator storage, the O(N·r) product and rank/memory figures.
+#include "hssbem/hss/hss_matrix.hpp"
+
+#include "hssbem/core/lapack.hpp"
+
+#include <algorithm>
+#include <numeric>
+
+namespace hssbem {
+
+int HssStats::max_row_rank() const
+{
+  int r = 0;
+  for (const auto &l : levels) r = std::max(r, l.max_row_rank);
+  return r;
+}
+
+int HssStats::max_col_rank() const
+{
+  int r = 0;
+  for (const auto &l : levels) r = std::max(r, l.max_col_rank);
+  return r;
+}
+
+HssMatrix::HssMatrix(ClusterTree tree, int row_block, int col_block)
+  : m_tree(std::move(tree)), m_row_block(row_block), m_col_block(col_block), m_clusters(m_tree.num_clusters())
+{
+}
+
+std::vector<int> HssMatrix::candidate_rows(int c) const
+{
+  const Cluster &cl = m_tree.cluster(c);
+  std::vector<int> out;
+  if (cl.left < 0) {
+    out.resize(static_cast<std::size_t>(m_row_block) * cl.size());
+    std::iota(out.begin(), out.end(), m_row_block * cl.begin);
+    return out;
+  }
+  out = m_clusters[cl.left].row_skel;
+  out.insert(out.end(), m_clusters[cl.right].row_skel.begin(), m_clusters[cl.right].row_skel.end());
+  return out;
+}
+
+std::vector<int> HssMatrix::candidate_cols(int c) const
+{
+  const Cluster &cl = m_tree.cluster(c);
+  std::vector<int> out;
+  if (cl.left < 0) {
+    out.resize(static_cast<std::size_t>(m_col_block) * cl.size());
+    std::iota(out.begin(), out.end(), m_col_block * cl.begin);
+    return out;
+  }
+  out = m_clusters[cl.left].col_skel;
+  out.insert(out.end(), m_clusters[cl.right].col_skel.begin(), m_clusters[cl.right].col_skel.end());
+  return out;
+}
+
+void HssMatrix::apply(const double *X, int ldx, double *Y, int ldy, int nrhs) const
+{
+  const int nc = m_tree.num_clusters();
+  std::vector<DenseMatrix> xh(nc), yh(nc);
+  // Upward pass: xh_τ = V_τᵀ (candidate part of x), deepest level first.
+  for (int l = m_tree.levels() - 1; l >= 1; --l) {
+    const auto &lev = m_tree.clusters_at_level(l);
+#pragma omp parallel for schedule(dynamic, 1)
+    for (std::size_t t = 0; t < lev.size(); ++t) {
+      const int c = lev[t];
+      const Cluster &cl = m_tree.cluster(c);
+      const HssCluster &h = m_clusters[c];
+      xh[c] = DenseMatrix(h.V.n, nrhs);
+      if (cl.left < 0) {
+        lapack::gemm('T', 'N', h.V.n, nrhs, h.V.m, 1.0, h.V.data(), h.V.ld(), X + static_cast<long>(m_col_block) * cl.begin, ldx, 0.0,
+                     xh[c].data(), xh[c].ld());
+      } else {
+        const DenseMatrix &a = xh[cl.left], &b = xh[cl.right];
+        DenseMatrix cat(a.m + b.m, nrhs);
+        for (int j = 0; j < nrhs; ++j) {
+          std::copy(a.data() + static_cast<long>(j) * a.m, a.data() + static_cast<long>(j + 1) * a.m, &cat(0, j));
+          std::copy(b.data() + static_cast<long>(j) * b.m, b.data() + static_cast<long>(j + 1) * b.m, &cat(a.m, j));
+        }
+        lapack::gemm('T', 'N', h.V.n, nrhs, h.V.m, 1.0, h.V.data(), h.V.ld(), cat.data(), cat.ld(), 0.0, xh[c].data(), xh[c].ld());
+      }
+    }
+  }
+  // Sibling couplings, then the downward pass: yh_children += U_τ yh_τ; leaves add D x.
+  for (int c = 0; c < nc; ++c) {
+    const Cluster &cl = m_tree.cluster(c);
+    if (cl.left < 0) continue;
+    yh[cl.left] = DenseMatrix(m_clusters[cl.left].U.n, nrhs);
+    yh[cl.right] = DenseMatrix(m_clusters[cl.right].U.n, nrhs);
+  }
+  for (int l = 0; l < m_tree.levels(); ++l) {
+    const auto &lev = m_tree.clusters_at_level(l);
+#pragma omp parallel for schedule(dynamic, 1)
+    for (std::size_t t = 0; t < lev.size(); ++t) {
+      const int c = lev[t];
+      const Cluster &cl = m_tree.cluster(c);
+      const HssCluster &h = m_clusters[c];
+      if (cl.left >= 0) {
+        DenseMatrix &ya = yh[cl.left], &yb = yh[cl.right];
+        const DenseMatrix &xa = xh[cl.left], &xb = xh[cl.right];
+        lapack::gemm('N', 'N', h.B12.m, nrhs, h.B12.n, 1.0, h.B12.data(), h.B12.ld(), xb.data(), xb.ld(), 1.0, ya.data(), ya.ld());
+        lapack::gemm('N', 'N', h.B21.m, nrhs, h.B21.n, 1.0, h.B21.data(), h.B21.ld(), xa.data(), xa.ld(), 1.0, yb.data(), yb.ld());
+        if (c != 0) {
+          DenseMatrix up(h.U.m, nrhs);
+          lapack::gemm('N', 'N', h.U.m, nrhs, h.U.n, 1.0, h.U.data(), h.U.ld(), yh[c].data(), yh[c].ld(), 0.0, up.data(), up.ld());
+          for (int j = 0; j < nrhs; ++j)
+            for (int i = 0; i < ya.m; ++i) ya(i, j) += up(i, j);
+          for (int j = 0; j < nrhs; ++j)
+            for (int i = 0; i < yb.m; ++i) yb(i, j) += up(ya.m + i, j);
+        }
+      } else {
+        double *y = Y + static_cast<long>(m_row_block) * cl.begin;
+        lapack::gemm('N', 'N', h.D.m, nrhs, h.D.n, 1.0, h.D.data(), h.D.ld(), X + static_cast<long>(m_col_block) * cl.begin, ldx, 0.0, y, ldy);
+        if (c != 0) lapack::gemm('N', 'N', h.U.m, nrhs, h.U.n, 1.0, h.U.data(), h.U.ld(), yh[c].data(), yh[c].ld(), 1.0, y, ldy);
+      }
+    }
+  }
+}
+
+void HssMatrix::update_stats()
+{
+  m_stats.levels.assign(m_tree.levels(), HssLevelStats{});
+  std::size_t bytes = 0;
+  for (int c = 0; c < m_tree.num_clusters(); ++c) {
+    const HssCluster &h = m_clusters[c];
+    bytes += h.U.bytes() + h.V.bytes() + h.D.bytes() + h.B12.bytes() + h.B21.bytes();
+    bytes += (h.row_skel.size() + h.col_skel.size()) * sizeof(int);
+    if (c == 0) continue;
+    HssLevelStats &s = m_stats.levels[m_tree.cluster(c).level];
+    s.clusters += 1;
+    const int kr = static_cast<int>(h.row_skel.size()), kc = static_cast<int>(h.col_skel.size());
+    s.max_row_rank = std::max(s.max_row_rank, kr);
+    s.max_col_rank = std::max(s.max_col_rank, kc);
+    s.mean_row_rank += kr;
+    s.mean_col_rank += kc;
+  }
+  for (auto &s : m_stats.levels)
+    if (s.clusters > 0) {
+      s.mean_row_rank /= s.clusters;
+      s.mean_col_rank /= s.clusters;
+    }
+  m_stats.memory_bytes = bytes;
+}
+
+} // namespace hssbem

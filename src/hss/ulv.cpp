@@ -1,0 +1,262 @@
+// ULV-type factorization and solve of A = K E_S in HSS form (see ulv.hpp).
+#include "hssbem/hss/ulv.hpp"
+
+#include "hssbem/core/lapack.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+namespace hssbem {
+
+namespace {
+
+/// Rows [r0, r0 + nr) and columns [c0, c0 + nc) of M as a new matrix.
+DenseMatrix sub(const DenseMatrix &M, int r0, int nr, int c0, int nc)
+{
+  DenseMatrix S(nr, nc);
+  for (int j = 0; j < nc; ++j)
+    for (int i = 0; i < nr; ++i) S(i, j) = M(r0 + i, c0 + j);
+  return S;
+}
+
+/// op(X) · op(Y) as a new matrix.
+DenseMatrix product(const DenseMatrix &X, char tx, const DenseMatrix &Y, char ty)
+{
+  const int m = tx == 'N' ? X.m : X.n, k = tx == 'N' ? X.n : X.m, n = ty == 'N' ? Y.n : Y.m;
+  DenseMatrix P(m, n);
+  lapack::gemm(tx, ty, m, n, k, 1.0, X.data(), X.ld(), Y.data(), Y.ld(), 0.0, P.data(), P.ld());
+  return P;
+}
+
+void put(DenseMatrix &M, int r0, int c0, const DenseMatrix &S)
+{
+  for (int j = 0; j < S.n; ++j)
+    for (int i = 0; i < S.m; ++i) M(r0 + i, c0 + j) = S(i, j);
+}
+
+double max_abs(const DenseMatrix &M)
+{
+  double v = 0;
+  for (double x : M.a) v = std::max(v, std::abs(x));
+  return v;
+}
+
+} // namespace
+
+UlvFactorization::UlvFactorization(const HssMatrix &K, const std::vector<std::array<bool, 3>> &displacement_known)
+  : m_K(K), m_nodes(K.tree().num_clusters())
+{
+  const ClusterTree &tree = K.tree();
+  if (static_cast<int>(displacement_known.size()) != tree.num_points())
+    throw std::invalid_argument("ULV: the boundary-condition pattern has " + std::to_string(displacement_known.size()) + " nodes, the matrix " +
+                                std::to_string(tree.num_points()));
+  const int w = K.col_block();
+  for (int l = tree.levels() - 1; l >= 0; --l) {
+    const auto &lev = tree.clusters_at_level(l);
+    std::string failure;
+#pragma omp parallel for schedule(dynamic, 1)
+    for (std::size_t t = 0; t < lev.size(); ++t) {
+      const int c = lev[t];
+      const Cluster &cl = tree.cluster(c);
+      const HssCluster &h = K.cluster(c);
+      DenseMatrix D, U, V;
+      if (cl.left < 0) {
+        // The pattern's columns: H where u is unknown, −G where t is unknown.
+        const int n = cl.size();
+        D = DenseMatrix(3 * n, 3 * n);
+        V = DenseMatrix(3 * n, h.V.n);
+        for (int k = 0; k < n; ++k) {
+          const auto &known = displacement_known[tree.perm()[cl.begin + k]];
+          for (int a = 0; a < 3; ++a) {
+            const int src = w * k + (known[a] ? 3 + a : a);
+            const double s = known[a] ? -1.0 : 1.0;
+            for (int i = 0; i < 3 * n; ++i) D(i, 3 * k + a) = s * h.D(i, src);
+            for (int j = 0; j < h.V.n; ++j) V(3 * k + a, j) = s * h.V(src, j);
+          }
+        }
+        U = h.U;
+      } else {
+        merge_children(c, D, U, V);
+      }
+      try {
+        if (c == 0) {
+          m_root_lu = std::move(D);
+          m_root_piv.assign(m_root_lu.m, 0);
+          const int info = lapack::getrf(m_root_lu.m, m_root_lu.data(), m_root_lu.ld(), m_root_piv.data());
+          if (info > 0) throw HssBreakdown("HSS factorization broke down: the root block (" + std::to_string(m_root_lu.m) + " unknowns) is singular");
+        } else {
+          factor_cluster(c, std::move(D), std::move(U), std::move(V));
+        }
+      } catch (const HssBreakdown &e) {
+#pragma omp critical(hssbem_ulv_failure)
+        failure = e.what();
+      }
+    }
+    if (!failure.empty()) throw HssBreakdown(failure);
+  }
+  m_max_front = m_root_lu.m;
+  for (const Node &n : m_nodes) m_max_front = std::max(m_max_front, n.m);
+}
+
+void UlvFactorization::merge_children(int c, DenseMatrix &D, DenseMatrix &U, DenseMatrix &V)
+{
+  const Cluster &cl = m_K.tree().cluster(c);
+  const HssCluster &h = m_K.cluster(c);
+  Node &a = m_nodes[cl.left], &b = m_nodes[cl.right];
+  const int ra = reduced_size(cl.left), rb = reduced_size(cl.right);
+  const int kra = a.Ut.n, kca = a.Vt.n;
+  D = DenseMatrix(ra + rb, ra + rb);
+  put(D, 0, 0, a.Dt);
+  put(D, ra, ra, b.Dt);
+  put(D, 0, ra, product(product(a.Ut, 'N', h.B12, 'N'), 'N', b.Vt, 'T'));
+  put(D, ra, 0, product(product(b.Ut, 'N', h.B21, 'N'), 'N', a.Vt, 'T'));
+  U = DenseMatrix(ra + rb, h.U.n);
+  V = DenseMatrix(ra + rb, h.V.n);
+  if (c != 0) {
+    put(U, 0, 0, product(a.Ut, 'N', sub(h.U, 0, kra, 0, h.U.n), 'N'));
+    put(U, ra, 0, product(b.Ut, 'N', sub(h.U, kra, h.U.m - kra, 0, h.U.n), 'N'));
+    put(V, 0, 0, product(a.Vt, 'N', sub(h.V, 0, kca, 0, h.V.n), 'N'));
+    put(V, ra, 0, product(b.Vt, 'N', sub(h.V, kca, h.V.m - kca, 0, h.V.n), 'N'));
+  }
+  a.Dt = DenseMatrix();
+  b.Dt = DenseMatrix();
+  a.Vt = DenseMatrix();
+  b.Vt = DenseMatrix();
+}
+
+void UlvFactorization::factor_cluster(int c, DenseMatrix D, DenseMatrix U, DenseMatrix V)
+{
+  Node &nd = m_nodes[c];
+  const int m = D.m, kr = U.n, kc = V.n;
+  nd.m = m;
+  nd.kr = kr;
+  if (m <= kr) { // nothing decouples: hand everything up
+    nd.Dt = std::move(D);
+    nd.Ut = std::move(U);
+    nd.Vt = std::move(V);
+    return;
+  }
+  nd.eliminated = true;
+  const int ne = m - kr;
+  // Û = Q [R; 0]: the last m − kr rows of Qᵀ A no longer see the rest of the matrix.
+  nd.qr = std::move(U);
+  nd.tau_q.assign(std::max(1, kr), 0.0);
+  if (lapack::geqrf(m, kr, nd.qr.data(), nd.qr.ld(), nd.tau_q.data()) != 0) throw HssBreakdown("HSS factorization: dgeqrf failed");
+  nd.Ut = DenseMatrix(kr, kr);
+  for (int j = 0; j < kr; ++j)
+    for (int i = 0; i <= j; ++i) nd.Ut(i, j) = nd.qr(i, j);
+  lapack::ormqr('L', 'T', m, m, kr, nd.qr.data(), nd.qr.ld(), nd.tau_q.data(), D.data(), D.ld());
+  // Decoupled rows E = [L 0] P (LQ); y = P x, and the first m − kr entries of y are eliminated.
+  nd.lq = sub(D, kr, ne, 0, m);
+  nd.tau_p.assign(ne, 0.0);
+  if (lapack::gelqf(ne, m, nd.lq.data(), nd.lq.ld(), nd.tau_p.data()) != 0) throw HssBreakdown("HSS factorization: dgelqf failed");
+  double lmax = 0, lmin = HUGE_VAL;
+  for (int i = 0; i < ne; ++i) {
+    lmax = std::max(lmax, std::abs(nd.lq(i, i)));
+    lmin = std::min(lmin, std::abs(nd.lq(i, i)));
+  }
+  if (!(lmin > 1e-14 * std::max(lmax, max_abs(D))))
+    throw HssBreakdown("HSS factorization broke down: a pivot block of cluster " + std::to_string(c) + " is singular to working precision");
+  DenseMatrix top = sub(D, 0, kr, 0, m);
+  lapack::ormlq('R', 'T', kr, m, ne, nd.lq.data(), nd.lq.ld(), nd.tau_p.data(), top.data(), top.ld());
+  nd.Xce = sub(top, 0, kr, 0, ne);
+  nd.Dt = sub(top, 0, kr, ne, kr);
+  lapack::ormlq('L', 'N', m, kc, ne, nd.lq.data(), nd.lq.ld(), nd.tau_p.data(), V.data(), V.ld());
+  nd.Ve = sub(V, 0, ne, 0, kc);
+  nd.Vt = sub(V, ne, kr, 0, kc);
+}
+
+void UlvFactorization::solve(double *b) const
+{
+  const ClusterTree &tree = m_K.tree();
+  const int nc = tree.num_clusters();
+  std::vector<std::vector<double>> bt(nc), z(nc), ye(nc), xk(nc);
+  // Upward: eliminate, carrying the reduced right-hand sides and the known part V_τᵀ x_τ.
+  for (int l = tree.levels() - 1; l >= 0; --l) {
+    const auto &lev = tree.clusters_at_level(l);
+#pragma omp parallel for schedule(dynamic, 1) if (lev.size() > 4)
+    for (std::size_t t = 0; t < lev.size(); ++t) {
+      const int c = lev[t];
+      const Cluster &cl = tree.cluster(c);
+      const HssCluster &h = m_K.cluster(c);
+      const Node &nd = m_nodes[c];
+      std::vector<double> bh, zin(h.V.n, 0.0);
+      if (cl.left < 0) {
+        bh.assign(b + 3L * cl.begin, b + 3L * cl.end);
+      } else {
+        const Node &a = m_nodes[cl.left], &bb = m_nodes[cl.right];
+        const int ra = reduced_size(cl.left), rb = reduced_size(cl.right);
+        bh.resize(ra + rb);
+        std::copy(bt[cl.left].begin(), bt[cl.left].end(), bh.begin());
+        std::copy(bt[cl.right].begin(), bt[cl.right].end(), bh.begin() + ra);
+        std::vector<double> tmp(std::max(h.B12.m, h.B21.m));
+        lapack::gemv('N', h.B12.m, h.B12.n, 1.0, h.B12.data(), h.B12.ld(), z[cl.right].data(), 0.0, tmp.data());
+        lapack::gemv('N', a.Ut.m, a.Ut.n, -1.0, a.Ut.data(), a.Ut.ld(), tmp.data(), 1.0, bh.data());
+        lapack::gemv('N', h.B21.m, h.B21.n, 1.0, h.B21.data(), h.B21.ld(), z[cl.left].data(), 0.0, tmp.data());
+        lapack::gemv('N', bb.Ut.m, bb.Ut.n, -1.0, bb.Ut.data(), bb.Ut.ld(), tmp.data(), 1.0, bh.data() + ra);
+        if (c != 0) { // what the children already know of V_τᵀ x_τ, through the transfer matrix
+          std::vector<double> zz(z[cl.left]);
+          zz.insert(zz.end(), z[cl.right].begin(), z[cl.right].end());
+          lapack::gemv('T', h.V.m, h.V.n, 1.0, h.V.data(), h.V.ld(), zz.data(), 0.0, zin.data());
+        }
+      }
+      if (c == 0) {
+        if (m_root_lu.m > 0) lapack::getrs('N', m_root_lu.m, 1, m_root_lu.data(), m_root_lu.ld(), m_root_piv.data(), bh.data(), m_root_lu.m);
+        xk[0] = std::move(bh);
+        continue;
+      }
+      if (!nd.eliminated) {
+        bt[c] = std::move(bh);
+        z[c] = std::move(zin);
+        continue;
+      }
+      const int m = nd.m, kr = nd.kr, ne = m - kr;
+      lapack::ormqr('L', 'T', m, 1, kr, nd.qr.data(), nd.qr.ld(), nd.tau_q.data(), bh.data(), m);
+      std::vector<double> y(bh.begin() + kr, bh.end());
+      lapack::trsm('L', 'L', 'N', 'N', ne, 1, 1.0, nd.lq.data(), nd.lq.ld(), y.data(), ne);
+      bh.resize(kr);
+      lapack::gemv('N', kr, ne, -1.0, nd.Xce.data(), nd.Xce.ld(), y.data(), 1.0, bh.data());
+      lapack::gemv('T', ne, nd.Ve.n, 1.0, nd.Ve.data(), nd.Ve.ld(), y.data(), 1.0, zin.data());
+      bt[c] = std::move(bh);
+      z[c] = std::move(zin);
+      ye[c] = std::move(y);
+    }
+  }
+  // Downward: undo the transforms and hand the kept unknowns to the children.
+  for (int l = 0; l < tree.levels(); ++l) {
+    const auto &lev = tree.clusters_at_level(l);
+#pragma omp parallel for schedule(dynamic, 1) if (lev.size() > 4)
+    for (std::size_t t = 0; t < lev.size(); ++t) {
+      const int c = lev[t];
+      const Cluster &cl = tree.cluster(c);
+      const Node &nd = m_nodes[c];
+      std::vector<double> x;
+      if (c != 0 && nd.eliminated) {
+        x = ye[c];
+        x.insert(x.end(), xk[c].begin(), xk[c].end());
+        lapack::ormlq('L', 'T', nd.m, 1, nd.m - nd.kr, nd.lq.data(), nd.lq.ld(), nd.tau_p.data(), x.data(), nd.m);
+      } else {
+        x = std::move(xk[c]);
+      }
+      if (cl.left < 0) {
+        std::copy(x.begin(), x.end(), b + 3L * cl.begin);
+      } else {
+        const int ra = reduced_size(cl.left);
+        xk[cl.left].assign(x.begin(), x.begin() + ra);
+        xk[cl.right].assign(x.begin() + ra, x.end());
+      }
+    }
+  }
+}
+
+std::size_t UlvFactorization::memory_bytes() const
+{
+  std::size_t s = m_root_lu.bytes() + m_root_piv.size() * sizeof(int);
+  for (const Node &n : m_nodes)
+    s += n.qr.bytes() + n.lq.bytes() + n.Xce.bytes() + n.Ve.bytes() + n.Ut.bytes() + n.Vt.bytes() + n.Dt.bytes() +
+         (n.tau_q.size() + n.tau_p.size()) * sizeof(double);
+  return s;
+}
+
+} // namespace hssbem

@@ -1,0 +1,178 @@
+// HSS engine: compression of K = [H, G] against the dense operator.
+#include "hssbem/bem/bem_operator.hpp"
+#include "hssbem/hss/bem_compression.hpp"
+#include "hssbem/hss/ulv.hpp"
+#include "hssbem/core/lapack.hpp"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <numeric>
+#include <random>
+
+using namespace hssbem;
+
+namespace {
+
+struct Loaded {
+  SurfaceMesh mesh;
+  std::unique_ptr<Discretization> disc;
+  std::unique_ptr<BemOperator> op;
+};
+
+std::unique_ptr<Loaded> load(const std::string &name, double nu = 0.3)
+{
+  auto L = std::make_unique<Loaded>();
+  L->mesh = read_mesh(std::string(HSSBEM_MESHES) + "/" + name);
+  std::vector<std::string> notices;
+  validate_and_orient(L->mesh, notices);
+  L->disc = std::make_unique<Discretization>(L->mesh, 40.0);
+  L->op = std::make_unique<BemOperator>(*L->disc, Material::from_young(1.0, nu));
+  return L;
+}
+
+/// Dense K = [H, G, Gn] in mesh order, row-major 3n × w n (rigid-body terms included).
+std::vector<double> dense_k(const BemOperator &op, int w)
+{
+  const int n = op.num_nodes();
+  std::vector<int> all(n);
+  std::iota(all.begin(), all.end(), 0);
+  std::vector<double> H(9L * n * n), G(9L * n * n), Gn(w > 6 ? 3L * n * n : 0), K(3L * n * w * n);
+  BemOperator::Workspace ws(op);
+  op.fill_hg(all, all, H.data(), G.data(), 3L * n, w > 6 ? Gn.data() : nullptr, n, ws);
+  for (long r = 0; r < 3L * n; ++r)
+    for (int j = 0; j < n; ++j)
+      for (int s = 0; s < w; ++s)
+        K[r * w * n + w * j + s] = s < 3 ? H[r * 3 * n + 3 * j + s] : s < 6 ? G[r * 3 * n + 3 * j + s - 3] : Gn[r * n + j];
+  return K;
+}
+
+double matvec_error(const HssMatrix &K, const std::vector<double> &Kd, int seed)
+{
+  const int n = K.tree().num_points(), w = K.col_block();
+  std::mt19937 gen(seed);
+  std::normal_distribution<double> N01;
+  std::vector<double> x(static_cast<size_t>(w) * n), xc(x.size()), yc(3L * n), y(3L * n), yd(3L * n, 0.0);
+  for (double &v : x) v = N01(gen);
+  K.tree().to_cluster_order(x.data(), xc.data(), w);
+  K.apply(xc.data(), w * n, yc.data(), 3 * n);
+  K.tree().to_mesh_order(yc.data(), y.data(), 3);
+  for (long r = 0; r < 3L * n; ++r)
+    for (long q = 0; q < static_cast<long>(w) * n; ++q) yd[r] += Kd[r * w * n + q] * x[q];
+  double e = 0, s = 0;
+  for (long r = 0; r < 3L * n; ++r) {
+    e += (y[r] - yd[r]) * (y[r] - yd[r]);
+    s += yd[r] * yd[r];
+  }
+  return std::sqrt(e / s);
+}
+
+struct Case {
+  const char *mesh;
+  double tol;
+  int leaf;
+};
+
+class HssAccuracy : public ::testing::TestWithParam<Case> {};
+
+TEST_P(HssAccuracy, MatvecMatchesDenseOperator)
+{
+  const Case c = GetParam();
+  auto L = load(c.mesh);
+  HssOptions o;
+  o.rel_tol = c.tol;
+  o.leaf_size = c.leaf;
+  o.pressure_columns = true;
+  const auto t0 = std::chrono::steady_clock::now();
+  HssMatrix K = compress_bem_operator(*L->op, o);
+  const double tc = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const auto Kd = dense_k(*L->op, K.col_block());
+  const double err = matvec_error(K, Kd, 7);
+  std::printf("%s tol %.0e: error %.2e, compress %.2f s, max rank row %d col %d, memory %.1f MB (dense %.1f MB)\n", c.mesh, c.tol, err, tc,
+              K.stats().max_row_rank(), K.stats().max_col_rank(), K.stats().memory_bytes / 1e6, 8.0 * Kd.size() / 1e6);
+  const HssStats &st = K.stats();
+  std::printf("  tree %.2f near %.2f ids %.2f couplings %.2f leaves %.2f rigid %.2f; entries %.3g; proxies %d\n", st.time_tree, st.time_near_field,
+              st.time_ids, st.time_couplings, st.time_leaves, st.time_rigid, double(st.entries_evaluated), st.proxy_points);
+  for (size_t l = 0; l < st.levels.size(); ++l)
+    std::printf("  level %zu: %d clusters, row rank max %d mean %.0f, col rank max %d mean %.0f\n", l, st.levels[l].clusters, st.levels[l].max_row_rank,
+                st.levels[l].mean_row_rank, st.levels[l].max_col_rank, st.levels[l].mean_col_rank);
+  EXPECT_LE(err, 10 * c.tol);
+}
+
+INSTANTIATE_TEST_SUITE_P(Meshes, HssAccuracy,
+                         ::testing::Values(Case{"sphere_l1.msh", 1e-3, 32}, Case{"sphere_l1.msh", 1e-6, 32}, Case{"sphere_l1.msh", 1e-9, 32},
+                                           Case{"cardioid_832.msh", 1e-3, 32}, Case{"cardioid_832.msh", 1e-6, 32},
+                                           Case{"cardioid_832.msh", 1e-9, 32}));
+
+/// Random pattern: u known (t unknown) with probability p per node and component.
+std::vector<std::array<bool, 3>> random_pattern(int n, double p, int seed)
+{
+  std::mt19937 gen(seed);
+  std::bernoulli_distribution B(p);
+  std::vector<std::array<bool, 3>> k(n);
+  for (auto &a : k)
+    for (bool &b : a) b = B(gen);
+  return k;
+}
+
+/// Dense A = K E_S (column-major, 3n × 3n) from the dense K (row-major 3n × w n, mesh order).
+std::vector<double> dense_a(const std::vector<double> &Kd, int n, int w, const std::vector<std::array<bool, 3>> &known)
+{
+  std::vector<double> A(9L * n * n);
+  for (long r = 0; r < 3L * n; ++r)
+    for (int j = 0; j < n; ++j)
+      for (int c = 0; c < 3; ++c) A[r + (3L * j + c) * 3 * n] = known[j][c] ? -Kd[r * w * n + w * j + 3 + c] : Kd[r * w * n + w * j + c];
+  return A;
+}
+
+struct SolveCase {
+  const char *mesh;
+  double tol;
+  int leaf;
+  double known_fraction;
+};
+
+class HssSolve : public ::testing::TestWithParam<SolveCase> {};
+
+TEST_P(HssSolve, UlvSolveMatchesDenseSolve)
+{
+  const SolveCase c = GetParam();
+  auto L = load(c.mesh);
+  HssOptions o;
+  o.rel_tol = c.tol;
+  o.leaf_size = c.leaf;
+  HssMatrix K = compress_bem_operator(*L->op, o);
+  const int n = L->op->num_nodes(), w = K.col_block();
+  const auto Kd = dense_k(*L->op, w);
+  const auto known = random_pattern(n, c.known_fraction, 3);
+  auto t0 = std::chrono::steady_clock::now();
+  UlvFactorization F(K, known);
+  const double tf = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::mt19937 gen(5);
+  std::normal_distribution<double> N01;
+  std::vector<double> b(3L * n), bc(3L * n), x(3L * n);
+  for (double &v : b) v = N01(gen);
+  K.tree().to_cluster_order(b.data(), bc.data(), 3);
+  F.solve(bc.data());
+  K.tree().to_mesh_order(bc.data(), x.data(), 3);
+  auto A = dense_a(Kd, n, w, known);
+  std::vector<double> xd(b);
+  ASSERT_EQ(lapack::gesv(3 * n, 1, A.data(), xd.data()), 0);
+  double e = 0, s = 0;
+  for (long i = 0; i < 3L * n; ++i) {
+    e += (x[i] - xd[i]) * (x[i] - xd[i]);
+    s += xd[i] * xd[i];
+  }
+  const double err = std::sqrt(e / s);
+  std::printf("%s tol %.0e: solve difference %.2e, factor %.2f s, front %d, factor memory %.1f MB\n", c.mesh, c.tol, err, tf, F.max_front(),
+              F.memory_bytes() / 1e6);
+  EXPECT_LE(err, 100 * c.tol);
+}
+
+INSTANTIATE_TEST_SUITE_P(Meshes, HssSolve,
+                         ::testing::Values(SolveCase{"sphere_l0.msh", 1e-6, 16, 0.5}, SolveCase{"cardioid_832.msh", 1e-3, 32, 0.3},
+                                           SolveCase{"cardioid_832.msh", 1e-9, 32, 0.7}, SolveCase{"cube_l1.msh", 1e-6, 32, 0.5}));
+
+} // namespace
