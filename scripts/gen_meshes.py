@@ -17,6 +17,9 @@ Usage
   scripts/gen_meshes.py --sphere-triangles 20000 --out s.msh   # sphere with ~N triangles
   scripts/gen_meshes.py --sphere-size 0.05 --out s.msh          # sphere with gmsh size h
         [--radius R] [--refine K]   (K nested 1:4 refinements with projection onto the sphere)
+  scripts/gen_meshes.py --disk-triangles 20000 --out d.msh     # disk organ with ~N triangles
+  scripts/gen_meshes.py --disk-size 0.02 --out d.msh            # disk organ with gmsh size h
+        [--refine K]   (K nested 1:4 refinements with projection onto the ellipsoid)
   scripts/gen_meshes.py --check-examples [--out DIR]   # check meshes/examples/*.json selectors
 
 Nested refinement (sphere, cube, hollow sphere, disk organ; not the cardioid): every triangle
@@ -664,6 +667,19 @@ def disk_regions(V, T):
     return np.where(nz < -0.7, 0, 1)  # bottom, top
 
 
+# Surface area of the (1, 0.8, 0.3) ellipsoid (about 6.1; Knud Thomsen's formula, within ~1 %).
+# Only used for the initial gmsh size of the triangle-count search.
+DISK_AREA = 4 * math.pi * ((np.prod(DISK_AXES[[0, 1]]) ** 1.6075 + np.prod(DISK_AXES[[0, 2]]) ** 1.6075
+                            + np.prod(DISK_AXES[[1, 2]]) ** 1.6075) / 3) ** (1 / 1.6075)
+
+
+def disk_mesh_count(target):
+    """Disk organ with about `target` triangles (gmsh size searched, like sphere_mesh_count)."""
+    h0 = math.sqrt(4 * DISK_AREA / (math.sqrt(3) * target)) * 1.05
+    V, T, h = mesh_by_count(disk_mesh_h, target, h0)
+    return V, T
+
+
 def gen_disk_organ(outdir, log):
     V, T, h = mesh_by_count(disk_mesh_h, 1000, 0.15)
     check_normals_star("disk_organ_1k", V, T, np.zeros(3))
@@ -771,7 +787,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--out", help="output directory (default: <repo>/meshes), or the output .msh "
-                    "file with --sphere-triangles/--sphere-size")
+                    "file with --sphere-triangles/--sphere-size/--disk-triangles/--disk-size")
     ap.add_argument("--only", choices=FAMILIES, action="append",
                     help="generate only this family (repeatable)")
     ap.add_argument("--sphere-triangles", type=int, metavar="N",
@@ -779,8 +795,12 @@ def main():
     ap.add_argument("--sphere-size", type=float, metavar="H",
                     help="write one sphere meshed by gmsh with size H to --out FILE")
     ap.add_argument("--radius", type=float, default=1.0, help="sphere radius (single-sphere mode)")
+    ap.add_argument("--disk-triangles", type=int, metavar="N",
+                    help="write one disk organ with about N triangles (gmsh size searched) to --out FILE")
+    ap.add_argument("--disk-size", type=float, metavar="H",
+                    help="write one disk organ meshed by gmsh with size H to --out FILE")
     ap.add_argument("--refine", type=int, default=0, metavar="K",
-                    help="apply K nested 1:4 refinements (single-sphere mode)")
+                    help="apply K nested 1:4 refinements (single-sphere and single-disk modes)")
     ap.add_argument("--check-examples", action="store_true",
                     help="only check the selectors and interior points of <out>/examples/*.json")
     args = ap.parse_args()
@@ -788,7 +808,13 @@ def main():
     if args.check_examples:
         sys.exit(0 if check_examples(args.out or DEFAULT_OUT) else 1)
 
-    if args.sphere_triangles is not None or args.sphere_size is not None:
+    single_sphere = args.sphere_triangles is not None or args.sphere_size is not None
+    single_disk = args.disk_triangles is not None or args.disk_size is not None
+    if single_sphere + single_disk + (args.sphere_triangles is not None and args.sphere_size is not None) \
+            + (args.disk_triangles is not None and args.disk_size is not None) > 1:
+        ap.error("give only one of --sphere-triangles, --sphere-size, --disk-triangles, --disk-size")
+
+    if single_sphere:
         if not args.out or not args.out.endswith(".msh"):
             ap.error("single-sphere mode needs --out FILE.msh")
         R = args.radius
@@ -804,6 +830,22 @@ def main():
         os.makedirs(d, exist_ok=True)
         reg = sphere_regions(V / R, T)
         save(d, os.path.basename(args.out), V, T, reg, SPHERE_REGIONS, [+1], [])
+        return
+
+    if single_disk:
+        if not args.out or not args.out.endswith(".msh"):
+            ap.error("single-disk mode needs --out FILE.msh")
+        if args.disk_triangles is not None:
+            V, T = disk_mesh_count(args.disk_triangles)
+        else:
+            V, T = disk_mesh_h(args.disk_size)
+        for _ in range(args.refine):
+            Vc = V
+            V, T = subdivide(Vc, T, lambda i, j: project_ellipsoid(0.5 * (Vc[i] + Vc[j])))
+        check_normals_star(args.out, V, T, np.zeros(3))
+        d = os.path.dirname(os.path.abspath(args.out))
+        os.makedirs(d, exist_ok=True)
+        save(d, os.path.basename(args.out), V, T, disk_regions(V, T), ["bottom", "top"], [+1], [])
         return
 
     outdir = args.out or DEFAULT_OUT

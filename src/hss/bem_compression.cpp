@@ -1,6 +1,7 @@
 // Entries-only HSS compression of K = [H, G(, Gn)] with proxy spheres (see bem_compression.hpp).
 #include "hssbem/hss/bem_compression.hpp"
 
+#include "hssbem/core/blas_threads.hpp"
 #include "hssbem/core/interpolative.hpp"
 #include "hssbem/core/lapack.hpp"
 #include "hssbem/hss/kernel_blocks.hpp"
@@ -173,10 +174,18 @@ Skeleton select_skeleton(std::vector<double> &X, int nfeat, int ncand, const std
   return s;
 }
 
+std::vector<double> col_scales(const HssMatrix &K)
+{
+  std::vector<double> s(K.col_block());
+  for (int q = 0; q < K.col_block(); ++q) s[q] = K.col_scale(q);
+  return s;
+}
+
 class Compressor {
 public:
   Compressor(const BemOperator &op, const HssOptions &opt, HssMatrix &K)
-    : m_op(op), m_opt(opt), m_K(K), m_tree(K.tree()), m_w(K.col_block()), m_eval(op, K.tree(), K.col_block()), m_reach(compute_reach(op, K.tree())),
+    : m_op(op), m_opt(opt), m_K(K), m_tree(K.tree()), m_w(K.col_block()),
+      m_eval(op, K.tree(), K.col_block(), col_scales(K)), m_reach(compute_reach(op, K.tree())),
       m_rigid(rigid_pattern(op))
   {
     const int np = opt.proxy_points > 0 ? opt.proxy_points : default_proxy_points(opt.rel_tol);
@@ -197,13 +206,17 @@ public:
       skeletonize_level(l);
       const auto t0 = std::chrono::steady_clock::now();
       const auto &parents = m_tree.clusters_at_level(l - 1);
-#pragma omp parallel for schedule(dynamic, 1)
+      const bool par = parallel_over_clusters(parents.size());
+      SerialBlas serial(par);
+#pragma omp parallel for schedule(dynamic, 1) if (par)
       for (std::size_t t = 0; t < parents.size(); ++t) couple_children(parents[t]);
       m_K.stats().time_couplings += seconds_since(t0);
     }
     const auto t0 = std::chrono::steady_clock::now();
     const auto &leaves = m_tree.leaves();
-#pragma omp parallel for schedule(dynamic, 1)
+    const bool par = parallel_over_clusters(leaves.size());
+    SerialBlas serial(par);
+#pragma omp parallel for schedule(dynamic, 1) if (par)
     for (std::size_t t = 0; t < leaves.size(); ++t) fill_leaf(leaves[t]);
     m_K.stats().time_leaves = seconds_since(t0);
     for (int t = 0; t < max_threads(); ++t) {
@@ -252,7 +265,9 @@ private:
       m_active_cols[c] = m_K.candidate_cols(c);
     }
     const auto &lev = m_tree.clusters_at_level(l);
-#pragma omp parallel for schedule(dynamic, 1)
+    const bool par = parallel_over_clusters(lev.size());
+    SerialBlas serial(par);
+#pragma omp parallel for schedule(dynamic, 1) if (par)
     for (std::size_t t = 0; t < lev.size(); ++t) skeletonize(lev[t], front);
   }
 
@@ -430,6 +445,28 @@ void add_rigid_body_terms(const BemOperator &op, HssMatrix &K)
   }
 }
 
+/// Column scales that give the G (and Gn) part of K the Frobenius norm of the H part on a sample
+/// of rows and columns spread over the mesh: G ~ 1/(μ r) and H ~ 1/r² differ by orders of
+/// magnitude, and one relative tolerance should resolve both.
+std::vector<double> balancing_scales(const BemOperator &op, int w)
+{
+  const int n = op.num_nodes();
+  std::vector<int> rows, cols;
+  for (int i = 0; i < n; i += std::max(1, n / 40)) rows.push_back(i);
+  for (int j = 0; j < n; j += std::max(1, n / 400)) cols.push_back(j);
+  const std::size_t ld = 3 * cols.size();
+  std::vector<double> H(3 * rows.size() * ld), G(H.size()), Gn(w > 6 ? 3 * rows.size() * cols.size() : 0);
+  BemOperator::Workspace ws(op);
+  op.fill_hg_without_rigid(rows, cols, H.data(), G.data(), static_cast<long>(ld), w > 6 ? Gn.data() : nullptr, static_cast<long>(cols.size()), ws);
+  double h2 = 0, g2 = 0, gn2 = 0;
+  for (std::size_t k = 0; k < H.size(); ++k) h2 += H[k] * H[k], g2 += G[k] * G[k];
+  for (double v : Gn) gn2 += v * v;
+  std::vector<double> s(w, 1.0);
+  for (int q = 3; q < 6; ++q) s[q] = g2 > 0 ? std::sqrt(h2 / g2) : 1.0;
+  if (w > 6) s[6] = gn2 > 0 ? std::sqrt(h2 / (3 * gn2)) : 1.0; // one Gn column per node against three of H
+  return s;
+}
+
 } // namespace
 
 int default_proxy_points(double rel_tol)
@@ -453,6 +490,7 @@ HssMatrix compress_bem_operator(const BemOperator &op, const HssOptions &options
   std::vector<Vec3> points(disc.num_nodes());
   for (int i = 0; i < disc.num_nodes(); ++i) points[i] = disc.node(i).point;
   HssMatrix K(ClusterTree(points, ClusterTreeOptions{options.leaf_size}), 3, k_columns_per_node(options.pressure_columns));
+  K.set_col_scales(balancing_scales(op, K.col_block()));
   K.stats().time_tree = seconds_since(t0);
   Compressor(op, options, K).run();
   t0 = std::chrono::steady_clock::now();

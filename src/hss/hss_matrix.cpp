@@ -1,6 +1,7 @@
 // HSS matrix: generator storage, the O(N·r) product and rank/memory figures.
 #include "hssbem/hss/hss_matrix.hpp"
 
+#include "hssbem/core/blas_threads.hpp"
 #include "hssbem/core/lapack.hpp"
 
 #include <algorithm>
@@ -23,7 +24,7 @@ int HssStats::max_col_rank() const
 }
 
 HssMatrix::HssMatrix(ClusterTree tree, int row_block, int col_block)
-  : m_tree(std::move(tree)), m_row_block(row_block), m_col_block(col_block), m_clusters(m_tree.num_clusters())
+  : m_tree(std::move(tree)), m_row_block(row_block), m_col_block(col_block), m_col_scale(col_block, 1.0), m_clusters(m_tree.num_clusters())
 {
 }
 
@@ -62,7 +63,9 @@ void HssMatrix::apply(const double *X, int ldx, double *Y, int ldy, int nrhs) co
   // Upward pass: xh_τ = V_τᵀ (candidate part of x), deepest level first.
   for (int l = m_tree.levels() - 1; l >= 1; --l) {
     const auto &lev = m_tree.clusters_at_level(l);
-#pragma omp parallel for schedule(dynamic, 1)
+    const bool par = parallel_over_clusters(lev.size());
+    SerialBlas serial(par);
+#pragma omp parallel for schedule(dynamic, 1) if (par)
     for (std::size_t t = 0; t < lev.size(); ++t) {
       const int c = lev[t];
       const Cluster &cl = m_tree.cluster(c);
@@ -91,7 +94,9 @@ void HssMatrix::apply(const double *X, int ldx, double *Y, int ldy, int nrhs) co
   }
   for (int l = 0; l < m_tree.levels(); ++l) {
     const auto &lev = m_tree.clusters_at_level(l);
-#pragma omp parallel for schedule(dynamic, 1)
+    const bool par = parallel_over_clusters(lev.size());
+    SerialBlas serial(par);
+#pragma omp parallel for schedule(dynamic, 1) if (par)
     for (std::size_t t = 0; t < lev.size(); ++t) {
       const int c = lev[t];
       const Cluster &cl = m_tree.cluster(c);

@@ -20,7 +20,10 @@ std::vector<int> distinct(const std::vector<int> &v, std::vector<int> &index_of)
 
 } // namespace
 
-KernelBlocks::KernelBlocks(const BemOperator &op, const ClusterTree &tree, int col_block) : m_op(op), m_tree(tree), m_w(col_block) {}
+KernelBlocks::KernelBlocks(const BemOperator &op, const ClusterTree &tree, int col_block, std::vector<double> col_scale)
+  : m_op(op), m_tree(tree), m_w(col_block), m_scale(std::move(col_scale))
+{
+}
 
 KernelBlocks::Columns KernelBlocks::split_columns(const std::vector<int> &cols) const
 {
@@ -46,7 +49,7 @@ void KernelBlocks::scatter(const Columns &J, std::size_t nrows, const std::vecto
     for (std::size_t q = 0; q < J.slot_of.size(); ++q) {
       const int b = J.node_of[q], s = J.slot_of[q];
       const double v = s < 3 ? H[hr * ld + 3 * b + s] : s < 6 ? G[hr * ld + 3 * b + s - 3] : Gn[hr * ldn + b];
-      out[r * rs + q * cs] = v;
+      out[r * rs + q * cs] = m_scale[s] * v;
     }
   }
 }

@@ -1,6 +1,7 @@
 // ULV-type factorization and solve of A = K E_S in HSS form (see ulv.hpp).
 #include "hssbem/hss/ulv.hpp"
 
+#include "hssbem/core/blas_threads.hpp"
 #include "hssbem/core/lapack.hpp"
 
 #include <algorithm>
@@ -44,18 +45,21 @@ double max_abs(const DenseMatrix &M)
 
 } // namespace
 
-UlvFactorization::UlvFactorization(const HssMatrix &K, const std::vector<std::array<bool, 3>> &displacement_known)
+UlvFactorization::UlvFactorization(const HssMatrix &K, const std::vector<std::array<bool, 3>> &displacement_known, const LowRankTerm *extra)
   : m_K(K), m_nodes(K.tree().num_clusters())
 {
   const ClusterTree &tree = K.tree();
   if (static_cast<int>(displacement_known.size()) != tree.num_points())
     throw std::invalid_argument("ULV: the boundary-condition pattern has " + std::to_string(displacement_known.size()) + " nodes, the matrix " +
                                 std::to_string(tree.num_points()));
+  if (extra && extra->p > 0) widen_generators(*extra);
   const int w = K.col_block();
   for (int l = tree.levels() - 1; l >= 0; --l) {
     const auto &lev = tree.clusters_at_level(l);
     std::string failure;
-#pragma omp parallel for schedule(dynamic, 1)
+    const bool par = parallel_over_clusters(lev.size());
+    SerialBlas serial(par);
+#pragma omp parallel for schedule(dynamic, 1) if (par)
     for (std::size_t t = 0; t < lev.size(); ++t) {
       const int c = lev[t];
       const Cluster &cl = tree.cluster(c);
@@ -70,12 +74,22 @@ UlvFactorization::UlvFactorization(const HssMatrix &K, const std::vector<std::ar
           const auto &known = displacement_known[tree.perm()[cl.begin + k]];
           for (int a = 0; a < 3; ++a) {
             const int src = w * k + (known[a] ? 3 + a : a);
-            const double s = known[a] ? -1.0 : 1.0;
+            const double s = known[a] ? -1.0 / K.col_scale(3 + a) : 1.0;
             for (int i = 0; i < 3 * n; ++i) D(i, 3 * k + a) = s * h.D(i, src);
             for (int j = 0; j < h.V.n; ++j) V(3 * k + a, j) = s * h.V(src, j);
           }
         }
         U = h.U;
+        if (m_p > 0) { // Y Zᵀ: D += Y_τ Z_τᵀ, and the bases gain Y_τ and Z_τ
+          const HssCluster &wd = m_wide[c];
+          lapack::gemm('N', 'T', D.m, D.n, m_p, 1.0, wd.U.data() + static_cast<std::size_t>(h.U.n) * wd.U.m, wd.U.ld(),
+                       wd.V.data() + static_cast<std::size_t>(h.V.n) * wd.V.m, wd.V.ld(), 1.0, D.data(), D.ld());
+          U = wd.U;
+          DenseMatrix Vw(V.m, V.n + m_p);
+          put(Vw, 0, 0, V);
+          put(Vw, 0, V.n, sub(wd.V, 0, V.m, h.V.n, m_p));
+          V = std::move(Vw);
+        }
       } else {
         merge_children(c, D, U, V);
       }
@@ -99,18 +113,73 @@ UlvFactorization::UlvFactorization(const HssMatrix &K, const std::vector<std::ar
   for (const Node &n : m_nodes) m_max_front = std::max(m_max_front, n.m);
 }
 
+void UlvFactorization::widen_generators(const LowRankTerm &extra)
+{
+  const ClusterTree &tree = m_K.tree();
+  const int p = extra.p, n = tree.num_points();
+  if (extra.Y.size() != 3ull * n * p || extra.Z.size() != 3ull * n * p) throw std::invalid_argument("ULV: the low-rank term has the wrong size");
+  m_p = p;
+  m_wide.assign(tree.num_clusters(), HssCluster{});
+  auto identity_block = [p](DenseMatrix &M, int r0, int c0) {
+    for (int i = 0; i < p; ++i) M(r0 + i, c0 + i) = 1.0;
+  };
+  for (int c = 0; c < tree.num_clusters(); ++c) {
+    const Cluster &cl = tree.cluster(c);
+    const HssCluster &h = m_K.cluster(c);
+    HssCluster &wd = m_wide[c];
+    if (cl.left < 0) {
+      // Leaf: U gains Y's rows, V gains Z's rows (V's row layout is the pattern's: 3 per node).
+      wd.U = DenseMatrix(h.U.m, h.U.n + p);
+      wd.V = DenseMatrix(3 * cl.size(), h.V.n + p);
+      put(wd.U, 0, 0, h.U);
+      for (int k = 0; k < cl.size(); ++k) {
+        const int node = tree.perm()[cl.begin + k];
+        for (int a = 0; a < 3; ++a)
+          for (int j = 0; j < p; ++j) {
+            wd.U(3 * k + a, h.U.n + j) = extra.Y[(3 * static_cast<std::size_t>(node) + a) * p + j];
+            wd.V(3 * k + a, h.V.n + j) = extra.Z[(3 * static_cast<std::size_t>(node) + a) * p + j];
+          }
+      }
+      continue;
+    }
+    const int kra = m_K.cluster(cl.left).U.n, krb = m_K.cluster(cl.right).U.n;
+    const int kca = m_K.cluster(cl.left).V.n, kcb = m_K.cluster(cl.right).V.n;
+    wd.B12 = DenseMatrix(kra + p, kcb + p);
+    put(wd.B12, 0, 0, h.B12);
+    identity_block(wd.B12, kra, kcb);
+    wd.B21 = DenseMatrix(krb + p, kca + p);
+    put(wd.B21, 0, 0, h.B21);
+    identity_block(wd.B21, krb, kca);
+    if (c == 0) continue;
+    // Transfers: [U_a-part 0; 0 I; U_b-part 0; 0 I], so the parent's extra basis is Y on both halves.
+    wd.U = DenseMatrix(kra + krb + 2 * p, h.U.n + p);
+    put(wd.U, 0, 0, sub(h.U, 0, kra, 0, h.U.n));
+    identity_block(wd.U, kra, h.U.n);
+    put(wd.U, kra + p, 0, sub(h.U, kra, krb, 0, h.U.n));
+    identity_block(wd.U, kra + p + krb, h.U.n);
+    wd.V = DenseMatrix(kca + kcb + 2 * p, h.V.n + p);
+    put(wd.V, 0, 0, sub(h.V, 0, kca, 0, h.V.n));
+    identity_block(wd.V, kca, h.V.n);
+    put(wd.V, kca + p, 0, sub(h.V, kca, kcb, 0, h.V.n));
+    identity_block(wd.V, kca + p + kcb, h.V.n);
+  }
+}
+
 void UlvFactorization::merge_children(int c, DenseMatrix &D, DenseMatrix &U, DenseMatrix &V)
 {
   const Cluster &cl = m_K.tree().cluster(c);
-  const HssCluster &h = m_K.cluster(c);
+  HssCluster h;
+  h.U = U_of(c);
+  h.V = V_of(c);
+  const DenseMatrix &B12 = B12_of(c), &B21 = B21_of(c);
   Node &a = m_nodes[cl.left], &b = m_nodes[cl.right];
   const int ra = reduced_size(cl.left), rb = reduced_size(cl.right);
   const int kra = a.Ut.n, kca = a.Vt.n;
   D = DenseMatrix(ra + rb, ra + rb);
   put(D, 0, 0, a.Dt);
   put(D, ra, ra, b.Dt);
-  put(D, 0, ra, product(product(a.Ut, 'N', h.B12, 'N'), 'N', b.Vt, 'T'));
-  put(D, ra, 0, product(product(b.Ut, 'N', h.B21, 'N'), 'N', a.Vt, 'T'));
+  put(D, 0, ra, product(product(a.Ut, 'N', B12, 'N'), 'N', b.Vt, 'T'));
+  put(D, ra, 0, product(product(b.Ut, 'N', B21, 'N'), 'N', a.Vt, 'T'));
   U = DenseMatrix(ra + rb, h.U.n);
   V = DenseMatrix(ra + rb, h.V.n);
   if (c != 0) {
@@ -179,9 +248,9 @@ void UlvFactorization::solve(double *b) const
     for (std::size_t t = 0; t < lev.size(); ++t) {
       const int c = lev[t];
       const Cluster &cl = tree.cluster(c);
-      const HssCluster &h = m_K.cluster(c);
       const Node &nd = m_nodes[c];
-      std::vector<double> bh, zin(h.V.n, 0.0);
+      const DenseMatrix &hV = V_of(c), &B12 = B12_of(c), &B21 = B21_of(c);
+      std::vector<double> bh, zin(hV.n, 0.0);
       if (cl.left < 0) {
         bh.assign(b + 3L * cl.begin, b + 3L * cl.end);
       } else {
@@ -190,15 +259,15 @@ void UlvFactorization::solve(double *b) const
         bh.resize(ra + rb);
         std::copy(bt[cl.left].begin(), bt[cl.left].end(), bh.begin());
         std::copy(bt[cl.right].begin(), bt[cl.right].end(), bh.begin() + ra);
-        std::vector<double> tmp(std::max(h.B12.m, h.B21.m));
-        lapack::gemv('N', h.B12.m, h.B12.n, 1.0, h.B12.data(), h.B12.ld(), z[cl.right].data(), 0.0, tmp.data());
+        std::vector<double> tmp(std::max(B12.m, B21.m));
+        lapack::gemv('N', B12.m, B12.n, 1.0, B12.data(), B12.ld(), z[cl.right].data(), 0.0, tmp.data());
         lapack::gemv('N', a.Ut.m, a.Ut.n, -1.0, a.Ut.data(), a.Ut.ld(), tmp.data(), 1.0, bh.data());
-        lapack::gemv('N', h.B21.m, h.B21.n, 1.0, h.B21.data(), h.B21.ld(), z[cl.left].data(), 0.0, tmp.data());
+        lapack::gemv('N', B21.m, B21.n, 1.0, B21.data(), B21.ld(), z[cl.left].data(), 0.0, tmp.data());
         lapack::gemv('N', bb.Ut.m, bb.Ut.n, -1.0, bb.Ut.data(), bb.Ut.ld(), tmp.data(), 1.0, bh.data() + ra);
         if (c != 0) { // what the children already know of V_τᵀ x_τ, through the transfer matrix
           std::vector<double> zz(z[cl.left]);
           zz.insert(zz.end(), z[cl.right].begin(), z[cl.right].end());
-          lapack::gemv('T', h.V.m, h.V.n, 1.0, h.V.data(), h.V.ld(), zz.data(), 0.0, zin.data());
+          lapack::gemv('T', hV.m, hV.n, 1.0, hV.data(), hV.ld(), zz.data(), 0.0, zin.data());
         }
       }
       if (c == 0) {

@@ -56,7 +56,10 @@ double matvec_error(const HssMatrix &K, const std::vector<double> &Kd, int seed)
   std::normal_distribution<double> N01;
   std::vector<double> x(static_cast<size_t>(w) * n), xc(x.size()), yc(3L * n), y(3L * n), yd(3L * n, 0.0);
   for (double &v : x) v = N01(gen);
-  K.tree().to_cluster_order(x.data(), xc.data(), w);
+  std::vector<double> xs(x);
+  for (int j = 0; j < n; ++j)
+    for (int q = 0; q < w; ++q) xs[static_cast<size_t>(w) * j + q] /= K.col_scale(q);
+  K.tree().to_cluster_order(xs.data(), xc.data(), w);
   K.apply(xc.data(), w * n, yc.data(), 3 * n);
   K.tree().to_mesh_order(yc.data(), y.data(), 3);
   for (long r = 0; r < 3L * n; ++r)

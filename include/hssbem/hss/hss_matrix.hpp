@@ -69,6 +69,12 @@ public:
   std::vector<int> candidate_rows(int c) const;
   std::vector<int> candidate_cols(int c) const;
 
+  /// Column scaling by slot: the matrix held is K S with S = diag(col_scale(q % col_block)), so
+  /// that H and the (much smaller, ~1/μ) G columns are compressed to the same relative accuracy.
+  /// apply() computes K S X; callers divide the G entries of X by the scale (see HssBemSystem).
+  double col_scale(int slot) const { return m_col_scale[slot]; }
+  void set_col_scales(std::vector<double> s) { m_col_scale = std::move(s); }
+
   /// Y = K X for nrhs columns, both in cluster order, column-major: X is num_cols() × nrhs with
   /// leading dimension ldx, Y num_rows() × nrhs with leading dimension ldy. O(N·r) per column.
   void apply(const double *X, int ldx, double *Y, int ldy, int nrhs = 1) const;
@@ -81,6 +87,7 @@ public:
 private:
   ClusterTree m_tree;
   int m_row_block, m_col_block;
+  std::vector<double> m_col_scale;
   std::vector<HssCluster> m_clusters;
   HssStats m_stats;
 };

@@ -1,6 +1,7 @@
 /// \file kernel_blocks.hpp
 /// Entries of K = [H, G(, Gn)] addressed by global row and column indices in cluster order, the
-/// index space of the HSS engine (see hss_matrix.hpp). The rigid-body terms of H are not included.
+/// index space of the HSS engine (see hss_matrix.hpp), times the column scale of their slot. The
+/// rigid-body terms of H are not included.
 #pragma once
 
 #include "hssbem/bem/bem_operator.hpp"
@@ -13,7 +14,7 @@ namespace hssbem {
 class KernelBlocks {
 public:
   /// `col_block` columns per node: 6 (H, G) or 7 (H, G, Gn).
-  KernelBlocks(const BemOperator &op, const ClusterTree &tree, int col_block);
+  KernelBlocks(const BemOperator &op, const ClusterTree &tree, int col_block, std::vector<double> col_scale);
 
   /// out(r, q) = K(rows[r], cols[q]), stored at out[r·rs + q·cs]. Thread-safe with one
   /// workspace per thread.
@@ -34,6 +35,7 @@ private:
   const BemOperator &m_op;
   const ClusterTree &m_tree;
   int m_w;
+  std::vector<double> m_scale;
 };
 
 } // namespace hssbem

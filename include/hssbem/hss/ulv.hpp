@@ -30,12 +30,20 @@ public:
   using std::runtime_error::runtime_error;
 };
 
+/// A low-rank term Y Zᵀ added to the system matrix (Y and Z: 3N × p, row-major, mesh order),
+/// e.g. the rigid-mode regularisation c Φ Φᵀ of a pure-traction problem. It widens every basis by
+/// p columns (DESIGN §2: the null space handled inside the factorization).
+struct LowRankTerm {
+  int p = 0;
+  std::vector<double> Y, Z;
+};
+
 class UlvFactorization {
 public:
   /// Factor A = K E_S. `displacement_known` (mesh order, per node and component): true where u is
   /// known and t unknown (column −G), false where u is unknown (column H). K must outlive this
   /// object (its transfer matrices and couplings are used, not copied). Throws HssBreakdown.
-  UlvFactorization(const HssMatrix &K, const std::vector<std::array<bool, 3>> &displacement_known);
+  UlvFactorization(const HssMatrix &K, const std::vector<std::array<bool, 3>> &displacement_known, const LowRankTerm *extra = nullptr);
 
   /// Solve A x = b in place: b (3N values, cluster order) becomes x.
   void solve(double *b) const;
@@ -63,8 +71,16 @@ private:
   int reduced_size(int c) const { return m_nodes[c].eliminated ? m_nodes[c].kr : m_nodes[c].m; }
   void factor_cluster(int c, DenseMatrix D, DenseMatrix U, DenseMatrix V);
   void merge_children(int c, DenseMatrix &D, DenseMatrix &U, DenseMatrix &V);
+  void widen_generators(const LowRankTerm &extra);
+  /// Transfer matrices and couplings of cluster c, widened by the low-rank term if there is one.
+  const DenseMatrix &U_of(int c) const { return m_p > 0 ? m_wide[c].U : m_K.cluster(c).U; }
+  const DenseMatrix &V_of(int c) const { return m_p > 0 ? m_wide[c].V : m_K.cluster(c).V; }
+  const DenseMatrix &B12_of(int c) const { return m_p > 0 ? m_wide[c].B12 : m_K.cluster(c).B12; }
+  const DenseMatrix &B21_of(int c) const { return m_p > 0 ? m_wide[c].B21 : m_K.cluster(c).B21; }
 
   const HssMatrix &m_K;
+  int m_p = 0;                       ///< width of the low-rank term
+  std::vector<HssCluster> m_wide;    ///< widened generators (leaves: U and V; inner: transfers and couplings)
   std::vector<Node> m_nodes;
   DenseMatrix m_root_lu;
   std::vector<int> m_root_piv;

@@ -1,0 +1,147 @@
+// HSS direct solve against dense assembly + LU on one mesh; prints one CSV row (see README.md).
+//
+//   bench_hss --mesh FILE [--tol 1e-6] [--leaf 64] [--dense 0|1] [--header]
+//
+// Problem: the nodes below the median height are clamped (u = 0, traction unknown), the others
+// carry a uniform traction (0, 0, -1) (displacement unknown), E = 1, nu = 0.3.
+#include "hssbem/bem/bem_operator.hpp"
+#include "hssbem/core/lapack.hpp"
+#include "hssbem/hss/bem_system.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <numeric>
+#include <string>
+
+using namespace hssbem;
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+double peak_rss_mb()
+{
+  std::ifstream f("/proc/self/status");
+  std::string line;
+  while (std::getline(f, line))
+    if (line.rfind("VmHWM:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;
+  return 0;
+}
+
+double rel_diff(const std::vector<double> &a, const std::vector<double> &b)
+{
+  double e = 0, s = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    e += (a[i] - b[i]) * (a[i] - b[i]);
+    s += b[i] * b[i];
+  }
+  return std::sqrt(e / s);
+}
+
+} // namespace
+
+int main(int argc, char **argv)
+{
+  std::string mesh_path;
+  HssOptions opt;
+  bool dense = true, header = false;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto next = [&]() -> std::string {
+      if (i + 1 >= argc) throw std::invalid_argument("missing value after " + a);
+      return argv[++i];
+    };
+    if (a == "--mesh") mesh_path = next();
+    else if (a == "--tol") opt.rel_tol = std::stod(next());
+    else if (a == "--leaf") opt.leaf_size = std::stoi(next());
+    else if (a == "--proxy-ratio") opt.proxy_ratio = std::stod(next());
+    else if (a == "--proxy-points") opt.proxy_points = std::stoi(next());
+    else if (a == "--dense") dense = std::stoi(next()) != 0;
+    else if (a == "--header") header = true;
+    else {
+      std::fprintf(stderr, "bench_hss: unknown argument %s\n", a.c_str());
+      return 2;
+    }
+  }
+  if (header)
+    std::printf("mesh,N,tol,leaf,dense_assembly_s,dense_lu_s,compress_s,factor_s,solve_s,matvec_s,max_row_rank,max_col_rank,top_front,"
+                "hss_memory_mb,factor_memory_mb,peak_rss_mb,rel_diff\n");
+  if (mesh_path.empty()) return header ? 0 : 2;
+
+  SurfaceMesh mesh = read_mesh(mesh_path);
+  std::vector<std::string> notices;
+  validate_and_orient(mesh, notices);
+  Discretization disc(mesh, 40.0);
+  BemOperator op(disc, Material::from_young(1.0, 0.3));
+  const int n = disc.num_nodes();
+  std::vector<double> z(n);
+  for (int i = 0; i < n; ++i) z[i] = disc.node_position(i)[2];
+  std::vector<double> zs(z);
+  std::nth_element(zs.begin(), zs.begin() + n / 2, zs.end());
+  const double zmid = zs[n / 2];
+  SystemSelection sel;
+  sel.displacement_known.resize(n);
+  sel.known.assign(n, Vec3{0, 0, 0});
+  for (int i = 0; i < n; ++i) {
+    const bool clamped = z[i] < zmid;
+    sel.displacement_known[i] = {clamped, clamped, clamped};
+    if (!clamped) sel.known[i] = {0, 0, -1};
+  }
+
+  // HSS: compress K once, right-hand side by a fast product, factor the pattern, solve.
+  auto t0 = Clock::now();
+  HssBemSystem sys(op, opt);
+  const double t_compress = since(t0);
+  t0 = Clock::now();
+  const std::vector<double> b = sys.rhs(sel);
+  const double t_matvec = since(t0);
+  t0 = Clock::now();
+  const auto F = sys.factor(sel);
+  const double t_factor = since(t0);
+  t0 = Clock::now();
+  const std::vector<double> x_hss = sys.solve(*F, b);
+  const double t_solve = since(t0);
+  const HssMatrix &K = sys.matrix();
+  const double rss = peak_rss_mb();
+  const HssStats &st = K.stats();
+  for (std::size_t l = 0; l < st.levels.size(); ++l)
+    std::fprintf(stderr, "level %zu: %d clusters, row rank max %d mean %.0f, column rank max %d mean %.0f\n", l, st.levels[l].clusters,
+                 st.levels[l].max_row_rank, st.levels[l].mean_row_rank, st.levels[l].max_col_rank, st.levels[l].mean_col_rank);
+  std::fprintf(stderr, "compress: tree %.2f s, rigid %.2f s, couplings %.2f s, leaves %.2f s; summed over threads: near field %.2f s, IDs %.2f s; %.3g entries, %d proxy points\n",
+               st.time_tree, st.time_rigid, st.time_couplings, st.time_leaves, st.time_near_field, st.time_ids, double(st.entries_evaluated),
+               st.proxy_points);
+
+  double t_asm = NAN, t_lu = NAN, diff = NAN;
+  if (dense) {
+    std::vector<int> all(n);
+    std::iota(all.begin(), all.end(), 0);
+    const long N = 3L * n;
+    std::vector<double> A(N * N), rhs(N);
+    t0 = Clock::now();
+#pragma omp parallel
+    {
+      BemOperator::Workspace ws(op);
+#pragma omp for schedule(dynamic, 1)
+      for (int r0 = 0; r0 < n; r0 += 16) {
+        const std::vector<int> rows(all.begin() + r0, all.begin() + std::min(n, r0 + 16));
+        fill_system_block(op, sel, rows, all, A.data() + 3L * r0 * N, N, rhs.data() + 3L * r0, ws);
+      }
+    }
+    t_asm = since(t0);
+    t0 = Clock::now();
+    std::vector<int> piv(N);
+    if (lapack::getrf(static_cast<int>(N), A.data(), static_cast<int>(N), piv.data()) != 0) throw std::runtime_error("dense LU failed");
+    lapack::getrs('T', static_cast<int>(N), 1, A.data(), static_cast<int>(N), piv.data(), rhs.data(), static_cast<int>(N)); // A is row-major
+    t_lu = since(t0);
+    diff = rel_diff(x_hss, rhs);
+  }
+  std::printf("%s,%d,%.0e,%d,%.3f,%.3f,%.3f,%.3f,%.4f,%.4f,%d,%d,%d,%.1f,%.1f,%.0f,%.3e\n", mesh_path.substr(mesh_path.find_last_of('/') + 1).c_str(), 3 * n,
+              opt.rel_tol, opt.leaf_size, t_asm, t_lu, t_compress, t_factor, t_solve, t_matvec, st.max_row_rank(), st.max_col_rank(), F->max_front(),
+              st.memory_bytes / 1048576.0, F->memory_bytes() / 1048576.0, rss, diff);
+  return 0;
+}

@@ -1,0 +1,666 @@
+#!/usr/bin/python3
+"""Scaling benchmark of the HSS direct solver against dense assembly + LU (drives bench_hss).
+
+For every mesh family (unit sphere, disk organ) and every target number of unknowns N this script
+
+  1. generates the surface mesh with scripts/gen_meshes.py (--sphere-triangles T or
+     --disk-triangles T, T = 2 (N/3 - 2) triangles) into the mesh cache directory, or reuses the
+     cached file when it is already there;
+  2. runs the C++ benchmark program (benchmarks/bench_hss.cpp, target bench_hss)
+
+         bench_hss --mesh FILE --tol TOL [--leaf L] --dense 0|1 [EXTRA ARGS]
+
+     as a subprocess (with --dense 1 only up to --dense-max unknowns), with a per-run timeout;
+  3. appends the single CSV line it prints on stdout, preceded by a `family` column, to the CSV
+     file, and saves its stderr (ranks per HSS level, compression time breakdown) in
+     <csv stem>_logs/<mesh stem>_<tol>.log.
+
+A run that fails or times out is reported (with the tail of its log) and the sweep goes on. At the
+end one markdown table per family is printed (dense and HSS times, speed-up, ranks, memory,
+difference to the dense solution), followed by the log-log least-squares slopes of HSS setup
+time (compress + factor), solve time and max rank against N, and the ranks per HSS level read
+back from the logs. --plot draws the times and ranks against N on log-log axes.
+
+--from-csv FILE skips all runs and only prints the tables and slopes (and plots) of an existing
+CSV file.
+
+Uses numpy (and matplotlib for --plot); gen_meshes.py needs gmsh: run with Debian's
+/usr/bin/python3.
+
+Examples
+  benchmarks/bench_hss.py --bench build/bin/bench_hss --quick                # smoke test, minutes
+  benchmarks/bench_hss.py --csv out/bench/hss.csv --plot out/bench/hss.png   # full sweep (hours)
+  benchmarks/bench_hss.py --from-csv out/bench/hss.csv --plot out/bench/hss.png
+"""
+
+import argparse
+import csv
+import datetime
+import math
+import os
+import platform
+import shlex
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+GEN_MESHES = os.path.join(REPO, "scripts", "gen_meshes.py")
+
+DEFAULT_SIZES = (3000, 6000, 10000, 20000, 40000, 80000, 150000, 300000)
+QUICK_SIZES = (3000, 6000)
+
+# Mesh families: name -> (gen_meshes.py option that takes a triangle count, mesh file prefix).
+FAMILIES = {
+    "sphere": ("--sphere-triangles", "sphere"),
+    "disk": ("--disk-triangles", "disk"),
+}
+
+# Columns printed by `bench_hss --header`; the CSV written here has `family` in front of them.
+BENCH_COLUMNS = ["mesh", "N", "tol", "leaf", "dense_assembly_s", "dense_lu_s", "compress_s",
+                 "factor_s", "solve_s", "matvec_s", "max_row_rank", "max_col_rank", "top_front",
+                 "hss_memory_mb", "factor_memory_mb", "peak_rss_mb", "rel_diff"]
+CSV_COLUMNS = ["family"] + BENCH_COLUMNS
+
+# Default range of N over which the log-log slopes are fitted.
+FIT_MIN, FIT_MAX = 10000, 300000
+
+
+# ------------------------------------------------------------------------------------------------
+# small helpers
+
+
+def log(msg=""):
+    """Progress output: stdout, flushed at once so it interleaves correctly with subprocesses."""
+    print(msg, flush=True)
+
+
+def triangles_for_unknowns(n):
+    """A closed surface of genus 0 with T triangles has T/2 + 2 vertices, 3 unknowns each, so
+    T = 2 (N/3 - 2); rounded to an even count."""
+    t = int(round(2.0 * (n / 3.0 - 2.0)))
+    return max(20, t + (t % 2))
+
+
+def parse_int_list(text):
+    """'3000,6000,1e4' -> [3000, 6000, 10000] (positive integers)."""
+    try:
+        vals = [int(float(s)) for s in text.replace(" ", "").split(",") if s]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a comma-separated list of integers, got {text!r}")
+    if not vals or any(v <= 0 for v in vals):
+        raise argparse.ArgumentTypeError(f"need positive integers, got {text!r}")
+    return vals
+
+
+def parse_families(text):
+    fams = [s for s in text.replace(" ", "").split(",") if s]
+    bad = [f for f in fams if f not in FAMILIES]
+    if not fams or bad:
+        raise argparse.ArgumentTypeError(f"families are {', '.join(FAMILIES)}; got {text!r}")
+    return fams
+
+
+def tol_tag(tol):
+    """Tolerance as the C++ program prints it (printf %.0e), e.g. 1e-06; used in log names."""
+    return f"{tol:.0e}"
+
+
+def to_float(text):
+    """CSV field -> float; empty or unparsable fields (and the program's 'nan') give nan."""
+    try:
+        return float(text)
+    except (TypeError, ValueError):
+        return math.nan
+
+
+def finite(x):
+    return x is not None and not math.isnan(x) and not math.isinf(x)
+
+
+def fmt_s(t):
+    """Seconds with about three significant digits and no exponent; '–' for missing values."""
+    if not finite(t):
+        return "–"
+    if t >= 100:
+        return f"{t:.0f}"
+    if t >= 10:
+        return f"{t:.1f}"
+    if t >= 1:
+        return f"{t:.2f}"
+    return f"{t:.3g}"
+
+
+def fmt_ratio(x):
+    """Speed-up factor: two significant digits below 10 (0.065, 3.4), integer above."""
+    if not finite(x):
+        return "–"
+    return f"{x:.0f}" if x >= 10 else f"{x:.2g}"
+
+
+def fmt_mb(m):
+    return "–" if not finite(m) else (f"{m:.0f}" if m >= 10 else f"{m:.1f}")
+
+
+def cpu_model():
+    try:
+        with open("/proc/cpuinfo") as f:
+            for line in f:
+                if line.startswith("model name"):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or "unknown CPU"
+
+
+def available_cores():
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover
+        return os.cpu_count() or 1
+
+
+def tail(path, lines=15):
+    """The last lines of a text file (for failure reports)."""
+    try:
+        with open(path, errors="replace") as f:
+            return "".join(f.readlines()[-lines:])
+    except OSError:
+        return ""
+
+
+def logs_dir_for(csv_path):
+    """Run logs live next to the CSV: out/bench/hss.csv -> out/bench/hss_logs/."""
+    return os.path.splitext(csv_path)[0] + "_logs"
+
+
+def log_path_for(logs_dir, mesh_file, tol, leaf):
+    """<logs>/<mesh stem>_<tol>.log, with _leaf<L> added when a leaf size was given explicitly."""
+    stem = os.path.splitext(os.path.basename(mesh_file))[0]
+    extra = f"_leaf{leaf}" if leaf is not None else ""
+    return os.path.join(logs_dir, f"{stem}_{tol_tag(tol)}{extra}.log")
+
+
+# ------------------------------------------------------------------------------------------------
+# subprocesses
+
+
+def run_command(cmd, timeout, stdout_path=None, stderr_path=None):
+    """Run cmd in its own process group (so a timeout kills the whole group, and only it).
+
+    stdout is captured and returned unless stdout_path is given; stderr goes to stderr_path, or is
+    captured and returned. Returns (returncode or None on timeout, stdout text, stderr text,
+    wall seconds). KeyboardInterrupt kills the group and is re-raised."""
+    out_f = open(stdout_path, "w") if stdout_path else None
+    err_f = open(stderr_path, "w") if stderr_path else None
+    t0 = time.monotonic()
+    try:
+        proc = subprocess.Popen(cmd, stdout=out_f or subprocess.PIPE, stderr=err_f or subprocess.PIPE,
+                                text=True, start_new_session=True)
+        try:
+            out, err = proc.communicate(timeout=timeout if timeout and timeout > 0 else None)
+            rc = proc.returncode
+        except subprocess.TimeoutExpired:
+            os.killpg(proc.pid, signal.SIGKILL)
+            out, err = proc.communicate()
+            rc = None
+        except KeyboardInterrupt:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.communicate()
+            raise
+    finally:
+        for f in (out_f, err_f):
+            if f:
+                f.close()
+    return rc, out or "", err or "", time.monotonic() - t0
+
+
+def ensure_mesh(family, triangles, mesh_dir, timeout):
+    """Path of the cached mesh <mesh_dir>/<prefix>_T<T>.msh, generated first if it is missing.
+
+    The generator writes to a temporary name that is renamed on success, so an interrupted or
+    failed generation never leaves a file that would be taken for a cached mesh. Returns
+    (path, None) or (None, error message)."""
+    option, prefix = FAMILIES[family]
+    path = os.path.join(mesh_dir, f"{prefix}_T{triangles}.msh")
+    if os.path.isfile(path):
+        return path, None
+    os.makedirs(mesh_dir, exist_ok=True)
+    tmp = os.path.join(mesh_dir, f"{prefix}_T{triangles}.tmp{os.getpid()}.msh")
+    cmd = [sys.executable, GEN_MESHES, option, str(triangles), "--out", tmp]
+    log(f"    generating {os.path.basename(path)}: {' '.join(shlex.quote(c) for c in cmd)}")
+    try:
+        rc, out, err, wall = run_command(cmd, timeout)
+    except KeyboardInterrupt:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+        raise
+    if rc != 0 or not os.path.isfile(tmp):
+        if os.path.exists(tmp):
+            os.remove(tmp)
+        why = "timed out" if rc is None else f"exit status {rc}"
+        return None, f"mesh generation {why}:\n{(out + err)[-2000:]}"
+    os.replace(tmp, path)
+    log(f"    {out.strip().replace(os.path.basename(tmp), os.path.basename(path))}  ({wall:.1f} s)")
+    return path, None
+
+
+def bench_header(bench):
+    """Columns that `bench_hss --header` prints; also checks that the binary runs at all."""
+    rc, out, err, _ = run_command([bench, "--header"], 60)
+    if rc != 0:
+        sys.exit(f"bench_hss.py: `{bench} --header` failed (exit status {rc}):\n{err}")
+    return out.strip().splitlines()[0].split(",")
+
+
+def parse_bench_line(stdout, ncols):
+    """The last stdout line with the expected number of comma-separated fields, or None."""
+    for line in reversed(stdout.strip().splitlines()):
+        fields = line.strip().split(",")
+        if len(fields) == ncols:
+            return fields
+    return None
+
+
+# ------------------------------------------------------------------------------------------------
+# CSV
+
+
+def open_csv(path, append):
+    """Start the CSV (header row) unless appending to an existing file with the same columns.
+
+    Without --append an existing file is kept as FILE.bak instead of being overwritten."""
+    d = os.path.dirname(os.path.abspath(path))
+    os.makedirs(d, exist_ok=True)
+    if append and os.path.isfile(path) and os.path.getsize(path) > 0:
+        with open(path, newline="") as f:
+            head = next(csv.reader(f), [])
+        if head != CSV_COLUMNS:
+            sys.exit(f"bench_hss.py: --append: {path} has other columns than this script writes")
+        return
+    if os.path.isfile(path):
+        os.replace(path, path + ".bak")
+        log(f"# previous {path} kept as {path}.bak")
+    with open(path, "w", newline="") as f:
+        csv.writer(f).writerow(CSV_COLUMNS)
+
+
+def append_csv(path, row):
+    with open(path, "a", newline="") as f:
+        csv.writer(f).writerow(row)
+
+
+def read_csv(path):
+    """Rows of a CSV written by this script as dicts: numbers converted to float (nan when
+    missing); 'family', 'mesh' and 'tol' (as printed) stay strings."""
+    rows = []
+    with open(path, newline="") as f:
+        for rec in csv.DictReader(f):
+            if not rec.get("family"):
+                continue
+            row = {k: to_float(v) for k, v in rec.items() if k not in ("family", "mesh", "tol")}
+            row["family"], row["mesh"], row["tol"] = rec["family"], rec["mesh"], rec["tol"]
+            rows.append(row)
+    return rows
+
+
+# ------------------------------------------------------------------------------------------------
+# report: tables, slopes, ranks per level
+
+
+def derived(r):
+    """Quantities of the summary table computed from one CSV row."""
+    setup = r["compress_s"] + r["factor_s"]
+    hss_total = setup + r["solve_s"]
+    dense_total = r["dense_assembly_s"] + r["dense_lu_s"]
+    return {
+        "setup": setup,
+        "hss_total": hss_total,
+        "dense_total": dense_total,
+        "speedup": dense_total / hss_total if finite(dense_total) and hss_total > 0 else math.nan,
+        "max_rank": max(r["max_row_rank"], r["max_col_rank"]),
+    }
+
+
+def loglog_slope(points, lo, hi):
+    """Least-squares slope of log y against log N over the points with lo <= N <= hi.
+
+    Points with a missing or non-positive y are ignored. Returns (slope, Nmin, Nmax, count); with
+    fewer than two usable points in [lo, hi] all usable points are taken instead, and with fewer
+    than two in total the slope is nan."""
+    good = [(n, y) for n, y in points if finite(y) and y > 0]
+    sel = [(n, y) for n, y in good if lo <= n <= hi]
+    if len(sel) < 2:
+        sel = good
+    if len(sel) < 2:
+        return math.nan, math.nan, math.nan, len(sel)
+    x = np.log([n for n, _ in sel])
+    y = np.log([v for _, v in sel])
+    slope = float(np.polyfit(x, y, 1)[0])
+    return slope, min(n for n, _ in sel), max(n for n, _ in sel), len(sel)
+
+
+def read_level_ranks(log_file):
+    """[(level, clusters, max row rank, max col rank)] from a bench_hss stderr log."""
+    levels = []
+    try:
+        with open(log_file, errors="replace") as f:
+            for line in f:
+                # level 3: 8 clusters, row rank max 120 mean 98, column rank max 131 mean 104
+                if not line.startswith("level "):
+                    continue
+                try:
+                    head, rest = line.split(":", 1)
+                    words = rest.replace(",", " ").split()
+                    lev = int(head.split()[1])
+                    clusters = int(words[0])
+                    row = int(words[words.index("row") + 3])
+                    col = int(words[words.index("column") + 3])
+                except (ValueError, IndexError):
+                    continue
+                levels.append((lev, clusters, row, col))
+    except OSError:
+        return None
+    return levels
+
+
+def group_rows(rows):
+    """Rows grouped by (family, tol, leaf), each sorted by N. For a repeated (family, mesh, tol,
+    leaf), e.g. from --append sweeps, the last row wins."""
+    latest = {}
+    for r in rows:
+        latest[(r["family"], r["mesh"], r["tol"], r["leaf"])] = r
+    groups = {}
+    for r in latest.values():
+        groups.setdefault((r["family"], r["tol"], r["leaf"]), []).append(r)
+    order = list(FAMILIES)
+    keys = sorted(groups, key=lambda k: (order.index(k[0]) if k[0] in order else len(order), k[0],
+                                         to_float(k[1]), k[2]))
+    return [(k, sorted(groups[k], key=lambda r: r["N"])) for k in keys]
+
+
+def print_report(rows, logs_dir, fit_min, fit_max):
+    """Markdown table, slopes and ranks per level for each (family, tol, leaf) group."""
+    if not rows:
+        log("\n(no successful runs to report)")
+        return
+    for (family, tol, leaf), grp in group_rows(rows):
+        log(f"\n### {family}: tol {tol}, leaf {leaf:.0f}\n")
+        hdr = ["N", "dense s (asm + LU)", "compress s", "factor s", "solve s", "HSS total s",
+               "speed-up", "max rank r/c", "top front", "HSS + factor MB", "peak RSS MB", "rel_diff"]
+        log("| " + " | ".join(hdr) + " |")
+        log("|" + "|".join("---:" for _ in hdr) + "|")
+        for r in grp:
+            d = derived(r)
+            dense = (f"{fmt_s(d['dense_total'])} ({fmt_s(r['dense_assembly_s'])} + {fmt_s(r['dense_lu_s'])})"
+                     if finite(d["dense_total"]) else "–")
+            mem = r["hss_memory_mb"] + r["factor_memory_mb"]
+            cells = [f"{r['N']:.0f}", dense, fmt_s(r["compress_s"]), fmt_s(r["factor_s"]),
+                     fmt_s(r["solve_s"]), fmt_s(d["hss_total"]),
+                     fmt_ratio(d["speedup"]),
+                     f"{r['max_row_rank']:.0f}/{r['max_col_rank']:.0f}", f"{r['top_front']:.0f}",
+                     f"{fmt_mb(mem)} ({fmt_mb(r['hss_memory_mb'])} + {fmt_mb(r['factor_memory_mb'])})",
+                     fmt_mb(r["peak_rss_mb"]),
+                     f"{r['rel_diff']:.2e}" if finite(r["rel_diff"]) else "–"]
+            log("| " + " | ".join(cells) + " |")
+
+        # log-log slopes
+        log(f"\nlog-log slopes against N (least squares; fit range {fit_min} <= N <= {fit_max}):")
+        series = [
+            ("HSS setup (compress + factor)", [(r["N"], derived(r)["setup"]) for r in grp], "1 to 1.5"),
+            ("HSS solve", [(r["N"], r["solve_s"]) for r in grp], "about 1"),
+            ("max rank (row/col)", [(r["N"], derived(r)["max_rank"]) for r in grp], "about 0.5"),
+            ("dense assembly + LU", [(r["N"], derived(r)["dense_total"]) for r in grp], "2 to 3"),
+        ]
+        for name, pts, expect in series:
+            slope, n0, n1, cnt = loglog_slope(pts, fit_min, fit_max)
+            if not finite(slope):
+                if name.startswith("dense"):
+                    continue  # fewer than two dense runs: nothing to say
+                log(f"  {name:30s}  –     (fewer than two runs)")
+                continue
+            in_range = all(fit_min <= n <= fit_max for n in (n0, n1))
+            note = "" if in_range else f"; fewer than two runs in [{fit_min}, {fit_max}], all runs used"
+            log(f"  {name:30s} {slope:5.2f}   (N = {n0:.0f} .. {n1:.0f}, {cnt} runs{note}; "
+                f"expected {expect})")
+
+        # ranks per level from the saved logs (the root, level 0, has no rank and is left out)
+        lines = []
+        for r in grp:
+            lf = log_path_for(logs_dir, r["mesh"], to_float(r["tol"]), int(r["leaf"]))
+            if not os.path.isfile(lf):
+                lf = log_path_for(logs_dir, r["mesh"], to_float(r["tol"]), None)
+            lev = read_level_ranks(lf)
+            if lev:
+                lines.append(f"  N {r['N']:7.0f}:  " + "  ".join(f"L{lv} {row}/{col}" for lv, nc, row, col in lev
+                                                             if nc > 0))
+        if lines:
+            log("\nmax row/column rank per HSS level (L1 = the two children of the root), from the logs:")
+            for line in lines:
+                log(line)
+
+
+# ------------------------------------------------------------------------------------------------
+# plot
+
+
+def plot(rows, path):
+    """Left: HSS setup, HSS solve and dense assembly + LU time vs N with N^1.5, N^1 and N^3 guide
+    lines. Right: max rank (and top front size) vs N with an N^0.5 guide line."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    groups = group_rows(rows)
+    if not groups:
+        log("(nothing to plot)")
+        return
+    fig, (ax, axr) = plt.subplots(1, 2, figsize=(13, 7))
+    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    label_tol = len({(k[1], k[2]) for k, _ in groups}) > 1
+
+    def guide(axis, n_ref, y_ref, n_max, power, text):
+        """Grey line y = y_ref (N / n_ref)^power from n_ref to n_max, labelled at its end."""
+        ns = np.array([n_ref, n_max], float)
+        axis.plot(ns, y_ref * (ns / n_ref) ** power, color="0.6", lw=1, ls="-", zorder=0)
+        axis.annotate(text, (ns[-1], y_ref * (ns[-1] / n_ref) ** power), color="0.4",
+                      fontsize=9, xytext=(3, 0), textcoords="offset points", va="center")
+
+    all_n = [r["N"] for _, g in groups for r in g]
+    n_lo, n_hi = min(all_n), max(all_n)
+    first = {"setup": None, "solve": None, "dense": None, "rank": None}
+    for i, ((family, tol, leaf), grp) in enumerate(groups):
+        c = colors[i % len(colors)]
+        name = family + (f" (tol {tol}, leaf {leaf:.0f})" if label_tol else "")
+        N = np.array([r["N"] for r in grp])
+        setup = np.array([derived(r)["setup"] for r in grp])
+        solve = np.array([r["solve_s"] for r in grp])
+        dense = np.array([derived(r)["dense_total"] for r in grp])
+        rank = np.array([derived(r)["max_rank"] for r in grp])
+        front = np.array([r["top_front"] for r in grp])
+        ax.plot(N, setup, "o-", color=c, label=f"{name}: HSS setup (compress + factor)")
+        ax.plot(N, solve, "s--", color=c, label=f"{name}: HSS solve")
+        ok = np.isfinite(dense)
+        if ok.any():
+            ax.plot(N[ok], dense[ok], "^:", color=c, label=f"{name}: dense assembly + LU")
+        axr.plot(N, rank, "o-", color=c, label=f"{name}: max rank (row/col)")
+        axr.plot(N, front, "s--", color=c, label=f"{name}: top front")
+        # guide lines start at the smallest-N point of the first group that has the series
+        for key, ys, msk in (("setup", setup, np.isfinite(setup)), ("solve", solve, np.isfinite(solve)),
+                             ("dense", dense, ok), ("rank", rank, np.isfinite(rank))):
+            if first[key] is None and msk.any():
+                j = int(np.flatnonzero(msk)[0])
+                first[key] = (N[j], ys[j])
+    if first["setup"]:
+        guide(ax, *first["setup"], n_hi, 1.5, r"$N^{1.5}$")
+    if first["solve"]:
+        guide(ax, *first["solve"], n_hi, 1.0, r"$N$")
+    if first["dense"]:
+        n_dense_hi = max(r["N"] for _, g in groups for r in g if finite(derived(r)["dense_total"]))
+        guide(ax, *first["dense"], max(n_dense_hi, 2 * first["dense"][0]), 3.0, r"$N^3$")
+    if first["rank"]:
+        guide(axr, *first["rank"], n_hi, 0.5, r"$N^{0.5}$")
+    for a, title, ylabel in ((ax, "time vs N", "wall time [s]"), (axr, "rank vs N", "rank / front size")):
+        a.set_xscale("log")
+        a.set_yscale("log")
+        a.set_xlabel("N (unknowns)")
+        a.set_ylabel(ylabel)
+        a.set_title(title)
+        a.set_xlim(n_lo / 1.3, n_hi * 1.6)
+        a.grid(True, which="both", alpha=0.3)
+        # below the axes, so that it never hides data points
+        a.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2)
+    fig.suptitle("hssbem: HSS direct solver vs dense assembly + LU (bench_hss); "
+                 "grey lines: reference slopes", fontsize=10)
+    fig.tight_layout()
+    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    log(f"\nplot written to {path}")
+
+
+# ------------------------------------------------------------------------------------------------
+# sweep
+
+
+def print_preamble(args, sizes, families):
+    env = {k: os.environ[k] for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "OMP_PROC_BIND")
+           if k in os.environ}
+    try:
+        built = datetime.datetime.fromtimestamp(os.path.getmtime(args.bench)).isoformat(" ", "seconds")
+    except OSError:
+        built = "?"
+    log(f"# bench_hss.py  {datetime.datetime.now().isoformat(' ', 'seconds')}  host {platform.node()}")
+    log(f"# CPU {cpu_model()}, {available_cores()} cores available; "
+        f"threads: {', '.join(f'{k}={v}' for k, v in env.items()) or 'environment defaults'}")
+    log(f"# binary {args.bench} (modified {built})")
+    log(f"# families {','.join(families)}; target N {','.join(map(str, sizes))}; tol {args.tol:g}; "
+        f"leaf {args.leaf if args.leaf is not None else 'program default'}; dense up to N = {args.dense_max}; "
+        f"timeout {args.timeout:g} s" + (f"; extra args {args.extra!r}" if args.extra else ""))
+    log(f"# meshes {args.mesh_dir}; CSV {args.csv}; logs {logs_dir_for(args.csv)}")
+
+
+def sweep(args, sizes, families):
+    """Run every (family, size); returns the list of failures (description, log file)."""
+    header = bench_header(args.bench)
+    if header != BENCH_COLUMNS:
+        log(f"# note: bench_hss prints the columns {','.join(header)}; expected {','.join(BENCH_COLUMNS)}")
+    logs_dir = logs_dir_for(args.csv)
+    os.makedirs(logs_dir, exist_ok=True)
+    open_csv(args.csv, args.append)
+    extra = shlex.split(args.extra) if args.extra else []
+    cases = [(f, n) for f in families for n in sizes]
+    failures = []
+    for k, (family, n_target) in enumerate(cases, 1):
+        tri = triangles_for_unknowns(n_target)
+        dense = n_target <= args.dense_max
+        log(f"[{k}/{len(cases)}] {family} N~{n_target} (T={tri}, {'HSS + dense' if dense else 'HSS only'})")
+        mesh, err = ensure_mesh(family, tri, args.mesh_dir, args.timeout)
+        if mesh is None:
+            log(f"    FAILED: {err}")
+            failures.append((f"{family} N~{n_target}: {err.splitlines()[0]}", None))
+            continue
+        cmd = [args.bench, "--mesh", mesh, "--tol", repr(args.tol), "--dense", "1" if dense else "0"]
+        if args.leaf is not None:
+            cmd += ["--leaf", str(args.leaf)]
+        cmd += extra
+        log_file = log_path_for(logs_dir, mesh, args.tol, args.leaf)
+        log(f"    {' '.join(shlex.quote(c) for c in cmd)}")
+        rc, out, _, wall = run_command(cmd, args.timeout, stderr_path=log_file)
+        fields = parse_bench_line(out, len(header)) if rc == 0 else None
+        if fields is None:
+            why = (f"timed out after {args.timeout:g} s" if rc is None else
+                   f"exit status {rc}" if rc != 0 else "no CSV line on stdout")
+            log(f"    FAILED ({why}, {wall:.1f} s); log {log_file}; its tail:")
+            for line in (tail(log_file) + out[-1000:]).rstrip().splitlines():
+                log(f"      | {line}")
+            failures.append((f"{family} N~{n_target}: {why}", log_file))
+            continue
+        # put the fields in this script's column order (by name, in case the program's differs)
+        rec = dict(zip(header, fields))
+        append_csv(args.csv, [family] + [rec.get(c, "nan") for c in BENCH_COLUMNS])
+        r = {c: to_float(rec.get(c)) for c in BENCH_COLUMNS}
+        d = derived(r)
+        dense_txt = f", dense {fmt_s(d['dense_total'])} s, speed-up {fmt_ratio(d['speedup'])}" if finite(d["dense_total"]) else ""
+        log(f"    done in {wall:.1f} s: N={r['N']:.0f}, compress {fmt_s(r['compress_s'])} s, factor "
+            f"{fmt_s(r['factor_s'])} s, solve {fmt_s(r['solve_s'])} s, max rank "
+            f"{r['max_row_rank']:.0f}/{r['max_col_rank']:.0f}, peak RSS {fmt_mb(r['peak_rss_mb'])} MB"
+            f"{dense_txt}" + (f", rel_diff {r['rel_diff']:.2e}" if finite(r["rel_diff"]) else ""))
+    return failures
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                 epilog=__doc__[__doc__.index("Examples"):],
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--bench", default=os.environ.get("BENCH_HSS", os.path.join(REPO, "build", "bin", "bench_hss")),
+                    help="bench_hss binary (default: $BENCH_HSS, else build/bin/bench_hss)")
+    ap.add_argument("--family", type=parse_families, default=",".join(FAMILIES),
+                    help="comma-separated mesh families: sphere, disk (default: both)")
+    ap.add_argument("--sizes", type=parse_int_list, default=",".join(map(str, DEFAULT_SIZES)),
+                    help="target unknown counts N (default: %(default)s)")
+    ap.add_argument("--quick", action="store_true",
+                    help=f"smoke test: sizes {','.join(map(str, QUICK_SIZES))} only (overrides --sizes)")
+    ap.add_argument("--tol", type=float, default=1e-6, help="HSS relative tolerance (default: 1e-6)")
+    ap.add_argument("--leaf", type=int, default=None, help="HSS leaf size (default: the program's default)")
+    ap.add_argument("--dense-max", type=int, default=21000, metavar="N",
+                    help="also run dense assembly + LU for target N <= this (default: 21000)")
+    ap.add_argument("--csv", default=os.path.join(REPO, "out", "bench", "hss.csv"),
+                    help="CSV output (default: out/bench/hss.csv); logs go to <stem>_logs/")
+    ap.add_argument("--append", action="store_true",
+                    help="append to an existing CSV (without it a new CSV is started and an existing one is "
+                         "renamed to FILE.bak)")
+    ap.add_argument("--plot", metavar="FILE.png", help="write a log-log plot of times and ranks vs N")
+    ap.add_argument("--mesh-dir", default=os.path.join(REPO, "build", "bench-meshes"),
+                    help="mesh cache directory (default: build/bench-meshes)")
+    ap.add_argument("--timeout", type=float, default=7200,
+                    help="seconds per run (and per mesh generation); 0 = none (default: 7200)")
+    ap.add_argument("--extra", default="", metavar="ARGS",
+                    help='further bench_hss arguments, e.g. --extra "--proxy-ratio 2.5" '
+                         '(a single word: --extra=--dense)')
+    ap.add_argument("--fit-min", type=int, default=FIT_MIN, help=f"slope fit: smallest N (default: {FIT_MIN})")
+    ap.add_argument("--fit-max", type=int, default=FIT_MAX, help=f"slope fit: largest N (default: {FIT_MAX})")
+    ap.add_argument("--from-csv", metavar="FILE",
+                    help="run nothing: only print the tables and slopes (and --plot) of this CSV")
+    args = ap.parse_args()
+
+    if args.from_csv:
+        rows = read_csv(args.from_csv)
+        log(f"# {len(rows)} rows from {args.from_csv}")
+        print_report(rows, logs_dir_for(args.from_csv), args.fit_min, args.fit_max)
+        if args.plot:
+            plot(rows, args.plot)
+        return 0
+
+    if not (os.path.isfile(args.bench) and os.access(args.bench, os.X_OK)):
+        ap.error(f"bench_hss binary {args.bench!r} not found or not executable "
+                 "(build it: cmake --build build --target bench_hss, or pass --bench / set $BENCH_HSS)")
+    sizes = list(QUICK_SIZES) if args.quick else args.sizes
+    args.csv = os.path.abspath(args.csv)
+    args.mesh_dir = os.path.abspath(args.mesh_dir)
+    print_preamble(args, sizes, args.family)
+    t0 = time.monotonic()
+    try:
+        failures = sweep(args, sizes, args.family)
+    except KeyboardInterrupt:
+        log("\ninterrupted; the report below covers the runs finished so far")
+        failures = [("interrupted", None)]
+    log(f"\n# sweep took {time.monotonic() - t0:.0f} s")
+
+    rows = read_csv(args.csv)
+    print_report(rows, logs_dir_for(args.csv), args.fit_min, args.fit_max)
+    if args.plot:
+        plot(rows, args.plot)
+    if failures:
+        log(f"\n{len(failures)} failed run(s):")
+        for what, lf in failures:
+            log(f"  {what}" + (f"  (log {lf})" if lf else ""))
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

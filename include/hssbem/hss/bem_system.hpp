@@ -1,0 +1,43 @@
+/// \file bem_system.hpp
+/// The collocation system of a problem through the HSS engine, in mesh order (DESIGN §3):
+/// compress K = [H, G(, Gn)] once; per boundary-condition pattern, a right-hand side by one fast
+/// product and a ULV factorization. The PETSc layer and the benchmarks build on this.
+#pragma once
+
+#include "hssbem/bem/bem_operator.hpp"
+#include "hssbem/hss/bem_compression.hpp"
+#include "hssbem/hss/ulv.hpp"
+
+#include <memory>
+#include <vector>
+
+namespace hssbem {
+
+class HssBemSystem {
+public:
+  /// Compress the operator (see compress_bem_operator). Pressure loads need
+  /// options.pressure_columns.
+  HssBemSystem(const BemOperator &op, const HssOptions &options);
+
+  const HssMatrix &matrix() const { return m_K; }
+  const BemOperator &op() const { return m_op; }
+
+  /// b = Σ_known −H u + G t (pressure nodes: −p Gn), 3 values per node, mesh order.
+  std::vector<double> rhs(const SystemSelection &sel) const;
+  /// y = A x for the selection's pattern (x and y: 3 per node, mesh order), by the HSS product.
+  void apply(const SystemSelection &sel, const double *x, double *y) const;
+  /// Factor A (+ c Φ Φᵀ when `rigid_modes` is given: row-major 3N × 6, as orthonormal_rigid_modes).
+  /// Throws HssBreakdown.
+  std::unique_ptr<UlvFactorization> factor(const SystemSelection &sel, const std::vector<double> *rigid_modes = nullptr) const;
+  /// x = A⁻¹ b with a factorization from factor(), both in mesh order.
+  std::vector<double> solve(const UlvFactorization &F, const std::vector<double> &b) const;
+
+private:
+  /// K x (3 per node out) for a vector of K's columns (col_block per node), both mesh order.
+  void apply_k(std::vector<double> xk, double *y) const;
+
+  const BemOperator &m_op;
+  HssMatrix m_K;
+};
+
+} // namespace hssbem
