@@ -4,12 +4,14 @@
 #include "hssbem/core/blas_threads.hpp"
 #include "hssbem/core/interpolative.hpp"
 #include "hssbem/core/lapack.hpp"
+#include "hssbem/core/phase.hpp"
 #include "hssbem/hss/kernel_blocks.hpp"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -126,8 +128,9 @@ RigidPattern rigid_pattern(const BemOperator &op)
 
 /// A skeleton chosen from candidates: local indices and the interpolation matrix (candidates × k).
 struct Skeleton {
-  std::vector<int> local;
+  std::vector<int> local; ///< forced candidates first
   DenseMatrix W;
+  int forced = 0;
 };
 
 /// Column ID of X (features × candidates, column-major) with the `forced` candidates always in
@@ -160,6 +163,7 @@ Skeleton select_skeleton(std::vector<double> &X, int nfeat, int ncand, const std
   }
   const int k = nforced + cid.rank();
   Skeleton s;
+  s.forced = nforced;
   s.W = DenseMatrix(ncand, k);
   for (int t = 0; t < nforced; ++t) {
     s.local.push_back(forced_idx[t]);
@@ -200,7 +204,8 @@ public:
     m_t_id.assign(max_threads(), 0.0);
   }
 
-  void run()
+  /// Skeletons and couplings, level by level from the leaves up.
+  void skeletonize()
   {
     for (int l = m_tree.levels() - 1; l >= 1; --l) {
       skeletonize_level(l);
@@ -212,6 +217,11 @@ public:
       for (std::size_t t = 0; t < parents.size(); ++t) couple_children(parents[t]);
       m_K.stats().time_couplings += seconds_since(t0);
     }
+  }
+
+  /// The leaves' diagonal blocks (true entries), then the totals of the per-thread counters.
+  void fill_leaves()
+  {
     const auto t0 = std::chrono::steady_clock::now();
     const auto &leaves = m_tree.leaves();
     const bool par = parallel_over_clusters(leaves.size());
@@ -350,6 +360,8 @@ private:
     for (int q : cs.local) h.col_skel.push_back(cols[q]);
     h.U = std::move(rs.W);
     h.V = std::move(cs.W);
+    h.row_forced = rs.forced;
+    h.col_forced = cs.forced;
     m_t_id[thread_index()] += seconds_since(t0);
   }
 
@@ -489,13 +501,21 @@ HssMatrix compress_bem_operator(const BemOperator &op, const HssOptions &options
   const Discretization &disc = op.discretization();
   std::vector<Vec3> points(disc.num_nodes());
   for (int i = 0; i < disc.num_nodes(); ++i) points[i] = disc.node(i).point;
+  std::optional<PhaseScope> phase(Phase::Tree);
   HssMatrix K(ClusterTree(points, ClusterTreeOptions{options.leaf_size}), 3, k_columns_per_node(options.pressure_columns));
+  phase.reset();
+  phase.emplace(Phase::Compression);
   K.set_col_scales(balancing_scales(op, K.col_block()));
   K.stats().time_tree = seconds_since(t0);
-  Compressor(op, options, K).run();
+  Compressor compressor(op, options, K);
+  compressor.skeletonize();
+  phase.reset();
+  phase.emplace(Phase::NearField);
+  compressor.fill_leaves();
   t0 = std::chrono::steady_clock::now();
   add_rigid_body_terms(op, K);
   K.stats().time_rigid = seconds_since(t0);
+  phase.reset();
   K.update_stats();
   return K;
 }

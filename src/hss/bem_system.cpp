@@ -10,6 +10,11 @@ namespace hssbem {
 
 HssBemSystem::HssBemSystem(const BemOperator &op, const HssOptions &options) : m_op(op), m_K(compress_bem_operator(op, options)) {}
 
+HssBemSystem::HssBemSystem(const BemOperator &op, HssMatrix K) : m_op(op), m_K(std::move(K))
+{
+  if (m_K.tree().num_points() != op.num_nodes()) throw std::invalid_argument("HSS: the compressed matrix does not belong to this operator");
+}
+
 void HssBemSystem::apply_k(std::vector<double> xk, double *y) const
 {
   const int n = m_K.tree().num_points(), w = m_K.col_block();
@@ -50,6 +55,26 @@ void HssBemSystem::apply(const SystemSelection &sel, const double *x, double *y)
       else xk[w * j + c] = x[3 * j + c];
     }
   apply_k(xk, y);
+}
+
+std::vector<double> HssBemSystem::diagonal(const SystemSelection &sel) const
+{
+  const ClusterTree &tree = m_K.tree();
+  const int w = m_K.col_block();
+  std::vector<double> d(3L * tree.num_points());
+  for (int c : tree.leaves()) {
+    const Cluster &cl = tree.cluster(c);
+    const DenseMatrix &D = m_K.cluster(c).D;
+    for (int k = cl.begin; k < cl.end; ++k) {
+      const int j = tree.perm()[k], local = k - cl.begin;
+      for (int r = 0; r < 3; ++r) {
+        const bool known = sel.displacement_known[j][r];
+        const int slot = known ? 3 + r : r;
+        d[3L * j + r] = (known ? -1.0 : 1.0) * D(3 * local + r, w * local + slot) / m_K.col_scale(slot);
+      }
+    }
+  }
+  return d;
 }
 
 std::unique_ptr<UlvFactorization> HssBemSystem::factor(const SystemSelection &sel, const std::vector<double> *rigid_modes) const

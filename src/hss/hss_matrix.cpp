@@ -3,6 +3,7 @@
 
 #include "hssbem/core/blas_threads.hpp"
 #include "hssbem/core/lapack.hpp"
+#include "hssbem/core/phase.hpp"
 
 #include <algorithm>
 #include <numeric>
@@ -51,6 +52,7 @@ std::vector<int> HssMatrix::candidate_cols(int c) const { return candidates(m_tr
 
 void HssMatrix::apply(const double *X, int ldx, double *Y, int ldy, int nrhs) const
 {
+  PhaseScope phase(Phase::Matvec);
   const int nc = m_tree.num_clusters();
   std::vector<DenseMatrix> xh(nc), yh(nc);
   // Upward pass: xh_τ = V_τᵀ (candidate part of x), deepest level first.

@@ -3,6 +3,7 @@
 
 #include "hssbem/core/blas_threads.hpp"
 #include "hssbem/core/lapack.hpp"
+#include "hssbem/core/phase.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -48,6 +49,7 @@ double max_abs(const DenseMatrix &M)
 UlvFactorization::UlvFactorization(const HssMatrix &K, const std::vector<std::array<bool, 3>> &displacement_known, const LowRankTerm *extra)
   : m_K(K), m_nodes(K.tree().num_clusters())
 {
+  PhaseScope phase(Phase::Factorization);
   const ClusterTree &tree = K.tree();
   if (static_cast<int>(displacement_known.size()) != tree.num_points())
     throw std::invalid_argument("ULV: the boundary-condition pattern has " + std::to_string(displacement_known.size()) + " nodes, the matrix " +
@@ -97,8 +99,13 @@ UlvFactorization::UlvFactorization(const HssMatrix &K, const std::vector<std::ar
         if (c == 0) {
           m_root_lu = std::move(D);
           m_root_piv.assign(m_root_lu.m, 0);
+          const double amax = max_abs(m_root_lu);
           const int info = lapack::getrf(m_root_lu.m, m_root_lu.data(), m_root_lu.ld(), m_root_piv.data());
-          if (info > 0) throw HssBreakdown("HSS factorization broke down: the root block (" + std::to_string(m_root_lu.m) + " unknowns) is singular");
+          double umin = HUGE_VAL;
+          for (int i = 0; i < m_root_lu.m; ++i) umin = std::min(umin, std::abs(m_root_lu(i, i)));
+          // The same test as for the pivot blocks below: singular to working precision.
+          if (info > 0 || (m_root_lu.m > 0 && !(umin > 1e-14 * amax)))
+            throw HssBreakdown("HSS factorization broke down: the root block (" + std::to_string(m_root_lu.m) + " unknowns) is singular to working precision");
         } else {
           factor_cluster(c, std::move(D), std::move(U), std::move(V));
         }
@@ -129,7 +136,8 @@ void UlvFactorization::widen_generators(const LowRankTerm &extra)
     HssCluster &wd = m_wide[c];
     if (cl.left < 0) {
       // Leaf: U gains Y's rows, V gains Z's rows (V's row layout is the pattern's: 3 per node).
-      wd.U = DenseMatrix(h.U.m, h.U.n + p);
+      // A leaf that is the root has no bases (h.U is empty) but still carries Y and Z.
+      wd.U = DenseMatrix(3 * cl.size(), h.U.n + p);
       wd.V = DenseMatrix(3 * cl.size(), h.V.n + p);
       put(wd.U, 0, 0, h.U);
       for (int k = 0; k < cl.size(); ++k) {
@@ -238,6 +246,7 @@ void UlvFactorization::factor_cluster(int c, DenseMatrix D, DenseMatrix U, Dense
 
 void UlvFactorization::solve(double *b) const
 {
+  PhaseScope phase(Phase::Solve);
   const ClusterTree &tree = m_K.tree();
   const int nc = tree.num_clusters();
   std::vector<std::vector<double>> bt(nc), z(nc), ye(nc), xk(nc);

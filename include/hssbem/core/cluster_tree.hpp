@@ -63,8 +63,9 @@ public:
   ClusterTree(const std::vector<Vec3> &points, const std::vector<int> &part, int nparts,
               const ClusterTreeOptions &opts = {});
 
-  ClusterTree(const ClusterTree &) = delete;
-  ClusterTree &operator=(const ClusterTree &) = delete;
+  /// Copyable (O(N) integers and boxes): a truncated HSS matrix keeps its own copy.
+  ClusterTree(const ClusterTree &) = default;
+  ClusterTree &operator=(const ClusterTree &) = default;
   ClusterTree(ClusterTree &&) = default;
   ClusterTree &operator=(ClusterTree &&) = default;
 

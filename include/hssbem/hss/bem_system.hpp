@@ -18,6 +18,8 @@ public:
   /// Compress the operator (see compress_bem_operator). Pressure loads need
   /// options.pressure_columns.
   HssBemSystem(const BemOperator &op, const HssOptions &options);
+  /// Adopt a compression of op's K made elsewhere (e.g. truncate_hss() of another system's).
+  HssBemSystem(const BemOperator &op, HssMatrix K);
 
   const HssMatrix &matrix() const { return m_K; }
   const BemOperator &op() const { return m_op; }
@@ -26,6 +28,8 @@ public:
   std::vector<double> rhs(const SystemSelection &sel) const;
   /// y = A x for the selection's pattern (x and y: 3 per node, mesh order), by the HSS product.
   void apply(const SystemSelection &sel, const double *x, double *y) const;
+  /// The diagonal of A for the selection (3 per node, mesh order): true entries, from the leaves.
+  std::vector<double> diagonal(const SystemSelection &sel) const;
   /// Factor A (+ c Φ Φᵀ when `rigid_modes` is given: row-major 3N × 6, as orthonormal_rigid_modes).
   /// Throws HssBreakdown.
   std::unique_ptr<UlvFactorization> factor(const SystemSelection &sel, const std::vector<double> *rigid_modes = nullptr) const;

@@ -35,6 +35,8 @@ struct HssCluster {
   DenseMatrix V;             ///< candidate columns × |col_skel|
   DenseMatrix D;             ///< leaf: its rows × its columns
   DenseMatrix B12, B21;      ///< inner: K(row_skel(left), col_skel(right)), K(row_skel(right), col_skel(left))
+  int row_forced = 0;        ///< the first row_forced entries of row_skel must stay (rigid-body terms cross τ's boundary there)
+  int col_forced = 0;        ///< likewise for col_skel
 };
 
 /// Rank and memory figures per tree level, and work counters.

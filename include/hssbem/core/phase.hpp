@@ -1,0 +1,38 @@
+/// \file phase.hpp
+/// Named phases of the engine, reported to an optional hook so a host (the PETSc layer: one
+/// PetscLogEvent per phase) can time them without the engine depending on it. The engine
+/// opens and closes phases on the calling thread only, never inside its OpenMP regions.
+#pragma once
+
+namespace hssbem {
+
+enum class Phase {
+  Tree,          ///< cluster tree (geometric bisection)
+  Compression,   ///< skeletons: proxy and near-field samples, interpolative decompositions, couplings
+  NearField,     ///< dense near-field blocks: leaf diagonal blocks and rigid-body terms
+  Truncation,    ///< recompression of an HSS matrix to a looser tolerance
+  Factorization, ///< ULV factorization
+  Solve,         ///< ULV solve
+  Matvec,        ///< HSS product
+  Count
+};
+
+/// Called with begin = true when a phase opens and false when it closes.
+using PhaseHook = void (*)(Phase phase, bool begin);
+
+/// Install (or with nullptr remove) the hook; not thread-safe, call it once at start-up.
+void set_phase_hook(PhaseHook hook);
+
+/// Opens a phase for the lifetime of the object.
+class PhaseScope {
+public:
+  explicit PhaseScope(Phase phase);
+  ~PhaseScope();
+  PhaseScope(const PhaseScope &) = delete;
+  PhaseScope &operator=(const PhaseScope &) = delete;
+
+private:
+  Phase m_phase;
+};
+
+} // namespace hssbem
