@@ -8,6 +8,7 @@ static const char help[] = "hssbem: 3D linear elastostatics by the boundary elem
 #include "hssbem/petsc/log.h"
 #include "hssbem/petsc/options.h"
 #include "hssbem/petsc/run.h"
+#include "hssbem/petsc/system.h"
 #include "hssbem/problem/setup.hpp"
 
 #include <cstdio>
@@ -35,10 +36,15 @@ int main(int argc, char **argv)
     PetscCall(HssbemProcessOptions(PETSC_COMM_WORLD, &opts));
     if (opts.problem.empty()) {
       if (!opts.help) PetscCall(PetscPrintf(PETSC_COMM_WORLD, "hssbem: error: no problem file; give -problem FILE.json (-help lists the options)\n"));
+      else { /* list the solver's options too */
+        KSP ksp;
+        PetscCall(HssbemKSPCreate(PETSC_COMM_WORLD, opts.mat_type.c_str(), &ksp));
+        PetscCall(KSPDestroy(&ksp));
+      }
       status = opts.help ? 0 : 1;
     } else {
       try {
-        PetscCall(HssbemRun(PETSC_COMM_WORLD, opts.problem, Overrides(opts), opts.quad));
+        PetscCall(HssbemRun(PETSC_COMM_WORLD, opts.problem, Overrides(opts), opts.quad, opts.mat_type.c_str()));
       } catch (const std::exception &e) {
         PetscCall(PetscPrintf(PETSC_COMM_WORLD, "hssbem: error: %s\n", e.what()));
         status = 1;

@@ -1,25 +1,16 @@
 #include "hssbem/petsc/dense.h"
+#include "hssbem/petsc/pc_hss.h"
+#include "hssbem/petsc/system.h"
 #include "hssbem/petsc/log.h"
 #include "hssbem/bem/rigid_modes.hpp"
+
+#include "problem_context.hpp"
 
 #include <algorithm>
 #include <exception>
 #include <string>
 #include <numeric>
 #include <vector>
-
-/* Rows (nodes) of this rank: a contiguous block, 3 dofs per node. */
-static PetscErrorCode OwnedNodes_Private(MPI_Comm comm, PetscInt nnodes, PetscInt *nstart, PetscInt *nlocal)
-{
-  PetscInt n = PETSC_DECIDE, N = nnodes;
-
-  PetscFunctionBegin;
-  PetscCall(PetscSplitOwnership(comm, &n, &N));
-  PetscCallMPI(MPI_Scan(&n, nstart, 1, MPIU_INT, MPI_SUM, comm));
-  *nstart -= n;
-  *nlocal = n;
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
 
 /* rows(r, :) += c Q(row0 + r, :) Q^T for nrows rows of width N (row-major). */
 static void AddRigidRegularization_Private(const std::vector<double> &Q, PetscInt row0, size_t nrows, PetscInt N, double *rows)
@@ -87,7 +78,7 @@ PetscErrorCode HssbemAssembleDense(MPI_Comm comm, const hssbem::BemOperator &op,
 
   PetscFunctionBegin;
   PetscCall(PetscLogEventBegin(BEM_Assembly, 0, 0, 0, 0));
-  PetscCall(OwnedNodes_Private(comm, nn, &nstart, &nlocal));
+  PetscCall(HssbemOwnedNodes(comm, nn, &nstart, &nlocal));
   PetscCall(MatCreateDense(comm, 3 * nlocal, 3 * nlocal, N, N, NULL, A));
   PetscCall(MatSetBlockSize(*A, 3));
   PetscCall(MatCreateVecs(*A, NULL, b));
@@ -105,19 +96,27 @@ PetscErrorCode HssbemAssembleDense(MPI_Comm comm, const hssbem::BemOperator &op,
 
 /* The format the factorization needs: MATDENSE LU works on one rank only, parallel dense LU is
    ScaLAPACK's, and MUMPS takes AIJ. Krylov methods with point preconditioners keep MATDENSE. */
-static PetscErrorCode FactorMatType_Private(Mat A, MatType *type)
+static PetscErrorCode FactorMatType_Private(KSP ksp, Mat A, MatType *type)
 {
-  char        pctype[64] = "lu", solver[64] = "";
+  char        solver[64] = "";
   PetscBool   set;
   PetscMPIInt size;
+  PC          pc;
+  PCType      pctype;
 
   PetscFunctionBegin;
   *type = NULL;
   PetscCallMPI(MPI_Comm_size(PetscObjectComm((PetscObject)A), &size));
-  PetscCall(PetscOptionsGetString(NULL, NULL, "-pc_type", pctype, sizeof(pctype), &set));
+  PetscCall(KSPGetPC(ksp, &pc));
+  PetscCall(PCGetType(pc, &pctype));
   PetscCall(PetscOptionsGetString(NULL, NULL, "-pc_factor_mat_solver_type", solver, sizeof(solver), &set));
-  const std::string pc(pctype), st(solver);
-  if (pc != "lu" && pc != "cholesky" && pc != "ilu") PetscFunctionReturn(PETSC_SUCCESS);
+  const std::string pct(pctype ? pctype : ""), st(solver);
+  if (pct != PCLU && pct != PCCHOLESKY && pct != PCILU) PetscFunctionReturn(PETSC_SUCCESS);
+  {
+    PetscBool hss;
+    PetscCall(HssbemMatIsHss(A, &hss));
+    PetscCheck(!hss, PetscObjectComm((PetscObject)A), PETSC_ERR_ARG_INCOMP, "the HSS matrix has no entries for -pc_type %s: use -pc_type hss, or -bem_mat_type dense", pct.c_str());
+  }
   if (st == "mumps" || st == "superlu_dist") *type = MATAIJ;
   else if (st == "scalapack" || (st.empty() && size > 1)) *type = MATSCALAPACK;
   PetscFunctionReturn(PETSC_SUCCESS);
@@ -166,32 +165,36 @@ static PetscErrorCode KSPSolveInLayout_Private(KSP ksp, Mat op, Vec b, Vec x, Pe
 }
 
 /*@C
-  HssbemKSPCreate - Creates the main solver (no prefix) with the defaults -ksp_type preonly
-  -pc_type lu and applies the options database, before there is a matrix, so that option errors
-  surface before the expensive assembly.
+  HssbemKSPCreate - Creates the main solver (no prefix) with the defaults of the matrix type
+  (-ksp_type preonly with -pc_type hss on the HSS matrix, -pc_type lu on the dense one) and applies
+  the options database, before there is a matrix, so that option errors surface before the
+  expensive assembly.
 
   Level: intermediate
 @*/
-PetscErrorCode HssbemKSPCreate(MPI_Comm comm, KSP *ksp)
+PetscErrorCode HssbemKSPCreate(MPI_Comm comm, const char *mat_type, KSP *ksp)
 {
-  PC pc;
+  PC        pc;
+  PetscBool hss;
 
   PetscFunctionBegin;
+  PetscCall(PetscStrcmp(mat_type, HSSBEM_MAT_HSS, &hss));
   PetscCall(KSPCreate(comm, ksp));
   PetscCall(KSPSetType(*ksp, KSPPREONLY));
   PetscCall(KSPGetPC(*ksp, &pc));
-  PetscCall(PCSetType(pc, PCLU));
+  PetscCall(PCSetType(pc, hss ? PCHSS : PCLU));
   PetscCall(KSPSetFromOptions(*ksp));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
 /*@C
-  HssbemSolveDense - Solves A x = b with a KSP from HssbemKSPCreate(); A is converted in place to
-  the format its factorization needs (so no second copy stays alive). A diverged solve is an error.
+  HssbemSolveSystem - Solves A x = b with a KSP from HssbemKSPCreate(); a dense A is converted in
+  place to the format its factorization needs (so no second copy stays alive). A diverged solve
+  is an error.
 
   Level: intermediate
 @*/
-PetscErrorCode HssbemSolveDense(KSP ksp, Mat *A, Vec b, Vec x, HssbemSolveInfo *info)
+PetscErrorCode HssbemSolveSystem(KSP ksp, Mat *A, Vec b, Vec x, HssbemSolveInfo *info)
 {
   PC            pc;
   MatType       ftype;
@@ -199,7 +202,7 @@ PetscErrorCode HssbemSolveDense(KSP ksp, Mat *A, Vec b, Vec x, HssbemSolveInfo *
 
   PetscFunctionBegin;
   PetscCall(PetscLogEventBegin(BEM_Solve, 0, 0, 0, 0));
-  PetscCall(FactorMatType_Private(*A, &ftype));
+  PetscCall(FactorMatType_Private(ksp, *A, &ftype));
   if (ftype) PetscCall(MatConvert(*A, ftype, MAT_INPLACE_MATRIX, A));
   PetscCall(KSPSetOperators(ksp, *A, *A));
   PetscCall(KSPGetPC(ksp, &pc));

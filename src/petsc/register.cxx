@@ -1,7 +1,22 @@
 #include "hssbem/petsc/log.h"
+#include "hssbem/petsc/pc_hss.h"
+#include "hssbem/core/phase.hpp"
+
+#include <petscksp.h>
 
 PetscClassId  HSSBEM_CLASSID;
 PetscLogEvent BEM_Mesh, BEM_Problem, BEM_RigidBody, BEM_Assembly, BEM_Solve, BEM_Post, BEM_Interior, BEM_Output;
+PetscLogEvent HSS_Tree, HSS_Compress, HSS_NearField, HSS_Truncate, HSS_Factor, HSS_Solve, HSS_MatMult;
+
+/* The engine's phases as log events (engine phases open and close on the calling thread). */
+static void PhaseHook_Private(hssbem::Phase phase, bool begin)
+{
+  static const PetscLogEvent *event[] = {&HSS_Tree, &HSS_Compress, &HSS_NearField, &HSS_Truncate, &HSS_Factor, &HSS_Solve, &HSS_MatMult};
+  static_assert(sizeof(event) / sizeof(event[0]) == static_cast<int>(hssbem::Phase::Count), "one log event per phase");
+  const PetscLogEvent e = *event[static_cast<int>(phase)];
+  if (begin) (void)PetscLogEventBegin(e, 0, 0, 0, 0);
+  else (void)PetscLogEventEnd(e, 0, 0, 0, 0);
+}
 
 static PetscBool HssbemPackageInitialized = PETSC_FALSE;
 
@@ -14,12 +29,14 @@ PetscErrorCode HssbemFinalizePackage(void)
 {
   PetscFunctionBegin;
   HssbemPackageInitialized = PETSC_FALSE;
+  hssbem::set_phase_hook(nullptr);
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
 /*@C
   HssbemInitializePackage - Registers the class id and the log events of hssbem (one per phase,
-  so -log_view shows where the time goes). Called once after PetscInitialize(); later calls do nothing.
+  so -log_view shows where the time goes; the HSS engine's phases through its phase hook) and
+  the PC type "hss" (PCHSS). Called once after PetscInitialize(); later calls do nothing.
 
   Level: beginner
 @*/
@@ -37,6 +54,15 @@ PetscErrorCode HssbemInitializePackage(void)
   PetscCall(PetscLogEventRegister("BEMPost", HSSBEM_CLASSID, &BEM_Post));
   PetscCall(PetscLogEventRegister(" BEMInterior", HSSBEM_CLASSID, &BEM_Interior));
   PetscCall(PetscLogEventRegister("BEMOutput", HSSBEM_CLASSID, &BEM_Output));
+  PetscCall(PetscLogEventRegister("HSSTree", HSSBEM_CLASSID, &HSS_Tree));
+  PetscCall(PetscLogEventRegister("HSSCompress", HSSBEM_CLASSID, &HSS_Compress));
+  PetscCall(PetscLogEventRegister("HSSNearField", HSSBEM_CLASSID, &HSS_NearField));
+  PetscCall(PetscLogEventRegister("HSSTruncate", HSSBEM_CLASSID, &HSS_Truncate));
+  PetscCall(PetscLogEventRegister("HSSFactor", HSSBEM_CLASSID, &HSS_Factor));
+  PetscCall(PetscLogEventRegister("HSSSolve", HSSBEM_CLASSID, &HSS_Solve));
+  PetscCall(PetscLogEventRegister("HSSMatMult", HSSBEM_CLASSID, &HSS_MatMult));
+  hssbem::set_phase_hook(PhaseHook_Private);
+  PetscCall(PCRegister(PCHSS, PCCreate_HSS));
   PetscCall(PetscRegisterFinalize(HssbemFinalizePackage));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

@@ -5,6 +5,7 @@
 #include "hssbem/petsc/dense.h"
 #include "hssbem/petsc/log.h"
 #include "hssbem/petsc/options.h"
+#include "hssbem/petsc/system.h"
 
 #include <petsctime.h>
 
@@ -96,7 +97,7 @@ void FillResult(const hssbem::ProblemSetup &s, const hssbem::BemOperator &op, co
   PetscCallAbort(PETSC_COMM_SELF, PetscLogEventEnd(BEM_Interior, 0, 0, 0, 0));
 }
 
-void Describe(const hssbem::ProblemSetup &s, const HssbemSolveInfo &info, PetscMPIInt size, hssbem::ResultData &r)
+void Describe(const hssbem::ProblemSetup &s, const HssbemSolveInfo &info, const char *mat_type, PetscMPIInt size, hssbem::ResultData &r)
 {
   r.attributes_real = {{"E", s.material.E}, {"nu", s.material.nu}, {"lambda", s.material.lambda()}, {"mu", s.material.mu()},
                        {"residual", info.residual}, {"feature_angle_deg", s.disc->feature_angle_deg()}};
@@ -105,7 +106,7 @@ void Describe(const hssbem::ProblemSetup &s, const HssbemSolveInfo &info, PetscM
                       {"pure_traction", (long long)s.pure_traction}};
   char petsc_version[128];
   PetscCallAbort(PETSC_COMM_SELF, PetscGetVersion(petsc_version, sizeof(petsc_version)));
-  r.attributes_str = {{"solver", "dense"}, {"ksp_type", info.ksp_type}, {"pc_type", info.pc_type}, {"mat_solver_type", info.solver_type},
+  r.attributes_str = {{"solver", mat_type}, {"mat_type", mat_type}, {"ksp_type", info.ksp_type}, {"pc_type", info.pc_type}, {"mat_solver_type", info.solver_type},
                       {"converged_reason", KSPConvergedReasons[info.reason]}, {"version", HSSBEM_VERSION}, {"petsc_version", petsc_version},
                       {"problem_file", s.spec.file}, {"mesh_file", s.spec.mesh_path}};
 }
@@ -113,12 +114,12 @@ void Describe(const hssbem::ProblemSetup &s, const HssbemSolveInfo &info, PetscM
 } // namespace
 
 /*@C
-  HssbemSolveSetup - Assembles and solves the dense system of a prepared problem; the unknowns (3 per
-  dof node, node order) come back on rank 0, or on every rank with to_all.
+  HssbemSolveSetup - Builds (dense or HSS) and solves the system of a prepared problem; the unknowns
+  (3 per dof node, node order) come back on rank 0, or on every rank with to_all.
 
   Level: intermediate
 @*/
-PetscErrorCode HssbemSolveSetup(MPI_Comm comm, const hssbem::ProblemSetup &s, const hssbem::BemOperator &op, PetscBool to_all, std::vector<double> *x_out, HssbemSolveInfo *info,
+PetscErrorCode HssbemSolveSetup(MPI_Comm comm, const hssbem::ProblemSetup &s, const hssbem::BemOperator &op, const char *mat_type, PetscBool to_all, std::vector<double> *x_out, HssbemSolveInfo *info,
                                 std::map<std::string, double> *seconds)
 {
   PhaseTimer timer;
@@ -127,16 +128,17 @@ PetscErrorCode HssbemSolveSetup(MPI_Comm comm, const hssbem::ProblemSetup &s, co
   Vec        b, x;
 
   PetscFunctionBegin;
-  PetscCall(HssbemKSPCreate(comm, &ksp));
+  PetscCall(HssbemKSPCreate(comm, mat_type, &ksp));
   PetscCall(HssbemCheckUnusedOptions(comm, PETSC_TRUE));
   timer.begin();
   std::vector<double> modes;
   if (s.pure_traction) modes = hssbem::orthonormal_rigid_modes(*s.disc);
-  PetscCall(HssbemAssembleDense(comm, op, s.selection, s.pure_traction ? &modes : nullptr, &A, &b));
+  PetscCall(HssbemCreateSystem(comm, op, s.selection, s.pure_traction ? &modes : nullptr, mat_type, &A, &b));
+  PetscCall(MatViewFromOptions(A, NULL, "-bem_mat_view"));
   timer.end("assembly");
   timer.begin();
   PetscCall(VecDuplicate(b, &x));
-  PetscCall(HssbemSolveDense(ksp, &A, b, x, info));
+  PetscCall(HssbemSolveSystem(ksp, &A, b, x, info));
   timer.end("solve");
   PetscCall(Gather(x, to_all, x_out));
   PetscCall(KSPDestroy(&ksp));
@@ -150,11 +152,11 @@ PetscErrorCode HssbemSolveSetup(MPI_Comm comm, const hssbem::ProblemSetup &s, co
 
 /*@C
   HssbemRun - Solves one problem file end to end on comm: set up (mesh, material, boundary
-  conditions), assemble the dense collocation system, solve with KSP, post-process and write.
+  conditions), build the collocation system (HSS or dense), solve with KSP, post-process and write.
 
   Level: beginner
 @*/
-PetscErrorCode HssbemRun(MPI_Comm comm, const std::string &problem_file, const hssbem::ProblemOverrides &overrides, const hssbem::QuadratureOptions &quad)
+PetscErrorCode HssbemRun(MPI_Comm comm, const std::string &problem_file, const hssbem::ProblemOverrides &overrides, const hssbem::QuadratureOptions &quad, const char *mat_type)
 {
   PhaseTimer      timer;
   PetscMPIInt     rank, size;
@@ -169,10 +171,10 @@ PetscErrorCode HssbemRun(MPI_Comm comm, const std::string &problem_file, const h
   hssbem::BemOperator op(*s.disc, s.material, quad);
   CheckInteriorPoints(op, s.spec);
   timer.end("setup");
-  PetscCall(PetscPrintf(comm, "hssbem: %s: %d vertices, %d triangles, %d dof nodes (%d sharp vertices), %d unknowns, %d ranks\n", s.spec.mesh_path.c_str(), s.mesh->num_vertices(),
-                        s.mesh->num_triangles(), s.disc->num_nodes(), s.disc->num_sharp_vertices(), 3 * s.disc->num_nodes(), size));
+  PetscCall(PetscPrintf(comm, "hssbem: %s: %d vertices, %d triangles, %d dof nodes (%d sharp vertices), %d unknowns, %d ranks, %s operator\n", s.spec.mesh_path.c_str(), s.mesh->num_vertices(),
+                        s.mesh->num_triangles(), s.disc->num_nodes(), s.disc->num_sharp_vertices(), 3 * s.disc->num_nodes(), size, mat_type));
   std::vector<double> xall;
-  PetscCall(HssbemSolveSetup(comm, s, op, PETSC_FALSE, &xall, &info, &timer.seconds));
+  PetscCall(HssbemSolveSetup(comm, s, op, mat_type, PETSC_FALSE, &xall, &info, &timer.seconds));
   PetscCall(PetscPrintf(comm, "hssbem: solved with %s/%s%s%s: %" PetscInt_FMT " iterations, relative residual %.3e\n", info.ksp_type.c_str(), info.pc_type.c_str(),
                         info.solver_type.empty() ? "" : "/", info.solver_type.c_str(), info.iterations, (double)info.residual));
   PetscCall(HssbemCheckUnusedOptions(comm, PETSC_FALSE));
@@ -186,7 +188,7 @@ PetscErrorCode HssbemRun(MPI_Comm comm, const std::string &problem_file, const h
       FillResult(s, op, xall, r);
       PetscCall(PetscLogEventEnd(BEM_Post, 0, 0, 0, 0));
       timer.end("post");
-      Describe(s, info, size, r);
+      Describe(s, info, mat_type, size, r);
       r.timings = timer.seconds;
       if (!s.output.empty()) {
         PetscCall(PetscLogEventBegin(BEM_Output, 0, 0, 0, 0));

@@ -741,6 +741,112 @@ class ParallelTests(CliTestCase):
 
 
 # ---------------------------------------------------------------------------------------------
+# The operator types and PC hss from the command line (cube_l0: 450 unknowns, double nodes)
+
+
+class HssOptionTests(CliTestCase):
+    CLAMPED_CUBE = [{"where": {"region": "z0"}, "displacement": [0, 0, 0]},
+                    {"where": {"region": "z1"}, "traction": [0, 0, 50.0]}]
+
+    def cube(self):
+        self.cube_l0_problem(self.CLAMPED_CUBE)
+
+    def displacement(self, name):
+        import h5py
+        with h5py.File(self.path(name), "r") as f:
+            return f["/fields/displacement"][()], dict(f.attrs)
+
+    def assertNoUnusedOptions(self, r):
+        self.assertRegex(r.output, r"There are no unused options", r.describe())
+
+    def test_help_lists_the_hss_options(self):
+        r = self.run_driver("-help")
+        self.assertEqual(r.returncode, 0, r.describe())
+        for key in ("bem_mat_type", "mat_hss_rel_tol", "mat_hss_leaf_size", "mat_hss_max_rank",
+                    "pc_hss_rel_tol", "pc_hss_leaf_size", "pc_hss_max_rank"):
+            self.assertRegex(r.output, r"(?m)^\s*-%s <" % key,
+                             "-help does not list -%s\n%s" % (key, r.describe()))
+
+    def test_hss_default_matches_dense(self):
+        import numpy as np
+        self.cube()
+        r = self.run_driver("-problem", "problem.json", "-o", "hss.h5", "-options_left",
+                            timeout=TIMEOUT_RUN)
+        self.assertSucceeds(r, self.path("hss.h5"))
+        self.assertRegex(r.output, r"hss operator", r.describe())
+        self.assertRegex(r.output, r"preonly/hss", r.describe())
+        self.assertNoUnusedOptions(r)
+        r = self.run_driver("-problem", "problem.json", "-o", "dense.h5", "-bem_mat_type", "dense",
+                            timeout=TIMEOUT_RUN)
+        self.assertSucceeds(r, self.path("dense.h5"))
+        uh, ah = self.displacement("hss.h5")
+        ud, ad = self.displacement("dense.h5")
+        self.assertEqual(ah["mat_type"], "hss")
+        self.assertEqual(ad["mat_type"], "dense")
+        # -mat_hss_rel_tol 1e-8 by default: the answers agree far below the discretisation error.
+        diff = np.linalg.norm(uh - ud) / np.linalg.norm(ud)
+        self.assertLess(diff, 1e-6)
+        self.assertGreater(np.linalg.norm(ud), 0)
+
+    def test_documented_solver_commands(self):
+        self.cube()
+        commands = [
+            ["-ksp_type", "preonly", "-pc_type", "hss", "-pc_hss_rel_tol", "1e-9"],
+            ["-ksp_type", "gmres", "-pc_type", "hss", "-pc_hss_rel_tol", "1e-3", "-ksp_rtol", "1e-10"],
+            ["-ksp_type", "gmres", "-pc_type", "hss", "-pc_hss_rel_tol", "1e-3",
+             "-pc_hss_leaf_size", "16", "-pc_hss_max_rank", "200", "-ksp_rtol", "1e-10"],
+            ["-bem_mat_type", "dense", "-ksp_type", "gmres", "-pc_type", "hss",
+             "-pc_hss_rel_tol", "1e-3", "-ksp_rtol", "1e-10"],
+            ["-ksp_type", "gmres", "-pc_type", "jacobi", "-ksp_rtol", "1e-10",
+             "-mat_hss_rel_tol", "1e-6", "-mat_hss_leaf_size", "32"],
+        ]
+        for args in commands:
+            r = self.run_problem("problem.json", "-options_left", "-ksp_converged_reason", *args,
+                                 timeout=TIMEOUT_RUN)
+            self.assertSucceeds(r, self.out)
+            self.assertNoUnusedOptions(r)
+            self.assertRegex(r.output, r"CONVERGED", r.describe())
+            os.remove(self.out)
+            os.remove(self.path("out.xdmf"))
+
+    def test_views_and_log_events(self):
+        self.cube()
+        r = self.run_problem("problem.json", "-ksp_type", "gmres", "-pc_type", "hss",
+                             "-pc_hss_rel_tol", "1e-3", "-ksp_view", "-bem_mat_view", "-log_view",
+                             timeout=TIMEOUT_RUN)
+        self.assertSucceeds(r, self.out)
+        self.assertRegex(r.output, r"BEM operator in HSS form.*relative tolerance 1e-08", r.describe())
+        self.assertRegex(r.output, r"type: hss", r.describe())
+        self.assertRegex(r.output, r"truncated from the matrix's compression", r.describe())
+        for event in ("BEMMesh", "HSSTree", "HSSCompress", "HSSNearField", "HSSTruncate",
+                      "HSSFactor", "HSSSolve", "HSSMatMult", "BEMOutput"):
+            self.assertRegex(r.output, r"(?m)^\s*%s\s+\d" % event,
+                             "-log_view lacks %s\n%s" % (event, r.describe()))
+
+    def test_lu_on_the_hss_matrix_fails_cleanly(self):
+        self.cube()
+        r = self.run_problem("problem.json", "-pc_type", "lu", timeout=TIMEOUT_RUN)
+        self.assertFailsCleanly(r, r"-bem_mat_type dense")
+
+    def test_unknown_matrix_type(self):
+        self.cube()
+        r = self.run_problem("problem.json", "-bem_mat_type", "sparse")
+        self.assertFailsCleanly(r, r"-bem_mat_type sparse")
+
+    def test_bad_hss_tolerance(self):
+        self.cube()
+        r = self.run_problem("problem.json", "-mat_hss_rel_tol", "2")
+        self.assertFailsCleanly(r, r"-mat_hss_rel_tol")
+        r = self.run_problem("problem.json", "-pc_hss_rel_tol", "-1")
+        self.assertFailsCleanly(r, r"-pc_hss_rel_tol")
+
+    def test_far_rule_refused_with_hss(self):
+        self.cube()
+        r = self.run_problem("problem.json", "-mat_bem_far_ratio", "8")
+        self.assertFailsCleanly(r, r"-mat_bem_far_ratio")
+
+
+# ---------------------------------------------------------------------------------------------
 # The default example and its result file
 
 

@@ -81,7 +81,7 @@ inline Solved solve(ProblemSpec spec, const QuadratureOptions &quad = {})
   BemOperator op(*out.setup.disc, out.setup.material, quad);
   std::vector<double> x;
   HssbemSolveInfo info;
-  PetscCallAbort(PETSC_COMM_WORLD, HssbemSolveSetup(PETSC_COMM_WORLD, out.setup, op, PETSC_TRUE, &x, &info, nullptr));
+  PetscCallAbort(PETSC_COMM_WORLD, HssbemSolveSetup(PETSC_COMM_WORLD, out.setup, op, HSSBEM_MAT_DENSE, PETSC_TRUE, &x, &info, nullptr));
   out.sol = split_unknowns(out.setup.selection, x);
   if (out.setup.pure_traction) remove_rigid_motion(*out.setup.disc, out.sol.u);
   return out;

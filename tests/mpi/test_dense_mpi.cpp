@@ -24,7 +24,7 @@ std::vector<double> serial_reference(const ProblemSpec &spec)
   BemOperator op(*s.disc, s.material);
   std::vector<double> x;
   HssbemSolveInfo info;
-  PetscCallAbort(PETSC_COMM_SELF, HssbemSolveSetup(PETSC_COMM_SELF, s, op, PETSC_TRUE, &x, &info, nullptr));
+  PetscCallAbort(PETSC_COMM_SELF, HssbemSolveSetup(PETSC_COMM_SELF, s, op, HSSBEM_MAT_DENSE, PETSC_TRUE, &x, &info, nullptr));
   return x;
 }
 
@@ -33,7 +33,7 @@ std::vector<double> parallel_solution(const ProblemSpec &spec, HssbemSolveInfo *
   ProblemSetup s = setup_problem(spec, ProblemOverrides{});
   BemOperator op(*s.disc, s.material);
   std::vector<double> x;
-  PetscCallAbort(PETSC_COMM_WORLD, HssbemSolveSetup(PETSC_COMM_WORLD, s, op, PETSC_TRUE, &x, info, nullptr));
+  PetscCallAbort(PETSC_COMM_WORLD, HssbemSolveSetup(PETSC_COMM_WORLD, s, op, HSSBEM_MAT_DENSE, PETSC_TRUE, &x, info, nullptr));
   return x;
 }
 

@@ -1,4 +1,4 @@
-/* Log events and class id of hssbem, registered by HssbemInitializePackage(). */
+/* Log events and class id of hssbem, and the PC type "hss", registered by HssbemInitializePackage(). */
 #pragma once
 
 #include "hssbem/petsc/compat.h"
@@ -7,6 +7,8 @@
 
 PETSC_EXTERN PetscClassId  HSSBEM_CLASSID;
 PETSC_EXTERN PetscLogEvent BEM_Mesh, BEM_Problem, BEM_RigidBody, BEM_Assembly, BEM_Solve, BEM_Post, BEM_Interior, BEM_Output;
+/* Phases of the HSS engine (hssbem::Phase), reported through its phase hook. */
+PETSC_EXTERN PetscLogEvent HSS_Tree, HSS_Compress, HSS_NearField, HSS_Truncate, HSS_Factor, HSS_Solve, HSS_MatMult;
 
 PETSC_EXTERN PetscErrorCode HssbemInitializePackage(void);
 PETSC_EXTERN PetscErrorCode HssbemFinalizePackage(void);

@@ -4,6 +4,7 @@
 #include "hssbem/petsc/compat.h"
 
 #include "hssbem/bem/quadrature.hpp"
+#include "hssbem/hss/bem_compression.hpp"
 
 #include <petscsys.h>
 #include <string>
@@ -15,12 +16,13 @@ struct HssbemAppOptions {
   PetscBool   has_E = PETSC_FALSE, has_nu = PETSC_FALSE;
   PetscReal   E = 0, nu = 0;
   PetscReal   feature_angle = 40.0;   /* degrees: dihedral angle above which an edge is sharp */
-  std::string mat_type = "dense";    /* -bem_mat_type */
+  std::string mat_type = "hss";      /* -bem_mat_type: hss or dense */
   hssbem::QuadratureOptions quad;    /* -mat_bem_* */
   PetscBool   help = PETSC_FALSE;
 };
 
-/* Read -problem, -mesh, -E, -nu, -o, -bem_feature_angle, -bem_mat_type, -mat_bem_*; -help lists them. */
+/* Read -problem, -mesh, -E, -nu, -o, -bem_feature_angle, -bem_mat_type, -mat_bem_*, and check
+   -mat_hss_* (read again where the matrix is made); -help lists them. */
 PetscErrorCode HssbemProcessOptions(MPI_Comm comm, HssbemAppOptions *opts);
 
 /* Error out (PETSC_ERR_ARG_WRONG) on options nobody used, naming them: typos must not pass silently.

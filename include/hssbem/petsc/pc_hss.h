@@ -1,0 +1,26 @@
+/* The HSS preconditioner and direct solver, PC type "hss" (registered by HssbemInitializePackage()).
+
+   PCSetUp factors the system matrix of the operator's boundary-condition pattern by ULV from an
+   HSS compression at -pc_hss_rel_tol:
+   - of the matrix itself when it is the HSS MatShell and the tolerance, leaf size and rank cap
+     are the matrix's (no new work but the factorization);
+   - truncated from the matrix's compression when the PC's tolerance is looser (or it has a rank
+     cap): no kernel entry is evaluated again;
+   - compressed from the operator otherwise (a dense matrix, a tighter tolerance, another leaf size).
+   PCApply solves with the factors. With -ksp_type preonly it is a direct solver to about
+   -pc_hss_rel_tol; with GMRES at a loose tolerance (1e-2 .. 1e-4) a preconditioner.
+   A breakdown of the factorization sets PC_FACTOR_NUMERIC_ZEROPIVOT (KSP: DIVERGED_PC_FAILED). */
+#pragma once
+
+#include "hssbem/petsc/compat.h"
+
+#include <petscpc.h>
+
+#define PCHSS "hss"
+
+PETSC_EXTERN PetscErrorCode PCCreate_HSS(PC);
+
+/* Setters for the options (before PCSetUp); rel_tol <= 0 means "the matrix's tolerance". */
+PETSC_EXTERN PetscErrorCode PCHSSSetRelTol(PC, PetscReal);
+PETSC_EXTERN PetscErrorCode PCHSSSetLeafSize(PC, PetscInt);
+PETSC_EXTERN PetscErrorCode PCHSSSetMaxRank(PC, PetscInt);

@@ -1,0 +1,54 @@
+/* The collocation system of a BEM problem as PETSc objects: the matrix A (dense, or a MatShell
+   backed by the HSS engine) and the right-hand side b. The public entry point of the library for
+   programs that run their own KSP (see examples/). */
+#pragma once
+
+#include "hssbem/petsc/compat.h"
+
+#include "hssbem/bem/bem_operator.hpp"
+#include "hssbem/hss/bem_compression.hpp"
+
+#include <petscksp.h>
+#include <string>
+#include <vector>
+
+/* Operator representations, for -bem_mat_type and HssbemCreateSystem(). */
+#define HSSBEM_MAT_HSS   "hss"
+#define HSSBEM_MAT_DENSE "dense"
+
+/* Assemble A and b = Σ_known (−H u + G t) of the pattern `sel` on comm (3 rows per dof node,
+   nodes split in contiguous blocks across the ranks, block size 3).
+   - mat_type HSSBEM_MAT_HSS: a MATSHELL whose MatMult applies the HSS compression of K = [H, G]
+     made at -mat_hss_rel_tol (see HssbemHssOptionsFromDatabase()); MatGetDiagonal and MatView
+     work. The compression lives on rank 0 (the tree is not distributed yet); products gather
+     and scatter the vectors.
+   - mat_type HSSBEM_MAT_DENSE: MATDENSE, filled row by row with the operator primitive.
+   With rigid_modes (orthonormal, row-major 3N × 6, see orthonormal_rigid_modes()), A gets
+   + rigid_regularization_weight · Q Qᵀ (pure-traction problems).
+   Either matrix carries the problem (operator, pattern, modes), so -pc_type hss can factor it.
+   op must outlive A. */
+PetscErrorCode HssbemCreateSystem(MPI_Comm comm, const hssbem::BemOperator &op, const hssbem::SystemSelection &sel, const std::vector<double> *rigid_modes, const char *mat_type, Mat *A,
+                                  Vec *b);
+
+/* Read -<prefix>mat_hss_rel_tol, _leaf_size, _max_rank, _proxy_ratio, _proxy_points into opts
+   (which holds the defaults on entry) and check them. */
+PetscErrorCode HssbemHssOptionsFromDatabase(MPI_Comm comm, const char *prefix, hssbem::HssOptions *opts);
+
+/* PETSC_TRUE when A is the HSS MatShell of HssbemCreateSystem(). */
+PetscErrorCode HssbemMatIsHss(Mat A, PetscBool *is_hss);
+
+/* Outcome of a solve, for the result file. */
+struct HssbemSolveInfo {
+  PetscInt           iterations = 0;
+  PetscReal          residual   = 0; /* ||b - A x|| / ||b|| with A's own product */
+  KSPConvergedReason reason     = KSP_CONVERGED_ITERATING;
+  std::string        ksp_type, pc_type, solver_type;
+};
+
+/* The main KSP (no prefix) with the defaults of the matrix type, then the options database:
+   preonly + PC hss (a direct HSS solve) for HSSBEM_MAT_HSS, preonly + LU for HSSBEM_MAT_DENSE. */
+PetscErrorCode HssbemKSPCreate(MPI_Comm comm, const char *mat_type, KSP *ksp);
+
+/* Solve A x = b with that KSP. A dense A is converted in place when its factorization needs
+   another format (ScaLAPACK for parallel LU, AIJ for MUMPS). A diverged solve is an error. */
+PetscErrorCode HssbemSolveSystem(KSP ksp, Mat *A, Vec b, Vec x, HssbemSolveInfo *info);

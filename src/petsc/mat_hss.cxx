@@ -1,0 +1,166 @@
+/* The BEM operator as a MatShell backed by the HSS engine: MatMult by the O(N·r) product,
+   MatGetDiagonal from the leaves' true entries, MatView with ranks and memory. */
+#include "mat_hss.hpp"
+
+#include "hssbem/petsc/log.h"
+#include "hssbem/bem/rigid_modes.hpp"
+
+#include <exception>
+#include <string>
+
+namespace {
+
+struct MatHss {
+  HssbemProblem     *problem = nullptr; /* owned by the container composed with the Mat */
+  HssbemRootExchange ex;
+};
+
+PetscErrorCode MatHssGetContext(Mat A, MatHss **ctx)
+{
+  PetscFunctionBegin;
+  PetscCall(MatShellGetContext(A, ctx));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode MatMult_Hss(Mat A, Vec x, Vec y)
+{
+  MatHss            *ctx;
+  const PetscScalar *xa;
+  PetscScalar       *ya;
+
+  PetscFunctionBegin;
+  PetscCall(MatHssGetContext(A, &ctx));
+  const HssbemProblem &p = *ctx->problem;
+  PetscCall(ctx->ex.SetUp(x));
+  PetscCall(ctx->ex.Gather(x, &xa));
+  PetscCall(ctx->ex.GetOut(&ya));
+  if (p.hss) {
+    p.hss->apply(p.sel, xa, ya);
+    if (!p.modes.empty()) HssbemAddRegularization(p.modes, xa, ya);
+  }
+  PetscCall(ctx->ex.RestoreGather(&xa));
+  PetscCall(ctx->ex.ScatterOut(&ya, y));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode MatGetDiagonal_Hss(Mat A, Vec d)
+{
+  MatHss      *ctx;
+  PetscScalar *da;
+
+  PetscFunctionBegin;
+  PetscCall(MatHssGetContext(A, &ctx));
+  const HssbemProblem &p = *ctx->problem;
+  PetscCall(ctx->ex.SetUp(d));
+  PetscCall(ctx->ex.GetOut(&da));
+  if (p.hss) {
+    const std::vector<double> diag = p.hss->diagonal(p.sel);
+    for (std::size_t i = 0; i < diag.size(); ++i) {
+      da[i] = diag[i];
+      if (!p.modes.empty()) {
+        const double *q = &p.modes[6 * i];
+        da[i] += hssbem::rigid_regularization_weight * (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3] + q[4] * q[4] + q[5] * q[5]);
+      }
+    }
+  }
+  PetscCall(ctx->ex.ScatterOut(&da, d));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode MatView_Hss(Mat A, PetscViewer viewer)
+{
+  MatHss   *ctx;
+  PetscBool ascii;
+
+  PetscFunctionBegin;
+  PetscCall(PetscObjectTypeCompare((PetscObject)viewer, PETSCVIEWERASCII, &ascii));
+  if (!ascii) PetscFunctionReturn(PETSC_SUCCESS);
+  PetscCall(MatHssGetContext(A, &ctx));
+  const HssbemProblem &p = *ctx->problem;
+  const hssbem::HssOptions &o = p.hss_options;
+  PetscCall(PetscViewerASCIIPrintf(viewer, "BEM operator in HSS form (hssbem): relative tolerance %g, leaf size %d, rank cap %s, proxy ratio %g\n", o.rel_tol, o.leaf_size,
+                                   o.max_rank > 0 ? std::to_string(o.max_rank).c_str() : "none", o.proxy_ratio));
+  PetscCall(PetscViewerASCIIPrintf(viewer, "  pattern: %s; rigid-mode regularisation: %s; the compression lives on rank 0\n", o.pressure_columns ? "K = [H, G, Gn] (pressure loads)" : "K = [H, G]",
+                                   p.modes.empty() ? "no" : "yes"));
+  if (p.hss) {
+    PetscCall(PetscViewerASCIIPushTab(viewer));
+    PetscCall(HssbemViewHssMatrix_Private(viewer, p.hss->matrix()));
+    PetscCall(PetscViewerASCIIPopTab(viewer));
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode MatDestroyContext_Hss(void *ctx)
+{
+  PetscFunctionBegin;
+  delete static_cast<MatHss *>(ctx);
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+} // namespace
+
+PetscErrorCode HssbemViewHssMatrix_Private(PetscViewer viewer, const hssbem::HssMatrix &K)
+{
+  const hssbem::HssStats &s = K.stats();
+  const double            n = K.num_rows(), dense_entries = n * K.num_cols();
+
+  PetscFunctionBegin;
+  PetscCall(PetscViewerASCIIPrintf(viewer, "%d rows, %d levels, %d proxy points; max rank %d (rows) / %d (columns); memory %.1f MB (dense K: %.1f MB)\n", K.num_rows(), (int)s.levels.size(),
+                                   s.proxy_points, s.max_row_rank(), s.max_col_rank(), s.memory_bytes / 1048576.0, 8 * dense_entries / 1048576.0));
+  PetscCall(PetscViewerASCIIPrintf(viewer, "rank per level (clusters: rows max/mean, columns max/mean):"));
+  PetscCall(PetscViewerASCIIUseTabs(viewer, PETSC_FALSE));
+  for (std::size_t l = 1; l < s.levels.size(); ++l) {
+    const hssbem::HssLevelStats &L = s.levels[l];
+    PetscCall(PetscViewerASCIIPrintf(viewer, " L%d (%d: %d/%.0f, %d/%.0f)", (int)l, L.clusters, L.max_row_rank, L.mean_row_rank, L.max_col_rank, L.mean_col_rank));
+  }
+  PetscCall(PetscViewerASCIIPrintf(viewer, "\n"));
+  PetscCall(PetscViewerASCIIUseTabs(viewer, PETSC_TRUE));
+  PetscCall(PetscViewerASCIIPrintf(viewer, "entries evaluated %lld (%.2f x dense K); seconds: tree %.2f, near field %.2f, IDs %.2f, couplings %.2f, leaves %.2f, rigid-body terms %.2f\n",
+                                   s.entries_evaluated, s.entries_evaluated / dense_entries, s.time_tree, s.time_near_field, s.time_ids, s.time_couplings, s.time_leaves, s.time_rigid));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode HssbemMatCreateHss_Private(MPI_Comm comm, HssbemProblem *problem, Mat *A, Vec *b)
+{
+  const hssbem::BemOperator &op = *problem->op;
+  const PetscInt             nn = op.num_nodes(), N = 3 * nn;
+  PetscInt                   nstart, nlocal;
+  PetscMPIInt                rank;
+  int                        failed = 0;
+  std::string                message;
+  std::vector<double>        b0;
+  PetscScalar               *ba;
+
+  PetscFunctionBegin;
+  PetscCall(PetscLogEventBegin(BEM_Assembly, 0, 0, 0, 0));
+  PetscCallMPI(MPI_Comm_rank(comm, &rank));
+  if (rank == 0) {
+    try {
+      auto sys    = std::make_shared<hssbem::HssBemSystem>(op, problem->hss_options);
+      b0          = sys->rhs(problem->sel);
+      problem->hss = sys;
+    } catch (const std::exception &e) {
+      failed  = 1;
+      message = e.what();
+    }
+  }
+  PetscCallMPI(MPI_Bcast(&failed, 1, MPI_INT, 0, comm));
+  PetscCheck(!failed, comm, PETSC_ERR_LIB, "HSS compression failed: %s", rank == 0 ? message.c_str() : "see rank 0");
+  PetscCall(HssbemOwnedNodes(comm, nn, &nstart, &nlocal));
+  auto ctx     = new MatHss;
+  ctx->problem = problem;
+  PetscCall(MatCreateShell(comm, 3 * nlocal, 3 * nlocal, N, N, ctx, A));
+  PetscCall(MatShellSetContextDestroy(*A, MatDestroyContext_Hss));
+  PetscCall(MatSetBlockSize(*A, 3));
+  PetscCall(MatShellSetOperation(*A, MATOP_MULT, (void (*)(void))MatMult_Hss));
+  PetscCall(MatShellSetOperation(*A, MATOP_GET_DIAGONAL, (void (*)(void))MatGetDiagonal_Hss));
+  PetscCall(MatShellSetOperation(*A, MATOP_VIEW, (void (*)(void))MatView_Hss));
+  PetscCall(MatSetOption(*A, MAT_SYMMETRIC, PETSC_FALSE));
+  PetscCall(MatCreateVecs(*A, NULL, b));
+  PetscCall(ctx->ex.SetUp(*b));
+  PetscCall(ctx->ex.GetOut(&ba));
+  for (std::size_t i = 0; i < b0.size(); ++i) ba[i] = b0[i];
+  PetscCall(ctx->ex.ScatterOut(&ba, *b));
+  PetscCall(PetscLogEventEnd(BEM_Assembly, 0, 0, 0, 0));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}

@@ -1,0 +1,12 @@
+/* Private to the PETSc layer: the HSS-backed MatShell. */
+#pragma once
+
+#include "problem_context.hpp"
+
+#include <petscviewer.h>
+
+/* The MatShell of problem (whose hss_options are set) and b; compresses on rank 0. */
+PetscErrorCode HssbemMatCreateHss_Private(MPI_Comm comm, HssbemProblem *problem, Mat *A, Vec *b);
+
+/* Ranks per level, memory, entries and phase times of an HSS matrix, to an ASCII viewer. */
+PetscErrorCode HssbemViewHssMatrix_Private(PetscViewer viewer, const hssbem::HssMatrix &K);

@@ -1,0 +1,53 @@
+/* Private to the PETSc layer: the BEM problem behind a system matrix, composed with the Mat so
+   that the HSS matrix, its products and PC hss find the operator, the pattern and the
+   compression. */
+#pragma once
+
+#include "hssbem/petsc/compat.h"
+
+#include "hssbem/bem/bem_operator.hpp"
+#include "hssbem/hss/bem_system.hpp"
+
+#include <petscmat.h>
+
+#include <memory>
+#include <vector>
+
+struct HssbemProblem {
+  const hssbem::BemOperator *op = nullptr;
+  hssbem::SystemSelection    sel;
+  std::vector<double>        modes; /* rigid modes (3N × 6, row-major) of the regularisation; empty: none */
+  PetscBool                  is_hss = PETSC_FALSE;
+  hssbem::HssOptions         hss_options;                 /* of the compression below */
+  std::shared_ptr<const hssbem::HssBemSystem> hss;        /* rank 0 only, HSS matrices only */
+};
+
+/* The problem composed with A, or NULL when A did not come from HssbemCreateSystem(). */
+PetscErrorCode HssbemMatGetProblem(Mat A, HssbemProblem **problem);
+
+/* Dof nodes owned by this rank: a contiguous block [nstart, nstart + nlocal), 3 rows each. */
+PetscErrorCode HssbemOwnedNodes(MPI_Comm comm, PetscInt nnodes, PetscInt *nstart, PetscInt *nlocal);
+
+/* Vectors gathered whole on rank 0 and scattered back: the HSS engine is not distributed yet. */
+class HssbemRootExchange {
+public:
+  HssbemRootExchange() = default;
+  HssbemRootExchange(const HssbemRootExchange &) = delete;
+  HssbemRootExchange &operator=(const HssbemRootExchange &) = delete;
+  ~HssbemRootExchange();
+  /* Set up for vectors laid out like x (once; later calls do nothing). */
+  PetscErrorCode SetUp(Vec x);
+  /* x gathered into the root's array (valid on rank 0 until Restore). */
+  PetscErrorCode Gather(Vec x, const PetscScalar **a);
+  PetscErrorCode RestoreGather(const PetscScalar **a);
+  /* The root's array out, scattered into y. */
+  PetscErrorCode GetOut(PetscScalar **a);
+  PetscErrorCode ScatterOut(PetscScalar **a, Vec y);
+
+private:
+  VecScatter m_scatter = nullptr;
+  Vec        m_in = nullptr, m_out = nullptr;
+};
+
+/* y += c Q (Qᵀ x) for the rigid-mode regularisation (full vectors on one rank). */
+void HssbemAddRegularization(const std::vector<double> &modes, const PetscScalar *x, PetscScalar *y);

@@ -1,0 +1,201 @@
+/* HssbemCreateSystem and the pieces the HSS matrix and PC share (see problem_context.hpp). */
+#include "hssbem/petsc/system.h"
+#include "hssbem/petsc/dense.h"
+#include "hssbem/petsc/log.h"
+#include "hssbem/bem/rigid_modes.hpp"
+
+#include "problem_context.hpp"
+#include "mat_hss.hpp"
+
+#include <cstring>
+
+static PetscErrorCode ProblemDestroy_Private(void *ctx)
+{
+  PetscFunctionBegin;
+  delete static_cast<HssbemProblem *>(ctx);
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Compose the problem with A; A owns it from here on. */
+static PetscErrorCode ComposeProblem_Private(Mat A, HssbemProblem *problem)
+{
+  PetscContainer c;
+
+  PetscFunctionBegin;
+  PetscCall(PetscContainerCreate(PetscObjectComm((PetscObject)A), &c));
+  PetscCall(PetscContainerSetPointer(c, problem));
+  PetscCall(PetscContainerSetUserDestroy(c, ProblemDestroy_Private));
+  PetscCall(PetscObjectCompose((PetscObject)A, "HssbemProblem", (PetscObject)c));
+  PetscCall(PetscContainerDestroy(&c));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode HssbemMatGetProblem(Mat A, HssbemProblem **problem)
+{
+  PetscContainer c = NULL;
+
+  PetscFunctionBegin;
+  *problem = NULL;
+  PetscCall(PetscObjectQuery((PetscObject)A, "HssbemProblem", (PetscObject *)&c));
+  if (c) PetscCall(PetscContainerGetPointer(c, (void **)problem));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/*@C
+  HssbemMatIsHss - Tells whether A is the HSS-backed MatShell of HssbemCreateSystem().
+
+  Not Collective
+
+  Level: intermediate
+@*/
+PetscErrorCode HssbemMatIsHss(Mat A, PetscBool *is_hss)
+{
+  HssbemProblem *p;
+
+  PetscFunctionBegin;
+  PetscCall(HssbemMatGetProblem(A, &p));
+  *is_hss = p ? p->is_hss : PETSC_FALSE;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/*@C
+  HssbemHssOptionsFromDatabase - Reads the options of the operator's HSS compression.
+
+  Options Database Keys:
++ -mat_hss_rel_tol <tol>      - relative tolerance of each interpolative decomposition
+. -mat_hss_leaf_size <n>      - dof nodes per leaf cluster
+. -mat_hss_max_rank <k>       - cap on each skeleton (-1: none)
+. -mat_hss_proxy_ratio <r>    - proxy sphere radius over cluster radius
+- -mat_hss_proxy_points <n>   - points per proxy sphere (0: from the tolerance)
+
+  Level: intermediate
+@*/
+PetscErrorCode HssbemHssOptionsFromDatabase(MPI_Comm comm, const char *prefix, hssbem::HssOptions *opts)
+{
+  PetscInt leaf = opts->leaf_size, rank = opts->max_rank, np = opts->proxy_points;
+
+  PetscFunctionBegin;
+  PetscOptionsBegin(comm, prefix, "HSS compression of the BEM operator (-bem_mat_type hss)", "Mat");
+  PetscCall(PetscOptionsReal("-mat_hss_rel_tol", "Relative tolerance of the compression", "HssbemCreateSystem", opts->rel_tol, &opts->rel_tol, NULL));
+  PetscCall(PetscOptionsInt("-mat_hss_leaf_size", "Dof nodes per leaf cluster", "HssbemCreateSystem", leaf, &leaf, NULL));
+  PetscCall(PetscOptionsInt("-mat_hss_max_rank", "Cap on each skeleton (-1: none)", "HssbemCreateSystem", rank, &rank, NULL));
+  PetscCall(PetscOptionsReal("-mat_hss_proxy_ratio", "Proxy sphere radius over cluster radius", "HssbemCreateSystem", opts->proxy_ratio, &opts->proxy_ratio, NULL));
+  PetscCall(PetscOptionsInt("-mat_hss_proxy_points", "Points per proxy sphere (0: chosen from the tolerance)", "HssbemCreateSystem", np, &np, NULL));
+  PetscOptionsEnd();
+  opts->leaf_size    = (int)leaf;
+  opts->max_rank     = (int)rank;
+  opts->proxy_points = (int)np;
+  PetscCheck(opts->rel_tol > 0 && opts->rel_tol < 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_hss_rel_tol must lie in (0, 1), got %g", (double)opts->rel_tol);
+  PetscCheck(opts->leaf_size >= 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_hss_leaf_size must be at least 1");
+  PetscCheck(opts->max_rank == -1 || opts->max_rank > 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_hss_max_rank must be positive, or -1 for no cap");
+  PetscCheck(opts->proxy_ratio > 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_hss_proxy_ratio must exceed 1");
+  PetscCheck(opts->proxy_points >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_hss_proxy_points must be 0 (automatic) or positive");
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/*@C
+  HssbemCreateSystem - Creates the system matrix A (dense or HSS) and right-hand side b of a
+  boundary-condition pattern; see system.h.
+
+  Collective
+
+  Level: beginner
+@*/
+PetscErrorCode HssbemCreateSystem(MPI_Comm comm, const hssbem::BemOperator &op, const hssbem::SystemSelection &sel, const std::vector<double> *rigid_modes, const char *mat_type, Mat *A,
+                                  Vec *b)
+{
+  PetscBool dense, hss;
+
+  PetscFunctionBegin;
+  PetscCall(PetscStrcmp(mat_type, HSSBEM_MAT_DENSE, &dense));
+  PetscCall(PetscStrcmp(mat_type, HSSBEM_MAT_HSS, &hss));
+  PetscCheck(dense || hss, comm, PETSC_ERR_ARG_UNKNOWN_TYPE, "unknown BEM matrix type '%s': use %s or %s", mat_type, HSSBEM_MAT_HSS, HSSBEM_MAT_DENSE);
+  auto problem = new HssbemProblem;
+  problem->op  = &op;
+  problem->sel = sel;
+  if (rigid_modes) problem->modes = *rigid_modes;
+  if (dense) {
+    PetscCall(HssbemAssembleDense(comm, op, sel, rigid_modes, A, b));
+  } else {
+    problem->is_hss                  = PETSC_TRUE;
+    problem->hss_options.rel_tol     = 1e-8;
+    problem->hss_options.pressure_columns = false;
+    for (double p : sel.pressure)
+      if (p == p) problem->hss_options.pressure_columns = true; /* a pressure load needs the Gn columns */
+    PetscCall(HssbemHssOptionsFromDatabase(comm, NULL, &problem->hss_options));
+    PetscCall(HssbemMatCreateHss_Private(comm, problem, A, b));
+  }
+  PetscCall(ComposeProblem_Private(*A, problem));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode HssbemOwnedNodes(MPI_Comm comm, PetscInt nnodes, PetscInt *nstart, PetscInt *nlocal)
+{
+  PetscInt n = PETSC_DECIDE, N = nnodes;
+
+  PetscFunctionBegin;
+  PetscCall(PetscSplitOwnership(comm, &n, &N));
+  PetscCallMPI(MPI_Scan(&n, nstart, 1, MPIU_INT, MPI_SUM, comm));
+  *nstart -= n;
+  *nlocal = n;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+HssbemRootExchange::~HssbemRootExchange()
+{
+  PetscCallAbort(PETSC_COMM_SELF, VecScatterDestroy(&m_scatter));
+  PetscCallAbort(PETSC_COMM_SELF, VecDestroy(&m_in));
+  PetscCallAbort(PETSC_COMM_SELF, VecDestroy(&m_out));
+}
+
+PetscErrorCode HssbemRootExchange::SetUp(Vec x)
+{
+  PetscFunctionBegin;
+  if (m_scatter) PetscFunctionReturn(PETSC_SUCCESS);
+  PetscCall(VecScatterCreateToZero(x, &m_scatter, &m_in));
+  PetscCall(VecDuplicate(m_in, &m_out));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode HssbemRootExchange::Gather(Vec x, const PetscScalar **a)
+{
+  PetscFunctionBegin;
+  PetscCall(VecScatterBegin(m_scatter, x, m_in, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecScatterEnd(m_scatter, x, m_in, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecGetArrayRead(m_in, a));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode HssbemRootExchange::RestoreGather(const PetscScalar **a)
+{
+  PetscFunctionBegin;
+  PetscCall(VecRestoreArrayRead(m_in, a));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode HssbemRootExchange::GetOut(PetscScalar **a)
+{
+  PetscFunctionBegin;
+  PetscCall(VecGetArrayWrite(m_out, a));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode HssbemRootExchange::ScatterOut(PetscScalar **a, Vec y)
+{
+  PetscFunctionBegin;
+  PetscCall(VecRestoreArrayWrite(m_out, a));
+  PetscCall(VecScatterBegin(m_scatter, m_out, y, INSERT_VALUES, SCATTER_REVERSE));
+  PetscCall(VecScatterEnd(m_scatter, m_out, y, INSERT_VALUES, SCATTER_REVERSE));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+void HssbemAddRegularization(const std::vector<double> &modes, const PetscScalar *x, PetscScalar *y)
+{
+  const std::size_t n = modes.size() / 6;
+  double            qx[6] = {0, 0, 0, 0, 0, 0};
+  for (std::size_t i = 0; i < n; ++i)
+    for (int m = 0; m < 6; ++m) qx[m] += modes[6 * i + m] * x[i];
+  for (int m = 0; m < 6; ++m) qx[m] *= hssbem::rigid_regularization_weight;
+  for (std::size_t i = 0; i < n; ++i)
+    for (int m = 0; m < 6; ++m) y[i] += modes[6 * i + m] * qx[m];
+}

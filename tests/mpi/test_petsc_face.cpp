@@ -1,0 +1,241 @@
+// The PETSc face of the HSS engine on 1, 2 and 4 ranks: the HSS MatShell against the dense
+// matrix (product, right-hand side, diagonal), PC hss as a direct solver and as a GMRES
+// preconditioner on the HSS and on the dense matrix, and a breakdown reported as a PC failure.
+#include "solve_helpers.hpp"
+#include "test_shapes.hpp"
+
+#include "hssbem/petsc/pc_hss.h"
+#include "hssbem/petsc/system.h"
+
+#include <gtest/gtest.h>
+
+#include <memory>
+
+using namespace hssbem;
+using namespace hssbem::test;
+
+namespace {
+
+/// ‖a − b‖ / ‖b‖.
+double rel_diff(Vec a, Vec b)
+{
+  Vec d;
+  PetscReal nd, nb;
+  PetscCallAbort(PETSC_COMM_WORLD, VecDuplicate(a, &d));
+  PetscCallAbort(PETSC_COMM_WORLD, VecWAXPY(d, -1.0, b, a));
+  PetscCallAbort(PETSC_COMM_WORLD, VecNorm(d, NORM_2, &nd));
+  PetscCallAbort(PETSC_COMM_WORLD, VecNorm(b, NORM_2, &nb));
+  PetscCallAbort(PETSC_COMM_WORLD, VecDestroy(&d));
+  return nd / nb;
+}
+
+/// A problem with its dense and HSS systems (-mat_hss_rel_tol at its default, 1e-8).
+struct Systems {
+  ProblemSetup setup;
+  std::unique_ptr<BemOperator> op;
+  std::vector<double> modes;
+  Mat Ad = nullptr, Ah = nullptr;
+  Vec bd = nullptr, bh = nullptr;
+
+  explicit Systems(const ProblemSpec &spec, bool regularise = true) : setup(setup_problem(spec, ProblemOverrides{}))
+  {
+    op = std::make_unique<BemOperator>(*setup.disc, setup.material);
+    if (setup.pure_traction && regularise) modes = orthonormal_rigid_modes(*setup.disc);
+    const std::vector<double> *m = modes.empty() ? nullptr : &modes;
+    PetscCallAbort(PETSC_COMM_WORLD, HssbemCreateSystem(PETSC_COMM_WORLD, *op, setup.selection, m, HSSBEM_MAT_DENSE, &Ad, &bd));
+    PetscCallAbort(PETSC_COMM_WORLD, HssbemCreateSystem(PETSC_COMM_WORLD, *op, setup.selection, m, HSSBEM_MAT_HSS, &Ah, &bh));
+  }
+  ~Systems()
+  {
+    MatDestroy(&Ad);
+    MatDestroy(&Ah);
+    VecDestroy(&bd);
+    VecDestroy(&bh);
+  }
+};
+
+ProblemSpec kelvin_mixed()
+{
+  const KelvinField k{Material{1000.0, 0.3}, {1.2, 0.9, 1.0}, {1.0, -2.0, 0.5}};
+  return kelvin_mixed_spec("sphere_l0.msh", k);
+}
+
+ProblemSpec sphere_pressure()
+{
+  ProblemSpec spec = spec_for("sphere_l0.msh", 1000.0, 0.3);
+  BoundaryRule r;
+  r.kind = BoundaryRule::Kind::Pressure;
+  r.pressure = {100.0};
+  spec.rules = {r};
+  return spec;
+}
+
+/// Outcome of one KSP solve with the options in `options` (prefix "t_").
+struct Outcome {
+  KSPConvergedReason reason;
+  PetscInt its;
+  double diff; ///< against x_ref
+};
+
+Outcome ksp_solve(Mat A, Vec b, Vec x_ref, const char *options)
+{
+  KSP ksp;
+  Vec x;
+  Outcome o{};
+  PetscCallAbort(PETSC_COMM_WORLD, PetscOptionsInsertString(NULL, options));
+  PetscCallAbort(PETSC_COMM_WORLD, KSPCreate(PETSC_COMM_WORLD, &ksp));
+  PetscCallAbort(PETSC_COMM_WORLD, KSPSetOptionsPrefix(ksp, "t_"));
+  PetscCallAbort(PETSC_COMM_WORLD, KSPSetOperators(ksp, A, A));
+  PetscCallAbort(PETSC_COMM_WORLD, KSPSetFromOptions(ksp));
+  PetscCallAbort(PETSC_COMM_WORLD, VecDuplicate(b, &x));
+  PetscCallAbort(PETSC_COMM_WORLD, KSPSolve(ksp, b, x));
+  PetscCallAbort(PETSC_COMM_WORLD, KSPGetConvergedReason(ksp, &o.reason));
+  PetscCallAbort(PETSC_COMM_WORLD, KSPGetIterationNumber(ksp, &o.its));
+  if (o.reason > 0 && x_ref) o.diff = rel_diff(x, x_ref);
+  PetscCallAbort(PETSC_COMM_WORLD, PetscPrintf(PETSC_COMM_WORLD, "  %s: %s after %d iterations, difference from dense LU %.2e\n", options, KSPConvergedReasons[o.reason], (int)o.its, o.diff));
+  PetscCallAbort(PETSC_COMM_WORLD, VecDestroy(&x));
+  PetscCallAbort(PETSC_COMM_WORLD, KSPDestroy(&ksp));
+  PetscCallAbort(PETSC_COMM_WORLD, PetscOptionsPrefixPush(NULL, "t_"));
+  PetscCallAbort(PETSC_COMM_WORLD, PetscOptionsPrefixPop(NULL));
+  PetscCallAbort(PETSC_COMM_WORLD, PetscOptionsClear(NULL));
+  return o;
+}
+
+/// Dense LU solution: the reference.
+Vec dense_solution(Mat Ad, Vec bd)
+{
+  KSP ksp;
+  PC pc;
+  Vec x;
+  Mat A;
+  PetscCallAbort(PETSC_COMM_WORLD, MatConvert(Ad, MATDENSE, MAT_INITIAL_MATRIX, &A));
+  PetscCallAbort(PETSC_COMM_WORLD, HssbemKSPCreate(PETSC_COMM_WORLD, HSSBEM_MAT_DENSE, &ksp));
+  PetscCallAbort(PETSC_COMM_WORLD, VecDuplicate(bd, &x));
+  HssbemSolveInfo info;
+  PetscCallAbort(PETSC_COMM_WORLD, HssbemSolveSystem(ksp, &A, bd, x, &info));
+  PetscCallAbort(PETSC_COMM_WORLD, KSPGetPC(ksp, &pc));
+  PetscCallAbort(PETSC_COMM_WORLD, KSPDestroy(&ksp));
+  PetscCallAbort(PETSC_COMM_WORLD, MatDestroy(&A));
+  return x;
+}
+
+class PetscFace : public ::testing::Test {
+protected:
+  static void SetUpTestSuite() { mixed = new Systems(kelvin_mixed()); }
+  static void TearDownTestSuite()
+  {
+    delete mixed;
+    mixed = nullptr;
+  }
+  static Systems *mixed;
+};
+Systems *PetscFace::mixed = nullptr;
+
+TEST_F(PetscFace, HssMatrixMatchesDense)
+{
+  PetscBool is_hss, shell;
+  PetscInt bs;
+  ASSERT_EQ(HssbemMatIsHss(mixed->Ah, &is_hss), 0);
+  EXPECT_TRUE(is_hss);
+  PetscCallAbort(PETSC_COMM_WORLD, PetscObjectTypeCompare((PetscObject)mixed->Ah, MATSHELL, &shell));
+  EXPECT_TRUE(shell);
+  PetscCallAbort(PETSC_COMM_WORLD, MatGetBlockSize(mixed->Ah, &bs));
+  EXPECT_EQ(bs, 3);
+  // b and A x for a random x agree to the tolerance (1e-8): 10·tol.
+  EXPECT_LE(rel_diff(mixed->bh, mixed->bd), 1e-7);
+  Vec x, yh, yd;
+  PetscRandom rnd;
+  PetscCallAbort(PETSC_COMM_WORLD, PetscRandomCreate(PETSC_COMM_WORLD, &rnd));
+  PetscCallAbort(PETSC_COMM_WORLD, MatCreateVecs(mixed->Ad, &x, &yd));
+  PetscCallAbort(PETSC_COMM_WORLD, VecDuplicate(yd, &yh));
+  PetscCallAbort(PETSC_COMM_WORLD, VecSetRandom(x, rnd));
+  PetscCallAbort(PETSC_COMM_WORLD, MatMult(mixed->Ad, x, yd));
+  PetscCallAbort(PETSC_COMM_WORLD, MatMult(mixed->Ah, x, yh));
+  EXPECT_LE(rel_diff(yh, yd), 1e-7);
+  // The diagonal: true entries, except the rigid-body terms, which come from an HSS product.
+  PetscCallAbort(PETSC_COMM_WORLD, MatGetDiagonal(mixed->Ad, yd));
+  PetscCallAbort(PETSC_COMM_WORLD, MatGetDiagonal(mixed->Ah, yh));
+  EXPECT_LE(rel_diff(yh, yd), 1e-7);
+  PetscCallAbort(PETSC_COMM_WORLD, PetscRandomDestroy(&rnd));
+  VecDestroy(&x);
+  VecDestroy(&yh);
+  VecDestroy(&yd);
+}
+
+TEST_F(PetscFace, DirectSolveReusesTheMatrixCompression)
+{
+  Vec xd = dense_solution(mixed->Ad, mixed->bd);
+  const Outcome o = ksp_solve(mixed->Ah, mixed->bh, xd, "-t_ksp_type preonly -t_pc_type hss");
+  EXPECT_GT(o.reason, 0);
+  EXPECT_LE(o.diff, 100 * 1e-8);
+  VecDestroy(&xd);
+}
+
+TEST_F(PetscFace, DirectSolveAtATighterTolerance)
+{
+  Vec xd = dense_solution(mixed->Ad, mixed->bd);
+  // 1e-9 is tighter than the matrix's 1e-8: the PC compresses anew; the rhs is the dense one,
+  // so the answer is checked against 100 · 1e-9.
+  const Outcome o = ksp_solve(mixed->Ah, mixed->bd, xd, "-t_ksp_type preonly -t_pc_type hss -t_pc_hss_rel_tol 1e-9");
+  EXPECT_GT(o.reason, 0);
+  EXPECT_LE(o.diff, 100 * 1e-9);
+  VecDestroy(&xd);
+}
+
+TEST_F(PetscFace, GmresWithTruncatedHssPreconditioner)
+{
+  Vec xd = dense_solution(mixed->Ad, mixed->bd);
+  const Outcome o = ksp_solve(mixed->Ah, mixed->bh, xd, "-t_ksp_type gmres -t_ksp_rtol 1e-10 -t_pc_type hss -t_pc_hss_rel_tol 1e-3");
+  EXPECT_GT(o.reason, 0);
+  EXPECT_LE(o.its, 15);
+  EXPECT_GE(o.its, 2); // a 1e-3 factorization is not a direct solve: GMRES must iterate
+  EXPECT_LE(o.diff, 100 * 1e-8);
+  VecDestroy(&xd);
+}
+
+TEST_F(PetscFace, GmresWithHssPreconditionerOnTheDenseMatrix)
+{
+  Vec xd = dense_solution(mixed->Ad, mixed->bd);
+  const Outcome o = ksp_solve(mixed->Ad, mixed->bd, xd, "-t_ksp_type gmres -t_ksp_rtol 1e-10 -t_pc_type hss -t_pc_hss_rel_tol 1e-3 -t_pc_hss_leaf_size 32");
+  EXPECT_GT(o.reason, 0);
+  EXPECT_LE(o.its, 15);
+  EXPECT_GE(o.its, 2);
+  EXPECT_LE(o.diff, 1e-8);
+  VecDestroy(&xd);
+}
+
+TEST(PetscFacePure, RegularisedPressureProblemMatchesDense)
+{
+  Systems s(sphere_pressure());
+  ASSERT_TRUE(s.setup.pure_traction);
+  Vec xd = dense_solution(s.Ad, s.bd);
+  const Outcome o = ksp_solve(s.Ah, s.bh, xd, "-t_ksp_type preonly -t_pc_type hss");
+  EXPECT_GT(o.reason, 0);
+  EXPECT_LE(o.diff, 100 * 1e-8);
+  VecDestroy(&xd);
+}
+
+TEST(PetscFacePure, OneLeafRegularisedMatchesDense)
+{
+  // The whole mesh in one leaf (the root): the rigid-mode term enters its dense block directly.
+  PetscCallAbort(PETSC_COMM_WORLD, PetscOptionsInsertString(NULL, "-mat_hss_leaf_size 100000"));
+  Systems s(sphere_pressure());
+  PetscCallAbort(PETSC_COMM_WORLD, PetscOptionsClearValue(NULL, "-mat_hss_leaf_size"));
+  Vec xd = dense_solution(s.Ad, s.bd);
+  const Outcome o = ksp_solve(s.Ah, s.bh, xd, "-t_ksp_type preonly -t_pc_type hss");
+  EXPECT_GT(o.reason, 0);
+  EXPECT_LE(o.diff, 1e-10); // one leaf: true entries only, no compression
+  VecDestroy(&xd);
+}
+
+TEST(PetscFacePure, BreakdownIsAPreconditionerFailure)
+{
+  // Pure traction without the rigid-mode regularisation: A is singular (the translations are
+  // in its null space to round-off), and the factorization must say so, not crash.
+  Systems s(sphere_pressure(), false);
+  ASSERT_TRUE(s.setup.pure_traction);
+  const Outcome o = ksp_solve(s.Ah, s.bh, nullptr, "-t_ksp_type preonly -t_pc_type hss");
+  EXPECT_EQ(o.reason, KSP_DIVERGED_PC_FAILED);
+}
+
+} // namespace
