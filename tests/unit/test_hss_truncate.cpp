@@ -5,6 +5,8 @@
 #include "hssbem/hss/truncate.hpp"
 #include "hssbem/hss/ulv.hpp"
 
+#include "hss_test_helpers.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -19,6 +21,8 @@
 #include <string>
 
 using namespace hssbem;
+using hssbem::test::dense_k;
+using hssbem::test::matvec_error;
 
 namespace {
 
@@ -36,21 +40,6 @@ struct Compressed {
   std::vector<double> Kd; ///< row-major 3n × w n, mesh order, rigid-body terms included
   double tol = 0, seconds = 0;
 };
-
-/// Dense K = [H, G] in mesh order (row-major 3n × 6n, rigid-body terms included).
-std::vector<double> dense_k(const BemOperator &op)
-{
-  const int n = op.num_nodes();
-  std::vector<int> all(n);
-  std::iota(all.begin(), all.end(), 0);
-  std::vector<double> H(9L * n * n), G(9L * n * n), K(18L * n * n);
-  BemOperator::Workspace ws(op);
-  op.fill_hg(all, all, H.data(), G.data(), 3L * n, nullptr, n, ws);
-  for (long r = 0; r < 3L * n; ++r)
-    for (int j = 0; j < n; ++j)
-      for (int s = 0; s < 6; ++s) K[r * 6 * n + 6 * j + s] = s < 3 ? H[r * 3 * n + 3 * j + s] : G[r * 3 * n + 3 * j + s - 3];
-  return K;
-}
 
 /// The compression of a mesh at tol with the given leaf size, made once per test program.
 const Compressed &compressed(const std::string &name, int leaf, double tol)
@@ -72,32 +61,8 @@ const Compressed &compressed(const std::string &name, int leaf, double tol)
   C.K = std::make_unique<HssMatrix>(compress_bem_operator(*C.op, o));
   C.seconds = seconds_since(t0);
   C.tol = tol;
-  C.Kd = dense_k(*C.op);
+  C.Kd = dense_k(*C.op, 6);
   return C;
-}
-
-/// Relative error of one product with a random vector against the dense K.
-double matvec_error(const HssMatrix &K, const std::vector<double> &Kd, int seed)
-{
-  const int n = K.tree().num_points(), w = K.col_block();
-  std::mt19937 gen(seed);
-  std::normal_distribution<double> N01;
-  std::vector<double> x(static_cast<size_t>(w) * n), xc(x.size()), yc(3L * n), y(3L * n), yd(3L * n, 0.0);
-  for (double &v : x) v = N01(gen);
-  std::vector<double> xs(x);
-  for (int j = 0; j < n; ++j)
-    for (int q = 0; q < w; ++q) xs[static_cast<size_t>(w) * j + q] /= K.col_scale(q);
-  K.tree().to_cluster_order(xs.data(), xc.data(), w);
-  K.apply(xc.data(), w * n, yc.data(), 3 * n);
-  K.tree().to_mesh_order(yc.data(), y.data(), 3);
-  for (long r = 0; r < 3L * n; ++r)
-    for (long q = 0; q < static_cast<long>(w) * n; ++q) yd[r] += Kd[r * w * n + q] * x[q];
-  double e = 0, s = 0;
-  for (long r = 0; r < 3L * n; ++r) {
-    e += (y[r] - yd[r]) * (y[r] - yd[r]);
-    s += yd[r] * yd[r];
-  }
-  return std::sqrt(e / s);
 }
 
 void print_ranks(const HssMatrix &K, const HssMatrix &T)
