@@ -30,7 +30,7 @@ const char *SourceName(Source s)
 struct PC_HSS {
   PetscReal rel_tol   = 0;  /* <= 0: the matrix's tolerance (1e-8 on a dense matrix) */
   PetscInt  leaf_size = 0;  /* <= 0: the matrix's leaf size (64 on a dense matrix) */
-  PetscInt  max_rank  = -1; /* -1: none */
+  PetscInt  max_rank  = -1; /* -1: the matrix's cap (none on a dense matrix) */
   /* set up (rank 0) */
   Source                                        source = Source::None;
   hssbem::HssOptions                            used;
@@ -57,7 +57,7 @@ void FactorOnRoot(PC_HSS *hss, const HssbemProblem &p)
   o.pressure_columns = false; /* the factorization needs H and G only */
   if (hss->rel_tol > 0) o.rel_tol = hss->rel_tol;
   if (hss->leaf_size > 0) o.leaf_size = (int)hss->leaf_size;
-  o.max_rank = (int)hss->max_rank;
+  if (hss->max_rank > 0) o.max_rank = (int)hss->max_rank; /* else the matrix's cap (none on a dense matrix) */
   hss->used = o;
   PetscLogDouble t0;
   PetscTime(&t0);
@@ -175,7 +175,7 @@ PetscErrorCode PCSetFromOptions_HSS(PC pc, PetscOptionItems *PetscOptionsObject)
   PetscOptionsHeadBegin(PetscOptionsObject, "HSS factorization options");
   PetscCall(PetscOptionsReal("-pc_hss_rel_tol", "Relative tolerance of the compression factored (0: the matrix's; 1e-8 on a dense matrix)", "PCHSSSetRelTol", hss->rel_tol, &hss->rel_tol, NULL));
   PetscCall(PetscOptionsInt("-pc_hss_leaf_size", "Dof nodes per leaf cluster (0: the matrix's; 64 on a dense matrix)", "PCHSSSetLeafSize", hss->leaf_size, &hss->leaf_size, NULL));
-  PetscCall(PetscOptionsInt("-pc_hss_max_rank", "Cap on each skeleton (-1: none)", "PCHSSSetMaxRank", hss->max_rank, &hss->max_rank, NULL));
+  PetscCall(PetscOptionsInt("-pc_hss_max_rank", "Cap on each skeleton (-1: the matrix's; none on a dense matrix)", "PCHSSSetMaxRank", hss->max_rank, &hss->max_rank, NULL));
   PetscOptionsHeadEnd();
   PetscCheck(hss->rel_tol >= 0 && hss->rel_tol < 1, PetscObjectComm((PetscObject)pc), PETSC_ERR_ARG_OUTOFRANGE, "-pc_hss_rel_tol must lie in [0, 1)");
   PetscCheck(hss->leaf_size >= 0, PetscObjectComm((PetscObject)pc), PETSC_ERR_ARG_OUTOFRANGE, "-pc_hss_leaf_size must be 0 (the matrix's) or positive");
@@ -194,7 +194,7 @@ PetscErrorCode PCView_HSS(PC pc, PetscViewer viewer)
   char tol[32], leaf[32], cap[32];
   PetscCall(PetscSNPrintf(tol, sizeof(tol), hss->rel_tol > 0 ? "%g" : "the matrix's", (double)hss->rel_tol));
   PetscCall(PetscSNPrintf(leaf, sizeof(leaf), hss->leaf_size > 0 ? "%d" : "the matrix's", (int)hss->leaf_size));
-  PetscCall(PetscSNPrintf(cap, sizeof(cap), hss->max_rank > 0 ? "%d" : "none", (int)hss->max_rank));
+  PetscCall(PetscSNPrintf(cap, sizeof(cap), hss->max_rank > 0 ? "%d" : "the matrix's", (int)hss->max_rank));
   PetscCall(PetscViewerASCIIPrintf(viewer, "  HSS ULV factorization: relative tolerance %s, leaf size %s, rank cap %s\n", tol, leaf, cap));
   if (hss->sys) {
     PetscCall(PetscViewerASCIIPrintf(viewer, "  compression at %g (leaf size %d): %s, %.2f s; factorization %.2f s\n", hss->used.rel_tol, hss->used.leaf_size, SourceName(hss->source), hss->seconds_compress,
@@ -243,7 +243,7 @@ PetscErrorCode PCHSSSetMaxRank_HSS(PC pc, PetscInt k)
   Options Database Keys:
 + -pc_hss_rel_tol <tol>   - tolerance of the compression factored (0: the matrix's, a direct solve)
 . -pc_hss_leaf_size <n>   - dof nodes per leaf (0: the matrix's)
-- -pc_hss_max_rank <k>    - cap on each skeleton (-1: none)
+- -pc_hss_max_rank <k>    - cap on each skeleton (-1: the matrix's cap; none on a dense matrix)
 
   Notes:
   With -ksp_type preonly this is a direct solver accurate to about the tolerance; with GMRES and a

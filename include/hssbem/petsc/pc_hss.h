@@ -20,7 +20,8 @@
 
 PETSC_EXTERN PetscErrorCode PCCreate_HSS(PC);
 
-/* Setters for the options (before PCSetUp); rel_tol <= 0 means "the matrix's tolerance". */
+/* Setters for the options (before PCSetUp); rel_tol 0, leaf size 0 and max rank -1 mean "the
+   matrix's" (on a dense matrix: 1e-8, 64 and no cap). */
 PETSC_EXTERN PetscErrorCode PCHSSSetRelTol(PC, PetscReal);
 PETSC_EXTERN PetscErrorCode PCHSSSetLeafSize(PC, PetscInt);
 PETSC_EXTERN PetscErrorCode PCHSSSetMaxRank(PC, PetscInt);
