@@ -210,11 +210,7 @@ public:
     for (int l = m_tree.levels() - 1; l >= 1; --l) {
       skeletonize_level(l);
       const auto t0 = std::chrono::steady_clock::now();
-      const auto &parents = m_tree.clusters_at_level(l - 1);
-      const bool par = parallel_over_clusters(parents.size());
-      SerialBlas serial(par);
-#pragma omp parallel for schedule(dynamic, 1) if (par)
-      for (std::size_t t = 0; t < parents.size(); ++t) couple_children(parents[t]);
+      for_each_cluster(m_tree.clusters_at_level(l - 1), [this](int c) { couple_children(c); });
       m_K.stats().time_couplings += seconds_since(t0);
     }
   }
@@ -223,11 +219,7 @@ public:
   void fill_leaves()
   {
     const auto t0 = std::chrono::steady_clock::now();
-    const auto &leaves = m_tree.leaves();
-    const bool par = parallel_over_clusters(leaves.size());
-    SerialBlas serial(par);
-#pragma omp parallel for schedule(dynamic, 1) if (par)
-    for (std::size_t t = 0; t < leaves.size(); ++t) fill_leaf(leaves[t]);
+    for_each_cluster(m_tree.leaves(), [this](int c) { fill_leaf(c); });
     m_K.stats().time_leaves = seconds_since(t0);
     for (int t = 0; t < max_threads(); ++t) {
       m_K.stats().entries_evaluated += m_entries[t];
@@ -274,11 +266,7 @@ private:
       m_active_rows[c] = m_K.candidate_rows(c);
       m_active_cols[c] = m_K.candidate_cols(c);
     }
-    const auto &lev = m_tree.clusters_at_level(l);
-    const bool par = parallel_over_clusters(lev.size());
-    SerialBlas serial(par);
-#pragma omp parallel for schedule(dynamic, 1) if (par)
-    for (std::size_t t = 0; t < lev.size(); ++t) skeletonize(lev[t], front);
+    for_each_cluster(m_tree.clusters_at_level(l), [this, &front](int c) { skeletonize(c, front); });
   }
 
   void skeletonize(int c, const std::vector<int> &front)

@@ -56,30 +56,20 @@ void HssMatrix::apply(const double *X, int ldx, double *Y, int ldy, int nrhs) co
   const int nc = m_tree.num_clusters();
   std::vector<DenseMatrix> xh(nc), yh(nc);
   // Upward pass: xh_τ = V_τᵀ (candidate part of x), deepest level first.
-  for (int l = m_tree.levels() - 1; l >= 1; --l) {
-    const auto &lev = m_tree.clusters_at_level(l);
-    const bool par = parallel_over_clusters(lev.size());
-    SerialBlas serial(par);
-#pragma omp parallel for schedule(dynamic, 1) if (par)
-    for (std::size_t t = 0; t < lev.size(); ++t) {
-      const int c = lev[t];
+  for (int l = m_tree.levels() - 1; l >= 1; --l)
+    for_each_cluster(m_tree.clusters_at_level(l), [&](int c) {
       const Cluster &cl = m_tree.cluster(c);
       const HssCluster &h = m_clusters[c];
       xh[c] = DenseMatrix(h.V.n, nrhs);
       if (cl.left < 0) {
         lapack::gemm('T', 'N', h.V.n, nrhs, h.V.m, 1.0, h.V.data(), h.V.ld(), X + static_cast<long>(m_col_block) * cl.begin, ldx, 0.0,
                      xh[c].data(), xh[c].ld());
-      } else {
+      } else { // V_τᵀ [xh_a; xh_b], by the two row blocks of V_τ
         const DenseMatrix &a = xh[cl.left], &b = xh[cl.right];
-        DenseMatrix cat(a.m + b.m, nrhs);
-        for (int j = 0; j < nrhs; ++j) {
-          std::copy(a.data() + static_cast<long>(j) * a.m, a.data() + static_cast<long>(j + 1) * a.m, &cat(0, j));
-          std::copy(b.data() + static_cast<long>(j) * b.m, b.data() + static_cast<long>(j + 1) * b.m, &cat(a.m, j));
-        }
-        lapack::gemm('T', 'N', h.V.n, nrhs, h.V.m, 1.0, h.V.data(), h.V.ld(), cat.data(), cat.ld(), 0.0, xh[c].data(), xh[c].ld());
+        lapack::gemm('T', 'N', h.V.n, nrhs, a.m, 1.0, h.V.data(), h.V.ld(), a.data(), a.ld(), 0.0, xh[c].data(), xh[c].ld());
+        lapack::gemm('T', 'N', h.V.n, nrhs, b.m, 1.0, h.V.data() + a.m, h.V.ld(), b.data(), b.ld(), 1.0, xh[c].data(), xh[c].ld());
       }
-    }
-  }
+    });
   // Sibling couplings, then the downward pass: yh_children += U_τ yh_τ; leaves add D x.
   for (int c = 0; c < nc; ++c) {
     const Cluster &cl = m_tree.cluster(c);
@@ -87,13 +77,8 @@ void HssMatrix::apply(const double *X, int ldx, double *Y, int ldy, int nrhs) co
     yh[cl.left] = DenseMatrix(m_clusters[cl.left].U.n, nrhs);
     yh[cl.right] = DenseMatrix(m_clusters[cl.right].U.n, nrhs);
   }
-  for (int l = 0; l < m_tree.levels(); ++l) {
-    const auto &lev = m_tree.clusters_at_level(l);
-    const bool par = parallel_over_clusters(lev.size());
-    SerialBlas serial(par);
-#pragma omp parallel for schedule(dynamic, 1) if (par)
-    for (std::size_t t = 0; t < lev.size(); ++t) {
-      const int c = lev[t];
+  for (int l = 0; l < m_tree.levels(); ++l)
+    for_each_cluster(m_tree.clusters_at_level(l), [&](int c) {
       const Cluster &cl = m_tree.cluster(c);
       const HssCluster &h = m_clusters[c];
       if (cl.left >= 0) {
@@ -101,21 +86,16 @@ void HssMatrix::apply(const double *X, int ldx, double *Y, int ldy, int nrhs) co
         const DenseMatrix &xa = xh[cl.left], &xb = xh[cl.right];
         lapack::gemm('N', 'N', h.B12.m, nrhs, h.B12.n, 1.0, h.B12.data(), h.B12.ld(), xb.data(), xb.ld(), 1.0, ya.data(), ya.ld());
         lapack::gemm('N', 'N', h.B21.m, nrhs, h.B21.n, 1.0, h.B21.data(), h.B21.ld(), xa.data(), xa.ld(), 1.0, yb.data(), yb.ld());
-        if (c != 0) {
-          DenseMatrix up(h.U.m, nrhs);
-          lapack::gemm('N', 'N', h.U.m, nrhs, h.U.n, 1.0, h.U.data(), h.U.ld(), yh[c].data(), yh[c].ld(), 0.0, up.data(), up.ld());
-          for (int j = 0; j < nrhs; ++j)
-            for (int i = 0; i < ya.m; ++i) ya(i, j) += up(i, j);
-          for (int j = 0; j < nrhs; ++j)
-            for (int i = 0; i < yb.m; ++i) yb(i, j) += up(ya.m + i, j);
+        if (c != 0) { // [ya; yb] += U_τ yh_τ, by the two row blocks of U_τ
+          lapack::gemm('N', 'N', ya.m, nrhs, h.U.n, 1.0, h.U.data(), h.U.ld(), yh[c].data(), yh[c].ld(), 1.0, ya.data(), ya.ld());
+          lapack::gemm('N', 'N', yb.m, nrhs, h.U.n, 1.0, h.U.data() + ya.m, h.U.ld(), yh[c].data(), yh[c].ld(), 1.0, yb.data(), yb.ld());
         }
       } else {
         double *y = Y + static_cast<long>(m_row_block) * cl.begin;
         lapack::gemm('N', 'N', h.D.m, nrhs, h.D.n, 1.0, h.D.data(), h.D.ld(), X + static_cast<long>(m_col_block) * cl.begin, ldx, 0.0, y, ldy);
         if (c != 0) lapack::gemm('N', 'N', h.U.m, nrhs, h.U.n, 1.0, h.U.data(), h.U.ld(), yh[c].data(), yh[c].ld(), 1.0, y, ldy);
       }
-    }
-  }
+    });
 }
 
 void HssMatrix::update_stats()

@@ -40,13 +40,13 @@
 #include "hssbem/hss/truncate.hpp"
 
 #include "hssbem/core/blas_threads.hpp"
+#include "hssbem/core/dense_ops.hpp"
 #include "hssbem/core/interpolative.hpp"
 #include "hssbem/core/lapack.hpp"
 #include "hssbem/core/phase.hpp"
 
 #include <algorithm>
 #include <cstddef>
-#include <exception>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -57,53 +57,7 @@ namespace hssbem {
 namespace {
 
 using Size = std::size_t;
-
-/// op(A) op(B), with op = 'N' or 'T'.
-DenseMatrix product(const DenseMatrix &A, char ta, const DenseMatrix &B, char tb)
-{
-  const int m = ta == 'N' ? A.m : A.n, k = ta == 'N' ? A.n : A.m, n = tb == 'N' ? B.n : B.m;
-  DenseMatrix C(m, n);
-  lapack::gemm(ta, tb, m, n, k, 1.0, A.data(), A.ld(), B.data(), B.ld(), 0.0, C.data(), C.ld());
-  return C;
-}
-
-/// Rows r0, …, r0 + m − 1 of A.
-DenseMatrix row_range(const DenseMatrix &A, int r0, int m)
-{
-  DenseMatrix out(m, A.n);
-  for (int j = 0; j < A.n; ++j)
-    for (int i = 0; i < m; ++i) out(i, j) = A(r0 + i, j);
-  return out;
-}
-
-/// The rows of A listed in idx, in that order.
-DenseMatrix rows_at(const DenseMatrix &A, const std::vector<int> &idx)
-{
-  DenseMatrix out(static_cast<int>(idx.size()), A.n);
-  for (int j = 0; j < A.n; ++j)
-    for (int i = 0; i < out.m; ++i) out(i, j) = A(idx[i], j);
-  return out;
-}
-
-/// [A, B] (A and B with the same number of rows).
-DenseMatrix hcat(const DenseMatrix &A, const DenseMatrix &B)
-{
-  DenseMatrix C(A.m, A.n + B.n);
-  std::copy(A.a.begin(), A.a.end(), C.a.begin());
-  std::copy(B.a.begin(), B.a.end(), C.a.begin() + static_cast<long>(A.a.size()));
-  return C;
-}
-
-/// [A; B] (A and B with the same number of columns).
-DenseMatrix vcat(const DenseMatrix &A, const DenseMatrix &B)
-{
-  DenseMatrix C(A.m + B.m, A.n);
-  for (int j = 0; j < A.n; ++j) {
-    for (int i = 0; i < A.m; ++i) C(i, j) = A(i, j);
-    for (int i = 0; i < B.m; ++i) C(A.m + i, j) = B(i, j);
-  }
-  return C;
-}
+using namespace dense; // row_block, rows_at, hcat, vcat, product
 
 /// R with A = Q R, Q with orthonormal columns; A itself when it has no more rows than columns.
 DenseMatrix r_factor(DenseMatrix A)
@@ -232,20 +186,7 @@ private:
   template <class Fn>
   void for_level(int l, const Fn &fn)
   {
-    const auto &lev = m_tree.clusters_at_level(l);
-    const bool par = parallel_over_clusters(lev.size());
-    SerialBlas serial(par);
-    std::exception_ptr error;
-#pragma omp parallel for schedule(dynamic, 1) if (par)
-    for (Size t = 0; t < lev.size(); ++t) {
-      try {
-        fn(lev[t]);
-      } catch (...) {
-#pragma omp critical(hssbem_truncate_error)
-        if (!error) error = std::current_exception();
-      }
-    }
-    if (error) std::rethrow_exception(error);
+    for_each_cluster(m_tree.clusters_at_level(l), fn);
   }
 
   /// step(c, rows) then step(c, columns) for the clusters of level l.
@@ -267,8 +208,8 @@ private:
       return;
     }
     const int ka = old_rank(side, cl.left);
-    const DenseMatrix top = product(work(side, cl.left).R, 'N', row_range(W, 0, ka), 'N');
-    const DenseMatrix bottom = product(work(side, cl.right).R, 'N', row_range(W, ka, W.m - ka), 'N');
+    const DenseMatrix top = product(work(side, cl.left).R, 'N', row_block(W, 0, ka), 'N');
+    const DenseMatrix bottom = product(work(side, cl.right).R, 'N', row_block(W, ka, W.m - ka), 'N');
     work(side, c).R = r_factor(vcat(top, bottom));
   }
 
@@ -282,7 +223,7 @@ private:
     const DenseMatrix &B = left == (side == 0) ? hp.B12 : hp.B21;
     DenseMatrix F = product(B, side == 0 ? 'N' : 'T', work(1 - side, left ? pc.right : pc.left).R, 'T');
     if (p != 0) {
-      const DenseMatrix T = row_range(hp.*k_sides[side].basis, left ? 0 : old_rank(side, pc.left), old_rank(side, c));
+      const DenseMatrix T = row_block(hp.*k_sides[side].basis, left ? 0 : old_rank(side, pc.left), old_rank(side, c));
       F = hcat(F, product(T, 'N', work(side, p).F, 'N'));
     }
     work(side, c).F = l_factor(std::move(F));
@@ -298,8 +239,8 @@ private:
     DenseMatrix Ut = W;
     if (cl.left >= 0) {
       const int ka = old_rank(side, cl.left);
-      Ut = vcat(product(work(side, cl.left).E, 'N', row_range(W, 0, ka), 'N'),
-                product(work(side, cl.right).E, 'N', row_range(W, ka, W.m - ka), 'N'));
+      Ut = vcat(product(work(side, cl.left).E, 'N', row_block(W, 0, ka), 'N'),
+                product(work(side, cl.right).E, 'N', row_block(W, ka, W.m - ka), 'N'));
     }
     const std::vector<int> cand = side == 0 ? m_out.candidate_rows(c) : m_out.candidate_cols(c);
     const std::vector<int> forced = forced_positions(old.*ref.skel, old.*ref.forced, cand);

@@ -2,6 +2,7 @@
 #include "hssbem/hss/ulv.hpp"
 
 #include "hssbem/core/blas_threads.hpp"
+#include "hssbem/core/dense_ops.hpp"
 #include "hssbem/core/lapack.hpp"
 #include "hssbem/core/phase.hpp"
 
@@ -11,40 +12,7 @@
 
 namespace hssbem {
 
-namespace {
-
-/// Rows [r0, r0 + nr) and columns [c0, c0 + nc) of M as a new matrix.
-DenseMatrix sub(const DenseMatrix &M, int r0, int nr, int c0, int nc)
-{
-  DenseMatrix S(nr, nc);
-  for (int j = 0; j < nc; ++j)
-    for (int i = 0; i < nr; ++i) S(i, j) = M(r0 + i, c0 + j);
-  return S;
-}
-
-/// op(X) · op(Y) as a new matrix.
-DenseMatrix product(const DenseMatrix &X, char tx, const DenseMatrix &Y, char ty)
-{
-  const int m = tx == 'N' ? X.m : X.n, k = tx == 'N' ? X.n : X.m, n = ty == 'N' ? Y.n : Y.m;
-  DenseMatrix P(m, n);
-  lapack::gemm(tx, ty, m, n, k, 1.0, X.data(), X.ld(), Y.data(), Y.ld(), 0.0, P.data(), P.ld());
-  return P;
-}
-
-void put(DenseMatrix &M, int r0, int c0, const DenseMatrix &S)
-{
-  for (int j = 0; j < S.n; ++j)
-    for (int i = 0; i < S.m; ++i) M(r0 + i, c0 + j) = S(i, j);
-}
-
-double max_abs(const DenseMatrix &M)
-{
-  double v = 0;
-  for (double x : M.a) v = std::max(v, std::abs(x));
-  return v;
-}
-
-} // namespace
+using namespace dense; // sub, put, product, max_abs
 
 UlvFactorization::UlvFactorization(const HssMatrix &K, const std::vector<std::array<bool, 3>> &displacement_known, const LowRankTerm *extra)
   : m_K(K), m_nodes(K.tree().num_clusters())
@@ -56,14 +24,8 @@ UlvFactorization::UlvFactorization(const HssMatrix &K, const std::vector<std::ar
                                 std::to_string(tree.num_points()));
   if (extra && extra->p > 0) widen_generators(*extra);
   const int w = K.col_block();
-  for (int l = tree.levels() - 1; l >= 0; --l) {
-    const auto &lev = tree.clusters_at_level(l);
-    std::string failure;
-    const bool par = parallel_over_clusters(lev.size());
-    SerialBlas serial(par);
-#pragma omp parallel for schedule(dynamic, 1) if (par)
-    for (std::size_t t = 0; t < lev.size(); ++t) {
-      const int c = lev[t];
+  for (int l = tree.levels() - 1; l >= 0; --l)
+    for_each_cluster(tree.clusters_at_level(l), [&](int c) { // an HssBreakdown is rethrown after the level
       const Cluster &cl = tree.cluster(c);
       const HssCluster &h = K.cluster(c);
       DenseMatrix D, U, V;
@@ -95,27 +57,20 @@ UlvFactorization::UlvFactorization(const HssMatrix &K, const std::vector<std::ar
       } else {
         merge_children(c, D, U, V);
       }
-      try {
-        if (c == 0) {
-          m_root_lu = std::move(D);
-          m_root_piv.assign(m_root_lu.m, 0);
-          const double amax = max_abs(m_root_lu);
-          const int info = lapack::getrf(m_root_lu.m, m_root_lu.data(), m_root_lu.ld(), m_root_piv.data());
-          double umin = HUGE_VAL;
-          for (int i = 0; i < m_root_lu.m; ++i) umin = std::min(umin, std::abs(m_root_lu(i, i)));
-          // The same test as for the pivot blocks below: singular to working precision.
-          if (info > 0 || (m_root_lu.m > 0 && !(umin > 1e-14 * amax)))
-            throw HssBreakdown("HSS factorization broke down: the root block (" + std::to_string(m_root_lu.m) + " unknowns) is singular to working precision");
-        } else {
-          factor_cluster(c, std::move(D), std::move(U), std::move(V));
-        }
-      } catch (const HssBreakdown &e) {
-#pragma omp critical(hssbem_ulv_failure)
-        failure = e.what();
+      if (c != 0) {
+        factor_cluster(c, std::move(D), std::move(U), std::move(V));
+        return;
       }
-    }
-    if (!failure.empty()) throw HssBreakdown(failure);
-  }
+      m_root_lu = std::move(D);
+      m_root_piv.assign(m_root_lu.m, 0);
+      const double amax = max_abs(m_root_lu);
+      const int info = lapack::getrf(m_root_lu.m, m_root_lu.data(), m_root_lu.ld(), m_root_piv.data());
+      double umin = HUGE_VAL;
+      for (int i = 0; i < m_root_lu.m; ++i) umin = std::min(umin, std::abs(m_root_lu(i, i)));
+      // The same test as for the pivot blocks below: singular to working precision.
+      if (info > 0 || (m_root_lu.m > 0 && !(umin > 1e-14 * amax)))
+        throw HssBreakdown("HSS factorization broke down: the root block (" + std::to_string(m_root_lu.m) + " unknowns) is singular to working precision");
+    });
   m_max_front = m_root_lu.m;
   for (const Node &n : m_nodes) m_max_front = std::max(m_max_front, n.m);
 }
@@ -273,10 +228,10 @@ void UlvFactorization::solve(double *b) const
         lapack::gemv('N', a.Ut.m, a.Ut.n, -1.0, a.Ut.data(), a.Ut.ld(), tmp.data(), 1.0, bh.data());
         lapack::gemv('N', B21.m, B21.n, 1.0, B21.data(), B21.ld(), z[cl.left].data(), 0.0, tmp.data());
         lapack::gemv('N', bb.Ut.m, bb.Ut.n, -1.0, bb.Ut.data(), bb.Ut.ld(), tmp.data(), 1.0, bh.data() + ra);
-        if (c != 0) { // what the children already know of V_τᵀ x_τ, through the transfer matrix
-          std::vector<double> zz(z[cl.left]);
-          zz.insert(zz.end(), z[cl.right].begin(), z[cl.right].end());
-          lapack::gemv('T', hV.m, hV.n, 1.0, hV.data(), hV.ld(), zz.data(), 0.0, zin.data());
+        if (c != 0) { // what the children already know of V_τᵀ x_τ: V_τᵀ [z_a; z_b], by row blocks
+          const int ka = static_cast<int>(z[cl.left].size()), kb = static_cast<int>(z[cl.right].size());
+          lapack::gemv('T', ka, hV.n, 1.0, hV.data(), hV.ld(), z[cl.left].data(), 0.0, zin.data());
+          lapack::gemv('T', kb, hV.n, 1.0, hV.data() + ka, hV.ld(), z[cl.right].data(), 1.0, zin.data());
         }
       }
       if (c == 0) {

@@ -8,6 +8,8 @@
 #pragma once
 
 #include <cstddef>
+#include <exception>
+#include <vector>
 
 namespace hssbem {
 
@@ -24,5 +26,26 @@ private:
 
 /// Whether a level with `clusters` independent clusters should run them on parallel threads.
 bool parallel_over_clusters(std::size_t clusters);
+
+/// fn(c) for every c in `clusters` (independent of each other): on parallel threads with serial
+/// BLAS when there are enough of them, else one after another with threaded BLAS. An exception
+/// thrown by fn stops nothing else; the first one is rethrown after the loop.
+template <class Fn>
+void for_each_cluster(const std::vector<int> &clusters, const Fn &fn)
+{
+  const bool par = parallel_over_clusters(clusters.size());
+  SerialBlas serial(par);
+  std::exception_ptr error;
+#pragma omp parallel for schedule(dynamic, 1) if (par)
+  for (std::size_t t = 0; t < clusters.size(); ++t) {
+    try {
+      fn(clusters[t]);
+    } catch (...) {
+#pragma omp critical(hssbem_for_each_cluster_error)
+      if (!error) error = std::current_exception();
+    }
+  }
+  if (error) std::rethrow_exception(error);
+}
 
 } // namespace hssbem

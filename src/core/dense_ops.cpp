@@ -1,0 +1,63 @@
+#include "hssbem/core/dense_ops.hpp"
+
+#include "hssbem/core/lapack.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace hssbem::dense {
+
+DenseMatrix sub(const DenseMatrix &M, int r0, int nr, int c0, int nc)
+{
+  DenseMatrix S(nr, nc);
+  for (int j = 0; j < nc; ++j)
+    for (int i = 0; i < nr; ++i) S(i, j) = M(r0 + i, c0 + j);
+  return S;
+}
+
+DenseMatrix rows_at(const DenseMatrix &M, const std::vector<int> &idx)
+{
+  DenseMatrix out(static_cast<int>(idx.size()), M.n);
+  for (int j = 0; j < M.n; ++j)
+    for (int i = 0; i < out.m; ++i) out(i, j) = M(idx[i], j);
+  return out;
+}
+
+void put(DenseMatrix &M, int r0, int c0, const DenseMatrix &S)
+{
+  for (int j = 0; j < S.n; ++j)
+    for (int i = 0; i < S.m; ++i) M(r0 + i, c0 + j) = S(i, j);
+}
+
+DenseMatrix hcat(const DenseMatrix &A, const DenseMatrix &B)
+{
+  DenseMatrix C(A.m, A.n + B.n);
+  std::copy(A.a.begin(), A.a.end(), C.a.begin());
+  std::copy(B.a.begin(), B.a.end(), C.a.begin() + static_cast<long>(A.a.size()));
+  return C;
+}
+
+DenseMatrix vcat(const DenseMatrix &A, const DenseMatrix &B)
+{
+  DenseMatrix C(A.m + B.m, A.n);
+  put(C, 0, 0, A);
+  put(C, A.m, 0, B);
+  return C;
+}
+
+DenseMatrix product(const DenseMatrix &A, char ta, const DenseMatrix &B, char tb)
+{
+  const int m = ta == 'N' ? A.m : A.n, k = ta == 'N' ? A.n : A.m, n = tb == 'N' ? B.n : B.m;
+  DenseMatrix C(m, n);
+  lapack::gemm(ta, tb, m, n, k, 1.0, A.data(), A.ld(), B.data(), B.ld(), 0.0, C.data(), C.ld());
+  return C;
+}
+
+double max_abs(const DenseMatrix &M)
+{
+  double v = 0;
+  for (double x : M.a) v = std::max(v, std::abs(x));
+  return v;
+}
+
+} // namespace hssbem::dense
