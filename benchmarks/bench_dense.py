@@ -45,6 +45,8 @@ import time
 
 import numpy as np
 
+from bench_common import available_cores, cpu_model, parse_int_list, tail, triangles_for_unknowns
+
 try:
     import h5py
 except ImportError:  # pragma: no cover
@@ -59,29 +61,6 @@ PRESSURE, YOUNG, POISSON = 100.0, 1000.0, 0.3
 
 # ------------------------------------------------------------------------------------------------
 # helpers
-
-
-def triangles_for_unknowns(n):
-    """Closed sphere: V = T/2 + 2 vertices, 3 unknowns per vertex (no sharp edges): T = 2 (n/3 - 2)."""
-    t = int(round(2.0 * (n / 3.0 - 2.0)))
-    return max(20, t + (t % 2))
-
-
-def parse_int_list(text, what):
-    try:
-        vals = [int(float(s)) for s in text.replace(" ", "").split(",") if s]
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{what}: expected a comma-separated list of integers, got {text!r}")
-    if not vals or any(v <= 0 for v in vals):
-        raise argparse.ArgumentTypeError(f"{what}: need positive integers, got {text!r}")
-    return vals
-
-
-def available_cores():
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:  # pragma: no cover
-        return os.cpu_count() or 1
 
 
 def parse_threads(text, ranks, cores):
@@ -103,17 +82,6 @@ def parse_threads(text, ranks, cores):
     return out
 
 
-def cpu_model():
-    try:
-        with open("/proc/cpuinfo") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown CPU"
-
-
 def git_revision():
     try:
         rev = subprocess.run(["git", "-C", REPO, "rev-parse", "--short", "HEAD"], capture_output=True,
@@ -123,16 +91,6 @@ def git_revision():
         return (rev or "unknown") + (" (+ uncommitted changes)" if dirty else "")
     except (OSError, subprocess.SubprocessError):
         return "unknown"
-
-
-def tail(path, lines=25, width=300):
-    """The last lines of a log, each cut to width characters (PETSc's configure line is huge)."""
-    try:
-        with open(path, errors="replace") as f:
-            out = f.readlines()[-lines:]
-    except OSError:
-        return ""
-    return "".join(l if len(l) <= width else l[:width] + " [...]\n" for l in out)
 
 
 def as_str(v):
@@ -326,16 +284,16 @@ def run_once(args, exe, problem, h5, log, ranks, threads):
         poller.join()
     rc = proc.returncode
     if timed_out:
-        return None, f"timed out after {args.timeout:g} s (killed)\n" + tail(err) + tail(log)
+        return None, f"timed out after {args.timeout:g} s (killed)\n" + tail(err, width=300) + tail(log, width=300)
     if rc != 0:
-        msg = f"mpirun exited with status {rc}\n--- stderr ({err}) ---\n{tail(err)}--- stdout ({log}) ---\n{tail(log)}"
+        msg = f"mpirun exited with status {rc}\n--- stderr ({err}) ---\n{tail(err, width=300)}--- stdout ({log}) ---\n{tail(log, width=300)}"
         if os.geteuid() == 0 and "run as root" in tail(err, 200, 10000):
             msg += "hint: as root set OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1\n"
         return None, msg
     try:
         res = read_result(h5)
     except (OSError, KeyError, ValueError) as e:
-        return None, f"cannot read {h5}: {e}\n--- stderr ---\n{tail(err)}--- stdout ---\n{tail(log)}"
+        return None, f"cannot read {h5}: {e}\n--- stderr ---\n{tail(err, width=300)}--- stdout ---\n{tail(log, width=300)}"
     if res["ranks_file"] != ranks:
         return None, f"{h5} says ranks = {res['ranks_file']}, expected {ranks}"
     res["total_s"] = wall

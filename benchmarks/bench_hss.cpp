@@ -7,6 +7,7 @@
 #include "hssbem/bem/bem_operator.hpp"
 #include "hssbem/core/lapack.hpp"
 #include "hssbem/hss/bem_system.hpp"
+#include "hssbem/problem/benchmark_problem.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -79,19 +80,7 @@ int main(int argc, char **argv)
   Discretization disc(mesh, 40.0);
   BemOperator op(disc, Material::from_young(1.0, 0.3));
   const int n = disc.num_nodes();
-  std::vector<double> z(n);
-  for (int i = 0; i < n; ++i) z[i] = disc.node_position(i)[2];
-  std::vector<double> zs(z);
-  std::nth_element(zs.begin(), zs.begin() + n / 2, zs.end());
-  const double zmid = zs[n / 2];
-  SystemSelection sel;
-  sel.displacement_known.resize(n);
-  sel.known.assign(n, Vec3{0, 0, 0});
-  for (int i = 0; i < n; ++i) {
-    const bool clamped = z[i] < zmid;
-    sel.displacement_known[i] = {clamped, clamped, clamped};
-    if (!clamped) sel.known[i] = {0, 0, -1};
-  }
+  const SystemSelection sel = clamped_lower_half(disc, {0, 0, -1});
 
   // HSS: compress K once, right-hand side by a fast product, factor the pattern, solve.
   auto t0 = Clock::now();

@@ -47,6 +47,8 @@ import time
 
 import numpy as np
 
+from bench_common import available_cores, cpu_model, parse_int_list, tail, triangles_for_unknowns
+
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 GEN_MESHES = os.path.join(REPO, "scripts", "gen_meshes.py")
 
@@ -76,24 +78,6 @@ FIT_MIN, FIT_MAX = 10000, 300000
 def log(msg=""):
     """Progress output: stdout, flushed at once so it interleaves correctly with subprocesses."""
     print(msg, flush=True)
-
-
-def triangles_for_unknowns(n):
-    """A closed surface of genus 0 with T triangles has T/2 + 2 vertices, 3 unknowns each, so
-    T = 2 (N/3 - 2); rounded to an even count."""
-    t = int(round(2.0 * (n / 3.0 - 2.0)))
-    return max(20, t + (t % 2))
-
-
-def parse_int_list(text):
-    """'3000,6000,1e4' -> [3000, 6000, 10000] (positive integers)."""
-    try:
-        vals = [int(float(s)) for s in text.replace(" ", "").split(",") if s]
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a comma-separated list of integers, got {text!r}")
-    if not vals or any(v <= 0 for v in vals):
-        raise argparse.ArgumentTypeError(f"need positive integers, got {text!r}")
-    return vals
 
 
 def parse_families(text):
@@ -143,33 +127,6 @@ def fmt_ratio(x):
 
 def fmt_mb(m):
     return "–" if not finite(m) else (f"{m:.0f}" if m >= 10 else f"{m:.1f}")
-
-
-def cpu_model():
-    try:
-        with open("/proc/cpuinfo") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown CPU"
-
-
-def available_cores():
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:  # pragma: no cover
-        return os.cpu_count() or 1
-
-
-def tail(path, lines=15):
-    """The last lines of a text file (for failure reports)."""
-    try:
-        with open(path, errors="replace") as f:
-            return "".join(f.readlines()[-lines:])
-    except OSError:
-        return ""
 
 
 def logs_dir_for(csv_path):
@@ -575,7 +532,7 @@ def sweep(args, sizes, families):
             why = (f"timed out after {args.timeout:g} s" if rc is None else
                    f"exit status {rc}" if rc != 0 else "no CSV line on stdout")
             log(f"    FAILED ({why}, {wall:.1f} s); log {log_file}; its tail:")
-            for line in (tail(log_file) + out[-1000:]).rstrip().splitlines():
+            for line in (tail(log_file, 15) + out[-1000:]).rstrip().splitlines():
                 log(f"      | {line}")
             failures.append((f"{family} N~{n_target}: {why}", log_file))
             continue

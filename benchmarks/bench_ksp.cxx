@@ -12,11 +12,11 @@
 #include "hssbem/petsc/log.h"
 #include "hssbem/petsc/pc_hss.h"
 #include "hssbem/petsc/system.h"
+#include "hssbem/problem/benchmark_problem.hpp"
 
 #include <petscksp.h>
 #include <petsctime.h>
 
-#include <algorithm>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -26,24 +26,6 @@ using namespace hssbem;
 static const char help[] = "Solver configurations side by side on one BEM problem.\n";
 
 namespace {
-
-SystemSelection clamped_bottom(const Discretization &disc)
-{
-  const int n = disc.num_nodes();
-  std::vector<double> z(n);
-  for (int i = 0; i < n; ++i) z[i] = disc.node_position(i)[2];
-  std::vector<double> zs(z);
-  std::nth_element(zs.begin(), zs.begin() + n / 2, zs.end());
-  SystemSelection sel;
-  sel.displacement_known.resize(n);
-  sel.known.assign(n, Vec3{0, 0, 0});
-  for (int i = 0; i < n; ++i) {
-    const bool clamped = z[i] < zs[n / 2];
-    sel.displacement_known[i] = {clamped, clamped, clamped};
-    if (!clamped) sel.known[i] = {0, 0, -1};
-  }
-  return sel;
-}
 
 struct Row {
   std::string name;
@@ -126,7 +108,7 @@ int main(int argc, char **argv)
     validate_and_orient(mesh, notices);
     Discretization  disc(mesh, 40.0);
     BemOperator     op(disc, Material::from_young(1.0, 0.3));
-    SystemSelection sel = clamped_bottom(disc);
+    SystemSelection sel = clamped_lower_half(disc, {0, 0, -1});
     PetscLogDouble  t0, t1;
 
     Mat Ad, Ak = NULL;

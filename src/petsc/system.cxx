@@ -7,7 +7,8 @@
 #include "problem_context.hpp"
 #include "mat_hss.hpp"
 
-#include <cstring>
+#include <algorithm>
+#include <cmath>
 
 static PetscErrorCode ProblemDestroy_Private(void *ctx)
 {
@@ -119,9 +120,8 @@ PetscErrorCode HssbemCreateSystem(MPI_Comm comm, const hssbem::BemOperator &op, 
   } else {
     problem->is_hss                  = PETSC_TRUE;
     problem->hss_options.rel_tol     = 1e-8;
-    problem->hss_options.pressure_columns = false;
-    for (double p : sel.pressure)
-      if (p == p) problem->hss_options.pressure_columns = true; /* a pressure load needs the Gn columns */
+    /* a pressure load needs the Gn columns */
+    problem->hss_options.pressure_columns = std::any_of(sel.pressure.begin(), sel.pressure.end(), [](double p) { return !std::isnan(p); });
     PetscCall(HssbemHssOptionsFromDatabase(comm, NULL, &problem->hss_options));
     PetscCall(HssbemMatCreateHss_Private(comm, problem, A, b));
   }

@@ -1,8 +1,11 @@
-// Shared by the HSS unit tests: the dense K = [H, G(, Gn)] and the error of an HSS product.
+// Shared by the HSS unit tests: dense references (K, A for a pattern), errors, random patterns.
 #pragma once
 
 #include "hssbem/bem/bem_operator.hpp"
 #include "hssbem/hss/hss_matrix.hpp"
+#include "hssbem/hss/ulv.hpp"
+
+#include <array>
 
 #include <cmath>
 #include <numeric>
@@ -10,6 +13,14 @@
 #include <vector>
 
 namespace hssbem::test {
+
+/// ‖a − b‖ / ‖b‖.
+inline double rel(const std::vector<double> &a, const std::vector<double> &b)
+{
+  double e = 0, s = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) e += (a[i] - b[i]) * (a[i] - b[i]), s += b[i] * b[i];
+  return std::sqrt(e / s);
+}
 
 /// Dense K = [H, G, Gn] in mesh order, row-major 3n × w n (rigid-body terms included).
 inline std::vector<double> dense_k(const BemOperator &op, int w)
@@ -42,12 +53,38 @@ inline double matvec_error(const HssMatrix &K, const std::vector<double> &Kd, in
   K.tree().to_mesh_order(yc.data(), y.data(), 3);
   for (long r = 0; r < 3L * n; ++r)
     for (long q = 0; q < static_cast<long>(w) * n; ++q) yd[r] += Kd[r * w * n + q] * x[q];
-  double e = 0, s = 0;
-  for (long r = 0; r < 3L * n; ++r) {
-    e += (y[r] - yd[r]) * (y[r] - yd[r]);
-    s += yd[r] * yd[r];
-  }
-  return std::sqrt(e / s);
+  return rel(y, yd);
+}
+
+/// Random pattern: u known (t unknown) with probability p per node and component.
+inline std::vector<std::array<bool, 3>> random_pattern(int n, double p, int seed)
+{
+  std::mt19937 gen(seed);
+  std::bernoulli_distribution B(p);
+  std::vector<std::array<bool, 3>> k(n);
+  for (auto &a : k)
+    for (bool &b : a) b = B(gen);
+  return k;
+}
+
+/// Dense A = K E_S (column-major, 3n × 3n) from the dense K (row-major 3n × w n, mesh order).
+inline std::vector<double> dense_a(const std::vector<double> &Kd, int n, int w, const std::vector<std::array<bool, 3>> &known)
+{
+  std::vector<double> A(9L * n * n);
+  for (long r = 0; r < 3L * n; ++r)
+    for (int j = 0; j < n; ++j)
+      for (int c = 0; c < 3; ++c) A[r + (3L * j + c) * 3 * n] = known[j][c] ? -Kd[r * w * n + w * j + 3 + c] : Kd[r * w * n + w * j + c];
+  return A;
+}
+
+/// x = A⁻¹ b with a ULV factorization of K's pattern, b and x in mesh order (3 per node).
+inline std::vector<double> ulv_solve(const HssMatrix &K, const UlvFactorization &F, const std::vector<double> &b)
+{
+  std::vector<double> bc(b.size()), x(b.size());
+  K.tree().to_cluster_order(b.data(), bc.data(), 3);
+  F.solve(bc.data());
+  K.tree().to_mesh_order(bc.data(), x.data(), 3);
+  return x;
 }
 
 } // namespace hssbem::test

@@ -16,8 +16,7 @@
 #include <random>
 
 using namespace hssbem;
-using hssbem::test::dense_k;
-using hssbem::test::matvec_error;
+using namespace hssbem::test; // dense_k, dense_a, matvec_error, random_pattern, rel, ulv_solve
 
 namespace {
 
@@ -75,27 +74,6 @@ INSTANTIATE_TEST_SUITE_P(Meshes, HssAccuracy,
                                            Case{"cardioid_832.msh", 1e-3, 32}, Case{"cardioid_832.msh", 1e-6, 32},
                                            Case{"cardioid_832.msh", 1e-9, 32}));
 
-/// Random pattern: u known (t unknown) with probability p per node and component.
-std::vector<std::array<bool, 3>> random_pattern(int n, double p, int seed)
-{
-  std::mt19937 gen(seed);
-  std::bernoulli_distribution B(p);
-  std::vector<std::array<bool, 3>> k(n);
-  for (auto &a : k)
-    for (bool &b : a) b = B(gen);
-  return k;
-}
-
-/// Dense A = K E_S (column-major, 3n × 3n) from the dense K (row-major 3n × w n, mesh order).
-std::vector<double> dense_a(const std::vector<double> &Kd, int n, int w, const std::vector<std::array<bool, 3>> &known)
-{
-  std::vector<double> A(9L * n * n);
-  for (long r = 0; r < 3L * n; ++r)
-    for (int j = 0; j < n; ++j)
-      for (int c = 0; c < 3; ++c) A[r + (3L * j + c) * 3 * n] = known[j][c] ? -Kd[r * w * n + w * j + 3 + c] : Kd[r * w * n + w * j + c];
-  return A;
-}
-
 struct SolveCase {
   const char *mesh;
   double tol;
@@ -121,20 +99,13 @@ TEST_P(HssSolve, UlvSolveMatchesDenseSolve)
   const double tf = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::mt19937 gen(5);
   std::normal_distribution<double> N01;
-  std::vector<double> b(3L * n), bc(3L * n), x(3L * n);
+  std::vector<double> b(3L * n);
   for (double &v : b) v = N01(gen);
-  K.tree().to_cluster_order(b.data(), bc.data(), 3);
-  F.solve(bc.data());
-  K.tree().to_mesh_order(bc.data(), x.data(), 3);
+  const std::vector<double> x = ulv_solve(K, F, b);
   auto A = dense_a(Kd, n, w, known);
   std::vector<double> xd(b);
   ASSERT_EQ(lapack::gesv(3 * n, 1, A.data(), xd.data()), 0);
-  double e = 0, s = 0;
-  for (long i = 0; i < 3L * n; ++i) {
-    e += (x[i] - xd[i]) * (x[i] - xd[i]);
-    s += xd[i] * xd[i];
-  }
-  const double err = std::sqrt(e / s);
+  const double err = rel(x, xd);
   std::printf("%s tol %.0e: solve difference %.2e, factor %.2f s, front %d, factor memory %.1f MB\n", c.mesh, c.tol, err, tf, F.max_front(),
               F.memory_bytes() / 1e6);
   EXPECT_LE(err, 100 * c.tol);
@@ -167,12 +138,6 @@ std::vector<double> dense_solve(const BemOperator &op, const SystemSelection &se
   return b;
 }
 
-double rel(const std::vector<double> &a, const std::vector<double> &b)
-{
-  double e = 0, s = 0;
-  for (size_t i = 0; i < a.size(); ++i) e += (a[i] - b[i]) * (a[i] - b[i]), s += b[i] * b[i];
-  return std::sqrt(e / s);
-}
 
 /// Matvec and solve of one pattern through the system against the dense matrix.
 void check_pattern(const HssBemSystem &sys, const SystemSelection &sel, double tol, const char *what)

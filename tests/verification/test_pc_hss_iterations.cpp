@@ -3,33 +3,15 @@
 // (disk_organ_4k, 6 066 unknowns), a soft body (nu = 0.45) clamped below mid-height and pressed
 // from above; the counts of -pc_type none and jacobi are printed beside it.
 #include "hssbem/petsc/system.h"
+#include "hssbem/problem/benchmark_problem.hpp"
 
 #include <gtest/gtest.h>
 
-#include <algorithm>
 #include <string>
 
 using namespace hssbem;
 
 namespace {
-
-SystemSelection clamped_bottom(const Discretization &disc)
-{
-  const int n = disc.num_nodes();
-  std::vector<double> z(n);
-  for (int i = 0; i < n; ++i) z[i] = disc.node_position(i)[2];
-  std::vector<double> zs(z);
-  std::nth_element(zs.begin(), zs.begin() + n / 2, zs.end());
-  SystemSelection sel;
-  sel.displacement_known.resize(n);
-  sel.known.assign(n, Vec3{0, 0, 0});
-  for (int i = 0; i < n; ++i) {
-    const bool clamped = z[i] < zs[n / 2];
-    sel.displacement_known[i] = {clamped, clamped, clamped};
-    if (!clamped) sel.known[i] = {0, 0, -100.0};
-  }
-  return sel;
-}
 
 /// Iterations of GMRES(100) to rtol 1e-10 (at most 1000) with the given PC options, the converged
 /// reason and the true relative residual.
@@ -73,7 +55,7 @@ TEST_P(PcHssIterations, GmresWithHss1e3ConvergesInAtMost15Iterations)
   validate_and_orient(mesh, notices);
   Discretization disc(mesh, 40.0);
   BemOperator op(disc, Material::from_young(3000.0, 0.45));
-  const SystemSelection sel = clamped_bottom(disc);
+  const SystemSelection sel = clamped_lower_half(disc, {0, 0, -100.0});
   Mat A;
   Vec b;
   PetscCallAbort(PETSC_COMM_WORLD, HssbemCreateSystem(PETSC_COMM_WORLD, op, sel, nullptr, HSSBEM_MAT_DENSE, &A, &b));
