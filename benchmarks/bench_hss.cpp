@@ -1,6 +1,6 @@
 // HSS direct solve against dense assembly + LU on one mesh; prints one CSV row (see README.md).
 //
-//   bench_hss --mesh FILE [--tol 1e-6] [--leaf 64] [--dense 0|1] [--header]
+//   bench_hss --mesh FILE [--tol 1e-6] [--leaf 256] [--dense 0|1] [--header]
 //
 // Problem: the nodes below the median height are clamped (u = 0, traction unknown), the others
 // carry a uniform traction (0, 0, -1) (displacement unknown), E = 1, nu = 0.3.

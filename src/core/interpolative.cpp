@@ -1,6 +1,7 @@
 // Interpolative decompositions from column-pivoted QR (dgeqp3); see interpolative.hpp.
 #include "hssbem/core/interpolative.hpp"
 #include "hssbem/core/lapack.hpp"
+#include "hssbem/core/sampled_qr.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -52,6 +53,10 @@ std::vector<double> interpolation_matrix(const double *r, int ld, int k, int n)
   return T;
 }
 
+/// From this size on (min(m, n)), the pivots come from the sampled blocked QR, which runs at
+/// level-3 BLAS speed; below it, dgeqp3.
+constexpr int kSampledMin = 128;
+
 /// Column ID of the m×n matrix in `work` (leading dimension ld), which is overwritten.
 ColumnId id_in_place(double *work, int m, int n, int ld, const IdOptions &options)
 {
@@ -60,6 +65,26 @@ ColumnId id_in_place(double *work, int m, int n, int ld, const IdOptions &option
     id.redundant.resize(Size(n));
     std::iota(id.redundant.begin(), id.redundant.end(), 0);
     return id;
+  }
+  if (std::min(m, n) >= kSampledMin) {
+    double max_norm2 = 0;
+    for (int j = 0; j < n; ++j) {
+      double s = 0;
+      for (int i = 0; i < m; ++i) s += work[Size(j) * Size(ld) + Size(i)] * work[Size(j) * Size(ld) + Size(i)];
+      max_norm2 = std::max(max_norm2, s);
+    }
+    const SampledQr qr = sampled_pivoted_qr(work, m, n, ld, options.rel_tol * std::sqrt(max_norm2), options.max_rank);
+    for (int j = 0; j < n; ++j) (j < qr.rank ? id.skeleton : id.redundant).push_back(qr.perm[Size(j)]);
+    id.T = interpolation_matrix(work, ld, qr.rank, n);
+    return id;
+  }
+  if (m > n) {
+    // Tall: an unpivoted QR first (level-3 BLAS) leaves a square R with the same column
+    // relations, and dgeqp3 (half level-2 BLAS) runs on that.
+    std::vector<double> qr_tau(static_cast<Size>(n));
+    if (lapack::geqrf(m, n, work, ld, qr_tau.data()) != 0) throw std::runtime_error("interpolative decomposition: dgeqrf failed");
+    for (int j = 0; j < n; ++j) std::fill(work + Size(j) * Size(ld) + Size(j) + 1, work + Size(j) * Size(ld) + Size(m), 0.0);
+    m = n;
   }
   std::vector<int> jpvt(static_cast<Size>(n));
   std::vector<double> tau(Size(std::min(m, n)));

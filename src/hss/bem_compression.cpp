@@ -143,20 +143,10 @@ Skeleton select_skeleton(std::vector<double> &X, int nfeat, int ncand, const std
   const int nfree = static_cast<int>(free_idx.size()), nforced = static_cast<int>(forced_idx.size());
   ColumnId cid;
   if (nfree > 0 && nfeat > 0) {
-    // Gather the free columns; when the features far outnumber them, an unpivoted QR first
-    // (BLAS-3) leaves a square R with the same column relations, and the pivoted QR runs on it.
+    // Gather the free columns.
     std::vector<double> Xf(static_cast<std::size_t>(nfeat) * nfree);
     for (int q = 0; q < nfree; ++q) std::copy(&X[static_cast<std::size_t>(free_idx[q]) * nfeat], &X[static_cast<std::size_t>(free_idx[q] + 1) * nfeat], &Xf[static_cast<std::size_t>(q) * nfeat]);
-    if (nfeat > 2 * nfree) {
-      std::vector<double> tau(nfree);
-      if (lapack::geqrf(nfeat, nfree, Xf.data(), nfeat, tau.data()) != 0) throw std::runtime_error("HSS compression: dgeqrf failed");
-      std::vector<double> R(static_cast<std::size_t>(nfree) * nfree, 0.0);
-      for (int j = 0; j < nfree; ++j)
-        for (int i = 0; i <= j; ++i) R[i + static_cast<std::size_t>(j) * nfree] = Xf[i + static_cast<std::size_t>(j) * nfeat];
-      cid = column_id(R.data(), nfree, nfree, nfree, id);
-    } else {
-      cid = column_id(Xf.data(), nfeat, nfree, nfeat, id);
-    }
+    cid = column_id(Xf.data(), nfeat, nfree, nfeat, id);
   } else if (nfree > 0) {
     cid.redundant.resize(nfree);
     for (int q = 0; q < nfree; ++q) cid.redundant[q] = q;

@@ -29,7 +29,7 @@ const char *SourceName(Source s)
 
 struct PC_HSS {
   PetscReal rel_tol   = 0;  /* <= 0: the matrix's tolerance (1e-8 on a dense matrix) */
-  PetscInt  leaf_size = 0;  /* <= 0: the matrix's leaf size (64 on a dense matrix) */
+  PetscInt  leaf_size = 0;  /* <= 0: the matrix's leaf size (256 on a dense matrix) */
   PetscInt  max_rank  = -1; /* -1: the matrix's cap (none on a dense matrix) */
   /* set up (rank 0) */
   Source                                        source = Source::None;
@@ -174,7 +174,7 @@ PetscErrorCode PCSetFromOptions_HSS(PC pc, PetscOptionItems *PetscOptionsObject)
   PetscFunctionBegin;
   PetscOptionsHeadBegin(PetscOptionsObject, "HSS factorization options");
   PetscCall(PetscOptionsReal("-pc_hss_rel_tol", "Relative tolerance of the compression factored (0: the matrix's; 1e-8 on a dense matrix)", "PCHSSSetRelTol", hss->rel_tol, &hss->rel_tol, NULL));
-  PetscCall(PetscOptionsInt("-pc_hss_leaf_size", "Dof nodes per leaf cluster (0: the matrix's; 64 on a dense matrix)", "PCHSSSetLeafSize", hss->leaf_size, &hss->leaf_size, NULL));
+  PetscCall(PetscOptionsInt("-pc_hss_leaf_size", "Dof nodes per leaf cluster (0: the matrix's; 256 on a dense matrix)", "PCHSSSetLeafSize", hss->leaf_size, &hss->leaf_size, NULL));
   PetscCall(PetscOptionsInt("-pc_hss_max_rank", "Cap on each skeleton (-1: the matrix's; none on a dense matrix)", "PCHSSSetMaxRank", hss->max_rank, &hss->max_rank, NULL));
   PetscOptionsHeadEnd();
   PetscCheck(hss->rel_tol >= 0 && hss->rel_tol < 1, PetscObjectComm((PetscObject)pc), PETSC_ERR_ARG_OUTOFRANGE, "-pc_hss_rel_tol must lie in [0, 1)");

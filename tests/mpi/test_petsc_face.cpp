@@ -115,6 +115,14 @@ Vec dense_solution(Mat Ad, Vec bd)
   return x;
 }
 
+/// sphere_l0 (251 nodes) would fit in one default leaf (256 nodes); leaves of 32 nodes give these
+/// tests a tree with three levels of skeletons.
+class SmallLeaves : public ::testing::Environment {
+public:
+  void SetUp() override { PetscCallAbort(PETSC_COMM_WORLD, PetscOptionsInsertString(NULL, "-mat_hss_leaf_size 32")); }
+};
+::testing::Environment *const small_leaves = ::testing::AddGlobalTestEnvironment(new SmallLeaves);
+
 class PetscFace : public ::testing::Test {
 protected:
   static void SetUpTestSuite()
@@ -211,7 +219,7 @@ TEST(PetscFacePure, OneLeafRegularisedMatchesDense)
   // The whole mesh in one leaf (the root): the rigid-mode term enters its dense block directly.
   PetscCallAbort(PETSC_COMM_WORLD, PetscOptionsInsertString(NULL, "-mat_hss_leaf_size 100000"));
   Systems s(sphere_pressure());
-  PetscCallAbort(PETSC_COMM_WORLD, PetscOptionsClearValue(NULL, "-mat_hss_leaf_size"));
+  PetscCallAbort(PETSC_COMM_WORLD, PetscOptionsInsertString(NULL, "-mat_hss_leaf_size 32"));
   Vec xd = dense_solution(s.Ad, s.bd);
   expect_solved(ksp_solve(s.Ah, s.bh, xd, "-t_ksp_type preonly -t_pc_type hss"), 1e-10); // one leaf: true entries, no compression
   VecDestroy(&xd);

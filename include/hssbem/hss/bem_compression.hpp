@@ -37,7 +37,7 @@ namespace hssbem {
 struct HssOptions {
   double rel_tol = 1e-6;      ///< relative tolerance of each interpolative decomposition
   int max_rank = -1;          ///< cap on each skeleton; negative: none
-  int leaf_size = 64;         ///< dof nodes per leaf cluster (at most)
+  int leaf_size = 256;        ///< dof nodes per leaf cluster (at most); below ~150 nodes the ranks are full at 1e-6
   double proxy_ratio = 2.0;   ///< proxy sphere radius / cluster radius (> 1)
   int proxy_points = 0;       ///< points on each proxy sphere; 0: chosen from rel_tol
   bool pressure_columns = false; ///< also compress Gn (slot 6), for pressure loads
