@@ -88,6 +88,22 @@ int ormqr(char side, char trans, int m, int n, int k, const double *a, int lda, 
   return with_workspace([&](double *w, int *lw, int *info) { dormqr_(&side, &trans, &m, &n, &k, a, &lda, tau, c, &ldc, w, lw, info); });
 }
 
+int geqrt3(int m, int n, double *a, int lda, double *t, int ldt)
+{
+  if (m == 0 || n == 0) return 0;
+  int info = 0;
+  dgeqrt3_(&m, &n, a, &lda, t, &ldt, &info);
+  return info;
+}
+
+void larfb_left(char trans, int m, int n, int k, const double *v, int ldv, const double *t, int ldt, double *c, int ldc)
+{
+  if (m == 0 || n == 0 || k == 0) return;
+  const char side = 'L', direct = 'F', storev = 'C';
+  std::vector<double> work(static_cast<std::size_t>(n) * static_cast<std::size_t>(k));
+  dlarfb_(&side, &trans, &direct, &storev, &m, &n, &k, v, &ldv, t, &ldt, c, &ldc, work.data(), &n);
+}
+
 int ormlq(char side, char trans, int m, int n, int k, const double *a, int lda, const double *tau, double *c, int ldc)
 {
   if (m == 0 || n == 0 || k == 0) return 0;

@@ -67,7 +67,7 @@ SampledQr sampled_pivoted_qr(double *a, int m, int n, int lda, double threshold,
     std::swap(out.perm[Size(p)], out.perm[Size(q)]);
   };
 
-  std::vector<double> sketch, ytau, Z, tau(static_cast<Size>(b)), panel_res(static_cast<Size>(b)), rest(static_cast<Size>(n));
+  std::vector<double> sketch, ytau, Z, tfac(static_cast<Size>(b) * static_cast<Size>(b)), panel_res(static_cast<Size>(b)), rest(static_cast<Size>(n));
   std::vector<int> jpvt, position, at;
   for (int j = 0; j < cap;) {
     const int bb = std::min(b, cap - j), rows = m - j, cols = n - j, trailing = cols - bb;
@@ -91,9 +91,10 @@ SampledQr sampled_pivoted_qr(double *a, int m, int n, int lda, double threshold,
       position[Size(moved)] = p;
     }
 
-    // 2. Householder QR of the panel, then the update of the remaining columns (level-3 BLAS).
-    check(lapack::geqrf(rows, bb, &A(j, j), lda, tau.data()), "dgeqrf");
-    if (trailing > 0) check(lapack::ormqr('L', 'T', rows, trailing, bb, &A(j, j), lda, tau.data(), &A(j, j + bb), lda), "dormqr");
+    // 2. Householder QR of the panel (recursive, so level-3 BLAS too), then the update of the
+    //    remaining columns.
+    check(lapack::geqrt3(rows, bb, &A(j, j), lda, tfac.data(), bb), "dgeqrt3");
+    if (trailing > 0) lapack::larfb_left('T', rows, trailing, bb, &A(j, j), lda, tfac.data(), bb, &A(j, j + bb), lda);
 
     // 3. Exact remainder norms for every k in [j, j+bb]: remainder(k) is the largest column norm
     //    of rows k.. of the columns k.. (panel columns count their R entries only).

@@ -20,6 +20,8 @@ void dormlq_(const char *side, const char *trans, const int *m, const int *n, co
 void dgetrf_(const int *m, const int *n, double *a, const int *lda, int *ipiv, int *info);
 void dgetrs_(const char *trans, const int *n, const int *nrhs, const double *a, const int *lda, const int *ipiv, double *b, const int *ldb, int *info);
 void dgemv_(const char *trans, const int *m, const int *n, const double *alpha, const double *a, const int *lda, const double *x, const int *incx, const double *beta, double *y, const int *incy);
+void dgeqrt3_(const int *m, const int *n, double *a, const int *lda, double *t, const int *ldt, int *info);
+void dlarfb_(const char *side, const char *trans, const char *direct, const char *storev, const int *m, const int *n, const int *k, const double *v, const int *ldv, const double *t, const int *ldt, double *c, const int *ldc, double *work, const int *ldwork);
 void dgemm_(const char *transa, const char *transb, const int *m, const int *n, const int *k, const double *alpha, const double *a, const int *lda, const double *b, const int *ldb, const double *beta, double *c, const int *ldc);
 }
 
@@ -42,6 +44,13 @@ void gemm(char transa, char transb, int m, int n, int k, double alpha, const dou
 
 /// QR (dgeqrf) of the m×n matrix a in place; tau gets min(m, n) entries. Returns info.
 int geqrf(int m, int n, double *a, int lda, double *tau);
+/// Recursive QR (dgeqrt3, level-3 BLAS throughout) of the m×n matrix a (m ≥ n) in place: R above
+/// the diagonal, the reflectors V below it, and the n×n triangular factor of Q = I − V T Vᵀ in t.
+/// Returns info.
+int geqrt3(int m, int n, double *a, int lda, double *t, int ldt);
+/// C ← Qᵀ C (trans 'T') or Q C (trans 'N') for Q = I − V T Vᵀ from geqrt3, C m×n, k reflectors
+/// (dlarfb, side 'L', forward, columnwise; the workspace is allocated inside).
+void larfb_left(char trans, int m, int n, int k, const double *v, int ldv, const double *t, int ldt, double *c, int ldc);
 /// LQ (dgelqf) of the m×n matrix a in place; tau gets min(m, n) entries. Returns info.
 int gelqf(int m, int n, double *a, int lda, double *tau);
 /// C ← op(Q) C or C op(Q) with Q from geqrf (k reflectors stored in a). Returns info.
