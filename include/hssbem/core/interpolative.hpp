@@ -13,13 +13,17 @@
 ///
 /// In both, T(i, j) is the weight of skeleton index skeleton[i] in redundant index redundant[j].
 ///
-/// Construction: dgeqp3 gives A P = Q R with non-increasing |R_ii|; k is the number of leading
-/// diagonal entries with |R_ii| > rel_tol·|R_11| (then capped by max_rank), S the first k pivots
-/// and T = R11⁻¹ R12. Because each pivot is the largest remaining column, the error satisfies
+/// Construction: a column-pivoted QR A P = Q R; S is the first k pivots and T = R11⁻¹ R12. From
+/// min(m, n) = 128 up, the pivots come from sampled_pivoted_qr (sampled_qr.hpp, level-3 BLAS),
+/// which stops at the first k where every remaining column norm is ≤ rel_tol·(largest column norm
+/// of A). Below that, dgeqp3 (after an unpivoted QR when A is tall) gives non-increasing |R_ii|,
+/// and k is the number of leading diagonal entries with |R_ii| > rel_tol·|R_11| — the same rule,
+/// since |R_kk| is the largest remaining column norm. Either way k is then capped by max_rank, and
+/// because the remaining columns are all below the threshold, the error satisfies
 ///
-///     ‖A(:, R) − A(:, S) T‖_F = ‖R22‖_F ≤ sqrt(n−k) · |R_{k+1,k+1}| ≤ rel_tol · sqrt(n−k) · ‖A‖_F
+///     ‖A(:, R) − A(:, S) T‖_F = ‖R22‖_F ≤ sqrt(n−k) · max_j ‖R22(:, j)‖ ≤ rel_tol · sqrt(n−k) · ‖A‖_F
 ///
-/// when the rank cap is inactive (|R_11| is the largest column norm of A, at most ‖A‖_F).
+/// when the rank cap is inactive (the largest column norm of A is at most ‖A‖_F).
 /// Entries of T are small in practice (bounded by 1 for a strong rank-revealing QR; plain
 /// column pivoting carries no such guarantee but stays near it on kernel matrices).
 /// Inputs must be free of NaN and Inf; this is not checked.
