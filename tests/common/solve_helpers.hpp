@@ -57,6 +57,17 @@ inline ProblemSpec spec_for(const std::string &mesh, double E, double nu)
   return spec;
 }
 
+/// Uniform pressure p on every vertex of `mesh` (a pure-traction problem).
+inline ProblemSpec pressure_spec(const std::string &mesh, double E, double nu, double p)
+{
+  ProblemSpec spec = spec_for(mesh, E, nu);
+  BoundaryRule r;
+  r.kind = BoundaryRule::Kind::Pressure;
+  r.pressure = {p};
+  spec.rules = {r};
+  return spec;
+}
+
 /// Mixed problem for Kelvin's solution k on a sphere mesh: traction (with the exact sphere
 /// normal) on every vertex, then displacement on the vertices with z >= 0.
 template <class Field>

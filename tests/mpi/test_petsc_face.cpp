@@ -60,15 +60,7 @@ ProblemSpec kelvin_mixed()
   return kelvin_mixed_spec("sphere_l0.msh", k);
 }
 
-ProblemSpec sphere_pressure()
-{
-  ProblemSpec spec = spec_for("sphere_l0.msh", 1000.0, 0.3);
-  BoundaryRule r;
-  r.kind = BoundaryRule::Kind::Pressure;
-  r.pressure = {100.0};
-  spec.rules = {r};
-  return spec;
-}
+ProblemSpec sphere_pressure() { return pressure_spec("sphere_l0.msh", 1000.0, 0.3, 100.0); }
 
 /// Outcome of one KSP solve with the options in `options` (prefix "t_").
 struct Outcome {

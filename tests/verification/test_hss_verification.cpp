@@ -73,11 +73,7 @@ class HssSpherePressure : public ::testing::TestWithParam<double> {};
 TEST_P(HssSpherePressure, PureTractionThroughTheRegularisedFactorization)
 {
   const double nu = GetParam(), E = 1000.0, p = 100.0;
-  ProblemSpec spec = spec_for("sphere_l1.msh", E, nu);
-  BoundaryRule r;
-  r.kind = Kind::Pressure;
-  r.pressure = {p};
-  spec.rules = {r};
+  const ProblemSpec spec = pressure_spec("sphere_l1.msh", E, nu, p);
   const Solved dense = solve(spec);
   const ProblemSetup setup = setup_problem(spec, ProblemOverrides{});
   ASSERT_TRUE(setup.pure_traction);

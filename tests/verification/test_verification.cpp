@@ -61,12 +61,7 @@ class SpherePressure : public ::testing::TestWithParam<double> {};
 TEST_P(SpherePressure, UniformCompressionWithinOnePercent)
 {
   const double nu = GetParam(), E = 1000.0, p = 100.0;
-  ProblemSpec spec = spec_for("sphere_l1.msh", E, nu);
-  BoundaryRule r;
-  r.kind = Kind::Pressure;
-  r.pressure = {p};
-  spec.rules = {r};
-  const Solved s = solve(spec);
+  const Solved s = solve(pressure_spec("sphere_l1.msh", E, nu, p));
   std::vector<Vec3> exact;
   for (int i = 0; i < s.setup.disc->num_nodes(); ++i) exact.push_back((-p * (1 - 2 * nu) / E) * s.setup.disc->node_position(i));
   const double err = rel_error_modulo_rigid(*s.setup.disc, s.sol.u, exact);
