@@ -123,8 +123,17 @@ SampledQr sampled_pivoted_qr(double *a, int m, int n, int lda, double threshold,
       return out;
     }
 
-    // 4. Downdate the sketch of the remaining columns: Y2 ← Y2 − Y1 R11⁻¹ R12.
-    if (trailing > 0) {
+    // 4. Downdate the sketch of the remaining columns: Y2 ← Y2 − Y1 R11⁻¹ R12. An exactly
+    //    singular R11 (a pivot with no residual left) cannot be inverted; then the sketch is taken
+    //    afresh from the remaining rows, which span the same residual geometry.
+    bool singular = false;
+    for (int t = 0; t < bb; ++t) singular = singular || A(j + t, j + t) == 0.0;
+    if (trailing > 0 && singular) {
+      const int rest_rows = rows - bb, ell_rest = std::min(ell, rest_rows);
+      std::fill(Y.begin() + std::ptrdiff_t(Size(j + bb) * Size(ell)), Y.end(), 0.0);
+      if (ell_rest > 0)
+        lapack::gemm('N', 'N', ell_rest, trailing, rest_rows, 1.0, omega.data(), ell, &A(j + bb, j + bb), lda, 0.0, &Y[Size(j + bb) * Size(ell)], ell);
+    } else if (trailing > 0) {
       Z.resize(Size(bb) * Size(trailing));
       for (int c = 0; c < trailing; ++c) std::copy(&A(j, j + bb + c), &A(j, j + bb + c) + bb, &Z[Size(c) * Size(bb)]);
       lapack::trsm('L', 'U', 'N', 'N', bb, trailing, 1.0, &A(j, j), lda, Z.data(), bb);
