@@ -207,10 +207,7 @@ void UlvFactorization::solve(double *b) const
   std::vector<std::vector<double>> bt(nc), z(nc), ye(nc), xk(nc);
   // Upward: eliminate, carrying the reduced right-hand sides and the known part V_τᵀ x_τ.
   for (int l = tree.levels() - 1; l >= 0; --l) {
-    const auto &lev = tree.clusters_at_level(l);
-#pragma omp parallel for schedule(dynamic, 1) if (lev.size() > 4)
-    for (std::size_t t = 0; t < lev.size(); ++t) {
-      const int c = lev[t];
+    for_each_cluster(tree.clusters_at_level(l), [&](int c) {
       const Cluster &cl = tree.cluster(c);
       const Node &nd = m_nodes[c];
       const DenseMatrix &hV = V_of(c), &B12 = B12_of(c), &B21 = B21_of(c);
@@ -237,12 +234,12 @@ void UlvFactorization::solve(double *b) const
       if (c == 0) {
         if (m_root_lu.m > 0) lapack::getrs('N', m_root_lu.m, 1, m_root_lu.data(), m_root_lu.ld(), m_root_piv.data(), bh.data(), m_root_lu.m);
         xk[0] = std::move(bh);
-        continue;
+        return;
       }
       if (!nd.eliminated) {
         bt[c] = std::move(bh);
         z[c] = std::move(zin);
-        continue;
+        return;
       }
       const int m = nd.m, kr = nd.kr, ne = m - kr;
       lapack::ormqr('L', 'T', m, 1, kr, nd.qr.data(), nd.qr.ld(), nd.tau_q.data(), bh.data(), m);
@@ -254,14 +251,11 @@ void UlvFactorization::solve(double *b) const
       bt[c] = std::move(bh);
       z[c] = std::move(zin);
       ye[c] = std::move(y);
-    }
+    });
   }
   // Downward: undo the transforms and hand the kept unknowns to the children.
   for (int l = 0; l < tree.levels(); ++l) {
-    const auto &lev = tree.clusters_at_level(l);
-#pragma omp parallel for schedule(dynamic, 1) if (lev.size() > 4)
-    for (std::size_t t = 0; t < lev.size(); ++t) {
-      const int c = lev[t];
+    for_each_cluster(tree.clusters_at_level(l), [&](int c) {
       const Cluster &cl = tree.cluster(c);
       const Node &nd = m_nodes[c];
       std::vector<double> x;
@@ -279,7 +273,7 @@ void UlvFactorization::solve(double *b) const
         xk[cl.left].assign(x.begin(), x.begin() + ra);
         xk[cl.right].assign(x.begin() + ra, x.end());
       }
-    }
+    });
   }
 }
 
