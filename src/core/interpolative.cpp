@@ -67,13 +67,7 @@ ColumnId id_in_place(double *work, int m, int n, int ld, const IdOptions &option
     return id;
   }
   if (std::min(m, n) >= kSampledMin) {
-    double max_norm2 = 0;
-    for (int j = 0; j < n; ++j) {
-      double s = 0;
-      for (int i = 0; i < m; ++i) s += work[Size(j) * Size(ld) + Size(i)] * work[Size(j) * Size(ld) + Size(i)];
-      max_norm2 = std::max(max_norm2, s);
-    }
-    const SampledQr qr = sampled_pivoted_qr(work, m, n, ld, options.rel_tol * std::sqrt(max_norm2), options.max_rank);
+    const SampledQr qr = sampled_pivoted_qr(work, m, n, ld, options.rel_tol, options.max_rank);
     for (int j = 0; j < n; ++j) (j < qr.rank ? id.skeleton : id.redundant).push_back(qr.perm[Size(j)]);
     id.T = interpolation_matrix(work, ld, qr.rank, n);
     return id;

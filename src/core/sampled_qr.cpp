@@ -33,7 +33,7 @@ double tail_norm2(const double *a, int lda, int c, int from, int m)
 
 } // namespace
 
-SampledQr sampled_pivoted_qr(double *a, int m, int n, int lda, double threshold, int max_rank, int block, std::uint64_t seed)
+SampledQr sampled_pivoted_qr(double *a, int m, int n, int lda, double rel_tol, int max_rank, int block, std::uint64_t seed)
 {
   if (m < 0 || n < 0 || lda < std::max(1, m)) throw std::invalid_argument("sampled pivoted QR: bad matrix size or leading dimension");
   SampledQr out;
@@ -42,12 +42,12 @@ SampledQr sampled_pivoted_qr(double *a, int m, int n, int lda, double threshold,
   const int kmax = std::min(m, n);
   const int cap = max_rank >= 0 ? std::min(kmax, max_rank) : kmax;
   if (cap == 0) return out;
-  const double t2 = threshold * threshold;
-
   // norm2[c]: squared norm of the part of column c below the rows already factorized.
   std::vector<double> norm2(static_cast<Size>(n));
   for (int c = 0; c < n; ++c) norm2[Size(c)] = tail_norm2(a, lda, c, 0, m);
-  if (*std::max_element(norm2.begin(), norm2.end()) <= t2) return out;
+  const double largest2 = *std::max_element(norm2.begin(), norm2.end());
+  const double t2 = rel_tol * rel_tol * largest2; // the threshold, squared
+  if (largest2 <= t2) return out;
 
   // Sketch Y = Ω A with Ω uniform in [−1, 1] (ell × m): its columns have the Gram matrix of A's
   // up to a random distortion, which is all the pivot choice needs.

@@ -12,11 +12,12 @@
 ///
 /// The randomly chosen pivots are not exactly the largest remaining columns, so the stopping rule
 /// does not trust |R_kk|: after each block it computes the exact norms of the remaining columns
-/// and stops at the smallest k whose remainder R22 has every column norm ≤ threshold. Hence
+/// and stops at the smallest k whose remainder R22 has every column norm ≤ rel_tol·max_j ‖A(:, j)‖.
+/// Hence
 ///
-///     A P = Q [R11 R12; 0 R22],   max_j ‖R22(:, j)‖ ≤ threshold   (unless the rank cap stops it),
+///     A P = Q [R11 R12; 0 R22],   max_j ‖R22(:, j)‖ ≤ rel_tol · max_j ‖A(:, j)‖   (unless the rank cap stops it),
 ///
-/// which is the bound dgeqp3 with the same threshold on |R_kk| gives.
+/// which is the bound dgeqp3 gives when it keeps the pivots with |R_ii| > rel_tol·|R_11|.
 #pragma once
 
 #include <cstdint>
@@ -31,11 +32,11 @@ struct SampledQr {
 };
 
 /// Factorize the m×n matrix a (column-major, leading dimension lda ≥ max(1, m)) in place until
-/// the remaining columns' norms are all ≤ threshold, or k reaches max_rank (negative: no cap) or
+/// the remaining columns' norms are all ≤ rel_tol × A's largest column norm, or k reaches max_rank (negative: no cap) or
 /// min(m, n). On return a's columns are permuted by perm, a(0:k, 0:k) is R11 (upper triangular),
 /// a(0:k, k:n) is R12; the rest of a is overwritten. `block` is b (pivots per step), `seed` makes
 /// the sampling reproducible. Throws std::runtime_error if LAPACK fails.
-SampledQr sampled_pivoted_qr(double *a, int m, int n, int lda, double threshold, int max_rank, int block = 64,
+SampledQr sampled_pivoted_qr(double *a, int m, int n, int lda, double rel_tol, int max_rank, int block = 64,
                              std::uint64_t seed = 20261121);
 
 } // namespace hssbem
