@@ -29,26 +29,9 @@ HssMatrix::HssMatrix(ClusterTree tree, int row_block, int col_block)
 {
 }
 
-/// A leaf's `block` indices per point, or the children's skeletons (member `skel`), left then right.
-static std::vector<int> candidates(const ClusterTree &tree, const std::vector<HssCluster> &clusters, int c, int block,
-                                   std::vector<int> HssCluster::*skel)
-{
-  const Cluster &cl = tree.cluster(c);
-  std::vector<int> out;
-  if (cl.left < 0) {
-    out.resize(static_cast<std::size_t>(block) * cl.size());
-    std::iota(out.begin(), out.end(), block * cl.begin);
-    return out;
-  }
-  out = clusters[cl.left].*skel;
-  const std::vector<int> &right = clusters[cl.right].*skel;
-  out.insert(out.end(), right.begin(), right.end());
-  return out;
-}
+std::vector<int> HssMatrix::candidate_rows(int c) const { return basis_candidates(m_tree, m_clusters, c, m_row_block, true); }
 
-std::vector<int> HssMatrix::candidate_rows(int c) const { return candidates(m_tree, m_clusters, c, m_row_block, &HssCluster::row_skel); }
-
-std::vector<int> HssMatrix::candidate_cols(int c) const { return candidates(m_tree, m_clusters, c, m_col_block, &HssCluster::col_skel); }
+std::vector<int> HssMatrix::candidate_cols(int c) const { return basis_candidates(m_tree, m_clusters, c, m_col_block, false); }
 
 void HssMatrix::apply(const double *X, int ldx, double *Y, int ldy, int nrhs) const
 {

@@ -21,22 +21,17 @@
 
 #include "hssbem/core/cluster_tree.hpp"
 #include "hssbem/core/dense_matrix.hpp"
+#include "hssbem/hss/nested_basis.hpp"
 
 #include <cstddef>
 #include <vector>
 
 namespace hssbem {
 
-/// One cluster's generators (see the file comment).
-struct HssCluster {
-  std::vector<int> row_skel; ///< global rows, cluster order (empty for the root)
-  std::vector<int> col_skel; ///< global columns, cluster order (empty for the root)
-  DenseMatrix U;             ///< candidate rows × |row_skel|
-  DenseMatrix V;             ///< candidate columns × |col_skel|
+/// One cluster's generators (see the file comment): its nested bases, and
+struct HssCluster : NestedBasis {
   DenseMatrix D;             ///< leaf: its rows × its columns
   DenseMatrix B12, B21;      ///< inner: K(row_skel(left), col_skel(right)), K(row_skel(right), col_skel(left))
-  int row_forced = 0;        ///< the first row_forced entries of row_skel must stay (rigid-body terms cross τ's boundary there)
-  int col_forced = 0;        ///< likewise for col_skel
 };
 
 /// Rank and memory figures per tree level, and work counters.

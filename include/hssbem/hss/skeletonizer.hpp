@@ -1,0 +1,107 @@
+/// \file skeletonizer.hpp
+/// Entries-only skeletonization of the BEM operator K = [H, G(, Gn)] with proxy spheres
+/// (DESIGN §5), one tree level at a time: the step shared by the HSS compression (weak
+/// admissibility, bem_compression.hpp) and the H² compression (strong admissibility,
+/// h2/h2_compression.hpp). The formats differ only in which other clusters' indices a cluster
+/// must be compressed against (its *sources*).
+///
+/// For a cluster τ of the level being skeletonized:
+///  - the row skeleton comes from an interpolative decomposition (ID) of τ's candidate rows
+///    against (a) Kelvin point sources at proxy points on a sphere of radius proxy_ratio·r_τ
+///    around τ, standing in for every source outside that sphere, and (b) the true entries of the
+///    columns of τ's sources whose quadrature can reach inside that sphere;
+///  - the column skeleton likewise, against the fields of τ's columns at the proxy points and
+///    the true entries of its sources' rows inside the proxy sphere;
+///  - the proxy spheres are large enough that everything outside sees each triangle of τ through
+///    the same regular quadrature rule (near_ratio diameters), so the discrete operator, not just
+///    the continuous one, is captured to the tolerance.
+/// A source on the current *frontier* (the clusters of the level, and leaves above it) offers
+/// its candidates; a source below it, already skeletonized, offers its skeleton, which stands for
+/// all of its indices against anything outside its own proxy spheres.
+#pragma once
+
+#include "hssbem/bem/bem_operator.hpp"
+#include "hssbem/core/cluster_tree.hpp"
+#include "hssbem/hss/kernel_blocks.hpp"
+#include "hssbem/hss/nested_basis.hpp"
+
+#include <functional>
+#include <memory>
+#include <vector>
+
+namespace hssbem {
+
+struct SkeletonizerOptions {
+  double rel_tol = 1e-6;     ///< relative tolerance of each ID
+  int max_rank = -1;         ///< cap on each skeleton; negative: none
+  double proxy_ratio = 2.0;  ///< proxy sphere radius / cluster radius (> 1)
+  int proxy_points = 64;     ///< points on each proxy sphere
+  /// Keep every row (column) whose rigid-body term couples it to a column (row) outside τ in τ's
+  /// skeleton, so that the term can be added to a skeleton coupling (HSS). Without it (H²) such
+  /// terms must lie in near-field blocks.
+  bool force_rigid = true;
+};
+
+/// Geometry of the quadrature's reach, per node (mesh order) and per cluster.
+struct QuadratureReach {
+  std::vector<double> sigma;   ///< per node: every support triangle's near ball lies within this distance of the vertex
+  std::vector<double> h;       ///< per node: largest support triangle diameter
+  std::vector<double> row_r;   ///< per cluster: radius of its collocation points around the centre
+  std::vector<double> src_r;   ///< per cluster: radius of its support triangles around the centre
+  std::vector<double> reach_r; ///< per cluster: radius of its support triangles' near balls
+};
+
+QuadratureReach quadrature_reach(const BemOperator &op, const ClusterTree &tree);
+
+class Skeletonizer {
+public:
+  /// `bases[c]` receives cluster c's skeletons; K's columns are `col_block` per point, scaled
+  /// by `col_scale` per slot (see HssMatrix::col_scale).
+  Skeletonizer(const BemOperator &op, const SkeletonizerOptions &opt, const ClusterTree &tree, int col_block, std::vector<double> col_scale,
+               std::vector<NestedBasis *> bases);
+  ~Skeletonizer();
+
+  /// sources(c, front, out): append to `out` the clusters (≠ c) that c is compressed against.
+  using Sources = std::function<void(int c, const std::vector<int> &front, std::vector<int> &out)>;
+  /// Weak admissibility: every other cluster of the frontier.
+  static void all_others(int c, const std::vector<int> &front, std::vector<int> &out);
+
+  /// Skeletons and interpolation matrices of the clusters of level l (their children done).
+  /// A cluster with need_rows[c] == 0 (need_cols) gets an empty row (column) skeleton; null
+  /// vectors mean every cluster needs both.
+  void skeletonize_level(int l, const Sources &sources, const std::vector<char> *need_rows = nullptr, const std::vector<char> *need_cols = nullptr);
+
+  /// out(r, q) = K(rows[r], cols[q]) (scaled, no rigid-body terms) at out[r·rs + q·cs]; counted
+  /// in entries(). Thread-safe.
+  void block(const std::vector<int> &rows, const std::vector<int> &cols, double *out, long rs, long cs);
+
+  long long entries() const;
+  double time_near_field() const; ///< thread-seconds spent on ID samples
+  double time_ids() const;        ///< thread-seconds spent on IDs
+  int proxy_points() const { return static_cast<int>(m_sphere.size()); }
+  const QuadratureReach &reach() const { return m_reach; }
+
+private:
+  void skeletonize(int c, const std::vector<int> &sources, bool need_rows, bool need_cols);
+  BemOperator::Workspace &ws();
+  bool row_forced(int c, int node) const;
+  bool col_forced(int c, int node) const;
+
+  const BemOperator &m_op;
+  SkeletonizerOptions m_opt;
+  const ClusterTree &m_tree;
+  const int m_w;
+  KernelBlocks m_eval;
+  QuadratureReach m_reach;
+  std::vector<NestedBasis *> m_bases;
+  std::vector<std::vector<int>> m_cols_of_row, m_rows_of_col; ///< rigid-body coupling pattern (nodes), when forced
+  std::vector<Vec3> m_sphere;
+  double m_node_area = 1;
+  std::vector<std::unique_ptr<BemOperator::Workspace>> m_ws;
+  std::vector<long long> m_entries;
+  std::vector<double> m_t_near, m_t_id;
+  std::vector<char> m_in_front;
+  std::vector<std::vector<int>> m_active_rows, m_active_cols;
+};
+
+} // namespace hssbem

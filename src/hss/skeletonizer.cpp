@@ -1,0 +1,326 @@
+// Proxy-sphere skeletonization of K = [H, G(, Gn)], one tree level at a time (see skeletonizer.hpp).
+#include "hssbem/hss/skeletonizer.hpp"
+
+#include "hssbem/core/blas_threads.hpp"
+#include "hssbem/core/interpolative.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+namespace hssbem {
+
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t0)
+{
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+int thread_index()
+{
+#ifdef _OPENMP
+  return omp_get_thread_num();
+#else
+  return 0;
+#endif
+}
+
+int max_threads()
+{
+#ifdef _OPENMP
+  return omp_get_max_threads();
+#else
+  return 1;
+#endif
+}
+
+/// n nearly uniform points on the unit sphere (Fibonacci lattice).
+std::vector<Vec3> unit_sphere_points(int n)
+{
+  std::vector<Vec3> p(n);
+  const double golden = M_PI * (3.0 - std::sqrt(5.0));
+  for (int i = 0; i < n; ++i) {
+    const double z = 1.0 - (2.0 * i + 1.0) / n, r = std::sqrt(std::max(0.0, 1.0 - z * z)), phi = golden * i;
+    p[i] = {r * std::cos(phi), r * std::sin(phi), z};
+  }
+  return p;
+}
+
+/// A skeleton chosen from candidates: local indices and the interpolation matrix (candidates × k).
+struct Skeleton {
+  std::vector<int> local; ///< forced candidates first
+  DenseMatrix W;
+  int forced = 0;
+};
+
+/// Column ID of X (features × candidates, column-major) with the `forced` candidates always in
+/// the skeleton (and interpolating nothing): the others are interpolated from the other skeleton
+/// candidates only, so a forced candidate's exceptional entries never leak into its neighbours.
+Skeleton select_skeleton(std::vector<double> &X, int nfeat, int ncand, const std::vector<char> &forced, const IdOptions &id)
+{
+  std::vector<int> free_idx, forced_idx;
+  for (int q = 0; q < ncand; ++q) (forced[q] ? forced_idx : free_idx).push_back(q);
+  const int nfree = static_cast<int>(free_idx.size()), nforced = static_cast<int>(forced_idx.size());
+  ColumnId cid;
+  if (nfree > 0 && nfeat > 0) {
+    // Gather the free columns.
+    std::vector<double> Xf(static_cast<std::size_t>(nfeat) * nfree);
+    for (int q = 0; q < nfree; ++q) std::copy(&X[static_cast<std::size_t>(free_idx[q]) * nfeat], &X[static_cast<std::size_t>(free_idx[q] + 1) * nfeat], &Xf[static_cast<std::size_t>(q) * nfeat]);
+    cid = column_id(Xf.data(), nfeat, nfree, nfeat, id);
+  } else if (nfree > 0) {
+    cid.redundant.resize(nfree);
+    for (int q = 0; q < nfree; ++q) cid.redundant[q] = q;
+  }
+  const int k = nforced + cid.rank();
+  Skeleton s;
+  s.forced = nforced;
+  s.W = DenseMatrix(ncand, k);
+  for (int t = 0; t < nforced; ++t) {
+    s.local.push_back(forced_idx[t]);
+    s.W(forced_idx[t], t) = 1.0;
+  }
+  for (int t = 0; t < cid.rank(); ++t) {
+    s.local.push_back(free_idx[cid.skeleton[t]]);
+    s.W(free_idx[cid.skeleton[t]], nforced + t) = 1.0;
+  }
+  for (std::size_t j = 0; j < cid.redundant.size(); ++j)
+    for (int t = 0; t < cid.rank(); ++t) s.W(free_idx[cid.redundant[j]], nforced + t) = cid.T[t + j * static_cast<std::size_t>(cid.rank())];
+  return s;
+}
+
+} // namespace
+
+QuadratureReach quadrature_reach(const BemOperator &op, const ClusterTree &tree)
+{
+  const Discretization &disc = op.discretization();
+  const double ratio = op.quadrature_options().near_ratio * (1.0 + 1e-9) + 1e-12;
+  const int nn = disc.num_nodes();
+  QuadratureReach r;
+  r.sigma.assign(nn, 0.0);
+  r.h.assign(nn, 0.0);
+  for (int j = 0; j < nn; ++j) {
+    const Vec3 &s = disc.node_position(j);
+    for (const int *t = disc.support_begin(j); t != disc.support_end(j); ++t) {
+      const Triangle &tri = op.triangle(*t);
+      const Vec3 c = (1.0 / 3) * (tri.p[0] + tri.p[1] + tri.p[2]);
+      const double d = std::max({norm(tri.p[1] - tri.p[0]), norm(tri.p[2] - tri.p[1]), norm(tri.p[0] - tri.p[2])});
+      r.h[j] = std::max(r.h[j], d);
+      r.sigma[j] = std::max(r.sigma[j], norm(c - s) + ratio * d);
+    }
+  }
+  const int nc = tree.num_clusters();
+  r.row_r.assign(nc, 0.0);
+  r.src_r.assign(nc, 0.0);
+  r.reach_r.assign(nc, 0.0);
+  for (int c = 0; c < nc; ++c) {
+    const Cluster &cl = tree.cluster(c);
+    for (int k = cl.begin; k < cl.end; ++k) {
+      const int j = tree.perm()[k];
+      const double d = norm(disc.node_position(j) - cl.centre);
+      r.row_r[c] = std::max(r.row_r[c], norm(disc.node(j).point - cl.centre));
+      r.src_r[c] = std::max(r.src_r[c], d + r.h[j]);
+      r.reach_r[c] = std::max(r.reach_r[c], d + r.sigma[j]);
+    }
+  }
+  return r;
+}
+
+Skeletonizer::Skeletonizer(const BemOperator &op, const SkeletonizerOptions &opt, const ClusterTree &tree, int col_block, std::vector<double> col_scale,
+                           std::vector<NestedBasis *> bases)
+  : m_op(op), m_opt(opt), m_tree(tree), m_w(col_block), m_eval(op, tree, col_block, std::move(col_scale)), m_reach(quadrature_reach(op, tree)),
+    m_bases(std::move(bases)), m_sphere(unit_sphere_points(opt.proxy_points))
+{
+  if (opt.force_rigid) {
+    const int nn = op.num_nodes();
+    m_cols_of_row.resize(nn);
+    m_rows_of_col.resize(nn);
+    for (int i = 0; i < nn; ++i) {
+      int cols[3];
+      double w[3];
+      const int n = op.rigid_body_columns(i, cols, w);
+      for (int a = 0; a < n; ++a) {
+        m_cols_of_row[i].push_back(cols[a]);
+        m_rows_of_col[cols[a]].push_back(i);
+      }
+    }
+  }
+  double area = 0;
+  for (int t = 0; t < op.discretization().mesh().num_triangles(); ++t) area += op.triangle(t).area;
+  m_node_area = area / std::max(1, op.num_nodes());
+  for (int t = 0; t < max_threads(); ++t) m_ws.push_back(std::make_unique<BemOperator::Workspace>(op));
+  m_entries.assign(max_threads(), 0);
+  m_t_near.assign(max_threads(), 0.0);
+  m_t_id.assign(max_threads(), 0.0);
+}
+
+Skeletonizer::~Skeletonizer() = default;
+
+BemOperator::Workspace &Skeletonizer::ws() { return *m_ws[thread_index()]; }
+
+long long Skeletonizer::entries() const
+{
+  long long s = 0;
+  for (long long e : m_entries) s += e;
+  return s;
+}
+
+double Skeletonizer::time_near_field() const
+{
+  double s = 0;
+  for (double t : m_t_near) s += t;
+  return s;
+}
+
+double Skeletonizer::time_ids() const
+{
+  double s = 0;
+  for (double t : m_t_id) s += t;
+  return s;
+}
+
+void Skeletonizer::all_others(int c, const std::vector<int> &front, std::vector<int> &out)
+{
+  for (int o : front)
+    if (o != c) out.push_back(o);
+}
+
+void Skeletonizer::block(const std::vector<int> &rows, const std::vector<int> &cols, double *out, long rs, long cs)
+{
+  m_eval.block(rows, cols, out, rs, cs, ws());
+  m_entries[thread_index()] += static_cast<long long>(rows.size()) * static_cast<long long>(cols.size());
+}
+
+/// A row (node) is forced into c's skeleton when its rigid-body term reaches a column outside c.
+bool Skeletonizer::row_forced(int c, int node) const
+{
+  const Cluster &cl = m_tree.cluster(c);
+  for (int j : m_cols_of_row[node]) {
+    const int pos = m_tree.iperm()[j];
+    if (pos < cl.begin || pos >= cl.end) return true;
+  }
+  return false;
+}
+
+bool Skeletonizer::col_forced(int c, int node) const
+{
+  const Cluster &cl = m_tree.cluster(c);
+  for (int i : m_rows_of_col[node]) {
+    const int pos = m_tree.iperm()[i];
+    if (pos < cl.begin || pos >= cl.end) return true;
+  }
+  return false;
+}
+
+void Skeletonizer::skeletonize_level(int l, const Sources &sources, const std::vector<char> *need_rows, const std::vector<char> *need_cols)
+{
+  // The frontier: the clusters of level l and the leaves above it.
+  std::vector<int> front = m_tree.clusters_at_level(l);
+  for (int c : m_tree.leaves())
+    if (m_tree.cluster(c).level < l) front.push_back(c);
+  m_in_front.assign(m_tree.num_clusters(), 0);
+  m_active_rows.assign(m_tree.num_clusters(), {});
+  m_active_cols.assign(m_tree.num_clusters(), {});
+  for (int c : front) {
+    m_in_front[c] = 1;
+    m_active_rows[c] = basis_candidates(m_tree, m_bases, c, 3, true);
+    m_active_cols[c] = basis_candidates(m_tree, m_bases, c, m_w, false);
+  }
+  for_each_cluster(m_tree.clusters_at_level(l), [&](int c) {
+    std::vector<int> src;
+    sources(c, front, src);
+    skeletonize(c, src, !need_rows || (*need_rows)[c], !need_cols || (*need_cols)[c]);
+  });
+}
+
+void Skeletonizer::skeletonize(int c, const std::vector<int> &sources, bool need_rows, bool need_cols)
+{
+  const Discretization &disc = m_op.discretization();
+  const Cluster &cl = m_tree.cluster(c);
+  const auto &perm = m_tree.perm();
+  const std::vector<int> &rows = m_active_rows[c], &cols = m_active_cols[c];
+  const int nrow = need_rows ? static_cast<int>(rows.size()) : 0, ncol = need_cols ? static_cast<int>(cols.size()) : 0;
+  double h_max = 0;
+  for (int k = cl.begin; k < cl.end; ++k) h_max = std::max(h_max, m_reach.h[perm[k]]);
+  const double r_row = m_opt.proxy_ratio * std::max(m_reach.row_r[c], h_max);
+  const double r_col = std::max(m_opt.proxy_ratio * m_reach.src_r[c], m_reach.reach_r[c]);
+  const int np = static_cast<int>(m_sphere.size());
+  const double w_row = std::sqrt(4 * M_PI * r_row * r_row / np / m_node_area) * m_node_area;
+  const double w_col = std::sqrt(4 * M_PI * r_col * r_col / np / m_node_area);
+
+  auto t0 = std::chrono::steady_clock::now();
+  // Near columns (for the row skeleton) and near rows (for the column skeleton).
+  std::vector<int> near_cols, near_rows;
+  for (int o : sources) {
+    const Cluster &oc = m_tree.cluster(o);
+    const std::vector<int> &o_cols = m_in_front[o] ? m_active_cols[o] : m_bases[o]->col_skel;
+    const std::vector<int> &o_rows = m_in_front[o] ? m_active_rows[o] : m_bases[o]->row_skel;
+    const double d = norm(oc.centre - cl.centre);
+    if (nrow > 0 && d - m_reach.reach_r[o] < r_row)
+      for (int q : o_cols) {
+        const int j = perm[q / m_w];
+        if (norm(disc.node_position(j) - cl.centre) - m_reach.sigma[j] < r_row) near_cols.push_back(q);
+      }
+    if (ncol > 0 && d - m_reach.row_r[o] < r_col)
+      for (int r : o_rows)
+        if (norm(disc.node(perm[r / 3]).point - cl.centre) < r_col) near_rows.push_back(r);
+  }
+  // Row skeleton: features of candidate row r = proxy sources, then near columns.
+  const int nfr = 3 * np + static_cast<int>(near_cols.size());
+  std::vector<double> X(static_cast<std::size_t>(nfr) * nrow);
+  if (nrow > 0) {
+    const Material &mat = m_op.material();
+    const double cu = 1.0 / (16 * M_PI * mat.mu() * (1 - mat.nu)), diag = 3 - 4 * mat.nu;
+    for (int q = 0; q < nrow; ++q) {
+      const Vec3 &x = disc.node(perm[rows[q] / 3]).point;
+      const int a = rows[q] % 3;
+      double *f = &X[static_cast<std::size_t>(q) * nfr];
+      for (int p = 0; p < np; ++p) {
+        const Vec3 d = x - (cl.centre + r_row * m_sphere[p]);
+        const double r2 = dot(d, d), ir = 1.0 / std::sqrt(r2);
+        for (int b = 0; b < 3; ++b) f[3 * p + b] = w_row * cu * ir * ((a == b ? diag : 0.0) + d[a] * d[b] / r2);
+      }
+    }
+    block(rows, near_cols, X.data() + 3 * np, nfr, 1);
+  }
+  // Column skeleton: features of candidate column q = fields at the proxy points, then near rows.
+  const int nfc = 3 * np + static_cast<int>(near_rows.size());
+  std::vector<double> Y(static_cast<std::size_t>(nfc) * ncol);
+  if (ncol > 0) {
+    std::vector<Vec3> P(np);
+    for (int p = 0; p < np; ++p) P[p] = cl.centre + r_col * m_sphere[p];
+    m_eval.at_points(P, cols, Y.data(), 1, nfc, ws());
+    m_entries[thread_index()] += static_cast<long long>(3 * np) * ncol;
+    for (int q = 0; q < ncol; ++q)
+      for (int f = 0; f < 3 * np; ++f) Y[f + static_cast<std::size_t>(q) * nfc] *= w_col;
+    block(near_rows, cols, Y.data() + 3 * np, 1, nfc);
+  }
+  m_t_near[thread_index()] += seconds_since(t0);
+
+  t0 = std::chrono::steady_clock::now();
+  const IdOptions id{m_opt.rel_tol, m_opt.max_rank};
+  NestedBasis &h = *m_bases[c];
+  h.row_skel.clear();
+  h.col_skel.clear();
+  std::vector<char> forced(nrow, 0);
+  if (m_opt.force_rigid)
+    for (int q = 0; q < nrow; ++q) forced[q] = row_forced(c, perm[rows[q] / 3]);
+  Skeleton rs = select_skeleton(X, nfr, nrow, forced, id);
+  forced.assign(ncol, 0);
+  if (m_opt.force_rigid)
+    for (int q = 0; q < ncol; ++q) forced[q] = cols[q] % m_w < 3 && col_forced(c, perm[cols[q] / m_w]);
+  Skeleton cs = select_skeleton(Y, nfc, ncol, forced, id);
+  for (int q : rs.local) h.row_skel.push_back(rows[q]);
+  for (int q : cs.local) h.col_skel.push_back(cols[q]);
+  h.U = need_rows ? std::move(rs.W) : DenseMatrix(static_cast<int>(rows.size()), 0);
+  h.V = need_cols ? std::move(cs.W) : DenseMatrix(static_cast<int>(cols.size()), 0);
+  h.row_forced = rs.forced;
+  h.col_forced = cs.forced;
+  m_t_id[thread_index()] += seconds_since(t0);
+}
+
+} // namespace hssbem
