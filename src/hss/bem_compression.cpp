@@ -151,28 +151,6 @@ void add_rigid_body_terms(const BemOperator &op, HssMatrix &K)
   }
 }
 
-/// Column scales that give the G (and Gn) part of K the Frobenius norm of the H part on a sample
-/// of rows and columns spread over the mesh: G ~ 1/(μ r) and H ~ 1/r² differ by orders of
-/// magnitude, and one relative tolerance should resolve both.
-std::vector<double> balancing_scales(const BemOperator &op, int w)
-{
-  const int n = op.num_nodes();
-  std::vector<int> rows, cols;
-  for (int i = 0; i < n; i += std::max(1, n / 40)) rows.push_back(i);
-  for (int j = 0; j < n; j += std::max(1, n / 400)) cols.push_back(j);
-  const std::size_t ld = 3 * cols.size();
-  std::vector<double> H(3 * rows.size() * ld), G(H.size()), Gn(w > 6 ? 3 * rows.size() * cols.size() : 0);
-  BemOperator::Workspace ws(op);
-  op.fill_hg_without_rigid(rows, cols, H.data(), G.data(), static_cast<long>(ld), w > 6 ? Gn.data() : nullptr, static_cast<long>(cols.size()), ws);
-  double h2 = 0, g2 = 0, gn2 = 0;
-  for (std::size_t k = 0; k < H.size(); ++k) h2 += H[k] * H[k], g2 += G[k] * G[k];
-  for (double v : Gn) gn2 += v * v;
-  std::vector<double> s(w, 1.0);
-  for (int q = 3; q < 6; ++q) s[q] = g2 > 0 ? std::sqrt(h2 / g2) : 1.0;
-  if (w > 6) s[6] = gn2 > 0 ? std::sqrt(h2 / (3 * gn2)) : 1.0; // one Gn column per node against three of H
-  return s;
-}
-
 } // namespace
 
 int default_proxy_points(double rel_tol)
@@ -199,7 +177,7 @@ HssMatrix compress_bem_operator(const BemOperator &op, const HssOptions &options
   HssMatrix K(ClusterTree(points, ClusterTreeOptions{options.leaf_size}), 3, k_columns_per_node(options.pressure_columns));
   phase.reset();
   phase.emplace(Phase::Compression);
-  K.set_col_scales(balancing_scales(op, K.col_block()));
+  K.set_col_scales(kernel_column_scales(op, K.col_block()));
   K.stats().time_tree = seconds_since(t0);
   Compressor compressor(op, options, K);
   compressor.skeletonize();

@@ -2,6 +2,7 @@
 #include "hssbem/hss/kernel_blocks.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 namespace hssbem {
 
@@ -80,6 +81,25 @@ void KernelBlocks::at_points(const std::vector<Vec3> &X, const std::vector<int> 
   std::vector<double> H(3 * X.size() * ld), G(3 * X.size() * ld), Gn(m_w > 6 ? 3 * X.size() * J.nodes.size() : 0);
   m_op.fill_hg_at_points(X, J.nodes, H.data(), G.data(), static_cast<long>(ld), m_w > 6 ? Gn.data() : nullptr, static_cast<long>(J.nodes.size()), ws);
   scatter(J, 3 * X.size(), nullptr, nullptr, H, G, Gn, out, rs, cs);
+}
+
+std::vector<double> kernel_column_scales(const BemOperator &op, int w)
+{
+  const int n = op.num_nodes();
+  std::vector<int> rows, cols;
+  for (int i = 0; i < n; i += std::max(1, n / 40)) rows.push_back(i);
+  for (int j = 0; j < n; j += std::max(1, n / 400)) cols.push_back(j);
+  const std::size_t ld = 3 * cols.size();
+  std::vector<double> H(3 * rows.size() * ld), G(H.size()), Gn(w > 6 ? 3 * rows.size() * cols.size() : 0);
+  BemOperator::Workspace ws(op);
+  op.fill_hg_without_rigid(rows, cols, H.data(), G.data(), static_cast<long>(ld), w > 6 ? Gn.data() : nullptr, static_cast<long>(cols.size()), ws);
+  double h2 = 0, g2 = 0, gn2 = 0;
+  for (std::size_t k = 0; k < H.size(); ++k) h2 += H[k] * H[k], g2 += G[k] * G[k];
+  for (double v : Gn) gn2 += v * v;
+  std::vector<double> s(w, 1.0);
+  for (int q = 3; q < 6; ++q) s[q] = g2 > 0 ? std::sqrt(h2 / g2) : 1.0;
+  if (w > 6) s[6] = gn2 > 0 ? std::sqrt(h2 / (3 * gn2)) : 1.0; // one Gn column per node against three of H
+  return s;
 }
 
 } // namespace hssbem

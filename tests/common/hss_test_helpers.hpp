@@ -38,7 +38,9 @@ inline std::vector<double> dense_k(const BemOperator &op, int w)
   return K;
 }
 
-inline double matvec_error(const HssMatrix &K, const std::vector<double> &Kd, int seed)
+/// ‖(K_compressed − K)x‖ / ‖Kx‖ for a random x; M is HssMatrix or H2Matrix.
+template <class M>
+double matvec_error(const M &K, const std::vector<double> &Kd, int seed)
 {
   const int n = K.tree().num_points(), w = K.col_block();
   std::mt19937 gen(seed);

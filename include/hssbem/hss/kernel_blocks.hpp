@@ -11,6 +11,11 @@
 
 namespace hssbem {
 
+/// Column scales per slot (`w` = 6 or 7) that give the G (and Gn) part of K the Frobenius norm of
+/// the H part, measured on a sample of rows and columns spread over the mesh: G ~ 1/(μ r) and
+/// H ~ 1/r² differ by orders of magnitude, and one relative tolerance should resolve both.
+std::vector<double> kernel_column_scales(const BemOperator &op, int w);
+
 class KernelBlocks {
 public:
   /// `col_block` columns per node: 6 (H, G) or 7 (H, G, Gn).

@@ -1,0 +1,96 @@
+/// \file h2_matrix.hpp
+/// An H² matrix: nested bases in interpolative form (nested_basis.hpp) on a strong-admissibility
+/// block partition (block_partition.hpp).
+///
+/// Rows and columns follow one ClusterTree, indexed as in HssMatrix (cluster order, `row_block`
+/// rows and `col_block` columns per point). With the partition's far blocks (a, b) and near
+/// blocks (leaf a, leaf b),
+///     K(a, b) ≈ U_a K(S_a, C_b) V_bᵀ   (far; U_a, V_b expanded through the nested bases),
+///     K(a, b) = D_ab                    (near, true entries),
+/// where S_a (C_b) is a's row (b's column) skeleton. Unlike HSS, a cluster's basis only has to
+/// capture its interaction with what is far from it or from one of its ancestors, not with its
+/// neighbours, so on a surface its rank stays bounded as the tree grows instead of growing with
+/// the cluster's boundary. The product costs O(N·r) with bounded r.
+#pragma once
+
+#include "hssbem/core/cluster_tree.hpp"
+#include "hssbem/core/dense_matrix.hpp"
+#include "hssbem/h2/block_partition.hpp"
+#include "hssbem/hss/nested_basis.hpp"
+
+#include <cstddef>
+#include <vector>
+
+namespace hssbem {
+
+/// One stored block of an H² matrix: far (skeleton × skeleton) or near (leaf × leaf).
+struct H2Block {
+  int col_cluster = -1;
+  DenseMatrix M;
+};
+
+struct H2LevelStats {
+  int clusters = 0; ///< clusters with a basis
+  int max_row_rank = 0, max_col_rank = 0;
+  double mean_row_rank = 0, mean_col_rank = 0;
+  long far_blocks = 0;
+};
+
+struct H2Stats {
+  std::vector<H2LevelStats> levels; ///< index = tree level (0 = root)
+  std::size_t memory_bytes = 0;     ///< all of the below
+  std::size_t basis_bytes = 0, far_bytes = 0, near_bytes = 0;
+  long far_blocks = 0, near_blocks = 0;
+  long long entries_evaluated = 0;
+  double time_tree = 0, time_near_field = 0, time_ids = 0, time_far = 0, time_near = 0, time_rigid = 0; ///< seconds (ID samples and IDs in thread-seconds)
+  int proxy_points = 0;
+  double eta = 0;
+  int max_row_rank() const;
+  int max_col_rank() const;
+};
+
+class H2Matrix {
+public:
+  H2Matrix(ClusterTree tree, int row_block, int col_block);
+
+  const ClusterTree &tree() const { return m_tree; }
+  int row_block() const { return m_row_block; }
+  int col_block() const { return m_col_block; }
+  int num_rows() const { return m_row_block * m_tree.num_points(); }
+  int num_cols() const { return m_col_block * m_tree.num_points(); }
+
+  /// Column scaling by slot, as HssMatrix::col_scale: the matrix held is K S.
+  double col_scale(int slot) const { return m_col_scale[slot]; }
+  void set_col_scales(std::vector<double> s) { m_col_scale = std::move(s); }
+
+  BlockPartition &partition() { return m_partition; }
+  const BlockPartition &partition() const { return m_partition; }
+  NestedBasis &basis(int c) { return m_bases[c]; }
+  const NestedBasis &basis(int c) const { return m_bases[c]; }
+  std::vector<NestedBasis> &bases() { return m_bases; }
+  /// Far blocks of row cluster a: K(S_a, C_b), one per b in partition().far[a], same order.
+  std::vector<H2Block> &far_blocks(int a) { return m_far[a]; }
+  const std::vector<H2Block> &far_blocks(int a) const { return m_far[a]; }
+  /// Near blocks of leaf a: K(rows of a, columns of b), one per b in partition().near[a].
+  std::vector<H2Block> &near_blocks(int a) { return m_near[a]; }
+  const std::vector<H2Block> &near_blocks(int a) const { return m_near[a]; }
+
+  /// Y = K X for nrhs columns in cluster order, as HssMatrix::apply. O(N·r) per column.
+  void apply(const double *X, int ldx, double *Y, int ldy, int nrhs = 1) const;
+
+  /// Recompute rank, block and memory figures.
+  void update_stats();
+  H2Stats &stats() { return m_stats; }
+  const H2Stats &stats() const { return m_stats; }
+
+private:
+  ClusterTree m_tree;
+  int m_row_block, m_col_block;
+  std::vector<double> m_col_scale;
+  BlockPartition m_partition;
+  std::vector<NestedBasis> m_bases;
+  std::vector<std::vector<H2Block>> m_far, m_near;
+  H2Stats m_stats;
+};
+
+} // namespace hssbem

@@ -1,0 +1,164 @@
+// Entries-only H² compression of K = [H, G(, Gn)] (see h2_compression.hpp).
+#include "hssbem/h2/h2_compression.hpp"
+
+#include "hssbem/core/blas_threads.hpp"
+#include "hssbem/core/phase.hpp"
+#include "hssbem/hss/bem_compression.hpp"
+#include "hssbem/hss/kernel_blocks.hpp"
+#include "hssbem/hss/skeletonizer.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <numeric>
+#include <optional>
+#include <stdexcept>
+
+namespace hssbem {
+
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t0)
+{
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+/// The clusters that c must be compressed against while its level is skeletonized: every
+/// frontier cluster that is not close to c (far from c or from an ancestor), and, when c is a
+/// leaf, the clusters below a close frontier cluster that are far from c.
+void strong_sources(const ClusterTree &tree, const BlockPartition &p, int c, const std::vector<int> &front, std::vector<int> &out)
+{
+  std::vector<int> stack;
+  for (int f : front) {
+    if (f == c) continue;
+    if (!p.is_close(c, f)) {
+      out.push_back(f);
+      continue;
+    }
+    if (tree.cluster(c).left >= 0) continue; // resolved by c's children
+    stack.assign({f});
+    while (!stack.empty()) {
+      const int g = stack.back();
+      stack.pop_back();
+      const Cluster &cg = tree.cluster(g);
+      if (cg.left < 0) continue;
+      for (int h : {cg.left, cg.right}) {
+        if (p.is_far(c, h))
+          out.push_back(h);
+        else if (p.is_close(c, h))
+          stack.push_back(h);
+      }
+    }
+  }
+}
+
+/// Add the rigid-body terms D_i = −Σ_j H⁰(i, j) (from a product with the three translations)
+/// to the near blocks that hold them.
+void add_rigid_body_terms(const BemOperator &op, H2Matrix &K)
+{
+  const ClusterTree &tree = K.tree();
+  const int n = tree.num_points(), w = K.col_block();
+  std::vector<double> X(static_cast<std::size_t>(w) * n * 3, 0.0), Y(static_cast<std::size_t>(3) * n * 3);
+  for (int k = 0; k < n; ++k)
+    for (int c = 0; c < 3; ++c) X[static_cast<std::size_t>(w) * k + c + static_cast<std::size_t>(c) * w * n] = 1.0;
+  K.apply(X.data(), w * n, Y.data(), 3 * n, 3);
+  std::vector<int> leaf_of(n);
+  for (int c : tree.leaves())
+    for (int k = tree.cluster(c).begin; k < tree.cluster(c).end; ++k) leaf_of[k] = c;
+  for (int i = 0; i < op.num_nodes(); ++i) {
+    const int pi = tree.iperm()[i], a = leaf_of[pi];
+    int cols[3];
+    double wts[3];
+    const int nc = op.rigid_body_columns(i, cols, wts);
+    for (int t = 0; t < nc; ++t) {
+      const int pj = tree.iperm()[cols[t]], b = leaf_of[pj];
+      const std::vector<int> &near = K.partition().near[a];
+      const auto it = std::lower_bound(near.begin(), near.end(), b);
+      if (it == near.end() || *it != b) throw std::logic_error("H2 compression: a rigid-body term falls outside the near blocks");
+      DenseMatrix &D = K.near_blocks(a)[it - near.begin()].M;
+      const int r0 = 3 * (pi - tree.cluster(a).begin), c0 = w * (pj - tree.cluster(b).begin);
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) D(r0 + r, c0 + c) -= wts[t] * Y[3 * static_cast<std::size_t>(pi) + r + static_cast<std::size_t>(c) * 3 * n];
+    }
+  }
+}
+
+} // namespace
+
+H2Matrix compress_bem_operator_h2(const BemOperator &op, const H2Options &options)
+{
+  if (!(options.rel_tol > 0 && options.rel_tol < 1)) throw std::invalid_argument("H2: the relative tolerance must lie in (0, 1)");
+  if (options.leaf_size < 1) throw std::invalid_argument("H2: the leaf size must be at least 1");
+  if (!(options.proxy_ratio > 1)) throw std::invalid_argument("H2: the proxy ratio must exceed 1");
+  if (!(options.eta >= 0)) throw std::invalid_argument("H2: eta must be >= 0");
+  if (options.max_rank == 0 || options.max_rank < -1) throw std::invalid_argument("H2: the rank cap must be positive (or -1 for none)");
+  if (op.quadrature_options().far_ratio > 0)
+    throw std::invalid_argument("H2: the 3-point far rule (-mat_bem_far_ratio) breaks the smooth far field the compression relies on; set it to 0");
+  auto t0 = std::chrono::steady_clock::now();
+  const Discretization &disc = op.discretization();
+  std::vector<Vec3> points(disc.num_nodes());
+  for (int i = 0; i < disc.num_nodes(); ++i) points[i] = disc.node(i).point;
+  std::optional<PhaseScope> phase(Phase::Tree);
+  const int w = k_columns_per_node(options.pressure_columns);
+  H2Matrix K(ClusterTree(points, ClusterTreeOptions{options.leaf_size}), 3, w);
+  const ClusterTree &tree = K.tree();
+  phase.reset();
+  phase.emplace(Phase::Compression);
+  K.set_col_scales(kernel_column_scales(op, w));
+  std::vector<double> scales(w);
+  for (int q = 0; q < w; ++q) scales[q] = K.col_scale(q);
+  std::vector<NestedBasis *> bases(tree.num_clusters());
+  for (int c = 0; c < tree.num_clusters(); ++c) bases[c] = &K.basis(c);
+  const int np = options.proxy_points > 0 ? options.proxy_points : default_proxy_points(options.rel_tol);
+  Skeletonizer skel(op, SkeletonizerOptions{options.rel_tol, options.max_rank, options.proxy_ratio, np, false}, tree, w, scales, bases);
+  const QuadratureReach &reach = skel.reach();
+  std::vector<double> radius(tree.num_clusters());
+  for (int c = 0; c < tree.num_clusters(); ++c) radius[c] = std::max(reach.row_r[c], reach.src_r[c]);
+  K.partition() = strong_block_partition(tree, radius, options.eta);
+  const BlockPartition &part = K.partition();
+  K.stats().time_tree = seconds_since(t0);
+  K.stats().proxy_points = np;
+  K.stats().eta = options.eta;
+
+  // Bases, bottom-up; only clusters with a far block at or above them need one.
+  const auto sources = [&](int c, const std::vector<int> &front, std::vector<int> &out) { strong_sources(tree, part, c, front, out); };
+  for (int l = tree.levels() - 1; l >= 1; --l) skel.skeletonize_level(l, sources, &part.has_far, &part.has_far);
+
+  // Far blocks between skeletons.
+  std::vector<int> all(tree.num_clusters());
+  std::iota(all.begin(), all.end(), 0);
+  t0 = std::chrono::steady_clock::now();
+  for_each_cluster(all, [&](int a) {
+    for (int b : part.far[a]) {
+      H2Block B{b, DenseMatrix(static_cast<int>(K.basis(a).row_skel.size()), static_cast<int>(K.basis(b).col_skel.size()))};
+      skel.block(K.basis(a).row_skel, K.basis(b).col_skel, B.M.data(), 1, B.M.ld());
+      K.far_blocks(a).push_back(std::move(B));
+    }
+  });
+  K.stats().time_far = seconds_since(t0);
+  phase.reset();
+
+  // Near blocks (true entries) and the rigid-body terms.
+  phase.emplace(Phase::NearField);
+  t0 = std::chrono::steady_clock::now();
+  for_each_cluster(tree.leaves(), [&](int a) {
+    const std::vector<int> rows = basis_candidates(tree, K.bases(), a, 3, true);
+    for (int b : part.near[a]) {
+      const std::vector<int> cols = basis_candidates(tree, K.bases(), b, w, false);
+      H2Block B{b, DenseMatrix(static_cast<int>(rows.size()), static_cast<int>(cols.size()))};
+      skel.block(rows, cols, B.M.data(), 1, B.M.ld());
+      K.near_blocks(a).push_back(std::move(B));
+    }
+  });
+  K.stats().time_near = seconds_since(t0);
+  t0 = std::chrono::steady_clock::now();
+  add_rigid_body_terms(op, K);
+  K.stats().time_rigid = seconds_since(t0);
+  phase.reset();
+  K.stats().entries_evaluated = skel.entries();
+  K.stats().time_near_field = skel.time_near_field();
+  K.stats().time_ids = skel.time_ids();
+  K.update_stats();
+  return K;
+}
+
+} // namespace hssbem

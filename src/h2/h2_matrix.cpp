@@ -1,0 +1,119 @@
+// H² matrix: storage, the O(N·r) product and rank/memory figures.
+#include "hssbem/h2/h2_matrix.hpp"
+
+#include "hssbem/core/blas_threads.hpp"
+#include "hssbem/core/lapack.hpp"
+#include "hssbem/core/phase.hpp"
+
+#include <algorithm>
+#include <numeric>
+
+namespace hssbem {
+
+int H2Stats::max_row_rank() const
+{
+  int r = 0;
+  for (const auto &l : levels) r = std::max(r, l.max_row_rank);
+  return r;
+}
+
+int H2Stats::max_col_rank() const
+{
+  int r = 0;
+  for (const auto &l : levels) r = std::max(r, l.max_col_rank);
+  return r;
+}
+
+H2Matrix::H2Matrix(ClusterTree tree, int row_block, int col_block)
+  : m_tree(std::move(tree)), m_row_block(row_block), m_col_block(col_block), m_col_scale(col_block, 1.0), m_bases(m_tree.num_clusters()),
+    m_far(m_tree.num_clusters()), m_near(m_tree.num_clusters())
+{
+}
+
+void H2Matrix::apply(const double *X, int ldx, double *Y, int ldy, int nrhs) const
+{
+  PhaseScope phase(Phase::Matvec);
+  const int nc = m_tree.num_clusters();
+  std::vector<int> all(nc);
+  std::iota(all.begin(), all.end(), 0);
+  std::vector<DenseMatrix> xh(nc), yh(nc);
+  // Upward pass: xh_τ = V_τᵀ (candidate part of x), deepest level first.
+  for (int l = m_tree.levels() - 1; l >= 1; --l)
+    for_each_cluster(m_tree.clusters_at_level(l), [&](int c) {
+      const Cluster &cl = m_tree.cluster(c);
+      const DenseMatrix &V = m_bases[c].V;
+      xh[c] = DenseMatrix(V.n, nrhs);
+      if (V.n == 0) return;
+      if (cl.left < 0) {
+        lapack::gemm('T', 'N', V.n, nrhs, V.m, 1.0, V.data(), V.ld(), X + static_cast<long>(m_col_block) * cl.begin, ldx, 0.0, xh[c].data(), xh[c].ld());
+      } else {
+        const DenseMatrix &a = xh[cl.left], &b = xh[cl.right];
+        lapack::gemm('T', 'N', V.n, nrhs, a.m, 1.0, V.data(), V.ld(), a.data(), a.ld(), 0.0, xh[c].data(), xh[c].ld());
+        lapack::gemm('T', 'N', V.n, nrhs, b.m, 1.0, V.data() + a.m, V.ld(), b.data(), b.ld(), 1.0, xh[c].data(), xh[c].ld());
+      }
+    });
+  // Far blocks: yh_a = Σ_b K(S_a, C_b) xh_b.
+  for_each_cluster(all, [&](int a) {
+    yh[a] = DenseMatrix(m_bases[a].U.n, nrhs);
+    for (const H2Block &B : m_far[a])
+      lapack::gemm('N', 'N', B.M.m, nrhs, B.M.n, 1.0, B.M.data(), B.M.ld(), xh[B.col_cluster].data(), xh[B.col_cluster].ld(), 1.0, yh[a].data(),
+                   yh[a].ld());
+  });
+  // Downward pass: children's yh += U_τ yh_τ; leaves add U yh and their near blocks.
+  for (int l = 1; l < m_tree.levels(); ++l)
+    for_each_cluster(m_tree.clusters_at_level(l), [&](int c) {
+      const Cluster &cl = m_tree.cluster(c);
+      const DenseMatrix &U = m_bases[c].U;
+      if (cl.left >= 0) {
+        if (U.n == 0) return;
+        DenseMatrix &ya = yh[cl.left], &yb = yh[cl.right];
+        lapack::gemm('N', 'N', ya.m, nrhs, U.n, 1.0, U.data(), U.ld(), yh[c].data(), yh[c].ld(), 1.0, ya.data(), ya.ld());
+        lapack::gemm('N', 'N', yb.m, nrhs, U.n, 1.0, U.data() + ya.m, U.ld(), yh[c].data(), yh[c].ld(), 1.0, yb.data(), yb.ld());
+      }
+    });
+  for_each_cluster(m_tree.leaves(), [&](int c) {
+    const Cluster &cl = m_tree.cluster(c);
+    double *y = Y + static_cast<long>(m_row_block) * cl.begin;
+    const int m = m_row_block * cl.size();
+    for (int k = 0; k < nrhs; ++k) std::fill(y + static_cast<long>(k) * ldy, y + static_cast<long>(k) * ldy + m, 0.0);
+    for (const H2Block &B : m_near[c])
+      lapack::gemm('N', 'N', B.M.m, nrhs, B.M.n, 1.0, B.M.data(), B.M.ld(), X + static_cast<long>(m_col_block) * m_tree.cluster(B.col_cluster).begin, ldx,
+                   1.0, y, ldy);
+    const DenseMatrix &U = m_bases[c].U;
+    if (U.n > 0) lapack::gemm('N', 'N', U.m, nrhs, U.n, 1.0, U.data(), U.ld(), yh[c].data(), yh[c].ld(), 1.0, y, ldy);
+  });
+}
+
+void H2Matrix::update_stats()
+{
+  const double eta = m_stats.eta;
+  m_stats.levels.assign(m_tree.levels(), H2LevelStats{});
+  m_stats.eta = eta;
+  m_stats.basis_bytes = m_stats.far_bytes = m_stats.near_bytes = 0;
+  m_stats.far_blocks = m_stats.near_blocks = 0;
+  for (int c = 0; c < m_tree.num_clusters(); ++c) {
+    const NestedBasis &b = m_bases[c];
+    m_stats.basis_bytes += b.U.bytes() + b.V.bytes() + (b.row_skel.size() + b.col_skel.size()) * sizeof(int);
+    for (const H2Block &B : m_far[c]) m_stats.far_bytes += B.M.bytes() + sizeof(H2Block);
+    for (const H2Block &B : m_near[c]) m_stats.near_bytes += B.M.bytes() + sizeof(H2Block);
+    m_stats.far_blocks += static_cast<long>(m_far[c].size());
+    m_stats.near_blocks += static_cast<long>(m_near[c].size());
+    H2LevelStats &s = m_stats.levels[m_tree.cluster(c).level];
+    s.far_blocks += static_cast<long>(m_far[c].size());
+    if (c == 0 || (b.U.n == 0 && b.V.n == 0 && !m_partition.has_far[c])) continue;
+    s.clusters += 1;
+    const int kr = static_cast<int>(b.row_skel.size()), kc = static_cast<int>(b.col_skel.size());
+    s.max_row_rank = std::max(s.max_row_rank, kr);
+    s.max_col_rank = std::max(s.max_col_rank, kc);
+    s.mean_row_rank += kr;
+    s.mean_col_rank += kc;
+  }
+  for (auto &s : m_stats.levels)
+    if (s.clusters > 0) {
+      s.mean_row_rank /= s.clusters;
+      s.mean_col_rank /= s.clusters;
+    }
+  m_stats.memory_bytes = m_stats.basis_bytes + m_stats.far_bytes + m_stats.near_bytes;
+}
+
+} // namespace hssbem
