@@ -2,13 +2,13 @@
 // direct solve, GMRES preconditioned by HSS factorizations at loose tolerances, and GMRES with
 // -pc_type none / jacobi. One table row per configuration (CSV on stdout).
 //
-//   bench_ksp -mesh FILE [-matrix dense|hss] [-direct_tol 1e-6] [-pc_tols 1e-2,1e-3,1e-4]
+//   bench_ksp -mesh FILE [-matrix dense|hss|h2] [-direct_tol 1e-6] [-pc_tols 1e-2,1e-3,1e-4]
 //             [-rtol 1e-10] [-max_it 300] [-skip none,jacobi]
 //
 // Problem (as bench_hss): nodes below the median height clamped, the others loaded by a traction
 // (0, 0, -1); E = 1, nu = 0.3. The Krylov runs use the -matrix operator: dense (exact entries,
-// BLAS product) or the HSS MatShell at -mat_hss_rel_tol (PC tolerances looser than that are
-// truncated from it). Every run's error is measured against the dense LU solution.
+// BLAS product), the HSS MatShell at -mat_hss_rel_tol (PC tolerances looser than that are
+// truncated from it) or the H² MatShell at -mat_h2_rel_tol (the PCs compress HSS anew). Every run's error is measured against the dense LU solution.
 #include "hssbem/petsc/log.h"
 #include "hssbem/petsc/pc_hss.h"
 #include "hssbem/petsc/system.h"
@@ -117,12 +117,12 @@ int main(int argc, char **argv)
     PetscCall(HssbemCreateSystem(PETSC_COMM_WORLD, op, sel, nullptr, HSSBEM_MAT_DENSE, &Ad, &bd));
     PetscCall(PetscTime(&t1));
     PetscCall(PetscPrintf(PETSC_COMM_WORLD, "# %s: %d unknowns; dense assembly %.2f s\n", mesh_path, 3 * disc.num_nodes(), t1 - t0));
-    const bool hss_matrix = std::string(matrix) == HSSBEM_MAT_HSS;
+    const bool hss_matrix = std::string(matrix) == HSSBEM_MAT_HSS || std::string(matrix) == HSSBEM_MAT_H2;
     if (hss_matrix) {
       PetscCall(PetscTime(&t0));
-      PetscCall(HssbemCreateSystem(PETSC_COMM_WORLD, op, sel, nullptr, HSSBEM_MAT_HSS, &Ak, &bk));
+      PetscCall(HssbemCreateSystem(PETSC_COMM_WORLD, op, sel, nullptr, matrix, &Ak, &bk));
       PetscCall(PetscTime(&t1));
-      PetscCall(PetscPrintf(PETSC_COMM_WORLD, "# HSS matrix (MatShell) compression %.2f s\n", t1 - t0));
+      PetscCall(PetscPrintf(PETSC_COMM_WORLD, "# %s matrix (MatShell) compression %.2f s\n", matrix, t1 - t0));
       PetscCall(MatView(Ak, PETSC_VIEWER_STDOUT_WORLD));
     }
     PetscCall(PetscPrintf(PETSC_COMM_WORLD, "configuration,iterations,reason,setup_s,solve_s,error_vs_dense_lu\n"));

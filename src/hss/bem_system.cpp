@@ -2,6 +2,7 @@
 #include "hssbem/hss/bem_system.hpp"
 
 #include "hssbem/bem/rigid_modes.hpp"
+#include "hssbem/hss/pattern_columns.hpp"
 
 #include <cmath>
 #include <stdexcept>
@@ -15,46 +16,16 @@ HssBemSystem::HssBemSystem(const BemOperator &op, HssMatrix K) : m_op(op), m_K(s
   if (m_K.tree().num_points() != op.num_nodes()) throw std::invalid_argument("HSS: the compressed matrix does not belong to this operator");
 }
 
-void HssBemSystem::apply_k(std::vector<double> xk, double *y) const
-{
-  const int n = m_K.tree().num_points(), w = m_K.col_block();
-  for (int j = 0; j < n; ++j) // the matrix holds K S (column scales); feed it S⁻¹ x
-    for (int q = 0; q < w; ++q) xk[static_cast<std::size_t>(w) * j + q] /= m_K.col_scale(q);
-  std::vector<double> xc(xk.size()), yc(3L * n);
-  m_K.tree().to_cluster_order(xk.data(), xc.data(), w);
-  m_K.apply(xc.data(), w * n, yc.data(), 3 * n);
-  m_K.tree().to_mesh_order(yc.data(), y, 3);
-}
-
 std::vector<double> HssBemSystem::rhs(const SystemSelection &sel) const
 {
-  const int n = m_K.tree().num_points(), w = m_K.col_block();
-  std::vector<double> xk(static_cast<std::size_t>(w) * n, 0.0), b(3L * n);
-  for (int j = 0; j < n; ++j) {
-    const bool pressure = !sel.pressure.empty() && !std::isnan(sel.pressure[j]);
-    if (pressure) {
-      if (w < 7) throw std::logic_error("HSS: pressure loads need the pressure columns (HssOptions::pressure_columns)");
-      xk[w * j + 6] = -sel.pressure[j];
-    }
-    for (int c = 0; c < 3; ++c) {
-      if (sel.displacement_known[j][c]) xk[w * j + c] = -sel.known[j][c];
-      else if (!pressure) xk[w * j + 3 + c] = sel.known[j][c];
-    }
-  }
-  apply_k(xk, b.data());
+  std::vector<double> b(3L * m_K.tree().num_points());
+  apply_compressed_k(m_K, pattern_rhs_input(sel, m_K.tree().num_points(), m_K.col_block()), b.data());
   return b;
 }
 
 void HssBemSystem::apply(const SystemSelection &sel, const double *x, double *y) const
 {
-  const int n = m_K.tree().num_points(), w = m_K.col_block();
-  std::vector<double> xk(static_cast<std::size_t>(w) * n, 0.0);
-  for (int j = 0; j < n; ++j)
-    for (int c = 0; c < 3; ++c) {
-      if (sel.displacement_known[j][c]) xk[w * j + 3 + c] = -x[3 * j + c];
-      else xk[w * j + c] = x[3 * j + c];
-    }
-  apply_k(xk, y);
+  apply_compressed_k(m_K, pattern_product_input(sel, x, m_K.tree().num_points(), m_K.col_block()), y);
 }
 
 std::vector<double> HssBemSystem::diagonal(const SystemSelection &sel) const
@@ -68,9 +39,9 @@ std::vector<double> HssBemSystem::diagonal(const SystemSelection &sel) const
     for (int k = cl.begin; k < cl.end; ++k) {
       const int j = tree.perm()[k], local = k - cl.begin;
       for (int r = 0; r < 3; ++r) {
-        const bool known = sel.displacement_known[j][r];
-        const int slot = known ? 3 + r : r;
-        d[3L * j + r] = (known ? -1.0 : 1.0) * D(3 * local + r, w * local + slot) / m_K.col_scale(slot);
+        double sign;
+        const int slot = pattern_slot(sel, j, r, &sign);
+        d[3L * j + r] = sign * D(3 * local + r, w * local + slot) / m_K.col_scale(slot);
       }
     }
   }

@@ -113,9 +113,9 @@ static PetscErrorCode FactorMatType_Private(KSP ksp, Mat A, MatType *type)
   const std::string pct(pctype ? pctype : ""), st(solver);
   if (pct != PCLU && pct != PCCHOLESKY && pct != PCILU) PetscFunctionReturn(PETSC_SUCCESS);
   {
-    PetscBool hss;
-    PetscCall(HssbemMatIsHss(A, &hss));
-    PetscCheck(!hss, PetscObjectComm((PetscObject)A), PETSC_ERR_ARG_INCOMP, "the HSS matrix has no entries for -pc_type %s: use -pc_type hss, or -bem_mat_type dense", pct.c_str());
+    PetscBool compressed;
+    PetscCall(HssbemMatIsCompressed(A, &compressed));
+    PetscCheck(!compressed, PetscObjectComm((PetscObject)A), PETSC_ERR_ARG_INCOMP, "the compressed (HSS or H2) matrix has no entries for -pc_type %s: use -pc_type hss, or -bem_mat_type dense", pct.c_str());
   }
   if (st == "mumps" || st == "superlu_dist") *type = MATAIJ;
   else if (st == "scalapack" || (st.empty() && size > 1)) *type = MATSCALAPACK;
@@ -166,7 +166,8 @@ static PetscErrorCode KSPSolveInLayout_Private(KSP ksp, Mat op, Vec b, Vec x, Pe
 
 /*@C
   HssbemKSPCreate - Creates the main solver (no prefix) with the defaults of the matrix type
-  (-ksp_type preonly with -pc_type hss on the HSS matrix, -pc_type lu on the dense one) and applies
+  (-ksp_type preonly with -pc_type hss on the HSS matrix, GMRES(100) with -pc_type jacobi and
+  -ksp_rtol 1e-8 on the H² one, -pc_type lu on the dense one) and applies
   the options database, before there is a matrix, so that option errors surface before the
   expensive assembly.
 
@@ -175,14 +176,19 @@ static PetscErrorCode KSPSolveInLayout_Private(KSP ksp, Mat op, Vec b, Vec x, Pe
 PetscErrorCode HssbemKSPCreate(MPI_Comm comm, const char *mat_type, KSP *ksp)
 {
   PC        pc;
-  PetscBool hss;
+  PetscBool hss, h2;
 
   PetscFunctionBegin;
   PetscCall(PetscStrcmp(mat_type, HSSBEM_MAT_HSS, &hss));
+  PetscCall(PetscStrcmp(mat_type, HSSBEM_MAT_H2, &h2));
   PetscCall(KSPCreate(comm, ksp));
-  PetscCall(KSPSetType(*ksp, KSPPREONLY));
+  PetscCall(KSPSetType(*ksp, h2 ? KSPGMRES : KSPPREONLY));
+  if (h2) {
+    PetscCall(KSPGMRESSetRestart(*ksp, 100));
+    PetscCall(KSPSetTolerances(*ksp, 1e-8, PETSC_DEFAULT, PETSC_DEFAULT, PETSC_DEFAULT));
+  }
   PetscCall(KSPGetPC(*ksp, &pc));
-  PetscCall(PCSetType(pc, hss ? PCHSS : PCLU));
+  PetscCall(PCSetType(pc, hss ? PCHSS : h2 ? PCJACOBI : PCLU));
   PetscCall(KSPSetFromOptions(*ksp));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

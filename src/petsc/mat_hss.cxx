@@ -1,5 +1,6 @@
-/* The BEM operator as a MatShell backed by the HSS engine: MatMult by the O(N·r) product,
-   MatGetDiagonal from the leaves' true entries, MatView with ranks and memory. */
+/* The BEM operator as a MatShell backed by a compressed K (HSS, or H² with -bem_mat_type h2):
+   MatMult by the O(N·r) product, MatGetDiagonal from the leaves' true entries, MatView with
+   ranks and memory. */
 #include "mat_hss.hpp"
 
 #include "hssbem/petsc/log.h"
@@ -34,8 +35,8 @@ PetscErrorCode MatMult_Hss(Mat A, Vec x, Vec y)
   PetscCall(ctx->ex.SetUp(x));
   PetscCall(ctx->ex.Gather(x, &xa));
   PetscCall(ctx->ex.GetOut(&ya));
-  if (p.hss) {
-    p.hss->apply(p.sel, xa, ya);
+  if (p.compressed()) {
+    p.compressed()->apply(p.sel, xa, ya);
     if (!p.modes.empty()) HssbemAddRegularization(p.modes, xa, ya);
   }
   PetscCall(ctx->ex.RestoreGather(&xa));
@@ -53,8 +54,8 @@ PetscErrorCode MatGetDiagonal_Hss(Mat A, Vec d)
   const HssbemProblem &p = *ctx->problem;
   PetscCall(ctx->ex.SetUp(d));
   PetscCall(ctx->ex.GetOut(&da));
-  if (p.hss) {
-    const std::vector<double> diag = p.hss->diagonal(p.sel);
+  if (p.compressed()) {
+    const std::vector<double> diag = p.compressed()->diagonal(p.sel);
     for (std::size_t i = 0; i < diag.size(); ++i) {
       da[i] = diag[i];
       if (!p.modes.empty()) {
@@ -77,6 +78,19 @@ PetscErrorCode MatView_Hss(Mat A, PetscViewer viewer)
   if (!ascii) PetscFunctionReturn(PETSC_SUCCESS);
   PetscCall(MatHssGetContext(A, &ctx));
   const HssbemProblem &p = *ctx->problem;
+  if (p.is_h2) {
+    const hssbem::H2Options &o = p.h2_options;
+    PetscCall(PetscViewerASCIIPrintf(viewer, "BEM operator in H² form (hssbem, strong admissibility): relative tolerance %g, leaf size %d, eta %g, rank cap %s, proxy ratio %g\n", o.rel_tol,
+                                     o.leaf_size, o.eta, o.max_rank > 0 ? std::to_string(o.max_rank).c_str() : "none", o.proxy_ratio));
+    PetscCall(PetscViewerASCIIPrintf(viewer, "  pattern: %s; rigid-mode regularisation: %s; the compression lives on rank 0\n", o.pressure_columns ? "K = [H, G, Gn] (pressure loads)" : "K = [H, G]",
+                                     p.modes.empty() ? "no" : "yes"));
+    if (p.h2) {
+      PetscCall(PetscViewerASCIIPushTab(viewer));
+      PetscCall(HssbemViewH2Matrix_Private(viewer, p.h2->matrix()));
+      PetscCall(PetscViewerASCIIPopTab(viewer));
+    }
+    PetscFunctionReturn(PETSC_SUCCESS);
+  }
   const hssbem::HssOptions &o = p.hss_options;
   PetscCall(PetscViewerASCIIPrintf(viewer, "BEM operator in HSS form (hssbem): relative tolerance %g, leaf size %d, rank cap %s, proxy ratio %g\n", o.rel_tol, o.leaf_size,
                                    o.max_rank > 0 ? std::to_string(o.max_rank).c_str() : "none", o.proxy_ratio));
@@ -120,6 +134,28 @@ PetscErrorCode HssbemViewHssMatrix_Private(PetscViewer viewer, const hssbem::Hss
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+PetscErrorCode HssbemViewH2Matrix_Private(PetscViewer viewer, const hssbem::H2Matrix &K)
+{
+  const hssbem::H2Stats &s = K.stats();
+  const double           n = K.num_rows(), dense_entries = n * K.num_cols();
+
+  PetscFunctionBegin;
+  PetscCall(PetscViewerASCIIPrintf(viewer, "%d rows, %d levels, %d proxy points; max rank %d (rows) / %d (columns); memory %.1f MB (bases %.1f, %ld far blocks %.1f, %ld near blocks %.1f; dense K: %.1f MB)\n",
+                                   K.num_rows(), (int)s.levels.size(), s.proxy_points, s.max_row_rank(), s.max_col_rank(), s.memory_bytes / 1048576.0, s.basis_bytes / 1048576.0, s.far_blocks,
+                                   s.far_bytes / 1048576.0, s.near_blocks, s.near_bytes / 1048576.0, 8 * dense_entries / 1048576.0));
+  PetscCall(PetscViewerASCIIPrintf(viewer, "rank per level (clusters with a basis: rows max/mean, columns max/mean):"));
+  PetscCall(PetscViewerASCIIUseTabs(viewer, PETSC_FALSE));
+  for (std::size_t l = 1; l < s.levels.size(); ++l) {
+    const hssbem::H2LevelStats &L = s.levels[l];
+    if (L.clusters > 0) PetscCall(PetscViewerASCIIPrintf(viewer, " L%d (%d: %d/%.0f, %d/%.0f)", (int)l, L.clusters, L.max_row_rank, L.mean_row_rank, L.max_col_rank, L.mean_col_rank));
+  }
+  PetscCall(PetscViewerASCIIPrintf(viewer, "\n"));
+  PetscCall(PetscViewerASCIIUseTabs(viewer, PETSC_TRUE));
+  PetscCall(PetscViewerASCIIPrintf(viewer, "entries evaluated %lld (%.2f x dense K); seconds: tree and partition %.2f, ID samples %.2f and IDs %.2f (thread-seconds), far blocks %.2f, near blocks %.2f, rigid-body terms %.2f\n",
+                                   s.entries_evaluated, s.entries_evaluated / dense_entries, s.time_tree, s.time_near_field, s.time_ids, s.time_far, s.time_near, s.time_rigid));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 PetscErrorCode HssbemMatCreateHss_Private(MPI_Comm comm, HssbemProblem *problem, Mat *A, Vec *b)
 {
   const hssbem::BemOperator &op = *problem->op;
@@ -136,16 +172,22 @@ PetscErrorCode HssbemMatCreateHss_Private(MPI_Comm comm, HssbemProblem *problem,
   PetscCallMPI(MPI_Comm_rank(comm, &rank));
   if (rank == 0) {
     try {
-      auto sys    = std::make_shared<hssbem::HssBemSystem>(op, problem->hss_options);
-      b0          = sys->rhs(problem->sel);
-      problem->hss = sys;
+      if (problem->is_h2) {
+        auto sys    = std::make_shared<hssbem::H2BemSystem>(op, problem->h2_options);
+        b0          = sys->rhs(problem->sel);
+        problem->h2 = sys;
+      } else {
+        auto sys     = std::make_shared<hssbem::HssBemSystem>(op, problem->hss_options);
+        b0           = sys->rhs(problem->sel);
+        problem->hss = sys;
+      }
     } catch (const std::exception &e) {
       failed  = 1;
       message = e.what();
     }
   }
   PetscCallMPI(MPI_Bcast(&failed, 1, MPI_INT, 0, comm));
-  PetscCheck(!failed, comm, PETSC_ERR_LIB, "HSS compression failed: %s", rank == 0 ? message.c_str() : "see rank 0");
+  PetscCheck(!failed, comm, PETSC_ERR_LIB, "%s compression failed: %s", problem->is_h2 ? "H2" : "HSS", rank == 0 ? message.c_str() : "see rank 0");
   PetscCall(HssbemOwnedNodes(comm, nn, &nstart, &nlocal));
   auto ctx     = new MatHss;
   ctx->problem = problem;

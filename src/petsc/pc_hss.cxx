@@ -28,7 +28,7 @@ const char *SourceName(Source s)
 }
 
 struct PC_HSS {
-  PetscReal rel_tol   = 0;  /* <= 0: the matrix's tolerance (1e-8 on a dense matrix) */
+  PetscReal rel_tol   = 0;  /* <= 0: the matrix's tolerance (1e-8 on a dense matrix, 1e-3 on an H² one) */
   PetscInt  leaf_size = 0;  /* <= 0: the matrix's leaf size (256 on a dense matrix) */
   PetscInt  max_rank  = -1; /* -1: the matrix's cap (none on a dense matrix) */
   /* set up (rank 0) */
@@ -53,7 +53,7 @@ double Since(PetscLogDouble t0)
 void FactorOnRoot(PC_HSS *hss, const HssbemProblem &p)
 {
   hssbem::HssOptions o = p.is_hss ? p.hss_options : hssbem::HssOptions{};
-  if (!p.is_hss) o.rel_tol = 1e-8;
+  if (!p.is_hss) o.rel_tol = p.is_h2 ? 1e-3 : 1e-8; /* on H², a preconditioner for GMRES around the accurate product (DESIGN §6) */
   o.pressure_columns = false; /* the factorization needs H and G only */
   if (hss->rel_tol > 0) o.rel_tol = hss->rel_tol;
   if (hss->leaf_size > 0) o.leaf_size = (int)hss->leaf_size;
@@ -173,7 +173,7 @@ PetscErrorCode PCSetFromOptions_HSS(PC pc, PetscOptionItems *PetscOptionsObject)
 
   PetscFunctionBegin;
   PetscOptionsHeadBegin(PetscOptionsObject, "HSS factorization options");
-  PetscCall(PetscOptionsReal("-pc_hss_rel_tol", "Relative tolerance of the compression factored (0: the matrix's; 1e-8 on a dense matrix)", "PCHSSSetRelTol", hss->rel_tol, &hss->rel_tol, NULL));
+  PetscCall(PetscOptionsReal("-pc_hss_rel_tol", "Relative tolerance of the compression factored (0: the matrix's; 1e-8 on a dense matrix, 1e-3 on an H2 one)", "PCHSSSetRelTol", hss->rel_tol, &hss->rel_tol, NULL));
   PetscCall(PetscOptionsInt("-pc_hss_leaf_size", "Dof nodes per leaf cluster (0: the matrix's; 256 on a dense matrix)", "PCHSSSetLeafSize", hss->leaf_size, &hss->leaf_size, NULL));
   PetscCall(PetscOptionsInt("-pc_hss_max_rank", "Cap on each skeleton (-1: the matrix's; none on a dense matrix)", "PCHSSSetMaxRank", hss->max_rank, &hss->max_rank, NULL));
   PetscOptionsHeadEnd();
@@ -248,8 +248,9 @@ PetscErrorCode PCHSSSetMaxRank_HSS(PC pc, PetscInt k)
   Notes:
   With -ksp_type preonly this is a direct solver accurate to about the tolerance; with GMRES and a
   loose tolerance (1e-2 .. 1e-4) a preconditioner. On the HSS matrix a looser tolerance truncates
-  the matrix's compression (no kernel entry evaluated); on a dense matrix, or at a tighter
-  tolerance, the operator is compressed anew. A breakdown sets PC_FACTOR_NUMERIC_ZEROPIVOT.
+  the matrix's compression (no kernel entry evaluated); on a dense or H² matrix, or at a tighter
+  tolerance, the operator is compressed anew (at 1e-3 by default on an H² matrix, a
+  preconditioner for GMRES around the H² product). A breakdown sets PC_FACTOR_NUMERIC_ZEROPIVOT.
 
   Level: beginner
 M*/

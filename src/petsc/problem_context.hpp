@@ -6,6 +6,7 @@
 #include "hssbem/petsc/compat.h"
 
 #include "hssbem/bem/bem_operator.hpp"
+#include "hssbem/h2/h2_system.hpp"
 #include "hssbem/hss/bem_system.hpp"
 
 #include <petscmat.h>
@@ -20,6 +21,16 @@ struct HssbemProblem {
   PetscBool                  is_hss = PETSC_FALSE;
   hssbem::HssOptions         hss_options;                 /* of the compression below */
   std::shared_ptr<const hssbem::HssBemSystem> hss;        /* rank 0 only, HSS matrices only */
+  PetscBool                  is_h2 = PETSC_FALSE;
+  hssbem::H2Options          h2_options;                  /* of the compression below */
+  std::shared_ptr<const hssbem::H2BemSystem> h2;          /* rank 0 only, H² matrices only */
+
+  /* The compressed operator behind a MatShell (rank 0), or NULL. */
+  const hssbem::CompressedBemSystem *compressed() const
+  {
+    if (hss) return hss.get();
+    return h2.get();
+  }
 };
 
 /* The problem composed with A, or NULL when A did not come from HssbemCreateSystem(). */

@@ -60,6 +60,24 @@ PetscErrorCode HssbemMatIsHss(Mat A, PetscBool *is_hss)
 }
 
 /*@C
+  HssbemMatIsCompressed - Tells whether A is a compressed (HSS or H²) MatShell of
+  HssbemCreateSystem(), which has no entries to factor.
+
+  Not Collective
+
+  Level: intermediate
+@*/
+PetscErrorCode HssbemMatIsCompressed(Mat A, PetscBool *compressed)
+{
+  HssbemProblem *p;
+
+  PetscFunctionBegin;
+  PetscCall(HssbemMatGetProblem(A, &p));
+  *compressed = p && (p->is_hss || p->is_h2) ? PETSC_TRUE : PETSC_FALSE;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/*@C
   HssbemHssOptionsFromDatabase - Reads the options of the operator's HSS compression.
 
   Options Database Keys:
@@ -95,6 +113,44 @@ PetscErrorCode HssbemHssOptionsFromDatabase(MPI_Comm comm, const char *prefix, h
 }
 
 /*@C
+  HssbemH2OptionsFromDatabase - Reads the options of the operator's H² compression.
+
+  Options Database Keys:
++ -mat_h2_rel_tol <tol>      - relative tolerance of each interpolative decomposition
+. -mat_h2_leaf_size <n>      - dof nodes per leaf cluster
+. -mat_h2_eta <eta>          - clusters a, b are far when |c_a - c_b| > (1 + eta)(R_a + R_b)
+. -mat_h2_max_rank <k>       - cap on each skeleton (-1: none)
+. -mat_h2_proxy_ratio <r>    - proxy sphere radius over cluster radius
+- -mat_h2_proxy_points <n>   - points per proxy sphere (0: from the tolerance)
+
+  Level: intermediate
+@*/
+PetscErrorCode HssbemH2OptionsFromDatabase(MPI_Comm comm, const char *prefix, hssbem::H2Options *opts)
+{
+  PetscInt leaf = opts->leaf_size, rank = opts->max_rank, np = opts->proxy_points;
+
+  PetscFunctionBegin;
+  PetscOptionsBegin(comm, prefix, "H2 compression of the BEM operator (-bem_mat_type h2)", "Mat");
+  PetscCall(PetscOptionsReal("-mat_h2_rel_tol", "Relative tolerance of the compression", "HssbemCreateSystem", opts->rel_tol, &opts->rel_tol, NULL));
+  PetscCall(PetscOptionsInt("-mat_h2_leaf_size", "Dof nodes per leaf cluster", "HssbemCreateSystem", leaf, &leaf, NULL));
+  PetscCall(PetscOptionsReal("-mat_h2_eta", "Admissibility: far when |c_a - c_b| > (1 + eta)(R_a + R_b)", "HssbemCreateSystem", opts->eta, &opts->eta, NULL));
+  PetscCall(PetscOptionsInt("-mat_h2_max_rank", "Cap on each skeleton (-1: none)", "HssbemCreateSystem", rank, &rank, NULL));
+  PetscCall(PetscOptionsReal("-mat_h2_proxy_ratio", "Proxy sphere radius over cluster radius", "HssbemCreateSystem", opts->proxy_ratio, &opts->proxy_ratio, NULL));
+  PetscCall(PetscOptionsInt("-mat_h2_proxy_points", "Points per proxy sphere (0: chosen from the tolerance)", "HssbemCreateSystem", np, &np, NULL));
+  PetscOptionsEnd();
+  opts->leaf_size    = (int)leaf;
+  opts->max_rank     = (int)rank;
+  opts->proxy_points = (int)np;
+  PetscCheck(opts->rel_tol > 0 && opts->rel_tol < 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_h2_rel_tol must lie in (0, 1), got %g", (double)opts->rel_tol);
+  PetscCheck(opts->leaf_size >= 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_h2_leaf_size must be at least 1");
+  PetscCheck(opts->eta >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_h2_eta must be >= 0");
+  PetscCheck(opts->max_rank == -1 || opts->max_rank > 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_h2_max_rank must be positive, or -1 for no cap");
+  PetscCheck(opts->proxy_ratio > 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_h2_proxy_ratio must exceed 1");
+  PetscCheck(opts->proxy_points >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_h2_proxy_points must be 0 (automatic) or positive");
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/*@C
   HssbemCreateSystem - Creates the system matrix A (dense or HSS) and right-hand side b of a
   boundary-condition pattern; see system.h.
 
@@ -105,23 +161,30 @@ PetscErrorCode HssbemHssOptionsFromDatabase(MPI_Comm comm, const char *prefix, h
 PetscErrorCode HssbemCreateSystem(MPI_Comm comm, const hssbem::BemOperator &op, const hssbem::SystemSelection &sel, const std::vector<double> *rigid_modes, const char *mat_type, Mat *A,
                                   Vec *b)
 {
-  PetscBool dense, hss;
+  PetscBool dense, hss, h2;
 
   PetscFunctionBegin;
   PetscCall(PetscStrcmp(mat_type, HSSBEM_MAT_DENSE, &dense));
   PetscCall(PetscStrcmp(mat_type, HSSBEM_MAT_HSS, &hss));
-  PetscCheck(dense || hss, comm, PETSC_ERR_ARG_UNKNOWN_TYPE, "unknown BEM matrix type '%s': use %s or %s", mat_type, HSSBEM_MAT_HSS, HSSBEM_MAT_DENSE);
+  PetscCall(PetscStrcmp(mat_type, HSSBEM_MAT_H2, &h2));
+  PetscCheck(dense || hss || h2, comm, PETSC_ERR_ARG_UNKNOWN_TYPE, "unknown BEM matrix type '%s': use %s, %s or %s", mat_type, HSSBEM_MAT_HSS, HSSBEM_MAT_H2, HSSBEM_MAT_DENSE);
   auto problem = new HssbemProblem;
   problem->op  = &op;
   problem->sel = sel;
   if (rigid_modes) problem->modes = *rigid_modes;
+  /* a pressure load needs the Gn columns */
+  const bool pressure = std::any_of(sel.pressure.begin(), sel.pressure.end(), [](double p) { return !std::isnan(p); });
   if (dense) {
     PetscCall(HssbemAssembleDense(comm, op, sel, rigid_modes, A, b));
+  } else if (h2) {
+    problem->is_h2                       = PETSC_TRUE;
+    problem->h2_options.pressure_columns = pressure;
+    PetscCall(HssbemH2OptionsFromDatabase(comm, NULL, &problem->h2_options));
+    PetscCall(HssbemMatCreateHss_Private(comm, problem, A, b));
   } else {
     problem->is_hss                  = PETSC_TRUE;
     problem->hss_options.rel_tol     = 1e-8;
-    /* a pressure load needs the Gn columns */
-    problem->hss_options.pressure_columns = std::any_of(sel.pressure.begin(), sel.pressure.end(), [](double p) { return !std::isnan(p); });
+    problem->hss_options.pressure_columns = pressure;
     PetscCall(HssbemHssOptionsFromDatabase(comm, NULL, &problem->hss_options));
     PetscCall(HssbemMatCreateHss_Private(comm, problem, A, b));
   }

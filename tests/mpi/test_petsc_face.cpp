@@ -1,6 +1,7 @@
-// The PETSc face of the HSS engine on 1, 2 and 4 ranks: the HSS MatShell against the dense
-// matrix (product, right-hand side, diagonal), PC hss as a direct solver and as a GMRES
-// preconditioner on the HSS and on the dense matrix, and a breakdown reported as a PC failure.
+// The PETSc face of the HSS and H² engines on 1, 2 and 4 ranks: the HSS and H² MatShells
+// against the dense matrix (product, right-hand side, diagonal), PC hss as a direct solver and as
+// a GMRES preconditioner on the HSS, H² and dense matrices, the H² matrix's default Krylov
+// solver, and a breakdown reported as a PC failure.
 #include "solve_helpers.hpp"
 #include "test_shapes.hpp"
 
@@ -34,8 +35,8 @@ struct Systems {
   ProblemSetup setup;
   std::unique_ptr<BemOperator> op;
   std::vector<double> modes;
-  Mat Ad = nullptr, Ah = nullptr;
-  Vec bd = nullptr, bh = nullptr;
+  Mat Ad = nullptr, Ah = nullptr, A2 = nullptr;
+  Vec bd = nullptr, bh = nullptr, b2 = nullptr;
 
   explicit Systems(const ProblemSpec &spec, bool regularise = true) : setup(setup_problem(spec, ProblemOverrides{}))
   {
@@ -44,13 +45,16 @@ struct Systems {
     const std::vector<double> *m = modes.empty() ? nullptr : &modes;
     PetscCallAbort(PETSC_COMM_WORLD, HssbemCreateSystem(PETSC_COMM_WORLD, *op, setup.selection, m, HSSBEM_MAT_DENSE, &Ad, &bd));
     PetscCallAbort(PETSC_COMM_WORLD, HssbemCreateSystem(PETSC_COMM_WORLD, *op, setup.selection, m, HSSBEM_MAT_HSS, &Ah, &bh));
+    PetscCallAbort(PETSC_COMM_WORLD, HssbemCreateSystem(PETSC_COMM_WORLD, *op, setup.selection, m, HSSBEM_MAT_H2, &A2, &b2));
   }
   ~Systems()
   {
     MatDestroy(&Ad);
     MatDestroy(&Ah);
+    MatDestroy(&A2);
     VecDestroy(&bd);
     VecDestroy(&bh);
+    VecDestroy(&b2);
   }
 };
 
@@ -108,10 +112,11 @@ Vec dense_solution(Mat Ad, Vec bd)
 }
 
 /// sphere_l0 (251 nodes) would fit in one default leaf (256 nodes); leaves of 32 nodes give these
-/// tests a tree with three levels of skeletons.
+/// tests a tree with three levels of skeletons. For H², leaves of 8 nodes and eta = 0 give it 452
+/// far blocks (the defaults, 64 and 0.5, leave a mesh this small all near field).
 class SmallLeaves : public ::testing::Environment {
 public:
-  void SetUp() override { PetscCallAbort(PETSC_COMM_WORLD, PetscOptionsInsertString(NULL, "-mat_hss_leaf_size 32")); }
+  void SetUp() override { PetscCallAbort(PETSC_COMM_WORLD, PetscOptionsInsertString(NULL, "-mat_hss_leaf_size 32 -mat_h2_leaf_size 8 -mat_h2_eta 0")); }
 };
 ::testing::Environment *const small_leaves = ::testing::AddGlobalTestEnvironment(new SmallLeaves);
 
@@ -195,6 +200,61 @@ TEST_F(PetscFace, GmresWithTruncatedHssPreconditioner)
 TEST_F(PetscFace, GmresWithHssPreconditionerOnTheDenseMatrix)
 {
   expect_solved(ksp_solve(mixed->Ad, mixed->bd, xd, "-t_ksp_type gmres -t_ksp_rtol 1e-10 -t_pc_type hss -t_pc_hss_rel_tol 1e-3 -t_pc_hss_leaf_size 32"), 1e-8, 2, 15);
+}
+
+TEST_F(PetscFace, H2MatrixMatchesDense)
+{
+  PetscBool is_hss, compressed;
+  ASSERT_EQ(HssbemMatIsHss(mixed->A2, &is_hss), 0);
+  ASSERT_EQ(HssbemMatIsCompressed(mixed->A2, &compressed), 0);
+  EXPECT_FALSE(is_hss);
+  EXPECT_TRUE(compressed);
+  // b, A x for a random x and the diagonal agree to the tolerance (-mat_h2_rel_tol 1e-6): 10·tol.
+  EXPECT_LE(rel_diff(mixed->b2, mixed->bd), 1e-5);
+  Vec x, y2, yd;
+  PetscRandom rnd;
+  PetscCallAbort(PETSC_COMM_WORLD, PetscRandomCreate(PETSC_COMM_WORLD, &rnd));
+  PetscCallAbort(PETSC_COMM_WORLD, MatCreateVecs(mixed->Ad, &x, &yd));
+  PetscCallAbort(PETSC_COMM_WORLD, VecDuplicate(yd, &y2));
+  PetscCallAbort(PETSC_COMM_WORLD, VecSetRandom(x, rnd));
+  PetscCallAbort(PETSC_COMM_WORLD, MatMult(mixed->Ad, x, yd));
+  PetscCallAbort(PETSC_COMM_WORLD, MatMult(mixed->A2, x, y2));
+  EXPECT_LE(rel_diff(y2, yd), 1e-5);
+  PetscCallAbort(PETSC_COMM_WORLD, MatGetDiagonal(mixed->Ad, yd));
+  PetscCallAbort(PETSC_COMM_WORLD, MatGetDiagonal(mixed->A2, y2));
+  EXPECT_LE(rel_diff(y2, yd), 1e-5);
+  PetscCallAbort(PETSC_COMM_WORLD, PetscRandomDestroy(&rnd));
+  VecDestroy(&x);
+  VecDestroy(&y2);
+  VecDestroy(&yd);
+}
+
+TEST_F(PetscFace, H2MatrixDefaultSolverIsGmresJacobi)
+{
+  KSP ksp;
+  Vec x;
+  Mat A = mixed->A2;
+  PetscCallAbort(PETSC_COMM_WORLD, PetscObjectReference((PetscObject)A));
+  PetscCallAbort(PETSC_COMM_WORLD, HssbemKSPCreate(PETSC_COMM_WORLD, HSSBEM_MAT_H2, &ksp));
+  PetscCallAbort(PETSC_COMM_WORLD, KSPSetTolerances(ksp, 1e-10, PETSC_DEFAULT, PETSC_DEFAULT, PETSC_DEFAULT));
+  PetscCallAbort(PETSC_COMM_WORLD, VecDuplicate(mixed->b2, &x));
+  HssbemSolveInfo info;
+  PetscCallAbort(PETSC_COMM_WORLD, HssbemSolveSystem(ksp, &A, mixed->b2, x, &info));
+  const double diff = rel_diff(x, xd);
+  PetscCallAbort(PETSC_COMM_WORLD, PetscPrintf(PETSC_COMM_WORLD, "  H2 default: %s/%s, %d iterations, difference from dense LU %.2e\n", info.ksp_type.c_str(), info.pc_type.c_str(), (int)info.iterations, diff));
+  EXPECT_EQ(info.ksp_type, "gmres");
+  EXPECT_EQ(info.pc_type, "jacobi");
+  EXPECT_GE(info.iterations, 5); // Jacobi is no direct solver
+  EXPECT_LE(diff, 1e-5);
+  PetscCallAbort(PETSC_COMM_WORLD, KSPDestroy(&ksp));
+  PetscCallAbort(PETSC_COMM_WORLD, MatDestroy(&A));
+  VecDestroy(&x);
+}
+
+TEST_F(PetscFace, GmresWithHssPreconditionerOnTheH2Matrix)
+{
+  // On the H² matrix PC hss compresses HSS anew (here at 1e-3, its default there).
+  expect_solved(ksp_solve(mixed->A2, mixed->b2, xd, "-t_ksp_type gmres -t_ksp_rtol 1e-10 -t_pc_type hss -t_pc_hss_leaf_size 32"), 1e-5, 2, 15);
 }
 
 TEST(PetscFacePure, RegularisedPressureProblemMatchesDense)

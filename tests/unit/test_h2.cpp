@@ -112,7 +112,7 @@ TEST_P(H2Accuracy, MatvecMatchesDenseOperator)
     for (H2Block &B : K.far_blocks(a)) std::fill(B.M.a.begin(), B.M.a.end(), 0.0);
   const double err_near = matvec_error(K, Kd, 7);
   std::printf("  without the far blocks: error %.2e\n", err_near);
-  EXPECT_GT(err_near, 100 * c.tol);
+  EXPECT_GT(err_near, 10 * c.tol); // so the bound above would fail without them
 }
 
 INSTANTIATE_TEST_SUITE_P(Meshes, H2Accuracy,

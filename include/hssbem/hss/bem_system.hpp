@@ -13,7 +13,20 @@
 
 namespace hssbem {
 
-class HssBemSystem {
+/// What a Krylov solver needs from a compressed operator, whatever its format (HSS, H²): the
+/// right-hand side, products and the diagonal of A for a pattern, all in mesh order.
+class CompressedBemSystem {
+public:
+  virtual ~CompressedBemSystem() = default;
+  /// b = Σ_known −H u + G t (pressure nodes: −p Gn), 3 values per node, mesh order.
+  virtual std::vector<double> rhs(const SystemSelection &sel) const = 0;
+  /// y = A x for the selection's pattern (x and y: 3 per node, mesh order), by a fast product.
+  virtual void apply(const SystemSelection &sel, const double *x, double *y) const = 0;
+  /// The diagonal of A for the selection (3 per node, mesh order): true entries.
+  virtual std::vector<double> diagonal(const SystemSelection &sel) const = 0;
+};
+
+class HssBemSystem : public CompressedBemSystem {
 public:
   /// Compress the operator (see compress_bem_operator). Pressure loads need
   /// options.pressure_columns.
@@ -24,12 +37,11 @@ public:
   const HssMatrix &matrix() const { return m_K; }
   const BemOperator &op() const { return m_op; }
 
-  /// b = Σ_known −H u + G t (pressure nodes: −p Gn), 3 values per node, mesh order.
-  std::vector<double> rhs(const SystemSelection &sel) const;
-  /// y = A x for the selection's pattern (x and y: 3 per node, mesh order), by the HSS product.
-  void apply(const SystemSelection &sel, const double *x, double *y) const;
-  /// The diagonal of A for the selection (3 per node, mesh order): true entries, from the leaves.
-  std::vector<double> diagonal(const SystemSelection &sel) const;
+  std::vector<double> rhs(const SystemSelection &sel) const override;
+  /// By the HSS product.
+  void apply(const SystemSelection &sel, const double *x, double *y) const override;
+  /// From the leaves' diagonal blocks.
+  std::vector<double> diagonal(const SystemSelection &sel) const override;
   /// Factor A (+ c Φ Φᵀ when `rigid_modes` is given: row-major 3N × 6, as orthonormal_rigid_modes).
   /// Throws HssBreakdown.
   std::unique_ptr<UlvFactorization> factor(const SystemSelection &sel, const std::vector<double> *rigid_modes = nullptr) const;
@@ -37,9 +49,6 @@ public:
   std::vector<double> solve(const UlvFactorization &F, const std::vector<double> &b) const;
 
 private:
-  /// K x (3 per node out) for a vector of K's columns (col_block per node), both mesh order.
-  void apply_k(std::vector<double> xk, double *y) const;
-
   const BemOperator &m_op;
   HssMatrix m_K;
 };

@@ -6,6 +6,7 @@
 #include "hssbem/petsc/compat.h"
 
 #include "hssbem/bem/bem_operator.hpp"
+#include "hssbem/h2/h2_compression.hpp"
 #include "hssbem/hss/bem_compression.hpp"
 
 #include <petscksp.h>
@@ -15,6 +16,7 @@
 /* Operator representations, for -bem_mat_type and HssbemCreateSystem(). */
 #define HSSBEM_MAT_HSS   "hss"
 #define HSSBEM_MAT_DENSE "dense"
+#define HSSBEM_MAT_H2    "h2"
 
 /* Assemble A and b = Σ_known (−H u + G t) of the pattern `sel` on comm (3 rows per dof node,
    nodes split in contiguous blocks across the ranks, block size 3).
@@ -22,6 +24,9 @@
      made at -mat_hss_rel_tol (see HssbemHssOptionsFromDatabase()); MatGetDiagonal and MatView
      work. The compression lives on rank 0 (the tree is not distributed yet); products gather
      and scatter the vectors.
+   - mat_type HSSBEM_MAT_H2: the same MatShell over an H² compression (strong admissibility,
+     -mat_h2_* options, see HssbemH2OptionsFromDatabase()): cheaper to build and to apply at
+     scale, for Krylov solvers; -pc_type hss then compresses its own HSS preconditioner.
    - mat_type HSSBEM_MAT_DENSE: MATDENSE, filled row by row with the operator primitive.
    With rigid_modes (orthonormal, row-major 3N × 6, see orthonormal_rigid_modes()), A gets
    + rigid_regularization_weight · Q Qᵀ (pure-traction problems).
@@ -34,8 +39,15 @@ PetscErrorCode HssbemCreateSystem(MPI_Comm comm, const hssbem::BemOperator &op, 
    (which holds the defaults on entry) and check them. */
 PetscErrorCode HssbemHssOptionsFromDatabase(MPI_Comm comm, const char *prefix, hssbem::HssOptions *opts);
 
+/* Read -<prefix>mat_h2_rel_tol, _leaf_size, _eta, _max_rank, _proxy_ratio, _proxy_points into
+   opts (which holds the defaults on entry) and check them. */
+PetscErrorCode HssbemH2OptionsFromDatabase(MPI_Comm comm, const char *prefix, hssbem::H2Options *opts);
+
 /* PETSC_TRUE when A is the HSS MatShell of HssbemCreateSystem(). */
 PetscErrorCode HssbemMatIsHss(Mat A, PetscBool *is_hss);
+
+/* PETSC_TRUE when A is a compressed MatShell (HSS or H²) of HssbemCreateSystem(): no entries. */
+PetscErrorCode HssbemMatIsCompressed(Mat A, PetscBool *compressed);
 
 /* Outcome of a solve, for the result file. */
 struct HssbemSolveInfo {
@@ -46,7 +58,9 @@ struct HssbemSolveInfo {
 };
 
 /* The main KSP (no prefix) with the defaults of the matrix type, then the options database:
-   preonly + PC hss (a direct HSS solve) for HSSBEM_MAT_HSS, preonly + LU for HSSBEM_MAT_DENSE. */
+   preonly + PC hss (a direct HSS solve) for HSSBEM_MAT_HSS, GMRES(100) + PC jacobi at
+   -ksp_rtol 1e-8 for HSSBEM_MAT_H2 (-pc_type hss works there too: an HSS preconditioner compressed anew, at
+   -pc_hss_rel_tol 1e-3 by default), preonly + LU for HSSBEM_MAT_DENSE. */
 PetscErrorCode HssbemKSPCreate(MPI_Comm comm, const char *mat_type, KSP *ksp);
 
 /* Solve A x = b with that KSP. A dense A is converted in place when its factorization needs

@@ -1,0 +1,42 @@
+/// \file pattern_columns.hpp
+/// From a boundary-condition pattern to products with a compressed K = [H, G(, Gn)] (DESIGN §3),
+/// shared by every compressed format (HSS, H²): A x = K E_S x and b = K (known values), where
+/// column (j, c) of A is H's when u is unknown and −G's when t is unknown.
+#pragma once
+
+#include "hssbem/bem/bem_operator.hpp"
+
+#include <vector>
+
+namespace hssbem {
+
+/// K's input for the right-hand side b = Σ_known −H u + G t (pressure nodes: −p Gn): w values
+/// per node, mesh order. Throws std::logic_error for a pressure load when w < 7.
+std::vector<double> pattern_rhs_input(const SystemSelection &sel, int nodes, int w);
+
+/// K's input for A x (x: 3 per node, mesh order): w values per node, mesh order.
+std::vector<double> pattern_product_input(const SystemSelection &sel, const double *x, int nodes, int w);
+
+/// y = K xk for a compressed K (M: HssMatrix or H2Matrix, which hold K S with column scales S),
+/// xk with w values per node and y with 3, both in mesh order.
+template <class M>
+void apply_compressed_k(const M &K, std::vector<double> xk, double *y)
+{
+  const int n = K.tree().num_points(), w = K.col_block();
+  for (int j = 0; j < n; ++j) // the matrix holds K S; feed it S⁻¹ x
+    for (int q = 0; q < w; ++q) xk[static_cast<std::size_t>(w) * j + q] /= K.col_scale(q);
+  std::vector<double> xc(xk.size()), yc(3L * n);
+  K.tree().to_cluster_order(xk.data(), xc.data(), w);
+  K.apply(xc.data(), w * n, yc.data(), 3 * n);
+  K.tree().to_mesh_order(yc.data(), y, 3);
+}
+
+/// Slot of K's column that A uses for component c of node j, and its sign (−G where u is known).
+inline int pattern_slot(const SystemSelection &sel, int j, int c, double *sign)
+{
+  const bool known = sel.displacement_known[j][c];
+  *sign = known ? -1.0 : 1.0;
+  return known ? 3 + c : c;
+}
+
+} // namespace hssbem
