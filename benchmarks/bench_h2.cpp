@@ -1,7 +1,7 @@
 // H² (strong admissibility) against HSS (weak admissibility) compression of K = [H, G] on one
 // mesh; prints one CSV row per format (see README.md).
 //
-//   bench_h2 --mesh FILE [--tol 1e-6] [--leaf 64] [--eta 0.5] [--hss 0|1] [--hss-leaf 256] [--header]
+//   bench_h2 --mesh FILE [--tol 1e-6] [--leaf 64] [--eta 0.5] [--single 0|1] [--hss 0|1] [--hss-leaf 256] [--header]
 //
 // Accuracy: K x for a random x against the exact product on 48 sampled rows (all columns,
 // true entries with the rigid-body terms), so no dense K is needed at any size.
@@ -106,6 +106,7 @@ int main(int argc, char **argv)
     else if (a == "--tol") opt.rel_tol = hss.rel_tol = std::stod(next());
     else if (a == "--leaf") opt.leaf_size = std::stoi(next());
     else if (a == "--eta") opt.eta = std::stod(next());
+    else if (a == "--single") opt.single_precision = std::stoi(next()) != 0;
     else if (a == "--hss") run_hss = std::stoi(next()) != 0;
     else if (a == "--hss-leaf") hss.leaf_size = std::stoi(next());
     else if (a == "--header") header = true;
@@ -140,7 +141,7 @@ int main(int argc, char **argv)
                    st.levels[l].max_row_rank, st.levels[l].mean_row_rank, st.levels[l].max_col_rank, st.levels[l].mean_col_rank, st.levels[l].far_blocks);
     std::fprintf(stderr, "h2: tree+partition %.2f s, far blocks %.2f s, near blocks %.2f s, rigid %.2f s; summed over threads: ID samples %.2f s, IDs %.2f s; %ld far, %ld near blocks\n",
                  st.time_tree, st.time_far, st.time_near, st.time_rigid, st.time_near_field, st.time_ids, st.far_blocks, st.near_blocks);
-    std::printf("h2,%s,%d,%.0e,%d,%.2f,%.3f,%.4f,%d,%d,%.1f,%.1f,%.1f,%.1f,%.3g,%.0f,%.3e\n", name.c_str(), 3 * n, opt.rel_tol, opt.leaf_size, opt.eta, t_compress,
+    std::printf("%s,%s,%d,%.0e,%d,%.2f,%.3f,%.4f,%d,%d,%.1f,%.1f,%.1f,%.1f,%.3g,%.0f,%.3e\n", opt.single_precision ? "h2-single" : "h2", name.c_str(), 3 * n, opt.rel_tol, opt.leaf_size, opt.eta, t_compress,
                 t_mv, st.max_row_rank(), st.max_col_rank(), st.memory_bytes / 1048576.0, st.basis_bytes / 1048576.0, st.far_bytes / 1048576.0,
                 st.near_bytes / 1048576.0, double(st.entries_evaluated), peak_rss_mb(), err);
     std::fflush(stdout);

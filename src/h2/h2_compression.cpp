@@ -74,10 +74,10 @@ void add_rigid_body_terms(const BemOperator &op, H2Matrix &K)
       const std::vector<int> &near = K.partition().near[a];
       const auto it = std::lower_bound(near.begin(), near.end(), b);
       if (it == near.end() || *it != b) throw std::logic_error("H2 compression: a rigid-body term falls outside the near blocks");
-      DenseMatrix &D = K.near_blocks(a)[it - near.begin()].M;
+      H2Block &D = K.near_blocks(a)[it - near.begin()];
       const int r0 = 3 * (pi - tree.cluster(a).begin), c0 = w * (pj - tree.cluster(b).begin);
       for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) D(r0 + r, c0 + c) -= wts[t] * Y[3 * static_cast<std::size_t>(pi) + r + static_cast<std::size_t>(c) * 3 * n];
+        for (int c = 0; c < 3; ++c) D.add(r0 + r, c0 + c, -wts[t] * Y[3 * static_cast<std::size_t>(pi) + r + static_cast<std::size_t>(c) * 3 * n]);
     }
   }
 }
@@ -129,8 +129,9 @@ H2Matrix compress_bem_operator_h2(const BemOperator &op, const H2Options &option
   t0 = std::chrono::steady_clock::now();
   for_each_cluster(all, [&](int a) {
     for (int b : part.far[a]) {
-      H2Block B{b, DenseMatrix(static_cast<int>(K.basis(a).row_skel.size()), static_cast<int>(K.basis(b).col_skel.size()))};
+      H2Block B{b, DenseMatrix(static_cast<int>(K.basis(a).row_skel.size()), static_cast<int>(K.basis(b).col_skel.size())), {}};
       skel.block(K.basis(a).row_skel, K.basis(b).col_skel, B.M.data(), 1, B.M.ld());
+      if (options.single_precision) B.demote();
       K.far_blocks(a).push_back(std::move(B));
     }
   });
@@ -144,8 +145,9 @@ H2Matrix compress_bem_operator_h2(const BemOperator &op, const H2Options &option
     const std::vector<int> rows = basis_candidates(tree, K.bases(), a, 3, true);
     for (int b : part.near[a]) {
       const std::vector<int> cols = basis_candidates(tree, K.bases(), b, w, false);
-      H2Block B{b, DenseMatrix(static_cast<int>(rows.size()), static_cast<int>(cols.size()))};
+      H2Block B{b, DenseMatrix(static_cast<int>(rows.size()), static_cast<int>(cols.size())), {}};
       skel.block(rows, cols, B.M.data(), 1, B.M.ld());
+      if (options.single_precision) B.demote();
       K.near_blocks(a).push_back(std::move(B));
     }
   });

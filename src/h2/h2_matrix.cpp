@@ -24,6 +24,21 @@ int H2Stats::max_col_rank() const
   return r;
 }
 
+void H2Block::demote()
+{
+  if (M.a.empty()) return;
+  single.assign(M.a.begin(), M.a.end());
+  M.a.clear();
+  M.a.shrink_to_fit();
+}
+
+const double *H2Block::data(std::vector<double> &buf) const
+{
+  if (!is_single()) return M.data();
+  buf.assign(single.begin(), single.end());
+  return buf.data();
+}
+
 H2Matrix::H2Matrix(ClusterTree tree, int row_block, int col_block)
   : m_tree(std::move(tree)), m_row_block(row_block), m_col_block(col_block), m_col_scale(col_block, 1.0), m_bases(m_tree.num_clusters()),
     m_far(m_tree.num_clusters()), m_near(m_tree.num_clusters())
@@ -55,8 +70,9 @@ void H2Matrix::apply(const double *X, int ldx, double *Y, int ldy, int nrhs) con
   // Far blocks: yh_a = Σ_b K(S_a, C_b) xh_b.
   for_each_cluster(all, [&](int a) {
     yh[a] = DenseMatrix(m_bases[a].U.n, nrhs);
+    std::vector<double> buf;
     for (const H2Block &B : m_far[a])
-      lapack::gemm('N', 'N', B.M.m, nrhs, B.M.n, 1.0, B.M.data(), B.M.ld(), xh[B.col_cluster].data(), xh[B.col_cluster].ld(), 1.0, yh[a].data(),
+      lapack::gemm('N', 'N', B.M.m, nrhs, B.M.n, 1.0, B.data(buf), B.M.ld(), xh[B.col_cluster].data(), xh[B.col_cluster].ld(), 1.0, yh[a].data(),
                    yh[a].ld());
   });
   // Downward pass: children's yh += U_τ yh_τ; leaves add U yh and their near blocks.
@@ -76,8 +92,9 @@ void H2Matrix::apply(const double *X, int ldx, double *Y, int ldy, int nrhs) con
     double *y = Y + static_cast<long>(m_row_block) * cl.begin;
     const int m = m_row_block * cl.size();
     for (int k = 0; k < nrhs; ++k) std::fill(y + static_cast<long>(k) * ldy, y + static_cast<long>(k) * ldy + m, 0.0);
+    std::vector<double> buf;
     for (const H2Block &B : m_near[c])
-      lapack::gemm('N', 'N', B.M.m, nrhs, B.M.n, 1.0, B.M.data(), B.M.ld(), X + static_cast<long>(m_col_block) * m_tree.cluster(B.col_cluster).begin, ldx,
+      lapack::gemm('N', 'N', B.M.m, nrhs, B.M.n, 1.0, B.data(buf), B.M.ld(), X + static_cast<long>(m_col_block) * m_tree.cluster(B.col_cluster).begin, ldx,
                    1.0, y, ldy);
     const DenseMatrix &U = m_bases[c].U;
     if (U.n > 0) lapack::gemm('N', 'N', U.m, nrhs, U.n, 1.0, U.data(), U.ld(), yh[c].data(), yh[c].ld(), 1.0, y, ldy);
@@ -94,8 +111,8 @@ void H2Matrix::update_stats()
   for (int c = 0; c < m_tree.num_clusters(); ++c) {
     const NestedBasis &b = m_bases[c];
     m_stats.basis_bytes += b.U.bytes() + b.V.bytes() + (b.row_skel.size() + b.col_skel.size()) * sizeof(int);
-    for (const H2Block &B : m_far[c]) m_stats.far_bytes += B.M.bytes() + sizeof(H2Block);
-    for (const H2Block &B : m_near[c]) m_stats.near_bytes += B.M.bytes() + sizeof(H2Block);
+    for (const H2Block &B : m_far[c]) m_stats.far_bytes += B.bytes() + sizeof(H2Block);
+    for (const H2Block &B : m_near[c]) m_stats.near_bytes += B.bytes() + sizeof(H2Block);
     m_stats.far_blocks += static_cast<long>(m_far[c].size());
     m_stats.near_blocks += static_cast<long>(m_near[c].size());
     H2LevelStats &s = m_stats.levels[m_tree.cluster(c).level];

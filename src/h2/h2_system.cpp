@@ -31,14 +31,14 @@ std::vector<double> H2BemSystem::diagonal(const SystemSelection &sel) const
     const std::vector<int> &near = m_K.partition().near[c];
     const auto it = std::lower_bound(near.begin(), near.end(), c);
     if (it == near.end() || *it != c) throw std::logic_error("H2: a leaf without its diagonal block");
-    const DenseMatrix &D = m_K.near_blocks(c)[it - near.begin()].M;
+    const H2Block &D = m_K.near_blocks(c)[it - near.begin()];
     const Cluster &cl = tree.cluster(c);
     for (int k = cl.begin; k < cl.end; ++k) {
       const int j = tree.perm()[k], local = k - cl.begin;
       for (int r = 0; r < 3; ++r) {
         double sign;
         const int slot = pattern_slot(sel, j, r, &sign);
-        d[3L * j + r] = sign * D(3 * local + r, w * local + slot) / m_K.col_scale(slot);
+        d[3L * j + r] = sign * D.entry(3 * local + r, w * local + slot) / m_K.col_scale(slot);
       }
     }
   }

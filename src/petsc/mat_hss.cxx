@@ -80,8 +80,8 @@ PetscErrorCode MatView_Hss(Mat A, PetscViewer viewer)
   const HssbemProblem &p = *ctx->problem;
   if (p.is_h2) {
     const hssbem::H2Options &o = p.h2_options;
-    PetscCall(PetscViewerASCIIPrintf(viewer, "BEM operator in H² form (hssbem, strong admissibility): relative tolerance %g, leaf size %d, eta %g, rank cap %s, proxy ratio %g\n", o.rel_tol,
-                                     o.leaf_size, o.eta, o.max_rank > 0 ? std::to_string(o.max_rank).c_str() : "none", o.proxy_ratio));
+    PetscCall(PetscViewerASCIIPrintf(viewer, "BEM operator in H² form (hssbem, strong admissibility): relative tolerance %g, leaf size %d, eta %g, rank cap %s, proxy ratio %g, blocks in %s precision\n",
+                                     o.rel_tol, o.leaf_size, o.eta, o.max_rank > 0 ? std::to_string(o.max_rank).c_str() : "none", o.proxy_ratio, o.single_precision ? "single" : "double"));
     PetscCall(PetscViewerASCIIPrintf(viewer, "  pattern: %s; rigid-mode regularisation: %s; the compression lives on rank 0\n", o.pressure_columns ? "K = [H, G, Gn] (pressure loads)" : "K = [H, G]",
                                      p.modes.empty() ? "no" : "yes"));
     if (p.h2) {

@@ -121,13 +121,15 @@ PetscErrorCode HssbemHssOptionsFromDatabase(MPI_Comm comm, const char *prefix, h
 . -mat_h2_eta <eta>          - clusters a, b are far when |c_a - c_b| > (1 + eta)(R_a + R_b)
 . -mat_h2_max_rank <k>       - cap on each skeleton (-1: none)
 . -mat_h2_proxy_ratio <r>    - proxy sphere radius over cluster radius
-- -mat_h2_proxy_points <n>   - points per proxy sphere (0: from the tolerance)
+. -mat_h2_proxy_points <n>   - points per proxy sphere (0: from the tolerance)
+- -mat_h2_single_precision   - store far and near blocks in single precision (half the memory)
 
   Level: intermediate
 @*/
 PetscErrorCode HssbemH2OptionsFromDatabase(MPI_Comm comm, const char *prefix, hssbem::H2Options *opts)
 {
-  PetscInt leaf = opts->leaf_size, rank = opts->max_rank, np = opts->proxy_points;
+  PetscInt  leaf = opts->leaf_size, rank = opts->max_rank, np = opts->proxy_points;
+  PetscBool single = opts->single_precision ? PETSC_TRUE : PETSC_FALSE;
 
   PetscFunctionBegin;
   PetscOptionsBegin(comm, prefix, "H2 compression of the BEM operator (-bem_mat_type h2)", "Mat");
@@ -137,7 +139,9 @@ PetscErrorCode HssbemH2OptionsFromDatabase(MPI_Comm comm, const char *prefix, hs
   PetscCall(PetscOptionsInt("-mat_h2_max_rank", "Cap on each skeleton (-1: none)", "HssbemCreateSystem", rank, &rank, NULL));
   PetscCall(PetscOptionsReal("-mat_h2_proxy_ratio", "Proxy sphere radius over cluster radius", "HssbemCreateSystem", opts->proxy_ratio, &opts->proxy_ratio, NULL));
   PetscCall(PetscOptionsInt("-mat_h2_proxy_points", "Points per proxy sphere (0: chosen from the tolerance)", "HssbemCreateSystem", np, &np, NULL));
+  PetscCall(PetscOptionsBool("-mat_h2_single_precision", "Store far and near blocks in single precision (half the memory)", "HssbemCreateSystem", single, &single, NULL));
   PetscOptionsEnd();
+  opts->single_precision = single == PETSC_TRUE;
   opts->leaf_size    = (int)leaf;
   opts->max_rank     = (int)rank;
   opts->proxy_points = (int)np;

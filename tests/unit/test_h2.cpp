@@ -138,6 +138,24 @@ TEST(H2Accuracy, FarBlocksCarryWhatNearBlocksMiss)
   EXPECT_GT(err_near, 1e-3);
 }
 
+TEST(H2Accuracy, SinglePrecisionBlocksHalveTheMemory)
+{
+  auto L = load("sphere_l1.msh");
+  H2Options o;
+  o.leaf_size = 16;
+  o.eta = 0;
+  const H2Matrix Kd = compress_bem_operator_h2(*L->op, o);
+  o.single_precision = true;
+  const H2Matrix Ks = compress_bem_operator_h2(*L->op, o);
+  const auto dense = dense_k(*L->op, Kd.col_block());
+  const double ed = matvec_error(Kd, dense, 4), es = matvec_error(Ks, dense, 4);
+  const double blocks_d = Kd.stats().far_bytes + Kd.stats().near_bytes, blocks_s = Ks.stats().far_bytes + Ks.stats().near_bytes;
+  std::printf("double: error %.2e, blocks %.1f MB; single: error %.2e, blocks %.1f MB\n", ed, blocks_d / 1e6, es, blocks_s / 1e6);
+  EXPECT_LE(es, 1e-5); // 10·tol
+  EXPECT_GT(es, ed);   // the blocks really are rounded
+  EXPECT_NEAR(blocks_s / blocks_d, 0.5, 0.02);
+}
+
 SurfaceMesh scaled(SurfaceMesh m, Vec3 s)
 {
   for (Vec3 &v : m.vertices) v = {s[0] * v[0], s[1] * v[1], s[2] * v[2]};

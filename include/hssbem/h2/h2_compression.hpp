@@ -30,6 +30,9 @@ struct H2Options {
   double proxy_ratio = 2.0;   ///< proxy sphere radius / cluster radius (> 1)
   int proxy_points = 0;       ///< points on each proxy sphere; 0: default_proxy_points(rel_tol)
   bool pressure_columns = false; ///< also compress Gn (slot 6), for pressure loads
+  /// Store far and near blocks in single precision (half the memory; each entry rounds to a
+  /// relative 6e-8, harmless for rel_tol ≥ 1e-6). Bases stay in double.
+  bool single_precision = false;
 };
 
 /// Compress K = [H, G] (and Gn if asked) of `op`, rigid-body terms included. The operator's

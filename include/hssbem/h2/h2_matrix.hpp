@@ -23,10 +23,27 @@
 
 namespace hssbem {
 
-/// One stored block of an H² matrix: far (skeleton × skeleton) or near (leaf × leaf).
+/// One stored block of an H² matrix: far (skeleton × skeleton) or near (leaf × leaf), in double
+/// precision (M) or, to halve the memory, in single precision (`single`, column-major with M's
+/// dimensions, M.a then empty). Products always compute in double: a single block is widened
+/// on the fly, so only its storage rounds (relative 6e-8 per entry).
 struct H2Block {
   int col_cluster = -1;
   DenseMatrix M;
+  std::vector<float> single;
+
+  bool is_single() const { return !single.empty(); }
+  /// Move the entries to single precision (no-op for an empty block).
+  void demote();
+  double entry(int i, int j) const { return is_single() ? single[i + static_cast<std::size_t>(j) * M.m] : M(i, j); }
+  void add(int i, int j, double v)
+  {
+    if (is_single()) single[i + static_cast<std::size_t>(j) * M.m] += static_cast<float>(v);
+    else M(i, j) += v;
+  }
+  std::size_t bytes() const { return M.bytes() + single.size() * sizeof(float); }
+  /// The entries in double: M's data, or `single` widened into buf.
+  const double *data(std::vector<double> &buf) const;
 };
 
 struct H2LevelStats {
