@@ -1,7 +1,7 @@
 // H² (strong admissibility) against HSS (weak admissibility) compression of K = [H, G] on one
 // mesh; prints one CSV row per format (see README.md).
 //
-//   bench_h2 --mesh FILE [--tol 1e-6] [--leaf 64] [--eta 0.5] [--single 0|1] [--hss 0|1] [--hss-leaf 256] [--header]
+//   bench_h2 --mesh FILE [--tol 1e-6] [--leaf 64] [--eta 0] [--single 0|1] [--hss 0|1] [--hss-leaf 256] [--header]
 //
 // Accuracy: K x for a random x against the exact product on 48 sampled rows (all columns,
 // true entries with the rigid-body terms), so no dense K is needed at any size.

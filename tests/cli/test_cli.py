@@ -763,7 +763,8 @@ class HssOptionTests(CliTestCase):
         r = self.run_driver("-help")
         self.assertEqual(r.returncode, 0, r.describe())
         for key in ("bem_mat_type", "mat_hss_rel_tol", "mat_hss_leaf_size", "mat_hss_max_rank",
-                    "pc_hss_rel_tol", "pc_hss_leaf_size", "pc_hss_max_rank"):
+                    "pc_hss_rel_tol", "pc_hss_leaf_size", "pc_hss_max_rank", "mat_h2_rel_tol",
+                    "mat_h2_leaf_size", "mat_h2_eta", "mat_h2_max_rank", "mat_h2_single_precision"):
             self.assertRegex(r.output, r"(?m)^\s*-%s <" % key,
                              "-help does not list -%s\n%s" % (key, r.describe()))
 
@@ -788,6 +789,36 @@ class HssOptionTests(CliTestCase):
         self.assertLess(diff, 1e-6)
         self.assertGreater(np.linalg.norm(ud), 0)
 
+    def test_h2_matrix_matches_dense(self):
+        import numpy as np
+        self.cube()
+        # Leaves of 8 nodes and eta = 0 give the 150-node cube far blocks; GMRES + Jacobi by default.
+        r = self.run_driver("-problem", "problem.json", "-o", "h2.h5", "-options_left", "-bem_mat_type", "h2",
+                            "-mat_h2_leaf_size", "8", "-mat_h2_eta", "0", "-bem_mat_view", timeout=TIMEOUT_RUN)
+        self.assertSucceeds(r, self.path("h2.h5"))
+        self.assertRegex(r.output, r"gmres/jacobi", r.describe())
+        self.assertRegex(r.output, r"BEM operator in H² form", r.describe())
+        self.assertNotRegex(r.output, r" 0 far blocks", r.describe())
+        self.assertNoUnusedOptions(r)
+        r = self.run_driver("-problem", "problem.json", "-o", "dense.h5", "-bem_mat_type", "dense",
+                            timeout=TIMEOUT_RUN)
+        self.assertSucceeds(r, self.path("dense.h5"))
+        u2, a2 = self.displacement("h2.h5")
+        ud, _ = self.displacement("dense.h5")
+        self.assertEqual(a2["mat_type"], "h2")
+        # -mat_h2_rel_tol 1e-6 and -ksp_rtol 1e-8 by default.
+        diff = np.linalg.norm(u2 - ud) / np.linalg.norm(ud)
+        self.assertLess(diff, 1e-5)
+        self.assertGreater(np.linalg.norm(ud), 0)
+
+    def test_bad_h2_options(self):
+        self.cube()
+        for args, name in ((["-mat_h2_eta", "-1"], "-mat_h2_eta"), (["-mat_h2_rel_tol", "2"], "-mat_h2_rel_tol"),
+                           (["-mat_h2_leaf_size", "0"], "-mat_h2_leaf_size"),
+                           (["-mat_bem_far_ratio", "8"], "-mat_bem_far_ratio")):
+            r = self.run_problem("problem.json", "-bem_mat_type", "h2", *args)
+            self.assertFailsCleanly(r, name)
+
     def test_documented_solver_commands(self):
         self.cube()
         commands = [
@@ -799,6 +830,8 @@ class HssOptionTests(CliTestCase):
              "-pc_hss_rel_tol", "1e-3", "-ksp_rtol", "1e-10"],
             ["-ksp_type", "gmres", "-pc_type", "jacobi", "-ksp_rtol", "1e-10",
              "-mat_hss_rel_tol", "1e-6", "-mat_hss_leaf_size", "32"],
+            ["-bem_mat_type", "h2", "-mat_h2_rel_tol", "1e-5", "-mat_h2_single_precision"],
+            ["-bem_mat_type", "h2", "-pc_type", "hss", "-pc_hss_leaf_size", "32"],
         ]
         for args in commands:
             r = self.run_problem("problem.json", "-options_left", "-ksp_converged_reason", *args,

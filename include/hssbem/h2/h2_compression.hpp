@@ -26,7 +26,7 @@ struct H2Options {
   double rel_tol = 1e-6;      ///< relative tolerance of each interpolative decomposition
   int max_rank = -1;          ///< cap on each skeleton; negative: none
   int leaf_size = 64;         ///< dof nodes per leaf cluster (at most)
-  double eta = 0.5;           ///< far when |c_a − c_b| > (1 + eta)(R_a + R_b)
+  double eta = 0.0;           ///< far when |c_a − c_b| > (1 + eta)(R_a + R_b); 0: the clusters' spheres are disjoint
   double proxy_ratio = 2.0;   ///< proxy sphere radius / cluster radius (> 1)
   int proxy_points = 0;       ///< points on each proxy sphere; 0: default_proxy_points(rel_tol)
   bool pressure_columns = false; ///< also compress Gn (slot 6), for pressure loads
