@@ -264,4 +264,12 @@ bool ClusterTree::admissible(int a, int b, double eta) const
   return norm(ca.centre - cb.centre) > (1 + eta) * (ca.radius + cb.radius);
 }
 
+std::vector<int> ClusterTree::leaf_of_positions() const
+{
+  std::vector<int> leaf(num_points());
+  for (int c : m_leaves)
+    for (int k = m_clusters[c].begin; k < m_clusters[c].end; ++k) leaf[k] = c;
+  return leaf;
+}
+
 } // namespace hssbem

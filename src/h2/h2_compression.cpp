@@ -5,6 +5,7 @@
 #include "hssbem/core/phase.hpp"
 #include "hssbem/hss/bem_compression.hpp"
 #include "hssbem/hss/kernel_blocks.hpp"
+#include "hssbem/hss/rigid_body_blocks.hpp"
 #include "hssbem/hss/skeletonizer.hpp"
 
 #include <algorithm>
@@ -51,19 +52,13 @@ void strong_sources(const ClusterTree &tree, const BlockPartition &p, int c, con
   }
 }
 
-/// Add the rigid-body terms D_i = −Σ_j H⁰(i, j) (from a product with the three translations)
-/// to the near blocks that hold them.
+/// Add the rigid-body terms (rigid_body_blocks.hpp) to the near blocks that hold them.
 void add_rigid_body_terms(const BemOperator &op, H2Matrix &K)
 {
   const ClusterTree &tree = K.tree();
-  const int n = tree.num_points(), w = K.col_block();
-  std::vector<double> X(static_cast<std::size_t>(w) * n * 3, 0.0), Y(static_cast<std::size_t>(3) * n * 3);
-  for (int k = 0; k < n; ++k)
-    for (int c = 0; c < 3; ++c) X[static_cast<std::size_t>(w) * k + c + static_cast<std::size_t>(c) * w * n] = 1.0;
-  K.apply(X.data(), w * n, Y.data(), 3 * n, 3);
-  std::vector<int> leaf_of(n);
-  for (int c : tree.leaves())
-    for (int k = tree.cluster(c).begin; k < tree.cluster(c).end; ++k) leaf_of[k] = c;
+  const int w = K.col_block();
+  const std::vector<double> rigid = rigid_body_blocks(K);
+  const std::vector<int> leaf_of = tree.leaf_of_positions();
   for (int i = 0; i < op.num_nodes(); ++i) {
     const int pi = tree.iperm()[i], a = leaf_of[pi];
     int cols[3];
@@ -77,7 +72,7 @@ void add_rigid_body_terms(const BemOperator &op, H2Matrix &K)
       H2Block &D = K.near_blocks(a)[it - near.begin()];
       const int r0 = 3 * (pi - tree.cluster(a).begin), c0 = w * (pj - tree.cluster(b).begin);
       for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) D.add(r0 + r, c0 + c, -wts[t] * Y[3 * static_cast<std::size_t>(pi) + r + static_cast<std::size_t>(c) * 3 * n]);
+        for (int c = 0; c < 3; ++c) D.add(r0 + r, c0 + c, wts[t] * rigid[9 * static_cast<std::size_t>(pi) + 3 * r + c]);
     }
   }
 }

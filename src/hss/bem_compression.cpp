@@ -4,6 +4,7 @@
 #include "hssbem/core/blas_threads.hpp"
 #include "hssbem/core/lapack.hpp"
 #include "hssbem/core/phase.hpp"
+#include "hssbem/hss/rigid_body_blocks.hpp"
 #include "hssbem/hss/skeletonizer.hpp"
 
 #include <algorithm>
@@ -102,14 +103,9 @@ private:
 void add_rigid_body_terms(const BemOperator &op, HssMatrix &K)
 {
   const ClusterTree &tree = K.tree();
-  const int n = tree.num_points(), w = K.col_block();
-  std::vector<double> X(static_cast<std::size_t>(w) * n * 3, 0.0), Y(static_cast<std::size_t>(3) * n * 3);
-  for (int k = 0; k < n; ++k)
-    for (int c = 0; c < 3; ++c) X[static_cast<std::size_t>(w) * k + c + static_cast<std::size_t>(c) * w * n] = 1.0;
-  K.apply(X.data(), w * n, Y.data(), 3 * n, 3);
-  std::vector<int> leaf_of(n);
-  for (int c : tree.leaves())
-    for (int k = tree.cluster(c).begin; k < tree.cluster(c).end; ++k) leaf_of[k] = c;
+  const int w = K.col_block();
+  const std::vector<double> rigid = rigid_body_blocks(K);
+  const std::vector<int> leaf_of = tree.leaf_of_positions();
   auto position = [](const std::vector<int> &list, int value) {
     const auto it = std::find(list.begin(), list.end(), value);
     if (it == list.end()) throw std::logic_error("HSS compression: a rigid-body coupling is missing from a skeleton");
@@ -117,9 +113,7 @@ void add_rigid_body_terms(const BemOperator &op, HssMatrix &K)
   };
   for (int i = 0; i < op.num_nodes(); ++i) {
     const int pi = tree.iperm()[i];
-    double Dm[3][3];
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c) Dm[r][c] = -Y[3 * static_cast<std::size_t>(pi) + r + static_cast<std::size_t>(c) * 3 * n];
+    const double *Dm = &rigid[9 * static_cast<std::size_t>(pi)];
     int cols[3];
     double wts[3];
     const int nc = op.rigid_body_columns(i, cols, wts);
@@ -130,7 +124,7 @@ void add_rigid_body_terms(const BemOperator &op, HssMatrix &K)
         const Cluster &cl = tree.cluster(ci);
         DenseMatrix &D = K.cluster(ci).D;
         for (int r = 0; r < 3; ++r)
-          for (int c = 0; c < 3; ++c) D(3 * (pi - cl.begin) + r, w * (pj - cl.begin) + c) += wts[a] * Dm[r][c];
+          for (int c = 0; c < 3; ++c) D(3 * (pi - cl.begin) + r, w * (pj - cl.begin) + c) += wts[a] * Dm[3 * r + c];
         continue;
       }
       // Climb to the child of the lowest common ancestor that holds the row.
@@ -145,7 +139,7 @@ void add_rigid_body_terms(const BemOperator &op, HssMatrix &K)
       DenseMatrix &B = left ? K.cluster(parent).B12 : K.cluster(parent).B21;
       for (int r = 0; r < 3; ++r) {
         const int row = position(K.cluster(ci).row_skel, 3 * pi + r);
-        for (int c = 0; c < 3; ++c) B(row, position(K.cluster(cj).col_skel, w * pj + c)) += wts[a] * Dm[r][c];
+        for (int c = 0; c < 3; ++c) B(row, position(K.cluster(cj).col_skel, w * pj + c)) += wts[a] * Dm[3 * r + c];
       }
     }
   }

@@ -765,7 +765,7 @@ class HssOptionTests(CliTestCase):
         for key in ("bem_mat_type", "mat_hss_rel_tol", "mat_hss_leaf_size", "mat_hss_max_rank",
                     "pc_hss_rel_tol", "pc_hss_leaf_size", "pc_hss_max_rank", "mat_h2_rel_tol",
                     "mat_h2_leaf_size", "mat_h2_eta", "mat_h2_max_rank", "mat_h2_single_precision"):
-            self.assertRegex(r.output, r"(?m)^\s*-%s <" % key,
+            self.assertRegex(r.output, r"(?m)^\s*-%s:? <" % key,
                              "-help does not list -%s\n%s" % (key, r.describe()))
 
     def test_hss_default_matches_dense(self):

@@ -139,6 +139,30 @@ protected:
 Systems *PetscFace::mixed = nullptr;
 Vec PetscFace::xd = nullptr;
 
+/// b, A x for a random x and the diagonal of a compressed matrix A against the dense system:
+/// each within `bound` (relative).
+void expect_matches_dense(Mat A, Vec b, const Systems &sys, double bound)
+{
+  EXPECT_LE(rel_diff(b, sys.bd), bound);
+  Vec x, y, yd;
+  PetscRandom rnd;
+  PetscCallAbort(PETSC_COMM_WORLD, PetscRandomCreate(PETSC_COMM_WORLD, &rnd));
+  PetscCallAbort(PETSC_COMM_WORLD, MatCreateVecs(sys.Ad, &x, &yd));
+  PetscCallAbort(PETSC_COMM_WORLD, VecDuplicate(yd, &y));
+  PetscCallAbort(PETSC_COMM_WORLD, VecSetRandom(x, rnd));
+  PetscCallAbort(PETSC_COMM_WORLD, MatMult(sys.Ad, x, yd));
+  PetscCallAbort(PETSC_COMM_WORLD, MatMult(A, x, y));
+  EXPECT_LE(rel_diff(y, yd), bound);
+  // The diagonal: true entries, except the rigid-body terms, which come from a fast product.
+  PetscCallAbort(PETSC_COMM_WORLD, MatGetDiagonal(sys.Ad, yd));
+  PetscCallAbort(PETSC_COMM_WORLD, MatGetDiagonal(A, y));
+  EXPECT_LE(rel_diff(y, yd), bound);
+  PetscCallAbort(PETSC_COMM_WORLD, PetscRandomDestroy(&rnd));
+  VecDestroy(&x);
+  VecDestroy(&y);
+  VecDestroy(&yd);
+}
+
 TEST_F(PetscFace, HssMatrixMatchesDense)
 {
   PetscBool is_hss, shell;
@@ -149,25 +173,7 @@ TEST_F(PetscFace, HssMatrixMatchesDense)
   EXPECT_TRUE(shell);
   PetscCallAbort(PETSC_COMM_WORLD, MatGetBlockSize(mixed->Ah, &bs));
   EXPECT_EQ(bs, 3);
-  // b and A x for a random x agree to the tolerance (1e-8): 10·tol.
-  EXPECT_LE(rel_diff(mixed->bh, mixed->bd), 1e-7);
-  Vec x, yh, yd;
-  PetscRandom rnd;
-  PetscCallAbort(PETSC_COMM_WORLD, PetscRandomCreate(PETSC_COMM_WORLD, &rnd));
-  PetscCallAbort(PETSC_COMM_WORLD, MatCreateVecs(mixed->Ad, &x, &yd));
-  PetscCallAbort(PETSC_COMM_WORLD, VecDuplicate(yd, &yh));
-  PetscCallAbort(PETSC_COMM_WORLD, VecSetRandom(x, rnd));
-  PetscCallAbort(PETSC_COMM_WORLD, MatMult(mixed->Ad, x, yd));
-  PetscCallAbort(PETSC_COMM_WORLD, MatMult(mixed->Ah, x, yh));
-  EXPECT_LE(rel_diff(yh, yd), 1e-7);
-  // The diagonal: true entries, except the rigid-body terms, which come from an HSS product.
-  PetscCallAbort(PETSC_COMM_WORLD, MatGetDiagonal(mixed->Ad, yd));
-  PetscCallAbort(PETSC_COMM_WORLD, MatGetDiagonal(mixed->Ah, yh));
-  EXPECT_LE(rel_diff(yh, yd), 1e-7);
-  PetscCallAbort(PETSC_COMM_WORLD, PetscRandomDestroy(&rnd));
-  VecDestroy(&x);
-  VecDestroy(&yh);
-  VecDestroy(&yd);
+  expect_matches_dense(mixed->Ah, mixed->bh, *mixed, 1e-7); // tol 1e-8: 10·tol
 }
 
 /// A solve that converged within [min_its, max_its] iterations to within max_diff of dense LU.
@@ -209,24 +215,7 @@ TEST_F(PetscFace, H2MatrixMatchesDense)
   ASSERT_EQ(HssbemMatIsCompressed(mixed->A2, &compressed), 0);
   EXPECT_FALSE(is_hss);
   EXPECT_TRUE(compressed);
-  // b, A x for a random x and the diagonal agree to the tolerance (-mat_h2_rel_tol 1e-6): 10·tol.
-  EXPECT_LE(rel_diff(mixed->b2, mixed->bd), 1e-5);
-  Vec x, y2, yd;
-  PetscRandom rnd;
-  PetscCallAbort(PETSC_COMM_WORLD, PetscRandomCreate(PETSC_COMM_WORLD, &rnd));
-  PetscCallAbort(PETSC_COMM_WORLD, MatCreateVecs(mixed->Ad, &x, &yd));
-  PetscCallAbort(PETSC_COMM_WORLD, VecDuplicate(yd, &y2));
-  PetscCallAbort(PETSC_COMM_WORLD, VecSetRandom(x, rnd));
-  PetscCallAbort(PETSC_COMM_WORLD, MatMult(mixed->Ad, x, yd));
-  PetscCallAbort(PETSC_COMM_WORLD, MatMult(mixed->A2, x, y2));
-  EXPECT_LE(rel_diff(y2, yd), 1e-5);
-  PetscCallAbort(PETSC_COMM_WORLD, MatGetDiagonal(mixed->Ad, yd));
-  PetscCallAbort(PETSC_COMM_WORLD, MatGetDiagonal(mixed->A2, y2));
-  EXPECT_LE(rel_diff(y2, yd), 1e-5);
-  PetscCallAbort(PETSC_COMM_WORLD, PetscRandomDestroy(&rnd));
-  VecDestroy(&x);
-  VecDestroy(&y2);
-  VecDestroy(&yd);
+  expect_matches_dense(mixed->A2, mixed->b2, *mixed, 1e-5); // -mat_h2_rel_tol 1e-6: 10·tol
 }
 
 TEST_F(PetscFace, H2MatrixDefaultSolverIsGmresJacobi)

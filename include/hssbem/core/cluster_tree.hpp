@@ -80,6 +80,8 @@ public:
   const std::vector<int> &clusters_at_level(int l) const { return m_levels[l]; }
   /// All leaves, left to right (ascending `begin`); they may lie on different levels.
   const std::vector<int> &leaves() const { return m_leaves; }
+  /// The leaf holding each position of cluster order (num_points() entries).
+  std::vector<int> leaf_of_positions() const;
 
   /// Number of top-level parts (1 when built without a partition).
   int num_parts() const { return static_cast<int>(m_part_cluster.size()); }
