@@ -1,43 +1,44 @@
-// H² (strong admissibility) against HSS (weak admissibility) compression of K = [H, G] on one
-// mesh; prints one CSV row per format (see README.md).
+// The H² path end to end on one mesh: compression of K = [H, G], GMRES(100) + Jacobi through
+// PETSc with the H² product, optionally against dense assembly + LU of the same system; prints
+// one CSV row with bench_hss's columns (so bench_hss.py drives both, see README.md) and the H²
+// extras.
 //
-//   bench_h2 --mesh FILE [--tol 1e-6] [--leaf 64] [--eta 0] [--single 0|1] [--hss 0|1] [--hss-leaf 256] [--header]
+//   bench_h2 --mesh FILE [--tol 1e-5] [--leaf 64] [--eta 0] [--single 0|1] [--dense 0|1]
+//            [--rtol 1e-8] [--max-it 1000] [--hss 0|1] [--hss-leaf 256] [--header]
 //
-// Accuracy: K x for a random x against the exact product on 48 sampled rows (all columns,
-// true entries with the rigid-body terms), so no dense K is needed at any size.
+// Problem (as bench_hss): the nodes below the median height clamped, the others loaded by a
+// traction (0, 0, -1); E = 1, nu = 0.3. Besides the solve, the product is checked against true
+// entries on 48 sampled rows of K (all columns, rigid-body terms included: sample_err), so the
+// accuracy is measured at any size. --hss 1 also compresses K as HSS (stderr: time, memory,
+// sampled error) for a side-by-side look at the two formats.
 #include "hssbem/bem/bem_operator.hpp"
-#include "hssbem/h2/h2_compression.hpp"
+#include "hssbem/h2/h2_system.hpp"
 #include "hssbem/hss/bem_compression.hpp"
+#include "hssbem/hss/pattern_columns.hpp"
+#include "hssbem/petsc/compat.h"
+#include "hssbem/problem/benchmark_problem.hpp"
 
-#include <chrono>
+#include "bench_support.hpp"
+
+#include <petscksp.h>
+
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <numeric>
 #include <random>
 #include <string>
 
 using namespace hssbem;
+using bench::Clock;
+using bench::since;
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
-
-double peak_rss_mb()
-{
-  std::ifstream f("/proc/self/status");
-  std::string line;
-  while (std::getline(f, line))
-    if (line.rfind("VmHWM:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;
-  return 0;
-}
-
-/// A random x (mesh order, w per node), and K x on `rows` (nodes) from true entries.
+/// A random x (w per node, mesh order) and K x on 48 sampled nodes from true entries.
 struct Probe {
-  std::vector<double> x;  ///< w per node, mesh order
-  std::vector<int> rows;  ///< sampled nodes
-  std::vector<double> y;  ///< 3 per sampled node
+  std::vector<double> x;
+  std::vector<int> rows;
+  std::vector<double> y; ///< 3 per sampled node
 };
 
 Probe make_probe(const BemOperator &op, int w)
@@ -53,31 +54,21 @@ Probe make_probe(const BemOperator &op, int w)
   std::iota(all.begin(), all.end(), 0);
   p.y.assign(3 * p.rows.size(), 0.0);
   const long ld = 3L * n;
-  std::vector<double> H(3 * p.rows.size() * ld), G(H.size()), Gn(w > 6 ? 3 * p.rows.size() * n : 0);
+  std::vector<double> H(3 * p.rows.size() * ld), G(H.size());
   BemOperator::Workspace ws(op);
-  op.fill_hg(p.rows, all, H.data(), G.data(), ld, w > 6 ? Gn.data() : nullptr, n, ws);
+  op.fill_hg(p.rows, all, H.data(), G.data(), ld, nullptr, n, ws);
   for (std::size_t r = 0; r < 3 * p.rows.size(); ++r)
     for (int j = 0; j < n; ++j)
-      for (int s = 0; s < w; ++s)
-        p.y[r] += p.x[static_cast<std::size_t>(w) * j + s] * (s < 3 ? H[r * ld + 3 * j + s] : s < 6 ? G[r * ld + 3 * j + s - 3] : Gn[r * n + j]);
+      for (int s = 0; s < w; ++s) p.y[r] += p.x[static_cast<std::size_t>(w) * j + s] * (s < 3 ? H[r * ld + 3 * j + s] : G[r * ld + 3 * j + s - 3]);
   return p;
 }
 
-/// Apply a compressed K (HssMatrix or H2Matrix) to the probe; relative error on its rows and
-/// the time of one product.
+/// Relative error of a compressed K (HssMatrix or H2Matrix) on the probe's rows.
 template <class M>
-double probe_error(const M &K, const Probe &p, double &t_matvec)
+double probe_error(const M &K, const Probe &p)
 {
-  const ClusterTree &tree = K.tree();
-  const int n = tree.num_points(), w = K.col_block();
-  std::vector<double> xs(p.x), xc(xs.size()), yc(3L * n), y(3L * n);
-  for (int j = 0; j < n; ++j)
-    for (int q = 0; q < w; ++q) xs[static_cast<std::size_t>(w) * j + q] /= K.col_scale(q);
-  tree.to_cluster_order(xs.data(), xc.data(), w);
-  const auto t0 = Clock::now();
-  K.apply(xc.data(), w * n, yc.data(), 3 * n);
-  t_matvec = since(t0);
-  tree.to_mesh_order(yc.data(), y.data(), 3);
+  std::vector<double> y(3L * K.tree().num_points());
+  apply_compressed_k(K, p.x, y.data());
   double e = 0, s = 0;
   for (std::size_t k = 0; k < p.rows.size(); ++k)
     for (int c = 0; c < 3; ++c) {
@@ -88,14 +79,89 @@ double probe_error(const M &K, const Probe &p, double &t_matvec)
   return std::sqrt(e / s);
 }
 
+/// The system matrix of a pattern as a sequential MatShell over the H² system.
+struct ShellContext {
+  const H2BemSystem *sys;
+  const SystemSelection *sel;
+};
+
+PetscErrorCode ShellMult(Mat A, Vec x, Vec y)
+{
+  ShellContext *ctx;
+  const PetscScalar *xa;
+  PetscScalar *ya;
+  PetscFunctionBeginUser;
+  PetscCall(MatShellGetContext(A, &ctx));
+  PetscCall(VecGetArrayRead(x, &xa));
+  PetscCall(VecGetArrayWrite(y, &ya));
+  ctx->sys->apply(*ctx->sel, xa, ya);
+  PetscCall(VecRestoreArrayRead(x, &xa));
+  PetscCall(VecRestoreArrayWrite(y, &ya));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode ShellDiagonal(Mat A, Vec d)
+{
+  ShellContext *ctx;
+  PetscScalar *da;
+  PetscFunctionBeginUser;
+  PetscCall(MatShellGetContext(A, &ctx));
+  const std::vector<double> diag = ctx->sys->diagonal(*ctx->sel);
+  PetscCall(VecGetArrayWrite(d, &da));
+  std::copy(diag.begin(), diag.end(), da);
+  PetscCall(VecRestoreArrayWrite(d, &da));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/// GMRES(restart 100) + Jacobi on the H² system: the solution, iterations and seconds.
+PetscErrorCode gmres_jacobi(const H2BemSystem &sys, const SystemSelection &sel, const std::vector<double> &b, double rtol, int max_it,
+                            std::vector<double> &x, PetscInt &its, double &seconds)
+{
+  const PetscInt N = static_cast<PetscInt>(b.size());
+  ShellContext ctx{&sys, &sel};
+  Mat A;
+  Vec vb, vx;
+  KSP ksp;
+  PC pc;
+  KSPConvergedReason reason;
+  PetscFunctionBeginUser;
+  PetscCall(MatCreateShell(PETSC_COMM_SELF, N, N, N, N, &ctx, &A));
+  PetscCall(MatShellSetOperation(A, MATOP_MULT, (void (*)(void))ShellMult));
+  PetscCall(MatShellSetOperation(A, MATOP_GET_DIAGONAL, (void (*)(void))ShellDiagonal));
+  PetscCall(VecCreateSeqWithArray(PETSC_COMM_SELF, 1, N, b.data(), &vb));
+  x.assign(b.size(), 0.0);
+  PetscCall(VecCreateSeqWithArray(PETSC_COMM_SELF, 1, N, x.data(), &vx));
+  PetscCall(KSPCreate(PETSC_COMM_SELF, &ksp));
+  PetscCall(KSPSetOperators(ksp, A, A));
+  PetscCall(KSPSetType(ksp, KSPGMRES));
+  PetscCall(KSPGMRESSetRestart(ksp, 100));
+  PetscCall(KSPGetPC(ksp, &pc));
+  PetscCall(PCSetType(pc, PCJACOBI));
+  PetscCall(KSPSetTolerances(ksp, rtol, PETSC_DEFAULT, PETSC_DEFAULT, max_it));
+  const auto t0 = Clock::now();
+  PetscCall(KSPSolve(ksp, vb, vx));
+  seconds = since(t0);
+  PetscCall(KSPGetIterationNumber(ksp, &its));
+  PetscCall(KSPGetConvergedReason(ksp, &reason));
+  PetscCheck(reason > 0, PETSC_COMM_SELF, PETSC_ERR_NOT_CONVERGED, "GMRES did not converge: %s after %d iterations", KSPConvergedReasons[reason], (int)its);
+  PetscCall(KSPDestroy(&ksp));
+  PetscCall(VecDestroy(&vx));
+  PetscCall(VecDestroy(&vb));
+  PetscCall(MatDestroy(&A));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 } // namespace
 
 int main(int argc, char **argv)
 {
   std::string mesh_path;
   H2Options opt;
+  opt.rel_tol = 1e-5;
   HssOptions hss;
-  bool run_hss = false, header = false;
+  bool dense = false, run_hss = false, header = false;
+  double rtol = 1e-8;
+  int max_it = 1000;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() -> std::string {
@@ -107,6 +173,9 @@ int main(int argc, char **argv)
     else if (a == "--leaf") opt.leaf_size = std::stoi(next());
     else if (a == "--eta") opt.eta = std::stod(next());
     else if (a == "--single") opt.single_precision = std::stoi(next()) != 0;
+    else if (a == "--dense") dense = std::stoi(next()) != 0;
+    else if (a == "--rtol") rtol = std::stod(next());
+    else if (a == "--max-it") max_it = std::stoi(next());
     else if (a == "--hss") run_hss = std::stoi(next()) != 0;
     else if (a == "--hss-leaf") hss.leaf_size = std::stoi(next());
     else if (a == "--header") header = true;
@@ -116,45 +185,61 @@ int main(int argc, char **argv)
     }
   }
   if (header)
-    std::printf("format,mesh,N,tol,leaf,eta,compress_s,matvec_s,max_row_rank,max_col_rank,memory_mb,basis_mb,far_mb,near_mb,entries,peak_rss_mb,"
-                "sample_err\n");
+    std::printf("mesh,N,tol,leaf,dense_assembly_s,dense_lu_s,compress_s,factor_s,solve_s,matvec_s,max_row_rank,max_col_rank,top_front,"
+                "hss_memory_mb,factor_memory_mb,peak_rss_mb,rel_diff,iterations,sample_err,eta,single,basis_mb,far_mb,near_mb\n");
   if (mesh_path.empty()) return header ? 0 : 2;
+  PetscCall(PetscInitializeNoArguments());
 
   SurfaceMesh mesh = read_mesh(mesh_path);
   std::vector<std::string> notices;
   validate_and_orient(mesh, notices);
   Discretization disc(mesh, 40.0);
   BemOperator op(disc, Material::from_young(1.0, 0.3));
-  const std::string name = mesh_path.substr(mesh_path.find_last_of('/') + 1);
   const int n = disc.num_nodes();
+  const SystemSelection sel = clamped_lower_half(disc, {0, 0, -1});
   const Probe probe = make_probe(op, 6);
 
-  {
-    auto t0 = Clock::now();
-    const H2Matrix K = compress_bem_operator_h2(op, opt);
-    const double t_compress = since(t0);
-    double t_mv = 0;
-    const double err = probe_error(K, probe, t_mv);
-    const H2Stats &st = K.stats();
-    for (std::size_t l = 0; l < st.levels.size(); ++l)
-      std::fprintf(stderr, "h2 level %zu: %d bases, row rank max %d mean %.0f, column rank max %d mean %.0f, %ld far blocks\n", l, st.levels[l].clusters,
-                   st.levels[l].max_row_rank, st.levels[l].mean_row_rank, st.levels[l].max_col_rank, st.levels[l].mean_col_rank, st.levels[l].far_blocks);
-    std::fprintf(stderr, "h2: tree+partition %.2f s, far blocks %.2f s, near blocks %.2f s, rigid %.2f s; summed over threads: ID samples %.2f s, IDs %.2f s; %ld far, %ld near blocks\n",
-                 st.time_tree, st.time_far, st.time_near, st.time_rigid, st.time_near_field, st.time_ids, st.far_blocks, st.near_blocks);
-    std::printf("%s,%s,%d,%.0e,%d,%.2f,%.3f,%.4f,%d,%d,%.1f,%.1f,%.1f,%.1f,%.3g,%.0f,%.3e\n", opt.single_precision ? "h2-single" : "h2", name.c_str(), 3 * n, opt.rel_tol, opt.leaf_size, opt.eta, t_compress,
-                t_mv, st.max_row_rank(), st.max_col_rank(), st.memory_bytes / 1048576.0, st.basis_bytes / 1048576.0, st.far_bytes / 1048576.0,
-                st.near_bytes / 1048576.0, double(st.entries_evaluated), peak_rss_mb(), err);
-    std::fflush(stdout);
-  }
+  // H²: compress K once, right-hand side by a fast product, GMRES + Jacobi.
+  auto t0 = Clock::now();
+  const H2BemSystem sys(op, opt);
+  const double t_compress = since(t0);
+  t0 = Clock::now();
+  const std::vector<double> b = sys.rhs(sel);
+  const double t_matvec = since(t0);
+  std::vector<double> x;
+  PetscInt its = 0;
+  double t_solve = 0;
+  PetscCall(gmres_jacobi(sys, sel, b, rtol, max_it, x, its, t_solve));
+  const H2Matrix &K = sys.matrix();
+  const double sample_err = probe_error(K, probe);
+  const double rss = bench::peak_rss_mb();
+  const H2Stats &st = K.stats();
+  for (std::size_t l = 0; l < st.levels.size(); ++l)
+    std::fprintf(stderr, "level %zu: %d clusters, row rank max %d mean %.0f, column rank max %d mean %.0f, %ld far blocks\n", l, st.levels[l].clusters,
+                 st.levels[l].max_row_rank, st.levels[l].mean_row_rank, st.levels[l].max_col_rank, st.levels[l].mean_col_rank, st.levels[l].far_blocks);
+  std::fprintf(stderr, "compress: tree+partition %.2f s, far blocks %.2f s, near blocks %.2f s, rigid %.2f s; summed over threads: ID samples %.2f s, IDs %.2f s; %.3g entries, %ld far and %ld near blocks, %d proxy points\n",
+               st.time_tree, st.time_far, st.time_near, st.time_rigid, st.time_near_field, st.time_ids, double(st.entries_evaluated), st.far_blocks,
+               st.near_blocks, st.proxy_points);
+  std::fprintf(stderr, "solve: GMRES(100) + Jacobi, %d iterations to rtol %g, %.2f s\n", (int)its, rtol, t_solve);
+
   if (run_hss) {
-    auto t0 = Clock::now();
-    const HssMatrix K = compress_bem_operator(op, hss);
-    const double t_compress = since(t0);
-    double t_mv = 0;
-    const double err = probe_error(K, probe, t_mv);
-    const HssStats &st = K.stats();
-    std::printf("hss,%s,%d,%.0e,%d,,%.3f,%.4f,%d,%d,%.1f,,,,%.3g,%.0f,%.3e\n", name.c_str(), 3 * n, hss.rel_tol, hss.leaf_size, t_compress, t_mv,
-                st.max_row_rank(), st.max_col_rank(), st.memory_bytes / 1048576.0, double(st.entries_evaluated), peak_rss_mb(), err);
+    t0 = Clock::now();
+    const HssMatrix Kh = compress_bem_operator(op, hss);
+    std::fprintf(stderr, "hss (leaf %d): compress %.2f s, max rank %d/%d, memory %.1f MB, sampled error %.3e\n", hss.leaf_size, since(t0),
+                 Kh.stats().max_row_rank(), Kh.stats().max_col_rank(), Kh.stats().memory_bytes / 1048576.0, probe_error(Kh, probe));
   }
+
+  double t_asm = NAN, t_lu = NAN, diff = NAN;
+  if (dense) {
+    const bench::DenseReference ref = bench::dense_reference(op, sel);
+    t_asm = ref.t_assembly;
+    t_lu = ref.t_lu;
+    diff = bench::rel_diff(x, ref.x);
+  }
+  std::printf("%s,%d,%.0e,%d,%.3f,%.3f,%.3f,0,%.4f,%.4f,%d,%d,nan,%.1f,0,%.0f,%.3e,%d,%.3e,%.2f,%d,%.1f,%.1f,%.1f\n",
+              mesh_path.substr(mesh_path.find_last_of('/') + 1).c_str(), 3 * n, opt.rel_tol, opt.leaf_size, t_asm, t_lu, t_compress, t_solve, t_matvec,
+              st.max_row_rank(), st.max_col_rank(), st.memory_bytes / 1048576.0, std::max(rss, bench::peak_rss_mb()), diff, (int)its, sample_err, opt.eta,
+              opt.single_precision ? 1 : 0, st.basis_bytes / 1048576.0, st.far_bytes / 1048576.0, st.near_bytes / 1048576.0);
+  PetscCall(PetscFinalize());
   return 0;
 }

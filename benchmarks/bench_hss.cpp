@@ -9,6 +9,8 @@
 #include "hssbem/hss/bem_system.hpp"
 #include "hssbem/problem/benchmark_problem.hpp"
 
+#include "bench_support.hpp"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -20,31 +22,8 @@
 
 using namespace hssbem;
 
-namespace {
-
-using Clock = std::chrono::steady_clock;
-double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
-
-double peak_rss_mb()
-{
-  std::ifstream f("/proc/self/status");
-  std::string line;
-  while (std::getline(f, line))
-    if (line.rfind("VmHWM:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;
-  return 0;
-}
-
-double rel_diff(const std::vector<double> &a, const std::vector<double> &b)
-{
-  double e = 0, s = 0;
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    e += (a[i] - b[i]) * (a[i] - b[i]);
-    s += b[i] * b[i];
-  }
-  return std::sqrt(e / s);
-}
-
-} // namespace
+using bench::Clock;
+using bench::since;
 
 int main(int argc, char **argv)
 {
@@ -96,7 +75,7 @@ int main(int argc, char **argv)
   const std::vector<double> x_hss = sys.solve(*F, b);
   const double t_solve = since(t0);
   const HssMatrix &K = sys.matrix();
-  const double rss = peak_rss_mb();
+  const double rss = bench::peak_rss_mb();
   const HssStats &st = K.stats();
   for (std::size_t l = 0; l < st.levels.size(); ++l)
     std::fprintf(stderr, "level %zu: %d clusters, row rank max %d mean %.0f, column rank max %d mean %.0f\n", l, st.levels[l].clusters,
@@ -107,27 +86,10 @@ int main(int argc, char **argv)
 
   double t_asm = NAN, t_lu = NAN, diff = NAN;
   if (dense) {
-    std::vector<int> all(n);
-    std::iota(all.begin(), all.end(), 0);
-    const long N = 3L * n;
-    std::vector<double> A(N * N), rhs(N);
-    t0 = Clock::now();
-#pragma omp parallel
-    {
-      BemOperator::Workspace ws(op);
-#pragma omp for schedule(dynamic, 1)
-      for (int r0 = 0; r0 < n; r0 += 16) {
-        const std::vector<int> rows(all.begin() + r0, all.begin() + std::min(n, r0 + 16));
-        fill_system_block(op, sel, rows, all, A.data() + 3L * r0 * N, N, rhs.data() + 3L * r0, ws);
-      }
-    }
-    t_asm = since(t0);
-    t0 = Clock::now();
-    std::vector<int> piv(N);
-    if (lapack::getrf(static_cast<int>(N), A.data(), static_cast<int>(N), piv.data()) != 0) throw std::runtime_error("dense LU failed");
-    lapack::getrs('T', static_cast<int>(N), 1, A.data(), static_cast<int>(N), piv.data(), rhs.data(), static_cast<int>(N)); // A is row-major
-    t_lu = since(t0);
-    diff = rel_diff(x_hss, rhs);
+    const bench::DenseReference ref = bench::dense_reference(op, sel);
+    t_asm = ref.t_assembly;
+    t_lu = ref.t_lu;
+    diff = bench::rel_diff(x_hss, ref.x);
   }
   std::printf("%s,%d,%.0e,%d,%.3f,%.3f,%.3f,%.3f,%.4f,%.4f,%d,%d,%d,%.1f,%.1f,%.0f,%.3e\n", mesh_path.substr(mesh_path.find_last_of('/') + 1).c_str(), 3 * n,
               opt.rel_tol, opt.leaf_size, t_asm, t_lu, t_compress, t_factor, t_solve, t_matvec, st.max_row_rank(), st.max_col_rank(), F->max_front(),

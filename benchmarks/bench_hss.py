@@ -1,14 +1,17 @@
 #!/usr/bin/python3
-"""Scaling benchmark of the HSS direct solver against dense assembly + LU (drives bench_hss).
+"""Scaling benchmark of the HSS direct solver, or of H² + GMRES, against dense assembly + LU
+(drives bench_hss or bench_h2).
 
 For every mesh family (unit sphere, disk organ) and every target number of unknowns N this script
 
   1. generates the surface mesh with scripts/gen_meshes.py (--sphere-triangles T or
      --disk-triangles T, T = 2 (N/3 - 2) triangles) into the mesh cache directory, or reuses the
      cached file when it is already there;
-  2. runs the C++ benchmark program (benchmarks/bench_hss.cpp, target bench_hss)
+  2. runs the C++ benchmark program of the chosen --solver: bench_hss (benchmarks/bench_hss.cpp:
+     HSS compression, ULV factorization and solve) or bench_h2 (benchmarks/bench_h2.cpp: H²
+     compression, GMRES(100) + Jacobi with the H² product; its "factor" time is 0)
 
-         bench_hss --mesh FILE --tol TOL [--leaf L] --dense 0|1 [EXTRA ARGS]
+         bench_hss|bench_h2 --mesh FILE --tol TOL [--leaf L] --dense 0|1 [EXTRA ARGS]
 
      as a subprocess (with --dense 1 only up to --dense-max unknowns), with a per-run timeout;
   3. appends the single CSV line it prints on stdout, preceded by a `family` column, to the CSV
@@ -31,6 +34,8 @@ Examples
   benchmarks/bench_hss.py --bench build/bin/bench_hss --quick                # smoke test, minutes
   benchmarks/bench_hss.py --csv out/bench/hss.csv --plot out/bench/hss.png   # full sweep (hours)
   benchmarks/bench_hss.py --from-csv out/bench/hss.csv --plot out/bench/hss.png
+  benchmarks/bench_hss.py --solver h2 --tol 1e-5 --extra "--single 1" --csv out/bench/h2.csv \
+      --plot out/bench/h2.png                                                 # H², 3k .. 300k
 """
 
 import argparse
@@ -65,7 +70,12 @@ FAMILIES = {
 BENCH_COLUMNS = ["mesh", "N", "tol", "leaf", "dense_assembly_s", "dense_lu_s", "compress_s",
                  "factor_s", "solve_s", "matvec_s", "max_row_rank", "max_col_rank", "top_front",
                  "hss_memory_mb", "factor_memory_mb", "peak_rss_mb", "rel_diff"]
-CSV_COLUMNS = ["family"] + BENCH_COLUMNS
+# Columns only bench_h2 prints (nan for bench_hss rows).
+H2_COLUMNS = ["iterations", "sample_err"]
+CSV_COLUMNS = ["family", "solver"] + BENCH_COLUMNS + H2_COLUMNS
+
+# Solvers: name -> benchmark program (default path).
+SOLVERS = {"hss": "bench_hss", "h2": "bench_h2"}
 
 # Default range of N over which the log-log slopes are fitted.
 FIT_MIN, FIT_MAX = 10000, 300000
@@ -258,8 +268,9 @@ def read_csv(path):
         for rec in csv.DictReader(f):
             if not rec.get("family"):
                 continue
-            row = {k: to_float(v) for k, v in rec.items() if k not in ("family", "mesh", "tol")}
+            row = {k: to_float(v) for k, v in rec.items() if k not in ("family", "solver", "mesh", "tol")}
             row["family"], row["mesh"], row["tol"] = rec["family"], rec["mesh"], rec["tol"]
+            row["solver"] = rec.get("solver") or "hss"
             rows.append(row)
     return rows
 
@@ -325,29 +336,30 @@ def read_level_ranks(log_file):
 
 
 def group_rows(rows):
-    """Rows grouped by (family, tol, leaf), each sorted by N. For a repeated (family, mesh, tol,
-    leaf), e.g. from --append sweeps, the last row wins."""
+    """Rows grouped by (family, solver, tol, leaf), each sorted by N. For a repeated (family,
+    solver, mesh, tol, leaf), e.g. from --append sweeps, the last row wins."""
     latest = {}
     for r in rows:
-        latest[(r["family"], r["mesh"], r["tol"], r["leaf"])] = r
+        latest[(r["family"], r["solver"], r["mesh"], r["tol"], r["leaf"])] = r
     groups = {}
     for r in latest.values():
-        groups.setdefault((r["family"], r["tol"], r["leaf"]), []).append(r)
+        groups.setdefault((r["family"], r["solver"], r["tol"], r["leaf"]), []).append(r)
     order = list(FAMILIES)
-    keys = sorted(groups, key=lambda k: (order.index(k[0]) if k[0] in order else len(order), k[0],
-                                         to_float(k[1]), k[2]))
+    keys = sorted(groups, key=lambda k: (order.index(k[0]) if k[0] in order else len(order), k[0], k[1],
+                                         to_float(k[2]), k[3]))
     return [(k, sorted(groups[k], key=lambda r: r["N"])) for k in keys]
 
 
 def print_report(rows, logs_dir, fit_min, fit_max):
-    """Markdown table, slopes and ranks per level for each (family, tol, leaf) group."""
+    """Markdown table, slopes and ranks per level for each (family, solver, tol, leaf) group."""
     if not rows:
         log("\n(no successful runs to report)")
         return
-    for (family, tol, leaf), grp in group_rows(rows):
-        log(f"\n### {family}: tol {tol}, leaf {leaf:.0f}\n")
-        hdr = ["N", "dense s (asm + LU)", "compress s", "factor s", "solve s", "HSS total s",
-               "speed-up", "max rank r/c", "top front", "HSS + factor MB", "peak RSS MB", "rel_diff"]
+    for (family, solver, tol, leaf), grp in group_rows(rows):
+        log(f"\n### {family}, {solver}: tol {tol}, leaf {leaf:.0f}\n")
+        hdr = ["N", "dense s (asm + LU)", "compress s", "factor s", "solve s", "total s",
+               "speed-up", "max rank r/c", "top front", "matrix + factor MB", "peak RSS MB", "rel_diff", "its",
+               "sampled K err"]
         log("| " + " | ".join(hdr) + " |")
         log("|" + "|".join("---:" for _ in hdr) + "|")
         for r in grp:
@@ -358,17 +370,20 @@ def print_report(rows, logs_dir, fit_min, fit_max):
             cells = [f"{r['N']:.0f}", dense, fmt_s(r["compress_s"]), fmt_s(r["factor_s"]),
                      fmt_s(r["solve_s"]), fmt_s(d["hss_total"]),
                      fmt_ratio(d["speedup"]),
-                     f"{r['max_row_rank']:.0f}/{r['max_col_rank']:.0f}", f"{r['top_front']:.0f}",
+                     f"{r['max_row_rank']:.0f}/{r['max_col_rank']:.0f}",
+                     f"{r['top_front']:.0f}" if finite(r["top_front"]) else "–",
                      f"{fmt_mb(mem)} ({fmt_mb(r['hss_memory_mb'])} + {fmt_mb(r['factor_memory_mb'])})",
                      fmt_mb(r["peak_rss_mb"]),
-                     f"{r['rel_diff']:.2e}" if finite(r["rel_diff"]) else "–"]
+                     f"{r['rel_diff']:.2e}" if finite(r["rel_diff"]) else "–",
+                     f"{r.get('iterations', math.nan):.0f}" if finite(r.get("iterations", math.nan)) else "–",
+                     f"{r['sample_err']:.1e}" if finite(r.get("sample_err", math.nan)) else "–"]
             log("| " + " | ".join(cells) + " |")
 
         # log-log slopes
         log(f"\nlog-log slopes against N (least squares; fit range {fit_min} <= N <= {fit_max}):")
         series = [
-            ("HSS setup (compress + factor)", [(r["N"], derived(r)["setup"]) for r in grp], "1 to 1.5"),
-            ("HSS solve", [(r["N"], r["solve_s"]) for r in grp], "about 1"),
+            ("setup (compress + factor)", [(r["N"], derived(r)["setup"]) for r in grp], "1 to 1.5"),
+            ("solve", [(r["N"], r["solve_s"]) for r in grp], "about 1"),
             ("max rank (row/col)", [(r["N"], derived(r)["max_rank"]) for r in grp], "about 0.5"),
             ("dense assembly + LU", [(r["N"], derived(r)["dense_total"]) for r in grp], "2 to 3"),
         ]
@@ -395,7 +410,7 @@ def print_report(rows, logs_dir, fit_min, fit_max):
                 lines.append(f"  N {r['N']:7.0f}:  " + "  ".join(f"L{lv} {row}/{col}" for lv, nc, row, col in lev
                                                              if nc > 0))
         if lines:
-            log("\nmax row/column rank per HSS level (L1 = the two children of the root), from the logs:")
+            log(f"\nmax row/column rank per {solver.upper()} level (L1 = the two children of the root), from the logs:")
             for line in lines:
                 log(line)
 
@@ -417,7 +432,7 @@ def plot(rows, path):
         return
     fig, (ax, axr) = plt.subplots(1, 2, figsize=(13, 7))
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
-    label_tol = len({(k[1], k[2]) for k, _ in groups}) > 1
+    label_tol = len({(k[2], k[3]) for k, _ in groups}) > 1
 
     def guide(axis, n_ref, y_ref, n_max, power, text):
         """Grey line y = y_ref (N / n_ref)^power from n_ref to n_max, labelled at its end."""
@@ -429,22 +444,23 @@ def plot(rows, path):
     all_n = [r["N"] for _, g in groups for r in g]
     n_lo, n_hi = min(all_n), max(all_n)
     first = {"setup": None, "solve": None, "dense": None, "rank": None}
-    for i, ((family, tol, leaf), grp) in enumerate(groups):
+    for i, ((family, solver, tol, leaf), grp) in enumerate(groups):
         c = colors[i % len(colors)]
-        name = family + (f" (tol {tol}, leaf {leaf:.0f})" if label_tol else "")
+        name = f"{family} {solver}" + (f" (tol {tol}, leaf {leaf:.0f})" if label_tol else "")
         N = np.array([r["N"] for r in grp])
         setup = np.array([derived(r)["setup"] for r in grp])
         solve = np.array([r["solve_s"] for r in grp])
         dense = np.array([derived(r)["dense_total"] for r in grp])
         rank = np.array([derived(r)["max_rank"] for r in grp])
         front = np.array([r["top_front"] for r in grp])
-        ax.plot(N, setup, "o-", color=c, label=f"{name}: HSS setup (compress + factor)")
-        ax.plot(N, solve, "s--", color=c, label=f"{name}: HSS solve")
+        ax.plot(N, setup, "o-", color=c, label=f"{name}: setup (compress + factor)")
+        ax.plot(N, solve, "s--", color=c, label=f"{name}: solve")
         ok = np.isfinite(dense)
         if ok.any():
             ax.plot(N[ok], dense[ok], "^:", color=c, label=f"{name}: dense assembly + LU")
         axr.plot(N, rank, "o-", color=c, label=f"{name}: max rank (row/col)")
-        axr.plot(N, front, "s--", color=c, label=f"{name}: top front")
+        if np.isfinite(front).any():
+            axr.plot(N, front, "s--", color=c, label=f"{name}: top front")
         # guide lines start at the smallest-N point of the first group that has the series
         for key, ys, msk in (("setup", setup, np.isfinite(setup)), ("solve", solve, np.isfinite(solve)),
                              ("dense", dense, ok), ("rank", rank, np.isfinite(rank))):
@@ -503,8 +519,8 @@ def print_preamble(args, sizes, families):
 def sweep(args, sizes, families):
     """Run every (family, size); returns the list of failures (description, log file)."""
     header = bench_header(args.bench)
-    if header != BENCH_COLUMNS:
-        log(f"# note: bench_hss prints the columns {','.join(header)}; expected {','.join(BENCH_COLUMNS)}")
+    if header[:len(BENCH_COLUMNS)] != BENCH_COLUMNS:
+        log(f"# note: {os.path.basename(args.bench)} prints the columns {','.join(header)}; expected {','.join(BENCH_COLUMNS)} first")
     logs_dir = logs_dir_for(args.csv)
     os.makedirs(logs_dir, exist_ok=True)
     open_csv(args.csv, args.append)
@@ -514,7 +530,8 @@ def sweep(args, sizes, families):
     for k, (family, n_target) in enumerate(cases, 1):
         tri = triangles_for_unknowns(n_target)
         dense = n_target <= args.dense_max
-        log(f"[{k}/{len(cases)}] {family} N~{n_target} (T={tri}, {'HSS + dense' if dense else 'HSS only'})")
+        what = args.solver.upper()
+        log(f"[{k}/{len(cases)}] {family} N~{n_target} (T={tri}, {what + ' + dense' if dense else what + ' only'})")
         mesh, err = ensure_mesh(family, tri, args.mesh_dir, args.timeout)
         if mesh is None:
             log(f"    FAILED: {err}")
@@ -538,7 +555,7 @@ def sweep(args, sizes, families):
             continue
         # put the fields in this script's column order (by name, in case the program's differs)
         rec = dict(zip(header, fields))
-        append_csv(args.csv, [family] + [rec.get(c, "nan") for c in BENCH_COLUMNS])
+        append_csv(args.csv, [family, args.solver] + [rec.get(c, "nan") for c in BENCH_COLUMNS + H2_COLUMNS])
         r = {c: to_float(rec.get(c)) for c in BENCH_COLUMNS}
         d = derived(r)
         dense_txt = f", dense {fmt_s(d['dense_total'])} s, speed-up {fmt_ratio(d['speedup'])}" if finite(d["dense_total"]) else ""
@@ -553,16 +570,18 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                  epilog=__doc__[__doc__.index("Examples"):],
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--bench", default=os.environ.get("BENCH_HSS", os.path.join(REPO, "build", "bin", "bench_hss")),
-                    help="bench_hss binary (default: $BENCH_HSS, else build/bin/bench_hss)")
+    ap.add_argument("--solver", choices=sorted(SOLVERS), default="hss",
+                    help="hss: HSS direct (bench_hss); h2: H² + GMRES/Jacobi (bench_h2) (default: hss)")
+    ap.add_argument("--bench", default=None,
+                    help="benchmark binary (default: $BENCH_HSS or $BENCH_H2, else build/bin/bench_hss or bench_h2)")
     ap.add_argument("--family", type=parse_families, default=",".join(FAMILIES),
                     help="comma-separated mesh families: sphere, disk (default: both)")
     ap.add_argument("--sizes", type=parse_int_list, default=",".join(map(str, DEFAULT_SIZES)),
                     help="target unknown counts N (default: %(default)s)")
     ap.add_argument("--quick", action="store_true",
                     help=f"smoke test: sizes {','.join(map(str, QUICK_SIZES))} only (overrides --sizes)")
-    ap.add_argument("--tol", type=float, default=1e-6, help="HSS relative tolerance (default: 1e-6)")
-    ap.add_argument("--leaf", type=int, default=None, help="HSS leaf size (default: the program's default)")
+    ap.add_argument("--tol", type=float, default=1e-6, help="compression tolerance (default: 1e-6)")
+    ap.add_argument("--leaf", type=int, default=None, help="leaf size (default: the program's default)")
     ap.add_argument("--dense-max", type=int, default=21000, metavar="N",
                     help="also run dense assembly + LU for target N <= this (default: 21000)")
     ap.add_argument("--csv", default=os.path.join(REPO, "out", "bench", "hss.csv"),
@@ -583,6 +602,9 @@ def main():
     ap.add_argument("--from-csv", metavar="FILE",
                     help="run nothing: only print the tables and slopes (and --plot) of this CSV")
     args = ap.parse_args()
+    if args.bench is None:
+        prog = SOLVERS[args.solver]
+        args.bench = os.environ.get(prog.upper(), os.path.join(REPO, "build", "bin", prog))
 
     if args.from_csv:
         rows = read_csv(args.from_csv)
@@ -593,8 +615,8 @@ def main():
         return 0
 
     if not (os.path.isfile(args.bench) and os.access(args.bench, os.X_OK)):
-        ap.error(f"bench_hss binary {args.bench!r} not found or not executable "
-                 "(build it: cmake --build build --target bench_hss, or pass --bench / set $BENCH_HSS)")
+        ap.error(f"benchmark binary {args.bench!r} not found or not executable "
+                 f"(build it: cmake --build build --target {SOLVERS[args.solver]}, or pass --bench)")
     sizes = list(QUICK_SIZES) if args.quick else args.sizes
     args.csv = os.path.abspath(args.csv)
     args.mesh_dir = os.path.abspath(args.mesh_dir)
