@@ -10,19 +10,9 @@
 
 namespace hssbem {
 
-int H2Stats::max_row_rank() const
-{
-  int r = 0;
-  for (const auto &l : levels) r = std::max(r, l.max_row_rank);
-  return r;
-}
+int H2Stats::max_row_rank() const { return max_level_rank(levels, true); }
 
-int H2Stats::max_col_rank() const
-{
-  int r = 0;
-  for (const auto &l : levels) r = std::max(r, l.max_col_rank);
-  return r;
-}
+int H2Stats::max_col_rank() const { return max_level_rank(levels, false); }
 
 void H2Block::demote()
 {

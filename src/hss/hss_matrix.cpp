@@ -10,19 +10,9 @@
 
 namespace hssbem {
 
-int HssStats::max_row_rank() const
-{
-  int r = 0;
-  for (const auto &l : levels) r = std::max(r, l.max_row_rank);
-  return r;
-}
+int HssStats::max_row_rank() const { return max_level_rank(levels, true); }
 
-int HssStats::max_col_rank() const
-{
-  int r = 0;
-  for (const auto &l : levels) r = std::max(r, l.max_col_rank);
-  return r;
-}
+int HssStats::max_col_rank() const { return max_level_rank(levels, false); }
 
 HssMatrix::HssMatrix(ClusterTree tree, int row_block, int col_block)
   : m_tree(std::move(tree)), m_row_block(row_block), m_col_block(col_block), m_col_scale(col_block, 1.0), m_clusters(m_tree.num_clusters())

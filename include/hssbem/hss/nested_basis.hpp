@@ -14,6 +14,7 @@
 #include "hssbem/core/cluster_tree.hpp"
 #include "hssbem/core/dense_matrix.hpp"
 
+#include <algorithm>
 #include <numeric>
 #include <vector>
 
@@ -49,6 +50,16 @@ std::vector<int> basis_candidates(const ClusterTree &tree, const std::vector<T> 
   const std::vector<int> &right = rows ? b.row_skel : b.col_skel;
   out.insert(out.end(), right.begin(), right.end());
   return out;
+}
+
+/// Largest row (rows = true) or column rank over per-level statistics (any type with
+/// max_row_rank and max_col_rank members).
+template <class Level>
+int max_level_rank(const std::vector<Level> &levels, bool rows)
+{
+  int r = 0;
+  for (const Level &l : levels) r = std::max(r, rows ? l.max_row_rank : l.max_col_rank);
+  return r;
 }
 
 } // namespace hssbem
