@@ -66,13 +66,11 @@ void add_rigid_body_terms(const BemOperator &op, H2Matrix &K)
     const int nc = op.rigid_body_columns(i, cols, wts);
     for (int t = 0; t < nc; ++t) {
       const int pj = tree.iperm()[cols[t]], b = leaf_of[pj];
-      const std::vector<int> &near = K.partition().near[a];
-      const auto it = std::lower_bound(near.begin(), near.end(), b);
-      if (it == near.end() || *it != b) throw std::logic_error("H2 compression: a rigid-body term falls outside the near blocks");
-      H2Block &D = K.near_blocks(a)[it - near.begin()];
+      H2Block *D = K.near_block(a, b);
+      if (!D) throw std::logic_error("H2 compression: a rigid-body term falls outside the near blocks");
       const int r0 = 3 * (pi - tree.cluster(a).begin), c0 = w * (pj - tree.cluster(b).begin);
       for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) D.add(r0 + r, c0 + c, wts[t] * rigid[9 * static_cast<std::size_t>(pi) + 3 * r + c]);
+        for (int c = 0; c < 3; ++c) D->add(r0 + r, c0 + c, wts[t] * rigid[9 * static_cast<std::size_t>(pi) + 3 * r + c]);
     }
   }
 }
@@ -81,20 +79,12 @@ void add_rigid_body_terms(const BemOperator &op, H2Matrix &K)
 
 H2Matrix compress_bem_operator_h2(const BemOperator &op, const H2Options &options)
 {
-  if (!(options.rel_tol > 0 && options.rel_tol < 1)) throw std::invalid_argument("H2: the relative tolerance must lie in (0, 1)");
-  if (options.leaf_size < 1) throw std::invalid_argument("H2: the leaf size must be at least 1");
-  if (!(options.proxy_ratio > 1)) throw std::invalid_argument("H2: the proxy ratio must exceed 1");
+  check_compression_inputs(op, options, "H2");
   if (!(options.eta >= 0)) throw std::invalid_argument("H2: eta must be >= 0");
-  if (options.max_rank == 0 || options.max_rank < -1) throw std::invalid_argument("H2: the rank cap must be positive (or -1 for none)");
-  if (op.quadrature_options().far_ratio > 0)
-    throw std::invalid_argument("H2: the 3-point far rule (-mat_bem_far_ratio) breaks the smooth far field the compression relies on; set it to 0");
   auto t0 = std::chrono::steady_clock::now();
-  const Discretization &disc = op.discretization();
-  std::vector<Vec3> points(disc.num_nodes());
-  for (int i = 0; i < disc.num_nodes(); ++i) points[i] = disc.node(i).point;
   std::optional<PhaseScope> phase(Phase::Tree);
   const int w = k_columns_per_node(options.pressure_columns);
-  H2Matrix K(ClusterTree(points, ClusterTreeOptions{options.leaf_size}), 3, w);
+  H2Matrix K(ClusterTree(collocation_points(op.discretization()), ClusterTreeOptions{options.leaf_size}), 3, w);
   const ClusterTree &tree = K.tree();
   phase.reset();
   phase.emplace(Phase::Compression);

@@ -35,6 +35,15 @@ H2Matrix::H2Matrix(ClusterTree tree, int row_block, int col_block)
 {
 }
 
+const H2Block *H2Matrix::near_block(int a, int b) const
+{
+  const std::vector<int> &near = m_partition.near[a];
+  const auto it = std::lower_bound(near.begin(), near.end(), b);
+  return it != near.end() && *it == b ? &m_near[a][it - near.begin()] : nullptr;
+}
+
+H2Block *H2Matrix::near_block(int a, int b) { return const_cast<H2Block *>(static_cast<const H2Matrix &>(*this).near_block(a, b)); }
+
 void H2Matrix::apply(const double *X, int ldx, double *Y, int ldy, int nrhs) const
 {
   PhaseScope phase(Phase::Matvec);
@@ -107,19 +116,9 @@ void H2Matrix::update_stats()
     m_stats.near_blocks += static_cast<long>(m_near[c].size());
     H2LevelStats &s = m_stats.levels[m_tree.cluster(c).level];
     s.far_blocks += static_cast<long>(m_far[c].size());
-    if (c == 0 || (b.U.n == 0 && b.V.n == 0 && !m_partition.has_far[c])) continue;
-    s.clusters += 1;
-    const int kr = static_cast<int>(b.row_skel.size()), kc = static_cast<int>(b.col_skel.size());
-    s.max_row_rank = std::max(s.max_row_rank, kr);
-    s.max_col_rank = std::max(s.max_col_rank, kc);
-    s.mean_row_rank += kr;
-    s.mean_col_rank += kc;
+    if (m_partition.has_far[c]) add_level_ranks(s, b); // the root never has far blocks
   }
-  for (auto &s : m_stats.levels)
-    if (s.clusters > 0) {
-      s.mean_row_rank /= s.clusters;
-      s.mean_col_rank /= s.clusters;
-    }
+  finish_level_means(m_stats.levels);
   m_stats.memory_bytes = m_stats.basis_bytes + m_stats.far_bytes + m_stats.near_bytes;
 }
 

@@ -3,7 +3,6 @@
 
 #include "hssbem/hss/pattern_columns.hpp"
 
-#include <algorithm>
 #include <stdexcept>
 
 namespace hssbem {
@@ -24,25 +23,11 @@ void H2BemSystem::apply(const SystemSelection &sel, const double *x, double *y) 
 
 std::vector<double> H2BemSystem::diagonal(const SystemSelection &sel) const
 {
-  const ClusterTree &tree = m_K.tree();
-  const int w = m_K.col_block();
-  std::vector<double> d(3L * tree.num_points());
-  for (int c : tree.leaves()) {
-    const std::vector<int> &near = m_K.partition().near[c];
-    const auto it = std::lower_bound(near.begin(), near.end(), c);
-    if (it == near.end() || *it != c) throw std::logic_error("H2: a leaf without its diagonal block");
-    const H2Block &D = m_K.near_blocks(c)[it - near.begin()];
-    const Cluster &cl = tree.cluster(c);
-    for (int k = cl.begin; k < cl.end; ++k) {
-      const int j = tree.perm()[k], local = k - cl.begin;
-      for (int r = 0; r < 3; ++r) {
-        double sign;
-        const int slot = pattern_slot(sel, j, r, &sign);
-        d[3L * j + r] = sign * D.entry(3 * local + r, w * local + slot) / m_K.col_scale(slot);
-      }
-    }
-  }
-  return d;
+  return pattern_diagonal(m_K, sel, [this](int leaf, int i, int j) {
+    const H2Block *D = m_K.near_block(leaf, leaf);
+    if (!D) throw std::logic_error("H2: a leaf without its diagonal block");
+    return D->entry(i, j);
+  });
 }
 
 } // namespace hssbem

@@ -157,18 +157,10 @@ int default_proxy_points(double rel_tol)
 
 HssMatrix compress_bem_operator(const BemOperator &op, const HssOptions &options)
 {
-  if (!(options.rel_tol > 0 && options.rel_tol < 1)) throw std::invalid_argument("HSS: the relative tolerance must lie in (0, 1)");
-  if (options.leaf_size < 1) throw std::invalid_argument("HSS: the leaf size must be at least 1");
-  if (!(options.proxy_ratio > 1)) throw std::invalid_argument("HSS: the proxy ratio must exceed 1");
-  if (options.max_rank == 0 || options.max_rank < -1) throw std::invalid_argument("HSS: the rank cap must be positive (or -1 for none)");
-  if (op.quadrature_options().far_ratio > 0)
-    throw std::invalid_argument("HSS: the 3-point far rule (-mat_bem_far_ratio) breaks the smooth far field the compression relies on; set it to 0");
+  check_compression_inputs(op, options, "HSS");
   auto t0 = std::chrono::steady_clock::now();
-  const Discretization &disc = op.discretization();
-  std::vector<Vec3> points(disc.num_nodes());
-  for (int i = 0; i < disc.num_nodes(); ++i) points[i] = disc.node(i).point;
   std::optional<PhaseScope> phase(Phase::Tree);
-  HssMatrix K(ClusterTree(points, ClusterTreeOptions{options.leaf_size}), 3, k_columns_per_node(options.pressure_columns));
+  HssMatrix K(ClusterTree(collocation_points(op.discretization()), ClusterTreeOptions{options.leaf_size}), 3, k_columns_per_node(options.pressure_columns));
   phase.reset();
   phase.emplace(Phase::Compression);
   K.set_col_scales(kernel_column_scales(op, K.col_block()));

@@ -30,22 +30,7 @@ void HssBemSystem::apply(const SystemSelection &sel, const double *x, double *y)
 
 std::vector<double> HssBemSystem::diagonal(const SystemSelection &sel) const
 {
-  const ClusterTree &tree = m_K.tree();
-  const int w = m_K.col_block();
-  std::vector<double> d(3L * tree.num_points());
-  for (int c : tree.leaves()) {
-    const Cluster &cl = tree.cluster(c);
-    const DenseMatrix &D = m_K.cluster(c).D;
-    for (int k = cl.begin; k < cl.end; ++k) {
-      const int j = tree.perm()[k], local = k - cl.begin;
-      for (int r = 0; r < 3; ++r) {
-        double sign;
-        const int slot = pattern_slot(sel, j, r, &sign);
-        d[3L * j + r] = sign * D(3 * local + r, w * local + slot) / m_K.col_scale(slot);
-      }
-    }
-  }
-  return d;
+  return pattern_diagonal(m_K, sel, [this](int leaf, int i, int j) { return m_K.cluster(leaf).D(i, j); });
 }
 
 std::unique_ptr<UlvFactorization> HssBemSystem::factor(const SystemSelection &sel, const std::vector<double> *rigid_modes) const

@@ -79,20 +79,9 @@ void HssMatrix::update_stats()
     const HssCluster &h = m_clusters[c];
     bytes += h.U.bytes() + h.V.bytes() + h.D.bytes() + h.B12.bytes() + h.B21.bytes();
     bytes += (h.row_skel.size() + h.col_skel.size()) * sizeof(int);
-    if (c == 0) continue;
-    HssLevelStats &s = m_stats.levels[m_tree.cluster(c).level];
-    s.clusters += 1;
-    const int kr = static_cast<int>(h.row_skel.size()), kc = static_cast<int>(h.col_skel.size());
-    s.max_row_rank = std::max(s.max_row_rank, kr);
-    s.max_col_rank = std::max(s.max_col_rank, kc);
-    s.mean_row_rank += kr;
-    s.mean_col_rank += kc;
+    if (c != 0) add_level_ranks(m_stats.levels[m_tree.cluster(c).level], h);
   }
-  for (auto &s : m_stats.levels)
-    if (s.clusters > 0) {
-      s.mean_row_rank /= s.clusters;
-      s.mean_col_rank /= s.clusters;
-    }
+  finish_level_means(m_stats.levels);
   m_stats.memory_bytes = bytes;
 }
 

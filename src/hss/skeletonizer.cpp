@@ -95,6 +95,13 @@ Skeleton select_skeleton(std::vector<double> &X, int nfeat, int ncand, const std
 
 } // namespace
 
+std::vector<Vec3> collocation_points(const Discretization &disc)
+{
+  std::vector<Vec3> points(disc.num_nodes());
+  for (int i = 0; i < disc.num_nodes(); ++i) points[i] = disc.node(i).point;
+  return points;
+}
+
 QuadratureReach quadrature_reach(const BemOperator &op, const ClusterTree &tree)
 {
   const Discretization &disc = op.discretization();

@@ -2,6 +2,7 @@
 // dense operator.
 #include "hssbem/bem/bem_operator.hpp"
 #include "hssbem/h2/h2_compression.hpp"
+#include "hssbem/hss/skeletonizer.hpp"
 #include "hss_test_helpers.hpp"
 #include "test_shapes.hpp"
 
@@ -46,9 +47,7 @@ void print_stats(const H2Matrix &K)
 TEST(H2Partition, EveryEntryInExactlyOneBlockAndSymmetric)
 {
   auto L = load("sphere_l1.msh");
-  std::vector<Vec3> pts(L->op->num_nodes());
-  for (int i = 0; i < L->op->num_nodes(); ++i) pts[i] = L->disc->node(i).point;
-  const ClusterTree tree(pts, ClusterTreeOptions{16});
+  const ClusterTree tree(collocation_points(*L->disc), ClusterTreeOptions{16});
   std::vector<double> radius(tree.num_clusters());
   for (int c = 0; c < tree.num_clusters(); ++c) radius[c] = tree.cluster(c).radius;
   const BlockPartition p = strong_block_partition(tree, radius, 0.5);

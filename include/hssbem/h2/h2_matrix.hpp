@@ -91,6 +91,9 @@ public:
   /// Near blocks of leaf a: K(rows of a, columns of b), one per b in partition().near[a].
   std::vector<H2Block> &near_blocks(int a) { return m_near[a]; }
   const std::vector<H2Block> &near_blocks(int a) const { return m_near[a]; }
+  /// The near block of leaves (a, b), or null when (a, b) is no near block.
+  H2Block *near_block(int a, int b);
+  const H2Block *near_block(int a, int b) const;
 
   /// Y = K X for nrhs columns in cluster order, as HssMatrix::apply. O(N·r) per column.
   void apply(const double *X, int ldx, double *Y, int ldy, int nrhs = 1) const;

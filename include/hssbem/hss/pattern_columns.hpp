@@ -5,6 +5,7 @@
 #pragma once
 
 #include "hssbem/bem/bem_operator.hpp"
+#include "hssbem/core/cluster_tree.hpp"
 
 #include <vector>
 
@@ -37,6 +38,29 @@ inline int pattern_slot(const SystemSelection &sel, int j, int c, double *sign)
   const bool known = sel.displacement_known[j][c];
   *sign = known ? -1.0 : 1.0;
   return known ? 3 + c : c;
+}
+
+/// The diagonal of A for the pattern (3 per node, mesh order) from K's leaf diagonal blocks (M:
+/// HssMatrix or H2Matrix, holding K S): block_entry(leaf, i, j) is entry (i, j) of K S(rows of
+/// leaf, columns of leaf), 3 rows and col_block() columns per point.
+template <class M, class BlockEntry>
+std::vector<double> pattern_diagonal(const M &K, const SystemSelection &sel, const BlockEntry &block_entry)
+{
+  const ClusterTree &tree = K.tree();
+  const int w = K.col_block();
+  std::vector<double> d(3L * tree.num_points());
+  for (int c : tree.leaves()) {
+    const Cluster &cl = tree.cluster(c);
+    for (int k = cl.begin; k < cl.end; ++k) {
+      const int j = tree.perm()[k], local = k - cl.begin;
+      for (int r = 0; r < 3; ++r) {
+        double sign;
+        const int slot = pattern_slot(sel, j, r, &sign);
+        d[3L * j + r] = sign * block_entry(c, 3 * local + r, w * local + slot) / K.col_scale(slot);
+      }
+    }
+  }
+  return d;
 }
 
 } // namespace hssbem

@@ -27,6 +27,8 @@
 
 #include <functional>
 #include <memory>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 namespace hssbem {
@@ -52,6 +54,23 @@ struct QuadratureReach {
 };
 
 QuadratureReach quadrature_reach(const BemOperator &op, const ClusterTree &tree);
+
+/// Checks shared by every compression built on the skeletonizer: the options rel_tol, leaf_size,
+/// proxy_ratio and max_rank of o (HssOptions, H2Options), and an operator without the 3-point far
+/// rule. `format` ("HSS", "H2") starts each message. Throws std::invalid_argument.
+template <class Opts>
+void check_compression_inputs(const BemOperator &op, const Opts &o, const std::string &format)
+{
+  if (!(o.rel_tol > 0 && o.rel_tol < 1)) throw std::invalid_argument(format + ": the relative tolerance must lie in (0, 1)");
+  if (o.leaf_size < 1) throw std::invalid_argument(format + ": the leaf size must be at least 1");
+  if (!(o.proxy_ratio > 1)) throw std::invalid_argument(format + ": the proxy ratio must exceed 1");
+  if (o.max_rank == 0 || o.max_rank < -1) throw std::invalid_argument(format + ": the rank cap must be positive (or -1 for none)");
+  if (op.quadrature_options().far_ratio > 0)
+    throw std::invalid_argument(format + ": the 3-point far rule (-mat_bem_far_ratio) breaks the smooth far field the compression relies on; set it to 0");
+}
+
+/// The collocation points of the dof nodes (mesh order): what the cluster tree partitions.
+std::vector<Vec3> collocation_points(const Discretization &disc);
 
 class Skeletonizer {
 public:
