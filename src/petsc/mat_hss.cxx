@@ -82,23 +82,18 @@ PetscErrorCode MatView_Hss(Mat A, PetscViewer viewer)
     const hssbem::H2Options &o = p.h2_options;
     PetscCall(PetscViewerASCIIPrintf(viewer, "BEM operator in H² form (hssbem, strong admissibility): relative tolerance %g, leaf size %d, eta %g, rank cap %s, proxy ratio %g, blocks in %s precision\n",
                                      o.rel_tol, o.leaf_size, o.eta, o.max_rank > 0 ? std::to_string(o.max_rank).c_str() : "none", o.proxy_ratio, o.single_precision ? "single" : "double"));
-    PetscCall(PetscViewerASCIIPrintf(viewer, "  pattern: %s; rigid-mode regularisation: %s; the compression lives on rank 0\n", o.pressure_columns ? "K = [H, G, Gn] (pressure loads)" : "K = [H, G]",
-                                     p.modes.empty() ? "no" : "yes"));
-    if (p.h2) {
-      PetscCall(PetscViewerASCIIPushTab(viewer));
-      PetscCall(HssbemViewH2Matrix_Private(viewer, p.h2->matrix()));
-      PetscCall(PetscViewerASCIIPopTab(viewer));
-    }
-    PetscFunctionReturn(PETSC_SUCCESS);
+  } else {
+    const hssbem::HssOptions &o = p.hss_options;
+    PetscCall(PetscViewerASCIIPrintf(viewer, "BEM operator in HSS form (hssbem): relative tolerance %g, leaf size %d, rank cap %s, proxy ratio %g\n", o.rel_tol, o.leaf_size,
+                                     o.max_rank > 0 ? std::to_string(o.max_rank).c_str() : "none", o.proxy_ratio));
   }
-  const hssbem::HssOptions &o = p.hss_options;
-  PetscCall(PetscViewerASCIIPrintf(viewer, "BEM operator in HSS form (hssbem): relative tolerance %g, leaf size %d, rank cap %s, proxy ratio %g\n", o.rel_tol, o.leaf_size,
-                                   o.max_rank > 0 ? std::to_string(o.max_rank).c_str() : "none", o.proxy_ratio));
-  PetscCall(PetscViewerASCIIPrintf(viewer, "  pattern: %s; rigid-mode regularisation: %s; the compression lives on rank 0\n", o.pressure_columns ? "K = [H, G, Gn] (pressure loads)" : "K = [H, G]",
+  const bool pressure = p.is_h2 ? p.h2_options.pressure_columns : p.hss_options.pressure_columns;
+  PetscCall(PetscViewerASCIIPrintf(viewer, "  pattern: %s; rigid-mode regularisation: %s; the compression lives on rank 0\n", pressure ? "K = [H, G, Gn] (pressure loads)" : "K = [H, G]",
                                    p.modes.empty() ? "no" : "yes"));
-  if (p.hss) {
+  if (p.compressed()) { /* rank 0 */
     PetscCall(PetscViewerASCIIPushTab(viewer));
-    PetscCall(HssbemViewHssMatrix_Private(viewer, p.hss->matrix()));
+    if (p.h2) PetscCall(HssbemViewH2Matrix_Private(viewer, p.h2->matrix()));
+    else PetscCall(HssbemViewHssMatrix_Private(viewer, p.hss->matrix()));
     PetscCall(PetscViewerASCIIPopTab(viewer));
   }
   PetscFunctionReturn(PETSC_SUCCESS);

@@ -58,13 +58,13 @@ PetscErrorCode HssbemProcessOptions(MPI_Comm comm, HssbemAppOptions *opts)
     hssbem::HssOptions hss;
     hss.rel_tol = 1e-8;
     PetscCall(HssbemHssOptionsFromDatabase(comm, NULL, &hss));
-    PetscCheck(opts->quad.far_ratio == 0 || opts->mat_type != HSSBEM_MAT_HSS, comm, PETSC_ERR_ARG_INCOMP, "-mat_bem_far_ratio must be 0 with -bem_mat_type hss: the 3-point far rule breaks the smooth far field the compression relies on");
   }
   if (opts->mat_type == HSSBEM_MAT_H2 || opts->help) {
     hssbem::H2Options h2;
     PetscCall(HssbemH2OptionsFromDatabase(comm, NULL, &h2));
-    PetscCheck(opts->quad.far_ratio == 0 || opts->mat_type != HSSBEM_MAT_H2, comm, PETSC_ERR_ARG_INCOMP, "-mat_bem_far_ratio must be 0 with -bem_mat_type h2: the 3-point far rule breaks the smooth far field the compression relies on");
   }
+  PetscCheck(opts->quad.far_ratio == 0 || opts->mat_type == HSSBEM_MAT_DENSE, comm, PETSC_ERR_ARG_INCOMP,
+             "-mat_bem_far_ratio must be 0 with -bem_mat_type %s: the 3-point far rule breaks the smooth far field the compression relies on", opts->mat_type.c_str());
   PetscCheck(opts->quad.duffy_order >= 2 && opts->quad.duffy_order <= 64, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_bem_quad_order must lie in [2, 64]");
   PetscCheck(opts->quad.near_ratio > 0 && (opts->quad.far_ratio == 0 || opts->quad.far_ratio >= opts->quad.near_ratio), comm, PETSC_ERR_ARG_OUTOFRANGE,
              "need -mat_bem_near_ratio > 0 and -mat_bem_far_ratio either 0 (off) or at least -mat_bem_near_ratio");

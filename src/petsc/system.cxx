@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 static PetscErrorCode ProblemDestroy_Private(void *ctx)
 {
@@ -77,6 +78,40 @@ PetscErrorCode HssbemMatIsCompressed(Mat A, PetscBool *compressed)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* The options every compression of the operator has, -mat_<family>_rel_tol, _leaf_size,
+   _max_rank, _proxy_ratio and _proxy_points (family "hss" or "h2"), inside the caller's
+   PetscOptionsBegin/End. Opts is hssbem::HssOptions or hssbem::H2Options. */
+template <class Opts>
+static PetscErrorCode CompressionOptions_Private(const char *family, Opts *opts, PetscOptionItems *PetscOptionsObject)
+{
+  const std::string key = std::string("-mat_") + family + "_";
+  PetscInt          leaf = opts->leaf_size, rank = opts->max_rank, np = opts->proxy_points;
+
+  PetscFunctionBegin;
+  PetscCall(PetscOptionsReal((key + "rel_tol").c_str(), "Relative tolerance of the compression", "HssbemCreateSystem", opts->rel_tol, &opts->rel_tol, NULL));
+  PetscCall(PetscOptionsInt((key + "leaf_size").c_str(), "Dof nodes per leaf cluster", "HssbemCreateSystem", leaf, &leaf, NULL));
+  PetscCall(PetscOptionsInt((key + "max_rank").c_str(), "Cap on each skeleton (-1: none)", "HssbemCreateSystem", rank, &rank, NULL));
+  PetscCall(PetscOptionsReal((key + "proxy_ratio").c_str(), "Proxy sphere radius over cluster radius", "HssbemCreateSystem", opts->proxy_ratio, &opts->proxy_ratio, NULL));
+  PetscCall(PetscOptionsInt((key + "proxy_points").c_str(), "Points per proxy sphere (0: chosen from the tolerance)", "HssbemCreateSystem", np, &np, NULL));
+  opts->leaf_size    = (int)leaf;
+  opts->max_rank     = (int)rank;
+  opts->proxy_points = (int)np;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* The checks of those options. */
+template <class Opts>
+static PetscErrorCode CheckCompressionOptions_Private(MPI_Comm comm, const char *family, const Opts &opts)
+{
+  PetscFunctionBegin;
+  PetscCheck(opts.rel_tol > 0 && opts.rel_tol < 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_%s_rel_tol must lie in (0, 1), got %g", family, (double)opts.rel_tol);
+  PetscCheck(opts.leaf_size >= 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_%s_leaf_size must be at least 1", family);
+  PetscCheck(opts.max_rank == -1 || opts.max_rank > 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_%s_max_rank must be positive, or -1 for no cap", family);
+  PetscCheck(opts.proxy_ratio > 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_%s_proxy_ratio must exceed 1", family);
+  PetscCheck(opts.proxy_points >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_%s_proxy_points must be 0 (automatic) or positive", family);
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 /*@C
   HssbemHssOptionsFromDatabase - Reads the options of the operator's HSS compression.
 
@@ -91,24 +126,11 @@ PetscErrorCode HssbemMatIsCompressed(Mat A, PetscBool *compressed)
 @*/
 PetscErrorCode HssbemHssOptionsFromDatabase(MPI_Comm comm, const char *prefix, hssbem::HssOptions *opts)
 {
-  PetscInt leaf = opts->leaf_size, rank = opts->max_rank, np = opts->proxy_points;
-
   PetscFunctionBegin;
   PetscOptionsBegin(comm, prefix, "HSS compression of the BEM operator (-bem_mat_type hss)", "Mat");
-  PetscCall(PetscOptionsReal("-mat_hss_rel_tol", "Relative tolerance of the compression", "HssbemCreateSystem", opts->rel_tol, &opts->rel_tol, NULL));
-  PetscCall(PetscOptionsInt("-mat_hss_leaf_size", "Dof nodes per leaf cluster", "HssbemCreateSystem", leaf, &leaf, NULL));
-  PetscCall(PetscOptionsInt("-mat_hss_max_rank", "Cap on each skeleton (-1: none)", "HssbemCreateSystem", rank, &rank, NULL));
-  PetscCall(PetscOptionsReal("-mat_hss_proxy_ratio", "Proxy sphere radius over cluster radius", "HssbemCreateSystem", opts->proxy_ratio, &opts->proxy_ratio, NULL));
-  PetscCall(PetscOptionsInt("-mat_hss_proxy_points", "Points per proxy sphere (0: chosen from the tolerance)", "HssbemCreateSystem", np, &np, NULL));
+  PetscCall(CompressionOptions_Private("hss", opts, PetscOptionsObject));
   PetscOptionsEnd();
-  opts->leaf_size    = (int)leaf;
-  opts->max_rank     = (int)rank;
-  opts->proxy_points = (int)np;
-  PetscCheck(opts->rel_tol > 0 && opts->rel_tol < 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_hss_rel_tol must lie in (0, 1), got %g", (double)opts->rel_tol);
-  PetscCheck(opts->leaf_size >= 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_hss_leaf_size must be at least 1");
-  PetscCheck(opts->max_rank == -1 || opts->max_rank > 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_hss_max_rank must be positive, or -1 for no cap");
-  PetscCheck(opts->proxy_ratio > 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_hss_proxy_ratio must exceed 1");
-  PetscCheck(opts->proxy_points >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_hss_proxy_points must be 0 (automatic) or positive");
+  PetscCall(CheckCompressionOptions_Private(comm, "hss", *opts));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -118,39 +140,27 @@ PetscErrorCode HssbemHssOptionsFromDatabase(MPI_Comm comm, const char *prefix, h
   Options Database Keys:
 + -mat_h2_rel_tol <tol>      - relative tolerance of each interpolative decomposition
 . -mat_h2_leaf_size <n>      - dof nodes per leaf cluster
-. -mat_h2_eta <eta>          - clusters a, b are far when |c_a - c_b| > (1 + eta)(R_a + R_b)
 . -mat_h2_max_rank <k>       - cap on each skeleton (-1: none)
 . -mat_h2_proxy_ratio <r>    - proxy sphere radius over cluster radius
 . -mat_h2_proxy_points <n>   - points per proxy sphere (0: from the tolerance)
+. -mat_h2_eta <eta>          - clusters a, b are far when |c_a - c_b| > (1 + eta)(R_a + R_b)
 - -mat_h2_single_precision   - store far and near blocks in single precision (half the memory)
 
   Level: intermediate
 @*/
 PetscErrorCode HssbemH2OptionsFromDatabase(MPI_Comm comm, const char *prefix, hssbem::H2Options *opts)
 {
-  PetscInt  leaf = opts->leaf_size, rank = opts->max_rank, np = opts->proxy_points;
   PetscBool single = opts->single_precision ? PETSC_TRUE : PETSC_FALSE;
 
   PetscFunctionBegin;
   PetscOptionsBegin(comm, prefix, "H2 compression of the BEM operator (-bem_mat_type h2)", "Mat");
-  PetscCall(PetscOptionsReal("-mat_h2_rel_tol", "Relative tolerance of the compression", "HssbemCreateSystem", opts->rel_tol, &opts->rel_tol, NULL));
-  PetscCall(PetscOptionsInt("-mat_h2_leaf_size", "Dof nodes per leaf cluster", "HssbemCreateSystem", leaf, &leaf, NULL));
+  PetscCall(CompressionOptions_Private("h2", opts, PetscOptionsObject));
   PetscCall(PetscOptionsReal("-mat_h2_eta", "Admissibility: far when |c_a - c_b| > (1 + eta)(R_a + R_b)", "HssbemCreateSystem", opts->eta, &opts->eta, NULL));
-  PetscCall(PetscOptionsInt("-mat_h2_max_rank", "Cap on each skeleton (-1: none)", "HssbemCreateSystem", rank, &rank, NULL));
-  PetscCall(PetscOptionsReal("-mat_h2_proxy_ratio", "Proxy sphere radius over cluster radius", "HssbemCreateSystem", opts->proxy_ratio, &opts->proxy_ratio, NULL));
-  PetscCall(PetscOptionsInt("-mat_h2_proxy_points", "Points per proxy sphere (0: chosen from the tolerance)", "HssbemCreateSystem", np, &np, NULL));
   PetscCall(PetscOptionsBool("-mat_h2_single_precision", "Store far and near blocks in single precision (half the memory)", "HssbemCreateSystem", single, &single, NULL));
   PetscOptionsEnd();
   opts->single_precision = single == PETSC_TRUE;
-  opts->leaf_size    = (int)leaf;
-  opts->max_rank     = (int)rank;
-  opts->proxy_points = (int)np;
-  PetscCheck(opts->rel_tol > 0 && opts->rel_tol < 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_h2_rel_tol must lie in (0, 1), got %g", (double)opts->rel_tol);
-  PetscCheck(opts->leaf_size >= 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_h2_leaf_size must be at least 1");
+  PetscCall(CheckCompressionOptions_Private(comm, "h2", *opts));
   PetscCheck(opts->eta >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_h2_eta must be >= 0");
-  PetscCheck(opts->max_rank == -1 || opts->max_rank > 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_h2_max_rank must be positive, or -1 for no cap");
-  PetscCheck(opts->proxy_ratio > 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_h2_proxy_ratio must exceed 1");
-  PetscCheck(opts->proxy_points >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_h2_proxy_points must be 0 (automatic) or positive");
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
