@@ -82,16 +82,30 @@ static PetscBool IsLateOption_Private(const char *name)
   return PETSC_FALSE;
 }
 
-/* Options read only during or after KSPSolve()/MatAssemblyEnd() (viewers and reports). */
+/* Options that PETSc reads only when the preconditioner is set up, inside KSPSolve(): those of
+   sub-solvers (-sub_pc_type of PCBJACOBI/PCASM, -fieldsplit_*, -redundant_*) and of external
+   factorization packages (-mat_mumps_icntl_14, ...). Checked after the solve instead. */
+static PetscBool IsSetUpTimeOption_Private(const char *name)
+{
+  static const char *prefixes[] = {"sub_", "fieldsplit_", "redundant_", "mat_mumps_", "mat_superlu", "mat_scalapack_", "mat_strumpack_", "mat_cholmod_", "mat_umfpack_", "mat_klu_"};
+  for (const char *p : prefixes)
+    if (!std::strncmp(name, p, std::strlen(p))) return PETSC_TRUE;
+  return PETSC_FALSE;
+}
+
+/* Options read only during or after KSPSolve()/MatAssemblyEnd() (viewers and reports), or when
+   the preconditioner is set up (IsSetUpTimeOption_Private). */
 static PetscBool IsSolveTimeOption_Private(const char *name)
 {
   const std::string n(name);
-  return (n.find("view") != std::string::npos || n.find("converged_reason") != std::string::npos) ? PETSC_TRUE : PETSC_FALSE;
+  return (n.find("view") != std::string::npos || n.find("converged_reason") != std::string::npos || IsSetUpTimeOption_Private(name)) ? PETSC_TRUE : PETSC_FALSE;
 }
 
 /*@C
   HssbemCheckUnusedOptions - Errors out naming any option that no object has read (a typo such as
-  -ksp_rtoll would otherwise be ignored).
+  -ksp_rtoll would otherwise be ignored). Before the solve (before_solve true), options that are
+  read only during it (viewers, sub-solver and factorization-package options) are let through;
+  the check after the solve catches those.
 
   Level: developer
 @*/

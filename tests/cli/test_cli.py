@@ -222,6 +222,33 @@ class CommandLineTests(CliTestCase):
         r = self.run_problem("problem.json", "-ksp_rtoll", "1e-8")
         self.assertFailsCleanly(r, r"-ksp_rtoll")
 
+    def test_sub_solver_options_reach_their_solver(self):
+        # Options read only when the PC is set up (sub-solvers, factorization packages) pass the
+        # check before the solve and are used by it.
+        self.write_cube()
+        self.problem()
+        r = self.run_problem("problem.json", "-bem_mat_type", "dense", "-ksp_type", "gmres",
+                             "-pc_type", "bjacobi", "-pc_bjacobi_blocks", "2", "-sub_pc_type", "lu",
+                             "-options_left", timeout=TIMEOUT_RUN)
+        self.assertSucceeds(r, self.out)
+        self.assertRegex(r.output, r"gmres/bjacobi", r.describe())
+        self.assertRegex(r.output, r"There are no unused options", r.describe())
+        os.remove(self.out)
+        r = self.run_problem("problem.json", "-bem_mat_type", "dense", "-pc_factor_mat_solver_type",
+                             "mumps", "-mat_mumps_icntl_14", "40", "-options_left",
+                             timeout=TIMEOUT_RUN)
+        self.assertSucceeds(r, self.out)
+        self.assertRegex(r.output, r"preonly/lu/mumps", r.describe())
+        self.assertRegex(r.output, r"There are no unused options", r.describe())
+
+    def test_sub_solver_option_typo(self):
+        # A misspelt sub-solver option is caught after the solve, before any output is written.
+        self.write_cube()
+        self.problem()
+        r = self.run_problem("problem.json", "-bem_mat_type", "dense", "-ksp_type", "gmres",
+                             "-pc_type", "bjacobi", "-sub_pc_typo", "lu", timeout=TIMEOUT_RUN)
+        self.assertFailsCleanly(r, r"-sub_pc_typo")
+
     def test_unknown_option_bogus(self):
         self.write_cube()
         self.problem()
