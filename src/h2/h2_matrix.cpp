@@ -29,6 +29,35 @@ const double *H2Block::data(std::vector<double> &buf) const
   return buf.data();
 }
 
+namespace {
+
+/// y += A x for a column-major float matrix A (m × n) and double x, y: four columns at a time,
+/// widening each entry as it is used.
+void mixed_gemv(int m, int n, const float *A, const double *x, double *y)
+{
+  int j = 0;
+  for (; j + 4 <= n; j += 4) {
+    const float *a0 = A + static_cast<std::size_t>(j) * m, *a1 = a0 + m, *a2 = a1 + m, *a3 = a2 + m;
+    const double x0 = x[j], x1 = x[j + 1], x2 = x[j + 2], x3 = x[j + 3];
+    for (int i = 0; i < m; ++i)
+      y[i] += (static_cast<double>(a0[i]) * x0 + static_cast<double>(a1[i]) * x1) + (static_cast<double>(a2[i]) * x2 + static_cast<double>(a3[i]) * x3);
+  }
+  for (; j < n; ++j) {
+    const float *a = A + static_cast<std::size_t>(j) * m;
+    const double xj = x[j];
+    for (int i = 0; i < m; ++i) y[i] += static_cast<double>(a[i]) * xj;
+  }
+}
+
+} // namespace
+
+void H2Block::multiply_add(const double *X, int ldx, double *Y, int ldy, int nrhs, std::vector<double> &buf) const
+{
+  if (M.m == 0 || M.n == 0 || nrhs == 0) return;
+  if (is_single() && nrhs == 1) return mixed_gemv(M.m, M.n, single.data(), X, Y);
+  lapack::gemm('N', 'N', M.m, nrhs, M.n, 1.0, data(buf), M.ld(), X, ldx, 1.0, Y, ldy);
+}
+
 H2Matrix::H2Matrix(ClusterTree tree, int row_block, int col_block)
   : m_tree(std::move(tree)), m_row_block(row_block), m_col_block(col_block), m_col_scale(col_block, 1.0), m_bases(m_tree.num_clusters()),
     m_far(m_tree.num_clusters()), m_near(m_tree.num_clusters())
@@ -70,9 +99,7 @@ void H2Matrix::apply(const double *X, int ldx, double *Y, int ldy, int nrhs) con
   for_each_cluster(all, [&](int a) {
     yh[a] = DenseMatrix(m_bases[a].U.n, nrhs);
     std::vector<double> buf;
-    for (const H2Block &B : m_far[a])
-      lapack::gemm('N', 'N', B.M.m, nrhs, B.M.n, 1.0, B.data(buf), B.M.ld(), xh[B.col_cluster].data(), xh[B.col_cluster].ld(), 1.0, yh[a].data(),
-                   yh[a].ld());
+    for (const H2Block &B : m_far[a]) B.multiply_add(xh[B.col_cluster].data(), xh[B.col_cluster].ld(), yh[a].data(), yh[a].ld(), nrhs, buf);
   });
   // Downward pass: children's yh += U_τ yh_τ; leaves add U yh and their near blocks.
   for (int l = 1; l < m_tree.levels(); ++l)
@@ -92,9 +119,7 @@ void H2Matrix::apply(const double *X, int ldx, double *Y, int ldy, int nrhs) con
     const int m = m_row_block * cl.size();
     for (int k = 0; k < nrhs; ++k) std::fill(y + static_cast<long>(k) * ldy, y + static_cast<long>(k) * ldy + m, 0.0);
     std::vector<double> buf;
-    for (const H2Block &B : m_near[c])
-      lapack::gemm('N', 'N', B.M.m, nrhs, B.M.n, 1.0, B.data(buf), B.M.ld(), X + static_cast<long>(m_col_block) * m_tree.cluster(B.col_cluster).begin, ldx,
-                   1.0, y, ldy);
+    for (const H2Block &B : m_near[c]) B.multiply_add(X + static_cast<long>(m_col_block) * m_tree.cluster(B.col_cluster).begin, ldx, y, ldy, nrhs, buf);
     const DenseMatrix &U = m_bases[c].U;
     if (U.n > 0) lapack::gemm('N', 'N', U.m, nrhs, U.n, 1.0, U.data(), U.ld(), yh[c].data(), yh[c].ld(), 1.0, y, ldy);
   });

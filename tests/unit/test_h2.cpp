@@ -155,6 +155,30 @@ TEST(H2Accuracy, SinglePrecisionBlocksHalveTheMemory)
   EXPECT_NEAR(blocks_s / blocks_d, 0.5, 0.02);
 }
 
+TEST(H2Block, SingleBlockProductWidensEachEntry)
+{
+  // The one-column product of a single-precision block (its own kernel) against the widened
+  // entries times x in double, for widths that do and do not fill its four-column steps.
+  std::mt19937 gen(8);
+  std::normal_distribution<double> N01;
+  for (const int n : {1, 4, 7, 53}) {
+    H2Block B{0, DenseMatrix(37, n), {}};
+    for (double &v : B.M.a) v = N01(gen);
+    B.demote();
+    ASSERT_TRUE(B.is_single());
+    for (const int nrhs : {1, 3}) {
+      std::vector<double> X(static_cast<std::size_t>(n) * nrhs), Y(37L * nrhs, 1.0), Yref(Y), buf;
+      for (double &v : X) v = N01(gen);
+      B.multiply_add(X.data(), n, Y.data(), 37, nrhs, buf);
+      for (int k = 0; k < nrhs; ++k)
+        for (int i = 0; i < 37; ++i)
+          for (int j = 0; j < n; ++j) Yref[i + 37L * k] += B.entry(i, j) * X[j + static_cast<std::size_t>(n) * k];
+      EXPECT_LE(rel(Y, Yref), 1e-14) << n << " columns, " << nrhs << " right-hand sides";
+      EXPECT_GT(rel(Y, std::vector<double>(Y.size(), 1.0)), 0.1); // the product did add something
+    }
+  }
+}
+
 SurfaceMesh scaled(SurfaceMesh m, Vec3 s)
 {
   for (Vec3 &v : m.vertices) v = {s[0] * v[0], s[1] * v[1], s[2] * v[2]};

@@ -44,6 +44,11 @@ struct H2Block {
   std::size_t bytes() const { return M.bytes() + single.size() * sizeof(float); }
   /// The entries in double: M's data, or `single` widened into buf.
   const double *data(std::vector<double> &buf) const;
+  /// Y += B X for nrhs columns (X: M.n × nrhs, Y: M.m × nrhs, column-major). A single block
+  /// with one column is widened entry by entry inside the product, so it reads 4 bytes per
+  /// entry instead of widening the block into buf first (the product is memory-bound); with
+  /// more columns it goes through data(buf) and one GEMM.
+  void multiply_add(const double *X, int ldx, double *Y, int ldy, int nrhs, std::vector<double> &buf) const;
 };
 
 struct H2LevelStats {
