@@ -229,16 +229,10 @@ int main(int argc, char **argv)
                  Kh.stats().max_row_rank(), Kh.stats().max_col_rank(), Kh.stats().memory_bytes / 1048576.0, probe_error(Kh, probe));
   }
 
-  double t_asm = NAN, t_lu = NAN, diff = NAN;
-  if (dense) {
-    const bench::DenseReference ref = bench::dense_reference(op, sel);
-    t_asm = ref.t_assembly;
-    t_lu = ref.t_lu;
-    diff = bench::rel_diff(x, ref.x);
-  }
+  const bench::DenseFigures d = bench::dense_figures(dense, op, sel, x);
   std::printf("%s,%d,%.0e,%d,%.3f,%.3f,%.3f,0,%.4f,%.4f,%d,%d,nan,%.1f,0,%.0f,%.3e,%d,%.3e,%.2f,%d,%.1f,%.1f,%.1f\n",
-              mesh_path.substr(mesh_path.find_last_of('/') + 1).c_str(), 3 * n, opt.rel_tol, opt.leaf_size, t_asm, t_lu, t_compress, t_solve, t_matvec,
-              st.max_row_rank(), st.max_col_rank(), st.memory_bytes / 1048576.0, std::max(rss, bench::peak_rss_mb()), diff, (int)its, sample_err, opt.eta,
+              mesh_path.substr(mesh_path.find_last_of('/') + 1).c_str(), 3 * n, opt.rel_tol, opt.leaf_size, d.t_assembly, d.t_lu, t_compress, t_solve, t_matvec,
+              st.max_row_rank(), st.max_col_rank(), st.memory_bytes / 1048576.0, std::max(rss, bench::peak_rss_mb()), d.rel_diff, (int)its, sample_err, opt.eta,
               opt.single_precision ? 1 : 0, st.basis_bytes / 1048576.0, st.far_bytes / 1048576.0, st.near_bytes / 1048576.0);
   PetscCall(PetscFinalize());
   return 0;

@@ -84,15 +84,9 @@ int main(int argc, char **argv)
                st.time_tree, st.time_rigid, st.time_couplings, st.time_leaves, st.time_near_field, st.time_ids, double(st.entries_evaluated),
                st.proxy_points);
 
-  double t_asm = NAN, t_lu = NAN, diff = NAN;
-  if (dense) {
-    const bench::DenseReference ref = bench::dense_reference(op, sel);
-    t_asm = ref.t_assembly;
-    t_lu = ref.t_lu;
-    diff = bench::rel_diff(x_hss, ref.x);
-  }
+  const bench::DenseFigures d = bench::dense_figures(dense, op, sel, x_hss);
   std::printf("%s,%d,%.0e,%d,%.3f,%.3f,%.3f,%.3f,%.4f,%.4f,%d,%d,%d,%.1f,%.1f,%.0f,%.3e\n", mesh_path.substr(mesh_path.find_last_of('/') + 1).c_str(), 3 * n,
-              opt.rel_tol, opt.leaf_size, t_asm, t_lu, t_compress, t_factor, t_solve, t_matvec, st.max_row_rank(), st.max_col_rank(), F->max_front(),
-              st.memory_bytes / 1048576.0, F->memory_bytes() / 1048576.0, rss, diff);
+              opt.rel_tol, opt.leaf_size, d.t_assembly, d.t_lu, t_compress, t_factor, t_solve, t_matvec, st.max_row_rank(), st.max_col_rank(), F->max_front(),
+              st.memory_bytes / 1048576.0, F->memory_bytes() / 1048576.0, rss, d.rel_diff);
   return 0;
 }

@@ -74,4 +74,21 @@ inline DenseReference dense_reference(const hssbem::BemOperator &op, const hssbe
   return ref;
 }
 
+/// The dense columns of a CSV row: assembly and LU seconds of the dense reference and the
+/// relative difference of x to its solution; all NaN when `run` is false (past dense reach).
+struct DenseFigures {
+  double t_assembly = NAN, t_lu = NAN, rel_diff = NAN;
+};
+
+inline DenseFigures dense_figures(bool run, const hssbem::BemOperator &op, const hssbem::SystemSelection &sel, const std::vector<double> &x)
+{
+  DenseFigures f;
+  if (!run) return f;
+  const DenseReference ref = dense_reference(op, sel);
+  f.t_assembly = ref.t_assembly;
+  f.t_lu = ref.t_lu;
+  f.rel_diff = bench::rel_diff(x, ref.x);
+  return f;
+}
+
 } // namespace bench
