@@ -786,6 +786,21 @@ class HssOptionTests(CliTestCase):
     def assertNoUnusedOptions(self, r):
         self.assertRegex(r.output, r"There are no unused options", r.describe())
 
+    def assertAgreesWithDense(self, name, mat_type, bound):
+        """Solve problem.json with -bem_mat_type dense into dense.h5; the result `name` must
+        come from mat_type and its displacement lie within `bound` (relative) of the dense one."""
+        import numpy as np
+        r = self.run_driver("-problem", "problem.json", "-o", "dense.h5", "-bem_mat_type", "dense",
+                            timeout=TIMEOUT_RUN)
+        self.assertSucceeds(r, self.path("dense.h5"))
+        u, a = self.displacement(name)
+        ud, ad = self.displacement("dense.h5")
+        self.assertEqual(a["mat_type"], mat_type)
+        self.assertEqual(ad["mat_type"], "dense")
+        diff = np.linalg.norm(u - ud) / np.linalg.norm(ud)
+        self.assertLess(diff, bound)
+        self.assertGreater(np.linalg.norm(ud), 0)
+
     def test_help_lists_the_hss_options(self):
         r = self.run_driver("-help")
         self.assertEqual(r.returncode, 0, r.describe())
@@ -796,7 +811,6 @@ class HssOptionTests(CliTestCase):
                              "-help does not list -%s\n%s" % (key, r.describe()))
 
     def test_hss_default_matches_dense(self):
-        import numpy as np
         self.cube()
         r = self.run_driver("-problem", "problem.json", "-o", "hss.h5", "-options_left",
                             timeout=TIMEOUT_RUN)
@@ -804,20 +818,10 @@ class HssOptionTests(CliTestCase):
         self.assertRegex(r.output, r"hss operator", r.describe())
         self.assertRegex(r.output, r"preonly/hss", r.describe())
         self.assertNoUnusedOptions(r)
-        r = self.run_driver("-problem", "problem.json", "-o", "dense.h5", "-bem_mat_type", "dense",
-                            timeout=TIMEOUT_RUN)
-        self.assertSucceeds(r, self.path("dense.h5"))
-        uh, ah = self.displacement("hss.h5")
-        ud, ad = self.displacement("dense.h5")
-        self.assertEqual(ah["mat_type"], "hss")
-        self.assertEqual(ad["mat_type"], "dense")
         # -mat_hss_rel_tol 1e-8 by default: the answers agree far below the discretisation error.
-        diff = np.linalg.norm(uh - ud) / np.linalg.norm(ud)
-        self.assertLess(diff, 1e-6)
-        self.assertGreater(np.linalg.norm(ud), 0)
+        self.assertAgreesWithDense("hss.h5", "hss", 1e-6)
 
     def test_h2_matrix_matches_dense(self):
-        import numpy as np
         self.cube()
         # Leaves of 8 nodes and eta = 0 give the 150-node cube far blocks; GMRES + Jacobi by default.
         r = self.run_driver("-problem", "problem.json", "-o", "h2.h5", "-options_left", "-bem_mat_type", "h2",
@@ -827,16 +831,8 @@ class HssOptionTests(CliTestCase):
         self.assertRegex(r.output, r"BEM operator in H² form", r.describe())
         self.assertNotRegex(r.output, r" 0 far blocks", r.describe())
         self.assertNoUnusedOptions(r)
-        r = self.run_driver("-problem", "problem.json", "-o", "dense.h5", "-bem_mat_type", "dense",
-                            timeout=TIMEOUT_RUN)
-        self.assertSucceeds(r, self.path("dense.h5"))
-        u2, a2 = self.displacement("h2.h5")
-        ud, _ = self.displacement("dense.h5")
-        self.assertEqual(a2["mat_type"], "h2")
         # -mat_h2_rel_tol 1e-6 and -ksp_rtol 1e-8 by default.
-        diff = np.linalg.norm(u2 - ud) / np.linalg.norm(ud)
-        self.assertLess(diff, 1e-5)
-        self.assertGreater(np.linalg.norm(ud), 0)
+        self.assertAgreesWithDense("h2.h5", "h2", 1e-5)
 
     def test_bad_h2_options(self):
         self.cube()
