@@ -11,8 +11,8 @@
 /// interpolates P1 over the dof nodes of its three corners.
 #pragma once
 
-#include "hssbem/bem/geometry.hpp"
 #include "hssbem/bem/mesh.hpp"
+#include "hssbem/core/geometry.hpp"
 
 #include <vector>
 

@@ -2,7 +2,7 @@
 /// Isotropic linear elastic material and Kelvin's fundamental solutions u* and p*.
 #pragma once
 
-#include "hssbem/bem/geometry.hpp"
+#include "hssbem/core/geometry.hpp"
 
 #include <stdexcept>
 

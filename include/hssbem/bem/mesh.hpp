@@ -2,7 +2,7 @@
 /// Closed triangulated surfaces: reading (.msh 2.2/4.1, .stl, .off, .obj) and validation.
 #pragma once
 
-#include "hssbem/bem/geometry.hpp"
+#include "hssbem/core/geometry.hpp"
 
 #include <map>
 #include <stdexcept>

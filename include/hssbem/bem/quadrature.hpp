@@ -10,8 +10,8 @@
 ///   `far_ratio` (dense path only).
 #pragma once
 
-#include "hssbem/bem/geometry.hpp"
 #include "hssbem/bem/kelvin.hpp"
+#include "hssbem/core/geometry.hpp"
 
 #include <array>
 #include <vector>

@@ -24,7 +24,7 @@
 /// the input: two builds from the same points and options are identical.
 #pragma once
 
-#include "hssbem/bem/geometry.hpp"
+#include "hssbem/core/geometry.hpp"
 
 #include <vector>
 

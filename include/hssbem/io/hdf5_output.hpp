@@ -2,7 +2,7 @@
 /// Result files: HDF5 with a ParaView-readable XDMF sidecar, written atomically.
 #pragma once
 
-#include "hssbem/bem/geometry.hpp"
+#include "hssbem/core/geometry.hpp"
 
 #include <array>
 #include <map>

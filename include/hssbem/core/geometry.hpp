@@ -1,5 +1,6 @@
 /// \file geometry.hpp
-/// Small fixed-size vector helpers shared by the mesh, the kernels and the quadrature.
+/// Small fixed-size vectors (points, normals) and 3×3 matrices: the geometry shared by every layer,
+/// from the cluster tree up to the mesh, the kernels, the quadrature and the result files.
 #pragma once
 
 #include <array>
