@@ -12,9 +12,9 @@
 // accuracy is measured at any size. --hss 1 also compresses K as HSS (stderr: time, memory,
 // sampled error) for a side-by-side look at the two formats.
 #include "hssbem/bem/bem_operator.hpp"
+#include "hssbem/compress/pattern_columns.hpp"
 #include "hssbem/h2/h2_system.hpp"
-#include "hssbem/hss/bem_compression.hpp"
-#include "hssbem/hss/pattern_columns.hpp"
+#include "hssbem/hss/hss_compression.hpp"
 #include "hssbem/petsc/compat.h"
 #include "hssbem/problem/benchmark_problem.hpp"
 

@@ -6,7 +6,7 @@
 // carry a uniform traction (0, 0, -1) (displacement unknown), E = 1, nu = 0.3.
 #include "hssbem/bem/bem_operator.hpp"
 #include "hssbem/core/lapack.hpp"
-#include "hssbem/hss/bem_system.hpp"
+#include "hssbem/hss/hss_system.hpp"
 #include "hssbem/problem/benchmark_problem.hpp"
 
 #include "bench_support.hpp"

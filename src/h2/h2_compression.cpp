@@ -1,12 +1,12 @@
 // Entries-only H² compression of K = [H, G(, Gn)] (see h2_compression.hpp).
 #include "hssbem/h2/h2_compression.hpp"
 
+#include "hssbem/compress/compression.hpp"
+#include "hssbem/compress/kernel_blocks.hpp"
+#include "hssbem/compress/rigid_body_blocks.hpp"
+#include "hssbem/compress/skeletonizer.hpp"
 #include "hssbem/core/blas_threads.hpp"
 #include "hssbem/core/phase.hpp"
-#include "hssbem/hss/bem_compression.hpp"
-#include "hssbem/hss/kernel_blocks.hpp"
-#include "hssbem/hss/rigid_body_blocks.hpp"
-#include "hssbem/hss/skeletonizer.hpp"
 
 #include <algorithm>
 #include <chrono>

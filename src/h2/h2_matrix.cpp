@@ -1,6 +1,7 @@
 // H² matrix: storage, the O(N·r) product and rank/memory figures.
 #include "hssbem/h2/h2_matrix.hpp"
 
+#include "hssbem/compress/rank_stats.hpp"
 #include "hssbem/core/blas_threads.hpp"
 #include "hssbem/core/lapack.hpp"
 #include "hssbem/core/phase.hpp"

@@ -1,7 +1,7 @@
 // The BEM system through the H² engine, in mesh order (see h2_system.hpp).
 #include "hssbem/h2/h2_system.hpp"
 
-#include "hssbem/hss/pattern_columns.hpp"
+#include "hssbem/compress/pattern_columns.hpp"
 
 #include <stdexcept>
 

@@ -1,6 +1,7 @@
 // HSS matrix: generator storage, the O(N·r) product and rank/memory figures.
 #include "hssbem/hss/hss_matrix.hpp"
 
+#include "hssbem/compress/rank_stats.hpp"
 #include "hssbem/core/blas_threads.hpp"
 #include "hssbem/core/lapack.hpp"
 #include "hssbem/core/phase.hpp"

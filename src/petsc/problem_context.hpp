@@ -7,7 +7,7 @@
 
 #include "hssbem/bem/bem_operator.hpp"
 #include "hssbem/h2/h2_system.hpp"
-#include "hssbem/hss/bem_system.hpp"
+#include "hssbem/hss/hss_system.hpp"
 
 #include <petscmat.h>
 

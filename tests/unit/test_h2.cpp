@@ -1,8 +1,8 @@
 // H² engine: strong-admissibility block partition and compression of K = [H, G] against the
 // dense operator.
 #include "hssbem/bem/bem_operator.hpp"
+#include "hssbem/compress/compression.hpp"
 #include "hssbem/h2/h2_compression.hpp"
-#include "hssbem/hss/skeletonizer.hpp"
 #include "hss_test_helpers.hpp"
 #include "test_shapes.hpp"
 

@@ -1,8 +1,8 @@
 // HSS engine: compression of K = [H, G] against the dense operator.
 #include "hssbem/bem/bem_operator.hpp"
-#include "hssbem/hss/bem_compression.hpp"
+#include "hssbem/hss/hss_compression.hpp"
 #include "hssbem/hss/ulv.hpp"
-#include "hssbem/hss/bem_system.hpp"
+#include "hssbem/hss/hss_system.hpp"
 #include "test_shapes.hpp"
 #include "hss_test_helpers.hpp"
 #include "hssbem/core/lapack.hpp"

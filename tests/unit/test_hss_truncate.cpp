@@ -1,7 +1,7 @@
 // Entries-free truncation of an HSS matrix (truncate_hss) against the dense operator.
 #include "hssbem/bem/bem_operator.hpp"
 #include "hssbem/core/lapack.hpp"
-#include "hssbem/hss/bem_compression.hpp"
+#include "hssbem/hss/hss_compression.hpp"
 #include "hssbem/hss/truncate.hpp"
 #include "hssbem/hss/ulv.hpp"
 

@@ -2,7 +2,7 @@
 // the dense path on the same discretisation.
 #include "hssbem/bem/post.hpp"
 #include "hssbem/bem/rigid_modes.hpp"
-#include "hssbem/hss/bem_system.hpp"
+#include "hssbem/hss/hss_system.hpp"
 #include "solve_helpers.hpp"
 #include "test_shapes.hpp"
 

@@ -1,7 +1,7 @@
 /// \file h2_compression.hpp
 /// Entries-only H² compression of the BEM operator K = [H, G(, Gn)] (strong admissibility).
 ///
-/// The same proxy-sphere skeletonization as the HSS compression (hss/skeletonizer.hpp), on the
+/// The same proxy-sphere skeletonization as the HSS compression (compress/skeletonizer.hpp), on the
 /// block partition of block_partition.hpp: a cluster is compressed only against the clusters
 /// that are far from it or from one of its ancestors, never against its close neighbours, whose
 /// interactions are resolved further down the tree and, at the leaves, by near blocks of true

@@ -13,10 +13,10 @@
 /// the cluster's boundary. The product costs O(N·r) with bounded r.
 #pragma once
 
+#include "hssbem/compress/nested_basis.hpp"
 #include "hssbem/core/cluster_tree.hpp"
 #include "hssbem/core/dense_matrix.hpp"
 #include "hssbem/h2/block_partition.hpp"
-#include "hssbem/hss/nested_basis.hpp"
 
 #include <cstddef>
 #include <vector>

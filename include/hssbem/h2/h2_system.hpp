@@ -2,11 +2,11 @@
 /// The collocation system of a problem through the H² engine, in mesh order: compress
 /// K = [H, G(, Gn)] once (strong admissibility, h2_compression.hpp); per boundary-condition
 /// pattern, the right-hand side, products with A and its diagonal, for Krylov solvers. There is
-/// no H² factorization yet: a direct solve goes through HSS (bem_system.hpp).
+/// no H² factorization yet: a direct solve goes through HSS (hss/hss_system.hpp, PC hss).
 #pragma once
 
+#include "hssbem/compress/compressed_system.hpp"
 #include "hssbem/h2/h2_compression.hpp"
-#include "hssbem/hss/bem_system.hpp"
 
 namespace hssbem {
 

@@ -19,9 +19,9 @@
 /// and the whole matrix is applied in O(N·r) operations (apply()).
 #pragma once
 
+#include "hssbem/compress/nested_basis.hpp"
 #include "hssbem/core/cluster_tree.hpp"
 #include "hssbem/core/dense_matrix.hpp"
-#include "hssbem/hss/nested_basis.hpp"
 
 #include <cstddef>
 #include <vector>

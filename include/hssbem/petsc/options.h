@@ -4,7 +4,7 @@
 #include "hssbem/petsc/compat.h"
 
 #include "hssbem/bem/quadrature.hpp"
-#include "hssbem/hss/bem_compression.hpp"
+#include "hssbem/hss/hss_compression.hpp"
 
 #include <petscsys.h>
 #include <string>

@@ -7,7 +7,7 @@
 
 #include "hssbem/bem/bem_operator.hpp"
 #include "hssbem/h2/h2_compression.hpp"
-#include "hssbem/hss/bem_compression.hpp"
+#include "hssbem/hss/hss_compression.hpp"
 
 #include <petscksp.h>
 #include <string>

@@ -1,5 +1,5 @@
 // Entries of K = [H, G(, Gn)] by global indices in cluster order.
-#include "hssbem/hss/kernel_blocks.hpp"
+#include "hssbem/compress/kernel_blocks.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,5 +1,5 @@
 // From a boundary-condition pattern to products with a compressed K (see pattern_columns.hpp).
-#include "hssbem/hss/pattern_columns.hpp"
+#include "hssbem/compress/pattern_columns.hpp"
 
 #include <cmath>
 #include <stdexcept>

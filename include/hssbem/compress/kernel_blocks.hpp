@@ -1,7 +1,7 @@
 /// \file kernel_blocks.hpp
 /// Entries of K = [H, G(, Gn)] addressed by global row and column indices in cluster order, the
-/// index space of the HSS engine (see hss_matrix.hpp), times the column scale of their slot. The
-/// rigid-body terms of H are not included.
+/// index space of the compressed formats (see nested_basis.hpp), times the column scale of their
+/// slot. The rigid-body terms of H are not included.
 #pragma once
 
 #include "hssbem/bem/bem_operator.hpp"

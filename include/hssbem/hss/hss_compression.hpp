@@ -1,11 +1,6 @@
-/// \file bem_compression.hpp
-/// Entries-only HSS compression of the BEM operator K = [H, G] (DESIGN §3, §5).
-///
-/// K has 3 rows per dof node (collocation point) and, per node, 6 columns: the 3 of H (slots
-/// 0–2) and the 3 of G (slots 3–5), optionally a 7th, Gn (slot 6: the response to a unit pressure
-/// carried by facet normals, for pressure loads). Any boundary-condition pattern then gives the
-/// system matrix A = K E_S (column (j, c) is H's where u is unknown and −G's where t is unknown)
-/// without evaluating a kernel again.
+/// \file hss_compression.hpp
+/// Entries-only HSS compression of the BEM operator K = [H, G(, Gn)] (DESIGN §3, §5), on the
+/// skeletonizer of compress/ (K's column layout: compress/compression.hpp).
 ///
 /// Construction, bottom-up over the cluster tree (one level at a time, clusters in parallel):
 ///  - the row skeleton of a cluster τ comes from an interpolative decomposition (ID) of its
@@ -39,19 +34,13 @@ struct HssOptions {
   int max_rank = -1;          ///< cap on each skeleton; negative: none
   int leaf_size = 256;        ///< dof nodes per leaf cluster (at most); below ~150 nodes the ranks are full at 1e-6
   double proxy_ratio = 2.0;   ///< proxy sphere radius / cluster radius (> 1)
-  int proxy_points = 0;       ///< points on each proxy sphere; 0: chosen from rel_tol
+  int proxy_points = 0;       ///< points on each proxy sphere; 0: default_proxy_points(rel_tol)
   bool pressure_columns = false; ///< also compress Gn (slot 6), for pressure loads
 };
-
-/// Number of proxy points used for a tolerance when HssOptions::proxy_points is 0.
-int default_proxy_points(double rel_tol);
 
 /// Compress K = [H, G] (and Gn if asked) of `op` at the given accuracy, rigid-body terms
 /// included (computed by fast matvecs). The operator's quadrature must have far_ratio = 0.
 /// Throws std::invalid_argument for bad options.
 HssMatrix compress_bem_operator(const BemOperator &op, const HssOptions &options);
-
-/// Columns per node of the compressed K (6, or 7 with pressure columns).
-inline int k_columns_per_node(bool pressure_columns) { return pressure_columns ? 7 : 6; }
 
 } // namespace hssbem

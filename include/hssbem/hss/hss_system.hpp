@@ -1,30 +1,18 @@
-/// \file bem_system.hpp
+/// \file hss_system.hpp
 /// The collocation system of a problem through the HSS engine, in mesh order (DESIGN §3):
 /// compress K = [H, G(, Gn)] once; per boundary-condition pattern, a right-hand side by one fast
 /// product and a ULV factorization. The PETSc layer and the benchmarks build on this.
 #pragma once
 
 #include "hssbem/bem/bem_operator.hpp"
-#include "hssbem/hss/bem_compression.hpp"
+#include "hssbem/compress/compressed_system.hpp"
+#include "hssbem/hss/hss_compression.hpp"
 #include "hssbem/hss/ulv.hpp"
 
 #include <memory>
 #include <vector>
 
 namespace hssbem {
-
-/// What a Krylov solver needs from a compressed operator, whatever its format (HSS, H²): the
-/// right-hand side, products and the diagonal of A for a pattern, all in mesh order.
-class CompressedBemSystem {
-public:
-  virtual ~CompressedBemSystem() = default;
-  /// b = Σ_known −H u + G t (pressure nodes: −p Gn), 3 values per node, mesh order.
-  virtual std::vector<double> rhs(const SystemSelection &sel) const = 0;
-  /// y = A x for the selection's pattern (x and y: 3 per node, mesh order), by a fast product.
-  virtual void apply(const SystemSelection &sel, const double *x, double *y) const = 0;
-  /// The diagonal of A for the selection (3 per node, mesh order): true entries.
-  virtual std::vector<double> diagonal(const SystemSelection &sel) const = 0;
-};
 
 class HssBemSystem : public CompressedBemSystem {
 public:

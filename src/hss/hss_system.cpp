@@ -1,8 +1,8 @@
-// The BEM system through the HSS engine, in mesh order (see bem_system.hpp).
-#include "hssbem/hss/bem_system.hpp"
+// The BEM system through the HSS engine, in mesh order (see hss_system.hpp).
+#include "hssbem/hss/hss_system.hpp"
 
 #include "hssbem/bem/rigid_modes.hpp"
-#include "hssbem/hss/pattern_columns.hpp"
+#include "hssbem/compress/pattern_columns.hpp"
 
 #include <cmath>
 #include <stdexcept>

@@ -1,7 +1,7 @@
 /// \file skeletonizer.hpp
 /// Entries-only skeletonization of the BEM operator K = [H, G(, Gn)] with proxy spheres
 /// (DESIGN §5), one tree level at a time: the step shared by the HSS compression (weak
-/// admissibility, bem_compression.hpp) and the H² compression (strong admissibility,
+/// admissibility, hss/hss_compression.hpp) and the H² compression (strong admissibility,
 /// h2/h2_compression.hpp). The formats differ only in which other clusters' indices a cluster
 /// must be compressed against (its *sources*).
 ///
@@ -21,14 +21,13 @@
 #pragma once
 
 #include "hssbem/bem/bem_operator.hpp"
+#include "hssbem/compress/kernel_blocks.hpp"
+#include "hssbem/compress/nested_basis.hpp"
+#include "hssbem/compress/quadrature_reach.hpp"
 #include "hssbem/core/cluster_tree.hpp"
-#include "hssbem/hss/kernel_blocks.hpp"
-#include "hssbem/hss/nested_basis.hpp"
 
 #include <functional>
 #include <memory>
-#include <stdexcept>
-#include <string>
 #include <vector>
 
 namespace hssbem {
@@ -44,38 +43,10 @@ struct SkeletonizerOptions {
   bool force_rigid = true;
 };
 
-/// Geometry of the quadrature's reach, per node (mesh order) and per cluster.
-struct QuadratureReach {
-  std::vector<double> sigma;   ///< per node: every support triangle's near ball lies within this distance of the vertex
-  std::vector<double> h;       ///< per node: largest support triangle diameter
-  std::vector<double> row_r;   ///< per cluster: radius of its collocation points around the centre
-  std::vector<double> src_r;   ///< per cluster: radius of its support triangles around the centre
-  std::vector<double> reach_r; ///< per cluster: radius of its support triangles' near balls
-};
-
-QuadratureReach quadrature_reach(const BemOperator &op, const ClusterTree &tree);
-
-/// Checks shared by every compression built on the skeletonizer: the options rel_tol, leaf_size,
-/// proxy_ratio and max_rank of o (HssOptions, H2Options), and an operator without the 3-point far
-/// rule. `format` ("HSS", "H2") starts each message. Throws std::invalid_argument.
-template <class Opts>
-void check_compression_inputs(const BemOperator &op, const Opts &o, const std::string &format)
-{
-  if (!(o.rel_tol > 0 && o.rel_tol < 1)) throw std::invalid_argument(format + ": the relative tolerance must lie in (0, 1)");
-  if (o.leaf_size < 1) throw std::invalid_argument(format + ": the leaf size must be at least 1");
-  if (!(o.proxy_ratio > 1)) throw std::invalid_argument(format + ": the proxy ratio must exceed 1");
-  if (o.max_rank == 0 || o.max_rank < -1) throw std::invalid_argument(format + ": the rank cap must be positive (or -1 for none)");
-  if (op.quadrature_options().far_ratio > 0)
-    throw std::invalid_argument(format + ": the 3-point far rule (-mat_bem_far_ratio) breaks the smooth far field the compression relies on; set it to 0");
-}
-
-/// The collocation points of the dof nodes (mesh order): what the cluster tree partitions.
-std::vector<Vec3> collocation_points(const Discretization &disc);
-
 class Skeletonizer {
 public:
   /// `bases[c]` receives cluster c's skeletons; K's columns are `col_block` per point, scaled
-  /// by `col_scale` per slot (see HssMatrix::col_scale).
+  /// by `col_scale` per slot (see HssMatrix::col_scale, H2Matrix::col_scale).
   Skeletonizer(const BemOperator &op, const SkeletonizerOptions &opt, const ClusterTree &tree, int col_block, std::vector<double> col_scale,
                std::vector<NestedBasis *> bases);
   ~Skeletonizer();

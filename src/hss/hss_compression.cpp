@@ -1,11 +1,12 @@
-// Entries-only HSS compression of K = [H, G(, Gn)] with proxy spheres (see bem_compression.hpp).
-#include "hssbem/hss/bem_compression.hpp"
+// Entries-only HSS compression of K = [H, G(, Gn)] with proxy spheres (see hss_compression.hpp).
+#include "hssbem/hss/hss_compression.hpp"
 
+#include "hssbem/compress/compression.hpp"
+#include "hssbem/compress/kernel_blocks.hpp"
+#include "hssbem/compress/rigid_body_blocks.hpp"
+#include "hssbem/compress/skeletonizer.hpp"
 #include "hssbem/core/blas_threads.hpp"
-#include "hssbem/core/lapack.hpp"
 #include "hssbem/core/phase.hpp"
-#include "hssbem/hss/rigid_body_blocks.hpp"
-#include "hssbem/hss/skeletonizer.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -146,14 +147,6 @@ void add_rigid_body_terms(const BemOperator &op, HssMatrix &K)
 }
 
 } // namespace
-
-int default_proxy_points(double rel_tol)
-{
-  // Enough points to resolve the far field's spherical harmonics up to the degree where they
-  // fall below the tolerance (they decay like (1/proxy_ratio)^degree); measured on the test meshes.
-  const double digits = std::max(1.0, -std::log10(rel_tol));
-  return std::clamp(static_cast<int>(std::lround(6.0 * digits * digits + 40)), 64, 1024);
-}
 
 HssMatrix compress_bem_operator(const BemOperator &op, const HssOptions &options)
 {

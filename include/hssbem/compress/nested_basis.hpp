@@ -1,6 +1,6 @@
 /// \file nested_basis.hpp
 /// One cluster's nested row and column bases in interpolative form, shared by the HSS format
-/// (hss_matrix.hpp, weak admissibility) and the H² format (h2/h2_matrix.hpp, strong admissibility).
+/// (hss/hss_matrix.hpp, weak admissibility) and the H² format (h2/h2_matrix.hpp, strong admissibility).
 ///
 /// Rows and columns follow a ClusterTree: point k of cluster order carries `row_block` rows and
 /// `col_block` columns, global row r = row_block·k + c and global column q = col_block·k + s.
@@ -14,7 +14,6 @@
 #include "hssbem/core/cluster_tree.hpp"
 #include "hssbem/core/dense_matrix.hpp"
 
-#include <algorithm>
 #include <numeric>
 #include <vector>
 
@@ -50,40 +49,6 @@ std::vector<int> basis_candidates(const ClusterTree &tree, const std::vector<T> 
   const std::vector<int> &right = rows ? b.row_skel : b.col_skel;
   out.insert(out.end(), right.begin(), right.end());
   return out;
-}
-
-/// Count one more cluster in a level's rank statistics (Level: clusters, max_row_rank,
-/// max_col_rank, mean_row_rank, mean_col_rank; the means hold sums until finish_level_means).
-template <class Level>
-void add_level_ranks(Level &s, const NestedBasis &b)
-{
-  const int kr = static_cast<int>(b.row_skel.size()), kc = static_cast<int>(b.col_skel.size());
-  s.clusters += 1;
-  s.max_row_rank = std::max(s.max_row_rank, kr);
-  s.max_col_rank = std::max(s.max_col_rank, kc);
-  s.mean_row_rank += kr;
-  s.mean_col_rank += kc;
-}
-
-/// Turn the rank sums of add_level_ranks into means.
-template <class Level>
-void finish_level_means(std::vector<Level> &levels)
-{
-  for (Level &s : levels)
-    if (s.clusters > 0) {
-      s.mean_row_rank /= s.clusters;
-      s.mean_col_rank /= s.clusters;
-    }
-}
-
-/// Largest row (rows = true) or column rank over per-level statistics (any type with
-/// max_row_rank and max_col_rank members).
-template <class Level>
-int max_level_rank(const std::vector<Level> &levels, bool rows)
-{
-  int r = 0;
-  for (const Level &l : levels) r = std::max(r, rows ? l.max_row_rank : l.max_col_rank);
-  return r;
 }
 
 } // namespace hssbem

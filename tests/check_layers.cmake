@@ -1,0 +1,50 @@
+# Checks that each layer of the library includes only the layers below it.
+#
+#   cmake -DSOURCE_DIR=<repository> -P tests/check_layers.cmake
+#
+# A layer is a folder of include/hssbem/ and src/; allowed_<layer> lists the layers its files may
+# include ("hssbem/<layer>/..."). A folder without a rule fails the check too: a new layer (a
+# format, say) gets its line here.
+cmake_minimum_required(VERSION 3.20)
+
+set(allowed_core     core)
+set(allowed_bem      core bem)
+set(allowed_compress core bem compress)
+set(allowed_hss      core bem compress hss)
+set(allowed_h2       core bem compress h2)
+set(allowed_problem  core bem problem)
+set(allowed_io       core io)
+set(allowed_petsc    core bem compress hss h2 problem io petsc)
+set(allowed_apps     core bem compress hss h2 problem io petsc)
+
+if(NOT SOURCE_DIR)
+  message(FATAL_ERROR "give -DSOURCE_DIR=<repository>")
+endif()
+file(GLOB_RECURSE files RELATIVE ${SOURCE_DIR}
+     ${SOURCE_DIR}/include/hssbem/*.h ${SOURCE_DIR}/include/hssbem/*.hpp
+     ${SOURCE_DIR}/src/*.h ${SOURCE_DIR}/src/*.hpp ${SOURCE_DIR}/src/*.cpp ${SOURCE_DIR}/src/*.cxx)
+set(errors "")
+set(checked 0)
+foreach(f IN LISTS files)
+  if(NOT f MATCHES "^(include/hssbem|src)/([^/]+)/")
+    string(APPEND errors "\n  ${f}: outside every layer folder")
+    continue()
+  endif()
+  set(layer ${CMAKE_MATCH_2})
+  if(NOT DEFINED allowed_${layer})
+    string(APPEND errors "\n  ${f}: layer '${layer}' has no rule in tests/check_layers.cmake")
+    continue()
+  endif()
+  math(EXPR checked "${checked} + 1")
+  file(STRINGS ${SOURCE_DIR}/${f} lines REGEX "^[ \t]*#[ \t]*include[ \t]*[\"<]hssbem/")
+  foreach(line IN LISTS lines)
+    if(line MATCHES "hssbem/([^/\">]+)/" AND NOT CMAKE_MATCH_1 IN_LIST allowed_${layer})
+      string(STRIP "${line}" line)
+      string(APPEND errors "\n  ${f}: ${line} (${layer}/ may include ${allowed_${layer}})")
+    endif()
+  endforeach()
+endforeach()
+if(errors)
+  message(FATAL_ERROR "layer violations:${errors}")
+endif()
+message(STATUS "layers: ${checked} files include only the layers below them")
