@@ -6,13 +6,13 @@
 // carry a uniform traction (0, 0, -1) (displacement unknown), E = 1, nu = 0.3.
 #include "hssbem/bem/bem_operator.hpp"
 #include "hssbem/core/lapack.hpp"
+#include "hssbem/core/timer.hpp"
 #include "hssbem/hss/hss_system.hpp"
 #include "hssbem/problem/benchmark_problem.hpp"
 
 #include "bench_support.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -22,8 +22,6 @@
 
 using namespace hssbem;
 
-using bench::Clock;
-using bench::since;
 
 int main(int argc, char **argv)
 {
@@ -62,18 +60,18 @@ int main(int argc, char **argv)
   const SystemSelection sel = clamped_lower_half(disc, {0, 0, -1});
 
   // HSS: compress K once, right-hand side by a fast product, factor the pattern, solve.
-  auto t0 = Clock::now();
+  Timer timer;
   HssBemSystem sys(op, opt);
-  const double t_compress = since(t0);
-  t0 = Clock::now();
+  const double t_compress = timer.seconds();
+  timer.restart();
   const std::vector<double> b = sys.rhs(sel);
-  const double t_matvec = since(t0);
-  t0 = Clock::now();
+  const double t_matvec = timer.seconds();
+  timer.restart();
   const auto F = sys.factor(sel);
-  const double t_factor = since(t0);
-  t0 = Clock::now();
+  const double t_factor = timer.seconds();
+  timer.restart();
   const std::vector<double> x_hss = sys.solve(*F, b);
-  const double t_solve = since(t0);
+  const double t_solve = timer.seconds();
   const HssMatrix &K = sys.matrix();
   const double rss = bench::peak_rss_mb();
   const HssStats &st = K.stats();

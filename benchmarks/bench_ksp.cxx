@@ -13,6 +13,7 @@
 // (0, 0, -1); E = 1, nu = 0.3. The Krylov runs use the -matrix operator: dense (exact entries,
 // BLAS product), the HSS MatShell at -mat_hss_rel_tol (PC tolerances looser than that are
 // truncated from it) or the H² MatShell at -mat_h2_rel_tol (the PCs compress HSS anew). Every run's error is measured against the dense LU solution.
+#include "hssbem/core/operator_type.hpp"
 #include "hssbem/petsc/log.h"
 #include "hssbem/petsc/pc_hss.h"
 #include "hssbem/petsc/system.h"
@@ -23,6 +24,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -121,7 +123,8 @@ int main(int argc, char **argv)
 
     Mat Ad = NULL, Ak = NULL;
     Vec bd = NULL, bk = NULL, xref = NULL;
-    const bool hss_matrix = std::string(matrix) == HSSBEM_MAT_HSS || std::string(matrix) == HSSBEM_MAT_H2;
+    const std::optional<OperatorType> matrix_type = parse_operator_type(matrix);
+    const bool                        hss_matrix  = matrix_type && is_compressed(*matrix_type);
     PetscCheck(reference || hss_matrix, PETSC_COMM_WORLD, PETSC_ERR_USER, "-reference 0 needs -matrix hss or h2");
     if (reference) {
       PetscCall(PetscTime(&t0));

@@ -1,12 +1,12 @@
-// Shared by the benchmark programs: timing, peak memory, relative differences, and the dense
+// Shared by the benchmark programs: peak memory, relative differences, and the dense
 // reference (collocation assembly + LU of the same system).
 #pragma once
 
 #include "hssbem/bem/bem_operator.hpp"
 #include "hssbem/core/lapack.hpp"
+#include "hssbem/core/timer.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <fstream>
 #include <numeric>
@@ -15,9 +15,6 @@
 #include <vector>
 
 namespace bench {
-
-using Clock = std::chrono::steady_clock;
-inline double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 /// Peak resident memory of this process (VmHWM), MB.
 inline double peak_rss_mb()
@@ -55,7 +52,7 @@ inline DenseReference dense_reference(const hssbem::BemOperator &op, const hssbe
   std::vector<double> A(N * N);
   DenseReference ref;
   ref.x.resize(N);
-  auto t0 = Clock::now();
+  hssbem::Timer timer;
 #pragma omp parallel
   {
     hssbem::BemOperator::Workspace ws(op);
@@ -65,12 +62,12 @@ inline DenseReference dense_reference(const hssbem::BemOperator &op, const hssbe
       hssbem::fill_system_block(op, sel, rows, all, A.data() + 3L * r0 * N, N, ref.x.data() + 3L * r0, ws);
     }
   }
-  ref.t_assembly = since(t0);
-  t0 = Clock::now();
+  ref.t_assembly = timer.seconds();
+  timer.restart();
   std::vector<int> piv(N);
   if (hssbem::lapack::getrf(static_cast<int>(N), A.data(), static_cast<int>(N), piv.data()) != 0) throw std::runtime_error("dense LU failed");
   hssbem::lapack::getrs('T', static_cast<int>(N), 1, A.data(), static_cast<int>(N), piv.data(), ref.x.data(), static_cast<int>(N)); // A is row-major
-  ref.t_lu = since(t0);
+  ref.t_lu = timer.seconds();
   return ref;
 }
 

@@ -38,13 +38,13 @@ int main(int argc, char **argv)
       if (!opts.help) PetscCall(PetscPrintf(PETSC_COMM_WORLD, "hssbem: error: no problem file; give -problem FILE.json (-help lists the options)\n"));
       else { /* list the solver's options too */
         KSP ksp;
-        PetscCall(HssbemKSPCreate(PETSC_COMM_WORLD, opts.mat_type.c_str(), &ksp));
+        PetscCall(HssbemKSPCreate(PETSC_COMM_WORLD, hssbem::operator_type_name(opts.operator_type), &ksp));
         PetscCall(KSPDestroy(&ksp));
       }
       status = opts.help ? 0 : 1;
     } else {
       try {
-        PetscCall(HssbemRun(PETSC_COMM_WORLD, opts.problem, Overrides(opts), opts.quad, opts.mat_type.c_str()));
+        PetscCall(HssbemRun(PETSC_COMM_WORLD, opts.problem, Overrides(opts), opts.quad, hssbem::operator_type_name(opts.operator_type)));
       } catch (const std::exception &e) {
         PetscCall(PetscPrintf(PETSC_COMM_WORLD, "hssbem: error: %s\n", e.what()));
         status = 1;

@@ -3,9 +3,9 @@
 
 #include "hssbem/core/blas_threads.hpp"
 #include "hssbem/core/interpolative.hpp"
+#include "hssbem/core/timer.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 
 #ifdef _OPENMP
@@ -15,11 +15,6 @@
 namespace hssbem {
 
 namespace {
-
-double seconds_since(std::chrono::steady_clock::time_point t0)
-{
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 int thread_index()
 {
@@ -217,7 +212,7 @@ void Skeletonizer::skeletonize(int c, const std::vector<int> &sources, bool need
   const double w_row = std::sqrt(4 * M_PI * r_row * r_row / np / m_node_area) * m_node_area;
   const double w_col = std::sqrt(4 * M_PI * r_col * r_col / np / m_node_area);
 
-  auto t0 = std::chrono::steady_clock::now();
+  Timer timer;
   // Near columns (for the row skeleton) and near rows (for the column skeleton).
   std::vector<int> near_cols, near_rows;
   for (int o : sources) {
@@ -264,9 +259,9 @@ void Skeletonizer::skeletonize(int c, const std::vector<int> &sources, bool need
       for (int f = 0; f < 3 * np; ++f) Y[f + static_cast<std::size_t>(q) * nfc] *= w_col;
     block(near_rows, cols, Y.data() + 3 * np, 1, nfc);
   }
-  m_t_near[thread_index()] += seconds_since(t0);
+  m_t_near[thread_index()] += timer.seconds();
 
-  t0 = std::chrono::steady_clock::now();
+  timer.restart();
   const IdOptions id{m_opt.rel_tol, m_opt.max_rank};
   NestedBasis &h = *m_bases[c];
   h.row_skel.clear();
@@ -285,7 +280,7 @@ void Skeletonizer::skeletonize(int c, const std::vector<int> &sources, bool need
   h.V = need_cols ? std::move(cs.W) : DenseMatrix(static_cast<int>(cols.size()), 0);
   h.row_forced = rs.forced;
   h.col_forced = cs.forced;
-  m_t_id[thread_index()] += seconds_since(t0);
+  m_t_id[thread_index()] += timer.seconds();
 }
 
 } // namespace hssbem

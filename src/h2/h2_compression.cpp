@@ -7,9 +7,9 @@
 #include "hssbem/compress/skeletonizer.hpp"
 #include "hssbem/core/blas_threads.hpp"
 #include "hssbem/core/phase.hpp"
+#include "hssbem/core/timer.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <numeric>
 #include <optional>
 #include <stdexcept>
@@ -17,11 +17,6 @@
 namespace hssbem {
 
 namespace {
-
-double seconds_since(std::chrono::steady_clock::time_point t0)
-{
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 /// The clusters that c must be compressed against while its level is skeletonized: every
 /// frontier cluster that is not close to c (far from c or from an ancestor), and, when c is a
@@ -81,7 +76,7 @@ H2Matrix compress_bem_operator_h2(const BemOperator &op, const H2Options &option
 {
   check_compression_inputs(op, options, "H2");
   if (!(options.eta >= 0)) throw std::invalid_argument("H2: eta must be >= 0");
-  auto t0 = std::chrono::steady_clock::now();
+  Timer timer;
   std::optional<PhaseScope> phase(Phase::Tree);
   const int w = k_columns_per_node(options.pressure_columns);
   H2Matrix K(ClusterTree(collocation_points(op.discretization()), ClusterTreeOptions{options.leaf_size}), 3, w);
@@ -100,7 +95,7 @@ H2Matrix compress_bem_operator_h2(const BemOperator &op, const H2Options &option
   for (int c = 0; c < tree.num_clusters(); ++c) radius[c] = std::max(reach.row_r[c], reach.src_r[c]);
   K.partition() = strong_block_partition(tree, radius, options.eta);
   const BlockPartition &part = K.partition();
-  K.stats().time_tree = seconds_since(t0);
+  K.stats().time_tree = timer.seconds();
   K.stats().proxy_points = np;
   K.stats().eta = options.eta;
 
@@ -111,7 +106,7 @@ H2Matrix compress_bem_operator_h2(const BemOperator &op, const H2Options &option
   // Far blocks between skeletons.
   std::vector<int> all(tree.num_clusters());
   std::iota(all.begin(), all.end(), 0);
-  t0 = std::chrono::steady_clock::now();
+  timer.restart();
   for_each_cluster(all, [&](int a) {
     for (int b : part.far[a]) {
       H2Block B{b, DenseMatrix(static_cast<int>(K.basis(a).row_skel.size()), static_cast<int>(K.basis(b).col_skel.size())), {}};
@@ -120,12 +115,12 @@ H2Matrix compress_bem_operator_h2(const BemOperator &op, const H2Options &option
       K.far_blocks(a).push_back(std::move(B));
     }
   });
-  K.stats().time_far = seconds_since(t0);
+  K.stats().time_far = timer.seconds();
   phase.reset();
 
   // Near blocks (true entries) and the rigid-body terms.
   phase.emplace(Phase::NearField);
-  t0 = std::chrono::steady_clock::now();
+  timer.restart();
   for_each_cluster(tree.leaves(), [&](int a) {
     const std::vector<int> rows = basis_candidates(tree, K.bases(), a, 3, true);
     for (int b : part.near[a]) {
@@ -136,10 +131,10 @@ H2Matrix compress_bem_operator_h2(const BemOperator &op, const H2Options &option
       K.near_blocks(a).push_back(std::move(B));
     }
   });
-  K.stats().time_near = seconds_since(t0);
-  t0 = std::chrono::steady_clock::now();
+  K.stats().time_near = timer.seconds();
+  timer.restart();
   add_rigid_body_terms(op, K);
-  K.stats().time_rigid = seconds_since(t0);
+  K.stats().time_rigid = timer.seconds();
   phase.reset();
   K.stats().entries_evaluated = skel.entries();
   K.stats().time_near_field = skel.time_near_field();

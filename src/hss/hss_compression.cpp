@@ -7,9 +7,9 @@
 #include "hssbem/compress/skeletonizer.hpp"
 #include "hssbem/core/blas_threads.hpp"
 #include "hssbem/core/phase.hpp"
+#include "hssbem/core/timer.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <memory>
 #include <optional>
@@ -19,11 +19,6 @@
 namespace hssbem {
 
 namespace {
-
-double seconds_since(std::chrono::steady_clock::time_point t0)
-{
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 std::vector<double> col_scales(const HssMatrix &K)
 {
@@ -56,18 +51,18 @@ public:
   {
     for (int l = m_tree.levels() - 1; l >= 1; --l) {
       m_skel.skeletonize_level(l, Skeletonizer::all_others);
-      const auto t0 = std::chrono::steady_clock::now();
+      const Timer timer;
       for_each_cluster(m_tree.clusters_at_level(l - 1), [this](int c) { couple_children(c); });
-      m_K.stats().time_couplings += seconds_since(t0);
+      m_K.stats().time_couplings += timer.seconds();
     }
   }
 
   /// The leaves' diagonal blocks (true entries), then the totals of the counters.
   void fill_leaves()
   {
-    const auto t0 = std::chrono::steady_clock::now();
+    const Timer timer;
     for_each_cluster(m_tree.leaves(), [this](int c) { fill_leaf(c); });
-    m_K.stats().time_leaves = seconds_since(t0);
+    m_K.stats().time_leaves = timer.seconds();
     m_K.stats().entries_evaluated += m_skel.entries();
     m_K.stats().time_near_field += m_skel.time_near_field();
     m_K.stats().time_ids += m_skel.time_ids();
@@ -148,24 +143,24 @@ void add_rigid_body_terms(const BemOperator &op, HssMatrix &K)
 
 } // namespace
 
-HssMatrix compress_bem_operator(const BemOperator &op, const HssOptions &options)
+HssMatrix compress_bem_operator_hss(const BemOperator &op, const HssOptions &options)
 {
   check_compression_inputs(op, options, "HSS");
-  auto t0 = std::chrono::steady_clock::now();
+  Timer timer;
   std::optional<PhaseScope> phase(Phase::Tree);
   HssMatrix K(ClusterTree(collocation_points(op.discretization()), ClusterTreeOptions{options.leaf_size}), 3, k_columns_per_node(options.pressure_columns));
   phase.reset();
   phase.emplace(Phase::Compression);
   K.set_col_scales(kernel_column_scales(op, K.col_block()));
-  K.stats().time_tree = seconds_since(t0);
+  K.stats().time_tree = timer.seconds();
   Compressor compressor(op, options, K);
   compressor.skeletonize();
   phase.reset();
   phase.emplace(Phase::NearField);
   compressor.fill_leaves();
-  t0 = std::chrono::steady_clock::now();
+  timer.restart();
   add_rigid_body_terms(op, K);
-  K.stats().time_rigid = seconds_since(t0);
+  K.stats().time_rigid = timer.seconds();
   phase.reset();
   K.update_stats();
   return K;

@@ -9,7 +9,7 @@
 
 namespace hssbem {
 
-HssBemSystem::HssBemSystem(const BemOperator &op, const HssOptions &options) : m_op(op), m_K(compress_bem_operator(op, options)) {}
+HssBemSystem::HssBemSystem(const BemOperator &op, const HssOptions &options) : m_op(op), m_K(compress_bem_operator_hss(op, options)) {}
 
 HssBemSystem::HssBemSystem(const BemOperator &op, HssMatrix K) : m_op(op), m_K(std::move(K))
 {

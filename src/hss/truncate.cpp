@@ -31,11 +31,11 @@
 // 4. Couplings. B'_ab = K_hss(S'_a, C'_b) = E_a B_ab E^colᵀ_b: K's own entries where both new
 //    skeletons are subsets of the old ones, and represented entries elsewhere.
 //
-// Forced entries (rigid-body terms) are kept, first, and, as in the compressor's
+// Forced entries (rigid-body terms) are kept, first, and, as in the skeletonizer's
 // select_skeleton, interpolate nothing: the ID runs over the free candidates only. Nothing is
 // lost by that, since K's U_τ never interpolates a free row from a forced one. A row forced in p
 // (its rigid-body term reaches outside p) is forced in the child that holds it as well (it
-// reaches outside the child too: Compressor::row_forced), so it is among the new candidates;
+// reaches outside the child too: Skeletonizer::row_forced), so it is among the new candidates;
 // this is checked. Its rows of Ũ and E are unit rows, so its coupling entries stay exact.
 #include "hssbem/hss/truncate.hpp"
 
@@ -90,7 +90,7 @@ struct Selection {
 };
 
 /// Row ID of X (candidates × features) over its free rows; the forced rows (positions, in
-/// order) are kept first and interpolate nothing, as in the compressor's select_skeleton.
+/// order) are kept first and interpolate nothing, as in the skeletonizer's select_skeleton.
 /// The rank cap counts the forced rows.
 Selection select_rows(const DenseMatrix &X, const std::vector<int> &forced, IdOptions id)
 {

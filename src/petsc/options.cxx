@@ -2,6 +2,7 @@
 #include "hssbem/petsc/system.h"
 
 #include <cstring>
+#include <optional>
 #include <string>
 
 static PetscErrorCode OptionString_Private(const char *key, const char *text, std::string *value, PetscOptionItems *PetscOptionsObject)
@@ -35,7 +36,8 @@ static PetscErrorCode OptionString_Private(const char *key, const char *text, st
 @*/
 PetscErrorCode HssbemProcessOptions(MPI_Comm comm, HssbemAppOptions *opts)
 {
-  PetscBool set;
+  PetscBool   set;
+  std::string mat_type = hssbem::operator_type_name(opts->operator_type);
 
   PetscFunctionBegin;
   PetscCall(PetscOptionsHasHelp(NULL, &opts->help));
@@ -46,25 +48,26 @@ PetscErrorCode HssbemProcessOptions(MPI_Comm comm, HssbemAppOptions *opts)
   PetscCall(PetscOptionsReal("-E", "Young's modulus (default: the problem file's)", "", opts->E, &opts->E, &opts->has_E));
   PetscCall(PetscOptionsReal("-nu", "Poisson's ratio (default: the problem file's)", "", opts->nu, &opts->nu, &opts->has_nu));
   PetscCall(PetscOptionsReal("-bem_feature_angle", "Dihedral angle (degrees) above which an edge is sharp", "", opts->feature_angle, &opts->feature_angle, NULL));
-  PetscCall(OptionString_Private("-bem_mat_type", "Operator representation: hss (compressed, MatShell), h2 (compressed, strong admissibility, MatShell) or dense", &opts->mat_type, PetscOptionsObject));
+  PetscCall(OptionString_Private("-bem_mat_type", "Operator representation: hss (compressed, MatShell), h2 (compressed, strong admissibility, MatShell) or dense", &mat_type, PetscOptionsObject));
   PetscCall(PetscOptionsInt("-mat_bem_quad_order", "Gauss points per direction on singular triangles", "", opts->quad.duffy_order, &opts->quad.duffy_order, NULL));
   PetscCall(PetscOptionsReal("-mat_bem_near_ratio", "Subdivide triangles closer than this many diameters", "", opts->quad.near_ratio, &opts->quad.near_ratio, NULL));
   PetscCall(PetscOptionsReal("-mat_bem_far_ratio", "Use the 3-point rule beyond this many diameters (0: never)", "", opts->quad.far_ratio, &opts->quad.far_ratio, NULL));
   PetscCall(PetscOptionsInt("-mat_bem_max_depth", "Subdivision levels for nearly singular triangles", "", opts->quad.max_depth, &opts->quad.max_depth, &set));
   PetscOptionsEnd();
-  PetscCheck(opts->mat_type == HSSBEM_MAT_HSS || opts->mat_type == HSSBEM_MAT_H2 || opts->mat_type == HSSBEM_MAT_DENSE, comm, PETSC_ERR_ARG_UNKNOWN_TYPE, "-bem_mat_type %s is not available; use hss, h2 or dense",
-             opts->mat_type.c_str());
-  if (opts->mat_type == HSSBEM_MAT_HSS || opts->help) {
+  const std::optional<hssbem::OperatorType> type = hssbem::parse_operator_type(mat_type);
+  PetscCheck(type, comm, PETSC_ERR_ARG_UNKNOWN_TYPE, "-bem_mat_type %s is not available; use hss, h2 or dense", mat_type.c_str());
+  opts->operator_type = *type;
+  if (opts->operator_type == hssbem::OperatorType::Hss || opts->help) {
     hssbem::HssOptions hss;
     hss.rel_tol = 1e-8;
     PetscCall(HssbemHssOptionsFromDatabase(comm, NULL, &hss));
   }
-  if (opts->mat_type == HSSBEM_MAT_H2 || opts->help) {
+  if (opts->operator_type == hssbem::OperatorType::H2 || opts->help) {
     hssbem::H2Options h2;
     PetscCall(HssbemH2OptionsFromDatabase(comm, NULL, &h2));
   }
-  PetscCheck(opts->quad.far_ratio == 0 || opts->mat_type == HSSBEM_MAT_DENSE, comm, PETSC_ERR_ARG_INCOMP,
-             "-mat_bem_far_ratio must be 0 with -bem_mat_type %s: the 3-point far rule breaks the smooth far field the compression relies on", opts->mat_type.c_str());
+  PetscCheck(opts->quad.far_ratio == 0 || !hssbem::is_compressed(opts->operator_type), comm, PETSC_ERR_ARG_INCOMP,
+             "-mat_bem_far_ratio must be 0 with -bem_mat_type %s: the 3-point far rule breaks the smooth far field the compression relies on", mat_type.c_str());
   PetscCheck(opts->quad.duffy_order >= 2 && opts->quad.duffy_order <= 64, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_bem_quad_order must lie in [2, 64]");
   PetscCheck(opts->quad.near_ratio > 0 && (opts->quad.far_ratio == 0 || opts->quad.far_ratio >= opts->quad.near_ratio), comm, PETSC_ERR_ARG_OUTOFRANGE,
              "need -mat_bem_near_ratio > 0 and -mat_bem_far_ratio either 0 (off) or at least -mat_bem_near_ratio");

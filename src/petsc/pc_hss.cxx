@@ -1,13 +1,13 @@
 /* PC "hss": ULV factorization of the BEM system matrix from an HSS compression, as a direct
    solver (-ksp_type preonly) or a preconditioner at a loose tolerance (see pc_hss.h). */
 #include "hssbem/petsc/pc_hss.h"
+#include "hssbem/core/timer.hpp"
 #include "hssbem/hss/truncate.hpp"
 #include "hssbem/hss/ulv.hpp"
 
-#include "mat_hss.hpp"
+#include "mat_compressed.hpp"
 
 #include <petsc/private/pcimpl.h>
-#include <petsctime.h>
 
 #include <exception>
 #include <memory>
@@ -41,27 +41,20 @@ struct PC_HSS {
   std::unique_ptr<HssbemRootExchange>           ex;
 };
 
-double Since(PetscLogDouble t0)
-{
-  PetscLogDouble t;
-  PetscTime(&t);
-  return t - t0;
-}
-
 /* Rank 0: the compression at the PC's options, then the factors; returns a breakdown in
    hss->failure, other errors as exceptions. */
-void FactorOnRoot(PC_HSS *hss, const HssbemProblem &p)
+void FactorOnRoot(PC_HSS *hss, const HssbemSystemContext &p)
 {
-  hssbem::HssOptions o = p.is_hss ? p.hss_options : hssbem::HssOptions{};
-  if (!p.is_hss) o.rel_tol = p.is_h2 ? 1e-3 : 1e-8; /* on H², a preconditioner for GMRES around the accurate product (DESIGN §6) */
+  const bool         on_hss = p.type == hssbem::OperatorType::Hss;
+  hssbem::HssOptions o      = on_hss ? p.hss_options : hssbem::HssOptions{};
+  if (!on_hss) o.rel_tol = p.type == hssbem::OperatorType::H2 ? 1e-3 : 1e-8; /* on H², a preconditioner for GMRES around the accurate product (DESIGN §6) */
   o.pressure_columns = false; /* the factorization needs H and G only */
   if (hss->rel_tol > 0) o.rel_tol = hss->rel_tol;
   if (hss->leaf_size > 0) o.leaf_size = (int)hss->leaf_size;
   if (hss->max_rank > 0) o.max_rank = (int)hss->max_rank; /* else the matrix's cap (none on a dense matrix) */
   hss->used = o;
-  PetscLogDouble t0;
-  PetscTime(&t0);
-  const bool same_tree = p.is_hss && p.hss && o.leaf_size == p.hss_options.leaf_size;
+  hssbem::Timer timer;
+  const bool    same_tree = on_hss && p.hss && o.leaf_size == p.hss_options.leaf_size;
   if (same_tree && o.rel_tol == p.hss_options.rel_tol && o.max_rank == p.hss_options.max_rank) {
     hss->sys    = p.hss;
     hss->source = Source::Matrix;
@@ -72,27 +65,27 @@ void FactorOnRoot(PC_HSS *hss, const HssbemProblem &p)
     hss->sys    = std::make_shared<hssbem::HssBemSystem>(*p.op, o);
     hss->source = Source::Compressed;
   }
-  hss->seconds_compress = Since(t0);
-  PetscTime(&t0);
+  hss->seconds_compress = timer.seconds();
+  timer.restart();
   try {
     hss->factors = hss->sys->factor(p.sel, p.modes.empty() ? nullptr : &p.modes);
   } catch (const hssbem::HssBreakdown &e) {
     hss->failure = e.what();
   }
-  hss->seconds_factor = Since(t0);
+  hss->seconds_factor = timer.seconds();
 }
 
 PetscErrorCode PCSetUp_HSS(PC pc)
 {
-  PC_HSS        *hss = (PC_HSS *)pc->data;
-  HssbemProblem *p;
-  MPI_Comm       comm = PetscObjectComm((PetscObject)pc);
-  PetscMPIInt    rank;
-  int            state[2] = {0, 0}; /* error, breakdown */
-  std::string    message;
+  PC_HSS              *hss = (PC_HSS *)pc->data;
+  HssbemSystemContext *p;
+  MPI_Comm             comm = PetscObjectComm((PetscObject)pc);
+  PetscMPIInt          rank;
+  int                  state[2] = {0, 0}; /* error, breakdown */
+  std::string          message;
 
   PetscFunctionBegin;
-  PetscCall(HssbemMatGetProblem(pc->pmat, &p));
+  PetscCall(HssbemMatGetSystemContext(pc->pmat, &p));
   PetscCheck(p, comm, PETSC_ERR_ARG_WRONG, "PC hss factors BEM system matrices only: build the matrix with HssbemCreateSystem() (the hssbem driver does)");
   PetscCallMPI(MPI_Comm_rank(comm, &rank));
   hss->factors.reset();

@@ -5,7 +5,7 @@
 #include <petscksp.h>
 
 PetscClassId  HSSBEM_CLASSID;
-PetscLogEvent BEM_Mesh, BEM_Problem, BEM_RigidBody, BEM_Assembly, BEM_Solve, BEM_Post, BEM_Interior, BEM_Output;
+PetscLogEvent BEM_Mesh, BEM_Assembly, BEM_Solve, BEM_Post, BEM_Interior, BEM_Output;
 PetscLogEvent HSS_Tree, HSS_Compress, HSS_NearField, HSS_Truncate, HSS_Factor, HSS_Solve, HSS_MatMult;
 
 /* The engine's phases as log events (engine phases open and close on the calling thread). */
@@ -35,8 +35,9 @@ PetscErrorCode HssbemFinalizePackage(void)
 
 /*@C
   HssbemInitializePackage - Registers the class id and the log events of hssbem (one per phase,
-  so -log_view shows where the time goes; the HSS engine's phases through its phase hook) and
-  the PC type "hss" (PCHSS). Called once after PetscInitialize(); later calls do nothing.
+  so -log_view shows where the time goes; the compression engines' phases through their phase
+  hook) and the PC type "hss" (PCHSS). Called once after PetscInitialize(); later calls do
+  nothing.
 
   Level: beginner
 @*/
@@ -47,8 +48,6 @@ PetscErrorCode HssbemInitializePackage(void)
   HssbemPackageInitialized = PETSC_TRUE;
   PetscCall(PetscClassIdRegister("hssbem", &HSSBEM_CLASSID));
   PetscCall(PetscLogEventRegister("BEMMesh", HSSBEM_CLASSID, &BEM_Mesh));
-  PetscCall(PetscLogEventRegister("BEMProblem", HSSBEM_CLASSID, &BEM_Problem));
-  PetscCall(PetscLogEventRegister("BEMRigidBody", HSSBEM_CLASSID, &BEM_RigidBody));
   PetscCall(PetscLogEventRegister("BEMAssembly", HSSBEM_CLASSID, &BEM_Assembly));
   PetscCall(PetscLogEventRegister("BEMSolve", HSSBEM_CLASSID, &BEM_Solve));
   PetscCall(PetscLogEventRegister("BEMPost", HSSBEM_CLASSID, &BEM_Post));

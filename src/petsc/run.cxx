@@ -7,25 +7,12 @@
 #include "hssbem/petsc/options.h"
 #include "hssbem/petsc/system.h"
 
-#include <petsctime.h>
+#include "hssbem/core/timer.hpp"
 
 #include <map>
 #include <string>
 
 namespace {
-
-/* Wall-clock seconds per phase, for the result file. */
-struct PhaseTimer {
-  std::map<std::string, double> seconds;
-  PetscLogDouble start = 0;
-  void begin() { PetscTime(&start); }
-  void end(const std::string &name)
-  {
-    PetscLogDouble now;
-    PetscTime(&now);
-    seconds[name] += now - start;
-  }
-};
 
 hssbem::ProblemSetup SetUp(MPI_Comm comm, const std::string &file, const hssbem::ProblemOverrides &ov)
 {
@@ -114,7 +101,7 @@ void Describe(const hssbem::ProblemSetup &s, const HssbemSolveInfo &info, const 
 } // namespace
 
 /*@C
-  HssbemSolveSetup - Builds (dense or HSS) and solves the system of a prepared problem; the unknowns
+  HssbemSolveSetup - Builds (dense, HSS or H²) and solves the system of a prepared problem; the unknowns
   (3 per dof node, node order) come back on rank 0, or on every rank with to_all.
 
   Level: intermediate
@@ -122,59 +109,60 @@ void Describe(const hssbem::ProblemSetup &s, const HssbemSolveInfo &info, const 
 PetscErrorCode HssbemSolveSetup(MPI_Comm comm, const hssbem::ProblemSetup &s, const hssbem::BemOperator &op, const char *mat_type, PetscBool to_all, std::vector<double> *x_out, HssbemSolveInfo *info,
                                 std::map<std::string, double> *seconds)
 {
-  PhaseTimer timer;
-  KSP        ksp;
-  Mat        A;
-  Vec        b, x;
+  std::map<std::string, double> phase_seconds;
+  hssbem::Timer                 timer;
+  KSP                           ksp;
+  Mat                           A;
+  Vec                           b, x;
 
   PetscFunctionBegin;
   PetscCall(HssbemKSPCreate(comm, mat_type, &ksp));
   PetscCall(HssbemCheckUnusedOptions(comm, PETSC_TRUE));
-  timer.begin();
+  timer.restart();
   std::vector<double> modes;
   if (s.pure_traction) modes = hssbem::orthonormal_rigid_modes(*s.disc);
   PetscCall(HssbemCreateSystem(comm, op, s.selection, s.pure_traction ? &modes : nullptr, mat_type, &A, &b));
   PetscCall(MatViewFromOptions(A, NULL, "-bem_mat_view"));
-  timer.end("assembly");
-  timer.begin();
+  phase_seconds["assembly"] += timer.seconds();
+  timer.restart();
   PetscCall(VecDuplicate(b, &x));
   PetscCall(HssbemSolveSystem(ksp, &A, b, x, info));
-  timer.end("solve");
+  phase_seconds["solve"] += timer.seconds();
   PetscCall(Gather(x, to_all, x_out));
   PetscCall(KSPDestroy(&ksp));
   PetscCall(MatDestroy(&A));
   PetscCall(VecDestroy(&b));
   PetscCall(VecDestroy(&x));
   if (seconds)
-    for (const auto &[k, v] : timer.seconds) (*seconds)[k] += v;
+    for (const auto &[k, v] : phase_seconds) (*seconds)[k] += v;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
 /*@C
   HssbemRun - Solves one problem file end to end on comm: set up (mesh, material, boundary
-  conditions), build the collocation system (HSS or dense), solve with KSP, post-process and write.
+  conditions), build the collocation system (dense, HSS or H²), solve with KSP, post-process and write.
 
   Level: beginner
 @*/
 PetscErrorCode HssbemRun(MPI_Comm comm, const std::string &problem_file, const hssbem::ProblemOverrides &overrides, const hssbem::QuadratureOptions &quad, const char *mat_type)
 {
-  PhaseTimer      timer;
-  PetscMPIInt     rank, size;
-  HssbemSolveInfo info;
+  std::map<std::string, double> seconds; /* per phase, for the result file */
+  hssbem::Timer                 timer;
+  PetscMPIInt                   rank, size;
+  HssbemSolveInfo               info;
 
   PetscFunctionBegin;
   PetscCallMPI(MPI_Comm_rank(comm, &rank));
   PetscCallMPI(MPI_Comm_size(comm, &size));
-  timer.begin();
   hssbem::ProblemSetup s = SetUp(comm, problem_file, overrides);
   for (const auto &n : s.notices) PetscCall(PetscPrintf(comm, "hssbem: notice: %s\n", n.c_str()));
   hssbem::BemOperator op(*s.disc, s.material, quad);
   CheckInteriorPoints(op, s.spec);
-  timer.end("setup");
+  seconds["setup"] += timer.seconds();
   PetscCall(PetscPrintf(comm, "hssbem: %s: %d vertices, %d triangles, %d dof nodes (%d sharp vertices), %d unknowns, %d ranks, %s operator\n", s.spec.mesh_path.c_str(), s.mesh->num_vertices(),
                         s.mesh->num_triangles(), s.disc->num_nodes(), s.disc->num_sharp_vertices(), 3 * s.disc->num_nodes(), size, mat_type));
   std::vector<double> xall;
-  PetscCall(HssbemSolveSetup(comm, s, op, mat_type, PETSC_FALSE, &xall, &info, &timer.seconds));
+  PetscCall(HssbemSolveSetup(comm, s, op, mat_type, PETSC_FALSE, &xall, &info, &seconds));
   PetscCall(PetscPrintf(comm, "hssbem: solved with %s/%s%s%s: %" PetscInt_FMT " iterations, relative residual %.3e\n", info.ksp_type.c_str(), info.pc_type.c_str(),
                         info.solver_type.empty() ? "" : "/", info.solver_type.c_str(), info.iterations, (double)info.residual));
   PetscCall(HssbemCheckUnusedOptions(comm, PETSC_FALSE));
@@ -183,13 +171,13 @@ PetscErrorCode HssbemRun(MPI_Comm comm, const std::string &problem_file, const h
   if (rank == 0) {
     try {
       hssbem::ResultData r;
-      timer.begin();
+      timer.restart();
       PetscCall(PetscLogEventBegin(BEM_Post, 0, 0, 0, 0));
       FillResult(s, op, xall, r);
       PetscCall(PetscLogEventEnd(BEM_Post, 0, 0, 0, 0));
-      timer.end("post");
+      seconds["post"] += timer.seconds();
       Describe(s, info, mat_type, size, r);
-      r.timings = timer.seconds;
+      r.timings = seconds;
       if (!s.output.empty()) {
         PetscCall(PetscLogEventBegin(BEM_Output, 0, 0, 0, 0));
         hssbem::write_result(s.output, r);

@@ -1,45 +1,55 @@
-/* HssbemCreateSystem and the pieces the HSS matrix and PC share (see problem_context.hpp). */
+/* HssbemCreateSystem and the pieces the compressed MatShell and PC hss share (see system_context.hpp). */
 #include "hssbem/petsc/system.h"
 #include "hssbem/petsc/dense.h"
 #include "hssbem/petsc/log.h"
 #include "hssbem/bem/rigid_modes.hpp"
 
-#include "problem_context.hpp"
-#include "mat_hss.hpp"
+#include "mat_compressed.hpp"
+#include "system_context.hpp"
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <string>
 
-static PetscErrorCode ProblemDestroy_Private(void *ctx)
+static PetscErrorCode SystemContextDestroy_Private(void *ctx)
 {
   PetscFunctionBegin;
-  delete static_cast<HssbemProblem *>(ctx);
+  delete static_cast<HssbemSystemContext *>(ctx);
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* Compose the problem with A; A owns it from here on. */
-static PetscErrorCode ComposeProblem_Private(Mat A, HssbemProblem *problem)
+/* Compose the system context with A; A owns it from here on. */
+static PetscErrorCode ComposeSystemContext_Private(Mat A, HssbemSystemContext *ctx)
 {
   PetscContainer c;
 
   PetscFunctionBegin;
   PetscCall(PetscContainerCreate(PetscObjectComm((PetscObject)A), &c));
-  PetscCall(PetscContainerSetPointer(c, problem));
-  PetscCall(PetscContainerSetUserDestroy(c, ProblemDestroy_Private));
-  PetscCall(PetscObjectCompose((PetscObject)A, "HssbemProblem", (PetscObject)c));
+  PetscCall(PetscContainerSetPointer(c, ctx));
+  PetscCall(PetscContainerSetUserDestroy(c, SystemContextDestroy_Private));
+  PetscCall(PetscObjectCompose((PetscObject)A, "HssbemSystemContext", (PetscObject)c));
   PetscCall(PetscContainerDestroy(&c));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-PetscErrorCode HssbemMatGetProblem(Mat A, HssbemProblem **problem)
+PetscErrorCode HssbemMatGetSystemContext(Mat A, HssbemSystemContext **ctx)
 {
   PetscContainer c = NULL;
 
   PetscFunctionBegin;
-  *problem = NULL;
-  PetscCall(PetscObjectQuery((PetscObject)A, "HssbemProblem", (PetscObject *)&c));
-  if (c) PetscCall(PetscContainerGetPointer(c, (void **)problem));
+  *ctx = NULL;
+  PetscCall(PetscObjectQuery((PetscObject)A, "HssbemSystemContext", (PetscObject *)&c));
+  if (c) PetscCall(PetscContainerGetPointer(c, (void **)ctx));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode HssbemOperatorTypeFromName(MPI_Comm comm, const char *mat_type, hssbem::OperatorType *type)
+{
+  PetscFunctionBegin;
+  const std::optional<hssbem::OperatorType> t = hssbem::parse_operator_type(mat_type ? mat_type : "");
+  PetscCheck(t, comm, PETSC_ERR_ARG_UNKNOWN_TYPE, "unknown BEM matrix type '%s': use %s, %s or %s", mat_type, HSSBEM_MAT_HSS, HSSBEM_MAT_H2, HSSBEM_MAT_DENSE);
+  *type = *t;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -52,11 +62,11 @@ PetscErrorCode HssbemMatGetProblem(Mat A, HssbemProblem **problem)
 @*/
 PetscErrorCode HssbemMatIsHss(Mat A, PetscBool *is_hss)
 {
-  HssbemProblem *p;
+  HssbemSystemContext *p;
 
   PetscFunctionBegin;
-  PetscCall(HssbemMatGetProblem(A, &p));
-  *is_hss = p ? p->is_hss : PETSC_FALSE;
+  PetscCall(HssbemMatGetSystemContext(A, &p));
+  *is_hss = p && p->type == hssbem::OperatorType::Hss ? PETSC_TRUE : PETSC_FALSE;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -70,11 +80,11 @@ PetscErrorCode HssbemMatIsHss(Mat A, PetscBool *is_hss)
 @*/
 PetscErrorCode HssbemMatIsCompressed(Mat A, PetscBool *compressed)
 {
-  HssbemProblem *p;
+  HssbemSystemContext *p;
 
   PetscFunctionBegin;
-  PetscCall(HssbemMatGetProblem(A, &p));
-  *compressed = p && (p->is_hss || p->is_h2) ? PETSC_TRUE : PETSC_FALSE;
+  PetscCall(HssbemMatGetSystemContext(A, &p));
+  *compressed = p && hssbem::is_compressed(p->type) ? PETSC_TRUE : PETSC_FALSE;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -165,7 +175,7 @@ PetscErrorCode HssbemH2OptionsFromDatabase(MPI_Comm comm, const char *prefix, hs
 }
 
 /*@C
-  HssbemCreateSystem - Creates the system matrix A (dense or HSS) and right-hand side b of a
+  HssbemCreateSystem - Creates the system matrix A (dense, HSS or H²) and right-hand side b of a
   boundary-condition pattern; see system.h.
 
   Collective
@@ -175,34 +185,34 @@ PetscErrorCode HssbemH2OptionsFromDatabase(MPI_Comm comm, const char *prefix, hs
 PetscErrorCode HssbemCreateSystem(MPI_Comm comm, const hssbem::BemOperator &op, const hssbem::SystemSelection &sel, const std::vector<double> *rigid_modes, const char *mat_type, Mat *A,
                                   Vec *b)
 {
-  PetscBool dense, hss, h2;
+  hssbem::OperatorType type;
 
   PetscFunctionBegin;
-  PetscCall(PetscStrcmp(mat_type, HSSBEM_MAT_DENSE, &dense));
-  PetscCall(PetscStrcmp(mat_type, HSSBEM_MAT_HSS, &hss));
-  PetscCall(PetscStrcmp(mat_type, HSSBEM_MAT_H2, &h2));
-  PetscCheck(dense || hss || h2, comm, PETSC_ERR_ARG_UNKNOWN_TYPE, "unknown BEM matrix type '%s': use %s, %s or %s", mat_type, HSSBEM_MAT_HSS, HSSBEM_MAT_H2, HSSBEM_MAT_DENSE);
-  auto problem = new HssbemProblem;
-  problem->op  = &op;
-  problem->sel = sel;
-  if (rigid_modes) problem->modes = *rigid_modes;
+  PetscCall(HssbemOperatorTypeFromName(comm, mat_type, &type));
+  auto ctx  = new HssbemSystemContext;
+  ctx->op   = &op;
+  ctx->sel  = sel;
+  ctx->type = type;
+  if (rigid_modes) ctx->modes = *rigid_modes;
   /* a pressure load needs the Gn columns */
   const bool pressure = std::any_of(sel.pressure.begin(), sel.pressure.end(), [](double p) { return !std::isnan(p); });
-  if (dense) {
+  switch (type) {
+  case hssbem::OperatorType::Dense:
     PetscCall(HssbemAssembleDense(comm, op, sel, rigid_modes, A, b));
-  } else if (h2) {
-    problem->is_h2                       = PETSC_TRUE;
-    problem->h2_options.pressure_columns = pressure;
-    PetscCall(HssbemH2OptionsFromDatabase(comm, NULL, &problem->h2_options));
-    PetscCall(HssbemMatCreateHss_Private(comm, problem, A, b));
-  } else {
-    problem->is_hss                  = PETSC_TRUE;
-    problem->hss_options.rel_tol     = 1e-8;
-    problem->hss_options.pressure_columns = pressure;
-    PetscCall(HssbemHssOptionsFromDatabase(comm, NULL, &problem->hss_options));
-    PetscCall(HssbemMatCreateHss_Private(comm, problem, A, b));
+    break;
+  case hssbem::OperatorType::H2:
+    ctx->h2_options.pressure_columns = pressure;
+    PetscCall(HssbemH2OptionsFromDatabase(comm, NULL, &ctx->h2_options));
+    PetscCall(HssbemMatCreateCompressed_Private(comm, ctx, A, b));
+    break;
+  case hssbem::OperatorType::Hss:
+    ctx->hss_options.rel_tol          = 1e-8;
+    ctx->hss_options.pressure_columns = pressure;
+    PetscCall(HssbemHssOptionsFromDatabase(comm, NULL, &ctx->hss_options));
+    PetscCall(HssbemMatCreateCompressed_Private(comm, ctx, A, b));
+    break;
   }
-  PetscCall(ComposeProblem_Private(*A, problem));
+  PetscCall(ComposeSystemContext_Private(*A, ctx));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

@@ -1,4 +1,4 @@
-// Shared by the HSS unit tests: dense references (K, A for a pattern), errors, random patterns.
+// Shared by the HSS and H² unit tests: dense references (K, A for a pattern), errors, random patterns.
 #pragma once
 
 #include "hssbem/bem/bem_operator.hpp"

@@ -1,6 +1,7 @@
 // Entries-free truncation of an HSS matrix (truncate_hss) against the dense operator.
 #include "hssbem/bem/bem_operator.hpp"
 #include "hssbem/core/lapack.hpp"
+#include "hssbem/core/timer.hpp"
 #include "hssbem/hss/hss_compression.hpp"
 #include "hssbem/hss/truncate.hpp"
 #include "hssbem/hss/ulv.hpp"
@@ -11,7 +12,6 @@
 
 #include <algorithm>
 #include <array>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -24,11 +24,6 @@ using namespace hssbem;
 using namespace hssbem::test; // dense_k, dense_a, matvec_error, random_pattern, rel, ulv_solve
 
 namespace {
-
-double seconds_since(std::chrono::steady_clock::time_point t0)
-{
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 /// A mesh, its operator, the HSS compression of K at the original tolerance and the dense K.
 struct Compressed {
@@ -56,9 +51,9 @@ const Compressed &compressed(const std::string &name, int leaf, double tol)
   HssOptions o;
   o.rel_tol = tol;
   o.leaf_size = leaf;
-  const auto t0 = std::chrono::steady_clock::now();
-  C.K = std::make_unique<HssMatrix>(compress_bem_operator(*C.op, o));
-  C.seconds = seconds_since(t0);
+  const Timer timer;
+  C.K = std::make_unique<HssMatrix>(compress_bem_operator_hss(*C.op, o));
+  C.seconds = timer.seconds();
   C.tol = tol;
   C.Kd = dense_k(*C.op, 6);
   return C;
@@ -78,9 +73,9 @@ TEST(Truncation, MatvecMatchesDenseOperatorWithSmallerRanks)
   const Compressed &C = compressed("cardioid_832.msh", 32, 1e-8);
   const double e0 = matvec_error(*C.K, C.Kd, 7);
   for (double tol : {1e-3, 1e-5}) {
-    const auto t0 = std::chrono::steady_clock::now();
+    const Timer timer;
     const HssMatrix T = truncate_hss(*C.K, tol);
-    const double tt = seconds_since(t0), err = matvec_error(T, C.Kd, 7);
+    const double tt = timer.seconds(), err = matvec_error(T, C.Kd, 7);
     std::printf("cardioid, leaf 32: tol 1e-8 -> %.0e: error %.2e -> %.2e, memory %.2f -> %.2f MB, compress %.2f s, truncate %.2f s\n", tol, e0,
                 err, C.K->stats().memory_bytes / 1e6, T.stats().memory_bytes / 1e6, C.seconds, tt);
     print_ranks(*C.K, T);

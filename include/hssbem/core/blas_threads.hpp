@@ -1,7 +1,7 @@
 /// \file blas_threads.hpp
 /// Keep threaded BLAS out of loops that are already parallel over clusters.
 ///
-/// The HSS engine runs a tree level's clusters on OpenMP threads; if each of them also called a
+/// The HSS and H² engines run a tree level's clusters on OpenMP threads; if each of them also called a
 /// multithreaded BLAS, the cores would be oversubscribed (and OpenBLAS threads spin). While a
 /// SerialBlas is alive, OpenBLAS runs on one thread; levels with fewer clusters than threads run
 /// their clusters one after another with BLAS threaded instead. With another BLAS this does nothing.

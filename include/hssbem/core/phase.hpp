@@ -1,19 +1,20 @@
 /// \file phase.hpp
-/// Named phases of the engine, reported to an optional hook so a host (the PETSc layer: one
-/// PetscLogEvent per phase) can time them without the engine depending on it. The engine
-/// opens and closes phases on the calling thread only, never inside its OpenMP regions.
+/// Named phases of the compression engines (HSS and H²), reported to an optional hook so a host
+/// (the PETSc layer: one PetscLogEvent per phase) can time them without the engines depending on
+/// it. The engines open and close phases on the calling thread only, never inside their OpenMP
+/// regions.
 #pragma once
 
 namespace hssbem {
 
 enum class Phase {
   Tree,          ///< cluster tree (geometric bisection)
-  Compression,   ///< skeletons: proxy and near-field samples, interpolative decompositions, couplings
-  NearField,     ///< dense near-field blocks: leaf diagonal blocks and rigid-body terms
+  Compression,   ///< skeletons: proxy and near-field samples, interpolative decompositions, couplings (H²: block partition, far blocks)
+  NearField,     ///< dense near-field blocks: leaf diagonal blocks (H²: near blocks) and rigid-body terms
   Truncation,    ///< recompression of an HSS matrix to a looser tolerance
   Factorization, ///< ULV factorization
   Solve,         ///< ULV solve
-  Matvec,        ///< HSS product
+  Matvec,        ///< HSS or H² product
   Count
 };
 

@@ -41,6 +41,6 @@ struct HssOptions {
 /// Compress K = [H, G] (and Gn if asked) of `op` at the given accuracy, rigid-body terms
 /// included (computed by fast matvecs). The operator's quadrature must have far_ratio = 0.
 /// Throws std::invalid_argument for bad options.
-HssMatrix compress_bem_operator(const BemOperator &op, const HssOptions &options);
+HssMatrix compress_bem_operator_hss(const BemOperator &op, const HssOptions &options);
 
 } // namespace hssbem

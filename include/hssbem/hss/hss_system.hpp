@@ -16,7 +16,7 @@ namespace hssbem {
 
 class HssBemSystem : public CompressedBemSystem {
 public:
-  /// Compress the operator (see compress_bem_operator). Pressure loads need
+  /// Compress the operator (see compress_bem_operator_hss). Pressure loads need
   /// options.pressure_columns.
   HssBemSystem(const BemOperator &op, const HssOptions &options);
   /// Adopt a compression of op's K made elsewhere (e.g. truncate_hss() of another system's).

@@ -6,8 +6,8 @@
 #include <petscsys.h>
 
 PETSC_EXTERN PetscClassId  HSSBEM_CLASSID;
-PETSC_EXTERN PetscLogEvent BEM_Mesh, BEM_Problem, BEM_RigidBody, BEM_Assembly, BEM_Solve, BEM_Post, BEM_Interior, BEM_Output;
-/* Phases of the HSS engine (hssbem::Phase), reported through its phase hook. */
+PETSC_EXTERN PetscLogEvent BEM_Mesh, BEM_Assembly, BEM_Solve, BEM_Post, BEM_Interior, BEM_Output;
+/* Phases of the compression engines, HSS and H² (hssbem::Phase), reported through their phase hook. */
 PETSC_EXTERN PetscLogEvent HSS_Tree, HSS_Compress, HSS_NearField, HSS_Truncate, HSS_Factor, HSS_Solve, HSS_MatMult;
 
 PETSC_EXTERN PetscErrorCode HssbemInitializePackage(void);

@@ -4,7 +4,7 @@
 #include "hssbem/petsc/compat.h"
 
 #include "hssbem/bem/quadrature.hpp"
-#include "hssbem/hss/hss_compression.hpp"
+#include "hssbem/core/operator_type.hpp"
 
 #include <petscsys.h>
 #include <string>
@@ -16,7 +16,7 @@ struct HssbemAppOptions {
   PetscBool   has_E = PETSC_FALSE, has_nu = PETSC_FALSE;
   PetscReal   E = 0, nu = 0;
   PetscReal   feature_angle = 40.0;   /* degrees: dihedral angle above which an edge is sharp */
-  std::string mat_type = "hss";      /* -bem_mat_type: hss or dense */
+  hssbem::OperatorType operator_type = hssbem::OperatorType::Hss; /* -bem_mat_type: hss, h2 or dense */
   hssbem::QuadratureOptions quad;    /* -mat_bem_* */
   PetscBool   help = PETSC_FALSE;
 };

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-/* Set up, build the operator (mat_type: HSSBEM_MAT_HSS or HSSBEM_MAT_DENSE), solve, post-process
+/* Set up, build the operator (mat_type: HSSBEM_MAT_HSS, HSSBEM_MAT_H2 or HSSBEM_MAT_DENSE), solve, post-process
    and write. Input errors throw std::exception (same on every rank, since every rank reads the
    same files); PETSc failures return an error code. */
 PetscErrorCode HssbemRun(MPI_Comm comm, const std::string &problem_file, const hssbem::ProblemOverrides &overrides, const hssbem::QuadratureOptions &quad, const char *mat_type);

@@ -1,5 +1,5 @@
 /* The collocation system of a BEM problem as PETSc objects: the matrix A (dense, or a MatShell
-   backed by the HSS engine) and the right-hand side b. The public entry point of the library for
+   backed by the HSS or the H² engine) and the right-hand side b. The public entry point of the library for
    programs that run their own KSP (see examples/). */
 #pragma once
 

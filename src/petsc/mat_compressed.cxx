@@ -1,7 +1,8 @@
-/* The BEM operator as a MatShell backed by a compressed K (HSS, or H² with -bem_mat_type h2):
-   MatMult by the O(N·r) product, MatGetDiagonal from the leaves' true entries, MatView with
-   ranks and memory. */
-#include "mat_hss.hpp"
+/* The BEM operator as a MatShell backed by a compressed K (HSS with -bem_mat_type hss, H² with
+   -bem_mat_type h2): MatMult by the O(N·r) product, MatGetDiagonal from the leaves' true
+   entries, MatView with ranks and memory. One shell serves both formats through
+   hssbem::CompressedBemSystem; only MatView and the construction tell them apart. */
+#include "mat_compressed.hpp"
 
 #include "hssbem/petsc/log.h"
 #include "hssbem/bem/rigid_modes.hpp"
@@ -11,27 +12,27 @@
 
 namespace {
 
-struct MatHss {
-  HssbemProblem     *problem = nullptr; /* owned by the container composed with the Mat */
-  HssbemRootExchange ex;
+struct Mat_Compressed {
+  HssbemSystemContext *sys = nullptr; /* owned by the container composed with the Mat */
+  HssbemRootExchange   ex;
 };
 
-PetscErrorCode MatHssGetContext(Mat A, MatHss **ctx)
+PetscErrorCode MatCompressedGetContext(Mat A, Mat_Compressed **ctx)
 {
   PetscFunctionBegin;
   PetscCall(MatShellGetContext(A, ctx));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-PetscErrorCode MatMult_Hss(Mat A, Vec x, Vec y)
+PetscErrorCode MatMult_Compressed(Mat A, Vec x, Vec y)
 {
-  MatHss            *ctx;
+  Mat_Compressed    *ctx;
   const PetscScalar *xa;
   PetscScalar       *ya;
 
   PetscFunctionBegin;
-  PetscCall(MatHssGetContext(A, &ctx));
-  const HssbemProblem &p = *ctx->problem;
+  PetscCall(MatCompressedGetContext(A, &ctx));
+  const HssbemSystemContext &p = *ctx->sys;
   PetscCall(ctx->ex.SetUp(x));
   PetscCall(ctx->ex.Gather(x, &xa));
   PetscCall(ctx->ex.GetOut(&ya));
@@ -44,14 +45,14 @@ PetscErrorCode MatMult_Hss(Mat A, Vec x, Vec y)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-PetscErrorCode MatGetDiagonal_Hss(Mat A, Vec d)
+PetscErrorCode MatGetDiagonal_Compressed(Mat A, Vec d)
 {
-  MatHss      *ctx;
-  PetscScalar *da;
+  Mat_Compressed *ctx;
+  PetscScalar    *da;
 
   PetscFunctionBegin;
-  PetscCall(MatHssGetContext(A, &ctx));
-  const HssbemProblem &p = *ctx->problem;
+  PetscCall(MatCompressedGetContext(A, &ctx));
+  const HssbemSystemContext &p = *ctx->sys;
   PetscCall(ctx->ex.SetUp(d));
   PetscCall(ctx->ex.GetOut(&da));
   if (p.compressed()) {
@@ -68,17 +69,17 @@ PetscErrorCode MatGetDiagonal_Hss(Mat A, Vec d)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-PetscErrorCode MatView_Hss(Mat A, PetscViewer viewer)
+PetscErrorCode MatView_Compressed(Mat A, PetscViewer viewer)
 {
-  MatHss   *ctx;
-  PetscBool ascii;
+  Mat_Compressed *ctx;
+  PetscBool       ascii;
 
   PetscFunctionBegin;
   PetscCall(PetscObjectTypeCompare((PetscObject)viewer, PETSCVIEWERASCII, &ascii));
   if (!ascii) PetscFunctionReturn(PETSC_SUCCESS);
-  PetscCall(MatHssGetContext(A, &ctx));
-  const HssbemProblem &p = *ctx->problem;
-  if (p.is_h2) {
+  PetscCall(MatCompressedGetContext(A, &ctx));
+  const HssbemSystemContext &p = *ctx->sys;
+  if (p.type == hssbem::OperatorType::H2) {
     const hssbem::H2Options &o = p.h2_options;
     PetscCall(PetscViewerASCIIPrintf(viewer, "BEM operator in H² form (hssbem, strong admissibility): relative tolerance %g, leaf size %d, eta %g, rank cap %s, proxy ratio %g, blocks in %s precision\n",
                                      o.rel_tol, o.leaf_size, o.eta, o.max_rank > 0 ? std::to_string(o.max_rank).c_str() : "none", o.proxy_ratio, o.single_precision ? "single" : "double"));
@@ -87,7 +88,7 @@ PetscErrorCode MatView_Hss(Mat A, PetscViewer viewer)
     PetscCall(PetscViewerASCIIPrintf(viewer, "BEM operator in HSS form (hssbem): relative tolerance %g, leaf size %d, rank cap %s, proxy ratio %g\n", o.rel_tol, o.leaf_size,
                                      o.max_rank > 0 ? std::to_string(o.max_rank).c_str() : "none", o.proxy_ratio));
   }
-  const bool pressure = p.is_h2 ? p.h2_options.pressure_columns : p.hss_options.pressure_columns;
+  const bool pressure = p.type == hssbem::OperatorType::H2 ? p.h2_options.pressure_columns : p.hss_options.pressure_columns;
   PetscCall(PetscViewerASCIIPrintf(viewer, "  pattern: %s; rigid-mode regularisation: %s; the compression lives on rank 0\n", pressure ? "K = [H, G, Gn] (pressure loads)" : "K = [H, G]",
                                    p.modes.empty() ? "no" : "yes"));
   if (p.compressed()) { /* rank 0 */
@@ -99,10 +100,10 @@ PetscErrorCode MatView_Hss(Mat A, PetscViewer viewer)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-PetscErrorCode MatDestroyContext_Hss(void *ctx)
+PetscErrorCode MatDestroyContext_Compressed(void *ctx)
 {
   PetscFunctionBegin;
-  delete static_cast<MatHss *>(ctx);
+  delete static_cast<Mat_Compressed *>(ctx);
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -151,9 +152,10 @@ PetscErrorCode HssbemViewH2Matrix_Private(PetscViewer viewer, const hssbem::H2Ma
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-PetscErrorCode HssbemMatCreateHss_Private(MPI_Comm comm, HssbemProblem *problem, Mat *A, Vec *b)
+PetscErrorCode HssbemMatCreateCompressed_Private(MPI_Comm comm, HssbemSystemContext *sys, Mat *A, Vec *b)
 {
-  const hssbem::BemOperator &op = *problem->op;
+  const hssbem::BemOperator &op = *sys->op;
+  const bool                 h2 = sys->type == hssbem::OperatorType::H2;
   const PetscInt             nn = op.num_nodes(), N = 3 * nn;
   PetscInt                   nstart, nlocal;
   PetscMPIInt                rank;
@@ -167,14 +169,14 @@ PetscErrorCode HssbemMatCreateHss_Private(MPI_Comm comm, HssbemProblem *problem,
   PetscCallMPI(MPI_Comm_rank(comm, &rank));
   if (rank == 0) {
     try {
-      if (problem->is_h2) {
-        auto sys    = std::make_shared<hssbem::H2BemSystem>(op, problem->h2_options);
-        b0          = sys->rhs(problem->sel);
-        problem->h2 = sys;
+      if (h2) {
+        auto K  = std::make_shared<hssbem::H2BemSystem>(op, sys->h2_options);
+        b0      = K->rhs(sys->sel);
+        sys->h2 = K;
       } else {
-        auto sys     = std::make_shared<hssbem::HssBemSystem>(op, problem->hss_options);
-        b0           = sys->rhs(problem->sel);
-        problem->hss = sys;
+        auto K   = std::make_shared<hssbem::HssBemSystem>(op, sys->hss_options);
+        b0       = K->rhs(sys->sel);
+        sys->hss = K;
       }
     } catch (const std::exception &e) {
       failed  = 1;
@@ -182,16 +184,16 @@ PetscErrorCode HssbemMatCreateHss_Private(MPI_Comm comm, HssbemProblem *problem,
     }
   }
   PetscCallMPI(MPI_Bcast(&failed, 1, MPI_INT, 0, comm));
-  PetscCheck(!failed, comm, PETSC_ERR_LIB, "%s compression failed: %s", problem->is_h2 ? "H2" : "HSS", rank == 0 ? message.c_str() : "see rank 0");
+  PetscCheck(!failed, comm, PETSC_ERR_LIB, "%s compression failed: %s", h2 ? "H2" : "HSS", rank == 0 ? message.c_str() : "see rank 0");
   PetscCall(HssbemOwnedNodes(comm, nn, &nstart, &nlocal));
-  auto ctx     = new MatHss;
-  ctx->problem = problem;
+  auto ctx = new Mat_Compressed;
+  ctx->sys  = sys;
   PetscCall(MatCreateShell(comm, 3 * nlocal, 3 * nlocal, N, N, ctx, A));
-  PetscCall(MatShellSetContextDestroy(*A, MatDestroyContext_Hss));
+  PetscCall(MatShellSetContextDestroy(*A, MatDestroyContext_Compressed));
   PetscCall(MatSetBlockSize(*A, 3));
-  PetscCall(MatShellSetOperation(*A, MATOP_MULT, (void (*)(void))MatMult_Hss));
-  PetscCall(MatShellSetOperation(*A, MATOP_GET_DIAGONAL, (void (*)(void))MatGetDiagonal_Hss));
-  PetscCall(MatShellSetOperation(*A, MATOP_VIEW, (void (*)(void))MatView_Hss));
+  PetscCall(MatShellSetOperation(*A, MATOP_MULT, (void (*)(void))MatMult_Compressed));
+  PetscCall(MatShellSetOperation(*A, MATOP_GET_DIAGONAL, (void (*)(void))MatGetDiagonal_Compressed));
+  PetscCall(MatShellSetOperation(*A, MATOP_VIEW, (void (*)(void))MatView_Compressed));
   PetscCall(MatSetOption(*A, MAT_SYMMETRIC, PETSC_FALSE));
   PetscCall(MatCreateVecs(*A, NULL, b));
   PetscCall(ctx->ex.SetUp(*b));

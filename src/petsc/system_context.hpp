@@ -1,11 +1,12 @@
-/* Private to the PETSc layer: the BEM problem behind a system matrix, composed with the Mat so
-   that the HSS matrix, its products and PC hss find the operator, the pattern and the
+/* Private to the PETSc layer: the BEM system behind a matrix of HssbemCreateSystem(), composed
+   with the Mat so that its MatShell operations and PC hss find the operator, the pattern and the
    compression. */
 #pragma once
 
 #include "hssbem/petsc/compat.h"
 
 #include "hssbem/bem/bem_operator.hpp"
+#include "hssbem/core/operator_type.hpp"
 #include "hssbem/h2/h2_system.hpp"
 #include "hssbem/hss/hss_system.hpp"
 
@@ -14,14 +15,13 @@
 #include <memory>
 #include <vector>
 
-struct HssbemProblem {
+struct HssbemSystemContext {
   const hssbem::BemOperator *op = nullptr;
   hssbem::SystemSelection    sel;
   std::vector<double>        modes; /* rigid modes (3N × 6, row-major) of the regularisation; empty: none */
-  PetscBool                  is_hss = PETSC_FALSE;
+  hssbem::OperatorType       type = hssbem::OperatorType::Dense;
   hssbem::HssOptions         hss_options;                 /* of the compression below */
   std::shared_ptr<const hssbem::HssBemSystem> hss;        /* rank 0 only, HSS matrices only */
-  PetscBool                  is_h2 = PETSC_FALSE;
   hssbem::H2Options          h2_options;                  /* of the compression below */
   std::shared_ptr<const hssbem::H2BemSystem> h2;          /* rank 0 only, H² matrices only */
 
@@ -33,13 +33,16 @@ struct HssbemProblem {
   }
 };
 
-/* The problem composed with A, or NULL when A did not come from HssbemCreateSystem(). */
-PetscErrorCode HssbemMatGetProblem(Mat A, HssbemProblem **problem);
+/* The system composed with A, or NULL when A did not come from HssbemCreateSystem(). */
+PetscErrorCode HssbemMatGetSystemContext(Mat A, HssbemSystemContext **ctx);
+
+/* The operator type named mat_type (HSSBEM_MAT_*); an error on comm for any other name. */
+PetscErrorCode HssbemOperatorTypeFromName(MPI_Comm comm, const char *mat_type, hssbem::OperatorType *type);
 
 /* Dof nodes owned by this rank: a contiguous block [nstart, nstart + nlocal), 3 rows each. */
 PetscErrorCode HssbemOwnedNodes(MPI_Comm comm, PetscInt nnodes, PetscInt *nstart, PetscInt *nlocal);
 
-/* Vectors gathered whole on rank 0 and scattered back: the HSS engine is not distributed yet. */
+/* Vectors gathered whole on rank 0 and scattered back: the compressed engines are not distributed yet. */
 class HssbemRootExchange {
 public:
   HssbemRootExchange() = default;

@@ -1,13 +1,13 @@
-/* Private to the PETSc layer: the HSS-backed MatShell. */
+/* Private to the PETSc layer: the MatShell over a compressed K (HSS or H²). */
 #pragma once
 
-#include "problem_context.hpp"
+#include "system_context.hpp"
 
 #include <petscviewer.h>
 
-/* The MatShell of problem (whose hss_options, or h2_options when is_h2, are set) and b;
-   compresses on rank 0. */
-PetscErrorCode HssbemMatCreateHss_Private(MPI_Comm comm, HssbemProblem *problem, Mat *A, Vec *b);
+/* The MatShell of the system ctx (of type HSS or H², with its hss_options or h2_options set) and
+   its right-hand side b; compresses on rank 0. */
+PetscErrorCode HssbemMatCreateCompressed_Private(MPI_Comm comm, HssbemSystemContext *ctx, Mat *A, Vec *b);
 
 /* Ranks per level, memory, entries and phase times of an HSS matrix, to an ASCII viewer. */
 PetscErrorCode HssbemViewHssMatrix_Private(PetscViewer viewer, const hssbem::HssMatrix &K);

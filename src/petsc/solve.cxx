@@ -1,0 +1,145 @@
+/* The main solve: the KSP with the defaults of the operator type, and A x = b with whatever
+   format conversion the factorization needs (see system.h). */
+#include "hssbem/petsc/system.h"
+#include "hssbem/petsc/log.h"
+#include "hssbem/petsc/pc_hss.h"
+
+#include "system_context.hpp"
+
+#include <string>
+
+/* The format the factorization needs: MATDENSE LU works on one rank only, parallel dense LU is
+   ScaLAPACK's, and MUMPS takes AIJ. Krylov methods with point preconditioners keep MATDENSE. */
+static PetscErrorCode FactorMatType_Private(KSP ksp, Mat A, MatType *type)
+{
+  char        solver[64] = "";
+  PetscBool   set;
+  PetscMPIInt size;
+  PC          pc;
+  PCType      pctype;
+
+  PetscFunctionBegin;
+  *type = NULL;
+  PetscCallMPI(MPI_Comm_size(PetscObjectComm((PetscObject)A), &size));
+  PetscCall(KSPGetPC(ksp, &pc));
+  PetscCall(PCGetType(pc, &pctype));
+  PetscCall(PetscOptionsGetString(NULL, NULL, "-pc_factor_mat_solver_type", solver, sizeof(solver), &set));
+  const std::string pct(pctype ? pctype : ""), st(solver);
+  if (pct != PCLU && pct != PCCHOLESKY && pct != PCILU) PetscFunctionReturn(PETSC_SUCCESS);
+  {
+    PetscBool compressed;
+    PetscCall(HssbemMatIsCompressed(A, &compressed));
+    PetscCheck(!compressed, PetscObjectComm((PetscObject)A), PETSC_ERR_ARG_INCOMP, "the compressed (HSS or H2) matrix has no entries for -pc_type %s: use -pc_type hss, or -bem_mat_type dense", pct.c_str());
+  }
+  if (st == "mumps" || st == "superlu_dist") *type = MATAIJ;
+  else if (st == "scalapack" || (st.empty() && size > 1)) *type = MATSCALAPACK;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* to := from, for vectors with the same global size and different layouts (ScaLAPACK picks its own). */
+static PetscErrorCode CopyAcrossLayouts_Private(Vec from, Vec to)
+{
+  PetscInt   lo, hi;
+  IS         is;
+  VecScatter sc;
+
+  PetscFunctionBegin;
+  PetscCall(VecGetOwnershipRange(to, &lo, &hi));
+  PetscCall(ISCreateStride(PetscObjectComm((PetscObject)to), hi - lo, lo, 1, &is));
+  PetscCall(VecScatterCreate(from, is, to, NULL, &sc));
+  PetscCall(VecScatterBegin(sc, from, to, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecScatterEnd(sc, from, to, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecScatterDestroy(&sc));
+  PetscCall(ISDestroy(&is));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Solve with vectors in the operator's layout (ScaLAPACK picks its own), copying in and out;
+   the relative residual ||b - A x|| / ||b|| is measured there too. */
+static PetscErrorCode KSPSolveInLayout_Private(KSP ksp, Mat op, Vec b, Vec x, PetscReal *residual)
+{
+  Vec       bo, xo, r;
+  PetscReal bnorm, rnorm;
+
+  PetscFunctionBegin;
+  PetscCall(MatCreateVecs(op, &xo, &bo));
+  PetscCall(CopyAcrossLayouts_Private(b, bo));
+  PetscCall(KSPSolve(ksp, bo, xo));
+  PetscCall(CopyAcrossLayouts_Private(xo, x));
+  PetscCall(VecDuplicate(bo, &r));
+  PetscCall(MatMult(op, xo, r));
+  PetscCall(VecAYPX(r, -1.0, bo));
+  PetscCall(VecNorm(r, NORM_2, &rnorm));
+  PetscCall(VecNorm(bo, NORM_2, &bnorm));
+  *residual = bnorm > 0 ? rnorm / bnorm : rnorm;
+  PetscCall(VecDestroy(&r));
+  PetscCall(VecDestroy(&bo));
+  PetscCall(VecDestroy(&xo));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/*@C
+  HssbemKSPCreate - Creates the main solver (no prefix) with the defaults of the matrix type
+  (-ksp_type preonly with -pc_type hss on the HSS matrix, GMRES(100) with -pc_type jacobi and
+  -ksp_rtol 1e-8 on the H² one, -pc_type lu on the dense one) and applies
+  the options database, before there is a matrix, so that option errors surface before the
+  expensive assembly.
+
+  Level: intermediate
+@*/
+PetscErrorCode HssbemKSPCreate(MPI_Comm comm, const char *mat_type, KSP *ksp)
+{
+  PC                   pc;
+  hssbem::OperatorType type;
+
+  PetscFunctionBegin;
+  PetscCall(HssbemOperatorTypeFromName(comm, mat_type, &type));
+  const bool h2 = type == hssbem::OperatorType::H2;
+  PetscCall(KSPCreate(comm, ksp));
+  PetscCall(KSPSetType(*ksp, h2 ? KSPGMRES : KSPPREONLY));
+  if (h2) {
+    PetscCall(KSPGMRESSetRestart(*ksp, 100));
+    PetscCall(KSPSetTolerances(*ksp, 1e-8, PETSC_DEFAULT, PETSC_DEFAULT, PETSC_DEFAULT));
+  }
+  PetscCall(KSPGetPC(*ksp, &pc));
+  PetscCall(PCSetType(pc, type == hssbem::OperatorType::Hss ? PCHSS : h2 ? PCJACOBI : PCLU));
+  PetscCall(KSPSetFromOptions(*ksp));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/*@C
+  HssbemSolveSystem - Solves A x = b with a KSP from HssbemKSPCreate(); a dense A is converted in
+  place to the format its factorization needs (so no second copy stays alive). A diverged solve
+  is an error.
+
+  Level: intermediate
+@*/
+PetscErrorCode HssbemSolveSystem(KSP ksp, Mat *A, Vec b, Vec x, HssbemSolveInfo *info)
+{
+  PC            pc;
+  MatType       ftype;
+  MatSolverType st = NULL;
+
+  PetscFunctionBegin;
+  PetscCall(PetscLogEventBegin(BEM_Solve, 0, 0, 0, 0));
+  PetscCall(FactorMatType_Private(ksp, *A, &ftype));
+  if (ftype) PetscCall(MatConvert(*A, ftype, MAT_INPLACE_MATRIX, A));
+  PetscCall(KSPSetOperators(ksp, *A, *A));
+  PetscCall(KSPGetPC(ksp, &pc));
+  PetscCall(KSPSolveInLayout_Private(ksp, *A, b, x, &info->residual));
+  PetscCall(KSPGetConvergedReason(ksp, &info->reason));
+  PetscCall(KSPGetIterationNumber(ksp, &info->iterations));
+  {
+    KSPType kt;
+    PCType  pt;
+    PetscCall(KSPGetType(ksp, &kt));
+    PetscCall(PCGetType(pc, &pt));
+    info->ksp_type = kt;
+    info->pc_type  = pt;
+  }
+  PetscCall(PCFactorGetMatSolverType(pc, &st));
+  info->solver_type = st ? st : "";
+  PetscCall(PetscLogEventEnd(BEM_Solve, 0, 0, 0, 0));
+  PetscCheck(info->reason > 0, PetscObjectComm((PetscObject)*A), PETSC_ERR_NOT_CONVERGED, "the linear solve failed: %s after %" PetscInt_FMT " iterations", KSPConvergedReasons[info->reason], info->iterations);
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
