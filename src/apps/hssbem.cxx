@@ -6,8 +6,8 @@ static const char help[] = "hssbem: 3D linear elastostatics by the boundary elem
 #include "hssbem/io/hdf5_output.hpp"
 #include "hssbem/petsc/dense.h"
 #include "hssbem/petsc/log.h"
-#include "hssbem/petsc/options.h"
-#include "hssbem/petsc/run.h"
+#include "hssbem/app/options.hpp"
+#include "hssbem/app/run.hpp"
 #include "hssbem/petsc/system.h"
 #include "hssbem/problem/setup.hpp"
 

@@ -3,7 +3,7 @@
 
 #include "hssbem/bem/post.hpp"
 #include "hssbem/bem/rigid_modes.hpp"
-#include "hssbem/petsc/run.h"
+#include "hssbem/app/run.hpp"
 #include "hssbem/problem/setup.hpp"
 
 #include <gtest/gtest.h>

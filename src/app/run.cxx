@@ -1,10 +1,10 @@
-#include "hssbem/petsc/run.h"
+#include "hssbem/app/run.hpp"
 #include "hssbem/bem/post.hpp"
 #include "hssbem/bem/rigid_modes.hpp"
 #include "hssbem/io/hdf5_output.hpp"
 #include "hssbem/petsc/dense.h"
 #include "hssbem/petsc/log.h"
-#include "hssbem/petsc/options.h"
+#include "hssbem/app/options.hpp"
 #include "hssbem/petsc/system.h"
 
 #include "hssbem/core/timer.hpp"

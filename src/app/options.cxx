@@ -1,4 +1,4 @@
-#include "hssbem/petsc/options.h"
+#include "hssbem/app/options.hpp"
 #include "hssbem/petsc/system.h"
 
 #include <cstring>
