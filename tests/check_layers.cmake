@@ -16,7 +16,7 @@ set(allowed_problem  core bem problem)
 set(allowed_io       core io)
 set(allowed_petsc    core bem compress hss h2 petsc)
 set(allowed_app      core bem compress hss h2 problem io petsc app)
-set(allowed_apps     core bem compress hss h2 problem io petsc app)
+set(allowed_apps     petsc app)
 
 if(NOT SOURCE_DIR)
   message(FATAL_ERROR "give -DSOURCE_DIR=<repository>")

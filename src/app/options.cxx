@@ -1,11 +1,21 @@
+// The driver's options (see options.hpp). PETSc's option macros need functions that return a
+// PetscErrorCode: ProcessOptions_Private and CheckUnusedOptions_Private are written like PETSc
+// code, and read_app_options() and check_unused_options() turn their error codes into
+// exceptions, once each.
 #include "hssbem/app/options.hpp"
+
+#include "hssbem/app/petsc_call.hpp"
 #include "hssbem/petsc/system.h"
 
 #include <cstring>
 #include <optional>
 #include <string>
 
-static PetscErrorCode OptionString_Private(const char *key, const char *text, std::string *value, PetscOptionItems *PetscOptionsObject)
+namespace hssbem {
+
+namespace {
+
+PetscErrorCode OptionString_Private(const char *key, const char *text, std::string *value, PetscOptionItems *PetscOptionsObject)
 {
   char      buf[PETSC_MAX_PATH_LEN];
   PetscBool set;
@@ -17,8 +27,7 @@ static PetscErrorCode OptionString_Private(const char *key, const char *text, st
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/*@C
-  HssbemProcessOptions - Reads the driver's options; with -help, PETSc prints each with its default.
+/* Reads the driver's options; with -help, PETSc prints each with its default.
 
   Options Database Keys:
 + -problem <file.json>        - problem file
@@ -31,88 +40,88 @@ static PetscErrorCode OptionString_Private(const char *key, const char *text, st
 . -mat_bem_near_ratio <r>     - subdivide triangles closer than r diameters
 . -mat_bem_far_ratio <r>      - 3-point rule beyond r diameters (0: never, the default)
 - -mat_bem_max_depth <n>      - subdivision levels for nearly singular triangles
-
-  Level: beginner
-@*/
-PetscErrorCode HssbemProcessOptions(MPI_Comm comm, HssbemAppOptions *opts)
+*/
+PetscErrorCode ProcessOptions_Private(MPI_Comm comm, AppOptions *opts)
 {
-  PetscBool   set;
-  std::string mat_type = hssbem::operator_type_name(opts->operator_type);
+  PetscBool   help, has_E, has_nu;
+  PetscReal   E = 0, nu = 0, feature_angle = opts->overrides.feature_angle_deg;
+  std::string mesh = opts->overrides.mesh.value_or(""), output = opts->overrides.output.value_or(""), mat_type = operator_type_name(opts->operator_type);
+  QuadratureOptions &quad = opts->quad;
 
   PetscFunctionBegin;
-  PetscCall(PetscOptionsHasHelp(NULL, &opts->help));
+  PetscCall(PetscOptionsHasHelp(NULL, &help));
+  opts->help = help;
   PetscOptionsBegin(comm, NULL, "hssbem: 3D linear elastostatics by the boundary element method", "hssbem");
   PetscCall(OptionString_Private("-problem", "Problem file (JSON)", &opts->problem, PetscOptionsObject));
-  PetscCall(OptionString_Private("-mesh", "Mesh file (.msh, .stl, .off, .obj); overrides the problem file", &opts->mesh, PetscOptionsObject));
-  PetscCall(OptionString_Private("-o", "Result file (.h5); overrides the problem file", &opts->output, PetscOptionsObject));
-  PetscCall(PetscOptionsReal("-E", "Young's modulus (default: the problem file's)", "", opts->E, &opts->E, &opts->has_E));
-  PetscCall(PetscOptionsReal("-nu", "Poisson's ratio (default: the problem file's)", "", opts->nu, &opts->nu, &opts->has_nu));
-  PetscCall(PetscOptionsReal("-bem_feature_angle", "Dihedral angle (degrees) above which an edge is sharp", "", opts->feature_angle, &opts->feature_angle, NULL));
+  PetscCall(OptionString_Private("-mesh", "Mesh file (.msh, .stl, .off, .obj); overrides the problem file", &mesh, PetscOptionsObject));
+  PetscCall(OptionString_Private("-o", "Result file (.h5); overrides the problem file", &output, PetscOptionsObject));
+  PetscCall(PetscOptionsReal("-E", "Young's modulus (default: the problem file's)", "", E, &E, &has_E));
+  PetscCall(PetscOptionsReal("-nu", "Poisson's ratio (default: the problem file's)", "", nu, &nu, &has_nu));
+  PetscCall(PetscOptionsReal("-bem_feature_angle", "Dihedral angle (degrees) above which an edge is sharp", "", feature_angle, &feature_angle, NULL));
   PetscCall(OptionString_Private("-bem_mat_type", "Operator representation: hss (compressed, MatShell), h2 (compressed, strong admissibility, MatShell) or dense", &mat_type, PetscOptionsObject));
-  PetscCall(PetscOptionsInt("-mat_bem_quad_order", "Gauss points per direction on singular triangles", "", opts->quad.duffy_order, &opts->quad.duffy_order, NULL));
-  PetscCall(PetscOptionsReal("-mat_bem_near_ratio", "Subdivide triangles closer than this many diameters", "", opts->quad.near_ratio, &opts->quad.near_ratio, NULL));
-  PetscCall(PetscOptionsReal("-mat_bem_far_ratio", "Use the 3-point rule beyond this many diameters (0: never)", "", opts->quad.far_ratio, &opts->quad.far_ratio, NULL));
-  PetscCall(PetscOptionsInt("-mat_bem_max_depth", "Subdivision levels for nearly singular triangles", "", opts->quad.max_depth, &opts->quad.max_depth, &set));
+  PetscCall(PetscOptionsInt("-mat_bem_quad_order", "Gauss points per direction on singular triangles", "", quad.duffy_order, &quad.duffy_order, NULL));
+  PetscCall(PetscOptionsReal("-mat_bem_near_ratio", "Subdivide triangles closer than this many diameters", "", quad.near_ratio, &quad.near_ratio, NULL));
+  PetscCall(PetscOptionsReal("-mat_bem_far_ratio", "Use the 3-point rule beyond this many diameters (0: never)", "", quad.far_ratio, &quad.far_ratio, NULL));
+  PetscCall(PetscOptionsInt("-mat_bem_max_depth", "Subdivision levels for nearly singular triangles", "", quad.max_depth, &quad.max_depth, NULL));
   PetscOptionsEnd();
-  const std::optional<hssbem::OperatorType> type = hssbem::parse_operator_type(mat_type);
+  if (!mesh.empty()) opts->overrides.mesh = mesh;
+  if (!output.empty()) opts->overrides.output = output;
+  if (has_E) opts->overrides.E = E;
+  if (has_nu) opts->overrides.nu = nu;
+  opts->overrides.feature_angle_deg = feature_angle;
+  const std::optional<OperatorType> type = parse_operator_type(mat_type);
   PetscCheck(type, comm, PETSC_ERR_ARG_UNKNOWN_TYPE, "-bem_mat_type %s is not available; use hss, h2 or dense", mat_type.c_str());
   opts->operator_type = *type;
-  if (opts->operator_type == hssbem::OperatorType::Hss || opts->help) {
-    hssbem::HssOptions hss;
+  if (opts->operator_type == OperatorType::Hss || opts->help) {
+    HssOptions hss;
     hss.rel_tol = 1e-8;
     PetscCall(HssbemHssOptionsFromDatabase(comm, NULL, &hss));
   }
-  if (opts->operator_type == hssbem::OperatorType::H2 || opts->help) {
-    hssbem::H2Options h2;
+  if (opts->operator_type == OperatorType::H2 || opts->help) {
+    H2Options h2;
     PetscCall(HssbemH2OptionsFromDatabase(comm, NULL, &h2));
   }
-  PetscCheck(opts->quad.far_ratio == 0 || !hssbem::is_compressed(opts->operator_type), comm, PETSC_ERR_ARG_INCOMP,
+  PetscCheck(quad.far_ratio == 0 || !is_compressed(opts->operator_type), comm, PETSC_ERR_ARG_INCOMP,
              "-mat_bem_far_ratio must be 0 with -bem_mat_type %s: the 3-point far rule breaks the smooth far field the compression relies on", mat_type.c_str());
-  PetscCheck(opts->quad.duffy_order >= 2 && opts->quad.duffy_order <= 64, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_bem_quad_order must lie in [2, 64]");
-  PetscCheck(opts->quad.near_ratio > 0 && (opts->quad.far_ratio == 0 || opts->quad.far_ratio >= opts->quad.near_ratio), comm, PETSC_ERR_ARG_OUTOFRANGE,
+  PetscCheck(quad.duffy_order >= 2 && quad.duffy_order <= 64, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_bem_quad_order must lie in [2, 64]");
+  PetscCheck(quad.near_ratio > 0 && (quad.far_ratio == 0 || quad.far_ratio >= quad.near_ratio), comm, PETSC_ERR_ARG_OUTOFRANGE,
              "need -mat_bem_near_ratio > 0 and -mat_bem_far_ratio either 0 (off) or at least -mat_bem_near_ratio");
-  PetscCheck(opts->quad.max_depth >= 0 && opts->quad.max_depth <= 20, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_bem_max_depth must lie in [0, 20]");
-  PetscCheck(opts->feature_angle > 0 && opts->feature_angle < 180, comm, PETSC_ERR_ARG_OUTOFRANGE, "-bem_feature_angle must lie in (0, 180)");
+  PetscCheck(quad.max_depth >= 0 && quad.max_depth <= 20, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_bem_max_depth must lie in [0, 20]");
+  PetscCheck(feature_angle > 0 && feature_angle < 180, comm, PETSC_ERR_ARG_OUTOFRANGE, "-bem_feature_angle must lie in (0, 180)");
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* Options that PETSc reads only at PetscFinalize() or that steer the run itself. */
-static PetscBool IsLateOption_Private(const char *name)
+/// Options that PETSc reads only at PetscFinalize() or that steer the run itself.
+bool is_late_option(const char *name)
 {
   static const char *late[] = {"log_view", "options_left", "help", "malloc_dump", "malloc_debug", "memory_view", "log_view_memory", "log_trace", "info", "malloc", "checkstack", "objects_dump", "fp_trap", "options_view", "history"};
   for (const char *k : late)
-    if (!std::strcmp(name, k)) return PETSC_TRUE;
-  return PETSC_FALSE;
+    if (!std::strcmp(name, k)) return true;
+  return false;
 }
 
-/* Options that PETSc reads only when the preconditioner is set up, inside KSPSolve(): those of
-   sub-solvers (-sub_pc_type of PCBJACOBI/PCASM, -fieldsplit_*, -redundant_*) and of external
-   factorization packages (-mat_mumps_icntl_14, ...). Checked after the solve instead. */
-static PetscBool IsSetUpTimeOption_Private(const char *name)
+/// Options that PETSc reads only when the preconditioner is set up, inside KSPSolve(): those of
+/// sub-solvers (-sub_pc_type of PCBJACOBI/PCASM, -fieldsplit_*, -redundant_*) and of external
+/// factorization packages (-mat_mumps_icntl_14, ...). Checked after the solve instead.
+bool is_set_up_time_option(const char *name)
 {
   static const char *prefixes[] = {"sub_", "fieldsplit_", "redundant_", "mat_mumps_", "mat_superlu", "mat_scalapack_", "mat_strumpack_", "mat_cholmod_", "mat_umfpack_", "mat_klu_"};
   for (const char *p : prefixes)
-    if (!std::strncmp(name, p, std::strlen(p))) return PETSC_TRUE;
-  return PETSC_FALSE;
+    if (!std::strncmp(name, p, std::strlen(p))) return true;
+  return false;
 }
 
-/* Options read only during or after KSPSolve()/MatAssemblyEnd() (viewers and reports), or when
-   the preconditioner is set up (IsSetUpTimeOption_Private). */
-static PetscBool IsSolveTimeOption_Private(const char *name)
+/// Options read only during or after KSPSolve()/MatAssemblyEnd() (viewers and reports), or when
+/// the preconditioner is set up (is_set_up_time_option).
+bool is_solve_time_option(const char *name)
 {
   const std::string n(name);
-  return (n.find("view") != std::string::npos || n.find("converged_reason") != std::string::npos || IsSetUpTimeOption_Private(name)) ? PETSC_TRUE : PETSC_FALSE;
+  return n.find("view") != std::string::npos || n.find("converged_reason") != std::string::npos || is_set_up_time_option(name);
 }
 
-/*@C
-  HssbemCheckUnusedOptions - Errors out naming any option that no object has read (a typo such as
-  -ksp_rtoll would otherwise be ignored). Before the solve (before_solve true), options that are
-  read only during it (viewers, sub-solver and factorization-package options) are let through;
-  the check after the solve catches those.
-
-  Level: developer
-@*/
-PetscErrorCode HssbemCheckUnusedOptions(MPI_Comm comm, PetscBool before_solve)
+/* Errors out naming any option that no object has read (a typo such as -ksp_rtoll would
+   otherwise be ignored); see check_unused_options(). */
+PetscErrorCode CheckUnusedOptions_Private(MPI_Comm comm, bool before_solve)
 {
   PetscInt    n;
   char      **names, **values;
@@ -121,8 +130,21 @@ PetscErrorCode HssbemCheckUnusedOptions(MPI_Comm comm, PetscBool before_solve)
   PetscFunctionBegin;
   PetscCall(PetscOptionsLeftGet(NULL, &n, &names, &values));
   for (PetscInt i = 0; i < n; ++i)
-    if (!IsLateOption_Private(names[i]) && !(before_solve && IsSolveTimeOption_Private(names[i]))) unused += std::string(unused.empty() ? "" : ", ") + "-" + names[i];
+    if (!is_late_option(names[i]) && !(before_solve && is_solve_time_option(names[i]))) unused += std::string(unused.empty() ? "" : ", ") + "-" + names[i];
   PetscCall(PetscOptionsLeftRestore(NULL, &n, &names, &values));
   PetscCheck(unused.empty(), comm, PETSC_ERR_ARG_WRONG, "unknown or unused option(s): %s (run with -help to list the options)", unused.c_str());
   PetscFunctionReturn(PETSC_SUCCESS);
 }
+
+} // namespace
+
+AppOptions read_app_options(MPI_Comm comm)
+{
+  AppOptions opts;
+  HssbemCallThrow(ProcessOptions_Private(comm, &opts));
+  return opts;
+}
+
+void check_unused_options(MPI_Comm comm, bool before_solve) { HssbemCallThrow(CheckUnusedOptions_Private(comm, before_solve)); }
+
+} // namespace hssbem

@@ -27,6 +27,7 @@ PetscErrorCode MatCompressedGetContext(Mat A, Mat_Compressed **ctx)
 PetscErrorCode MatMult_Compressed(Mat A, Vec x, Vec y)
 {
   Mat_Compressed    *ctx;
+  HssbemRootGuard    guard;
   const PetscScalar *xa;
   PetscScalar       *ya;
 
@@ -36,18 +37,20 @@ PetscErrorCode MatMult_Compressed(Mat A, Vec x, Vec y)
   PetscCall(ctx->ex.SetUp(x));
   PetscCall(ctx->ex.Gather(x, &xa));
   PetscCall(ctx->ex.GetOut(&ya));
-  if (p.compressed()) {
-    p.compressed()->apply(p.sel, xa, ya);
-    if (!p.modes.empty()) HssbemAddRegularization(p.modes, xa, ya);
-  }
+  if (p.compressed()) guard.Run([&] {
+      p.compressed()->apply(p.sel, xa, ya);
+      if (!p.modes.empty()) HssbemAddRegularization(p.modes, xa, ya);
+    });
   PetscCall(ctx->ex.RestoreGather(&xa));
   PetscCall(ctx->ex.ScatterOut(&ya, y));
+  PetscCall(guard.Check(PetscObjectComm((PetscObject)A), "MatMult", "failed on rank 0"));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
 PetscErrorCode MatGetDiagonal_Compressed(Mat A, Vec d)
 {
   Mat_Compressed *ctx;
+  HssbemRootGuard guard;
   PetscScalar    *da;
 
   PetscFunctionBegin;
@@ -55,17 +58,18 @@ PetscErrorCode MatGetDiagonal_Compressed(Mat A, Vec d)
   const HssbemSystemContext &p = *ctx->sys;
   PetscCall(ctx->ex.SetUp(d));
   PetscCall(ctx->ex.GetOut(&da));
-  if (p.compressed()) {
-    const std::vector<double> diag = p.compressed()->diagonal(p.sel);
-    for (std::size_t i = 0; i < diag.size(); ++i) {
-      da[i] = diag[i];
-      if (!p.modes.empty()) {
-        const double *q = &p.modes[6 * i];
-        da[i] += hssbem::rigid_regularization_weight * (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3] + q[4] * q[4] + q[5] * q[5]);
+  if (p.compressed()) guard.Run([&] {
+      const std::vector<double> diag = p.compressed()->diagonal(p.sel);
+      for (std::size_t i = 0; i < diag.size(); ++i) {
+        da[i] = diag[i];
+        if (!p.modes.empty()) {
+          const double *q = &p.modes[6 * i];
+          da[i] += hssbem::rigid_regularization_weight * (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3] + q[4] * q[4] + q[5] * q[5]);
+        }
       }
-    }
-  }
+    });
   PetscCall(ctx->ex.ScatterOut(&da, d));
+  PetscCall(guard.Check(PetscObjectComm((PetscObject)A), "MatGetDiagonal", "failed on rank 0"));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -159,16 +163,15 @@ PetscErrorCode HssbemMatCreateCompressed_Private(MPI_Comm comm, HssbemSystemCont
   const PetscInt             nn = op.num_nodes(), N = 3 * nn;
   PetscInt                   nstart, nlocal;
   PetscMPIInt                rank;
-  int                        failed = 0;
-  std::string                message;
+  HssbemRootGuard            guard;
   std::vector<double>        b0;
+  Mat_Compressed            *ctx;
   PetscScalar               *ba;
 
   PetscFunctionBegin;
   PetscCall(PetscLogEventBegin(BEM_Assembly, 0, 0, 0, 0));
   PetscCallMPI(MPI_Comm_rank(comm, &rank));
-  if (rank == 0) {
-    try {
+  if (rank == 0) guard.Run([&] {
       if (h2) {
         auto K  = std::make_shared<hssbem::H2BemSystem>(op, sys->h2_options);
         b0      = K->rhs(sys->sel);
@@ -178,16 +181,11 @@ PetscErrorCode HssbemMatCreateCompressed_Private(MPI_Comm comm, HssbemSystemCont
         b0       = K->rhs(sys->sel);
         sys->hss = K;
       }
-    } catch (const std::exception &e) {
-      failed  = 1;
-      message = e.what();
-    }
-  }
-  PetscCallMPI(MPI_Bcast(&failed, 1, MPI_INT, 0, comm));
-  PetscCheck(!failed, comm, PETSC_ERR_LIB, "%s compression failed: %s", h2 ? "H2" : "HSS", rank == 0 ? message.c_str() : "see rank 0");
+    });
+  PetscCall(guard.Check(comm, h2 ? "H2 compression failed" : "HSS compression failed", "see rank 0"));
   PetscCall(HssbemOwnedNodes(comm, nn, &nstart, &nlocal));
-  auto ctx = new Mat_Compressed;
-  ctx->sys  = sys;
+  PetscCallCXX(ctx = new Mat_Compressed);
+  ctx->sys = sys;
   PetscCall(MatCreateShell(comm, 3 * nlocal, 3 * nlocal, N, N, ctx, A));
   PetscCall(MatShellSetContextDestroy(*A, MatDestroyContext_Compressed));
   PetscCall(MatSetBlockSize(*A, 3));

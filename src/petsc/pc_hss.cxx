@@ -81,8 +81,8 @@ PetscErrorCode PCSetUp_HSS(PC pc)
   HssbemSystemContext *p;
   MPI_Comm             comm = PetscObjectComm((PetscObject)pc);
   PetscMPIInt          rank;
-  int                  state[2] = {0, 0}; /* error, breakdown */
-  std::string          message;
+  HssbemRootGuard      guard;
+  int                  breakdown = 0;
 
   PetscFunctionBegin;
   PetscCall(HssbemMatGetSystemContext(pc->pmat, &p));
@@ -91,28 +91,22 @@ PetscErrorCode PCSetUp_HSS(PC pc)
   hss->factors.reset();
   hss->sys.reset();
   hss->failure.clear();
-  if (rank == 0) {
-    try {
-      FactorOnRoot(hss, *p);
-      if (!hss->failure.empty()) state[1] = 1;
-    } catch (const std::exception &e) {
-      state[0] = 1;
-      message  = e.what();
-    }
-  }
-  PetscCallMPI(MPI_Bcast(state, 2, MPI_INT, 0, comm));
-  PetscCheck(!state[0], comm, PETSC_ERR_LIB, "PC hss: %s", rank == 0 ? message.c_str() : "set-up failed on rank 0");
-  if (state[1]) {
+  if (rank == 0) guard.Run([&] { FactorOnRoot(hss, *p); });
+  PetscCall(guard.Check(comm, "PC hss", "set-up failed on rank 0"));
+  breakdown = rank == 0 && !hss->failure.empty();
+  PetscCallMPI(MPI_Bcast(&breakdown, 1, MPI_INT, 0, comm));
+  if (breakdown) {
     PetscCall(PetscInfo(pc, "HSS factorization broke down: %s\n", rank == 0 ? hss->failure.c_str() : "on rank 0"));
     PetscCall(PCSetFailedReason(pc, PC_FACTOR_NUMERIC_ZEROPIVOT));
   }
-  hss->ex = std::make_unique<HssbemRootExchange>();
+  PetscCallCXX(hss->ex = std::make_unique<HssbemRootExchange>());
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
 PetscErrorCode PCApply_HSS(PC pc, Vec x, Vec y)
 {
   PC_HSS            *hss = (PC_HSS *)pc->data;
+  HssbemRootGuard    guard;
   const PetscScalar *xa;
   PetscScalar       *ya;
   PCFailedReason     reason;
@@ -126,13 +120,14 @@ PetscErrorCode PCApply_HSS(PC pc, Vec x, Vec y)
   PetscCall(hss->ex->SetUp(x));
   PetscCall(hss->ex->Gather(x, &xa));
   PetscCall(hss->ex->GetOut(&ya));
-  if (hss->factors) {
-    const std::vector<double> b(xa, xa + 3 * hss->sys->op().num_nodes());
-    const std::vector<double> z = hss->sys->solve(*hss->factors, b);
-    std::copy(z.begin(), z.end(), ya);
-  }
+  if (hss->factors) guard.Run([&] {
+      const std::vector<double> b(xa, xa + 3 * hss->sys->op().num_nodes());
+      const std::vector<double> z = hss->sys->solve(*hss->factors, b);
+      std::copy(z.begin(), z.end(), ya);
+    });
   PetscCall(hss->ex->RestoreGather(&xa));
   PetscCall(hss->ex->ScatterOut(&ya, y));
+  PetscCall(guard.Check(PetscObjectComm((PetscObject)pc), "PC hss", "failed on rank 0"));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -250,7 +245,7 @@ M*/
 PETSC_EXTERN PetscErrorCode PCCreate_HSS(PC pc)
 {
   PetscFunctionBegin;
-  pc->data                 = new PC_HSS;
+  PetscCallCXX(pc->data = new PC_HSS);
   pc->ops->setup           = PCSetUp_HSS;
   pc->ops->apply           = PCApply_HSS;
   pc->ops->reset           = PCReset_HSS;

@@ -134,11 +134,11 @@ PetscErrorCode HssbemSolveSystem(KSP ksp, Mat *A, Vec b, Vec x, HssbemSolveInfo 
     PCType  pt;
     PetscCall(KSPGetType(ksp, &kt));
     PetscCall(PCGetType(pc, &pt));
-    info->ksp_type = kt;
-    info->pc_type  = pt;
+    PetscCallCXX(info->ksp_type = kt);
+    PetscCallCXX(info->pc_type = pt);
   }
   PetscCall(PCFactorGetMatSolverType(pc, &st));
-  info->solver_type = st ? st : "";
+  PetscCallCXX(info->solver_type = st ? st : "");
   PetscCall(PetscLogEventEnd(BEM_Solve, 0, 0, 0, 0));
   PetscCheck(info->reason > 0, PetscObjectComm((PetscObject)*A), PETSC_ERR_NOT_CONVERGED, "the linear solve failed: %s after %" PetscInt_FMT " iterations", KSPConvergedReasons[info->reason], info->iterations);
   PetscFunctionReturn(PETSC_SUCCESS);

@@ -186,14 +186,15 @@ PetscErrorCode HssbemCreateSystem(MPI_Comm comm, const hssbem::BemOperator &op, 
                                   Vec *b)
 {
   hssbem::OperatorType type;
+  HssbemSystemContext *ctx;
 
   PetscFunctionBegin;
   PetscCall(HssbemOperatorTypeFromName(comm, mat_type, &type));
-  auto ctx  = new HssbemSystemContext;
+  PetscCallCXX(ctx = new HssbemSystemContext);
   ctx->op   = &op;
-  ctx->sel  = sel;
   ctx->type = type;
-  if (rigid_modes) ctx->modes = *rigid_modes;
+  PetscCallCXX(ctx->sel = sel);
+  if (rigid_modes) PetscCallCXX(ctx->modes = *rigid_modes);
   /* a pressure load needs the Gn columns */
   const bool pressure = std::any_of(sel.pressure.begin(), sel.pressure.end(), [](double p) { return !std::isnan(p); });
   switch (type) {
@@ -225,6 +226,17 @@ PetscErrorCode HssbemOwnedNodes(MPI_Comm comm, PetscInt nnodes, PetscInt *nstart
   PetscCallMPI(MPI_Scan(&n, nstart, 1, MPIU_INT, MPI_SUM, comm));
   *nstart -= n;
   *nlocal = n;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode HssbemRootGuard::Check(MPI_Comm comm, const char *what, const char *elsewhere)
+{
+  PetscMPIInt rank;
+
+  PetscFunctionBegin;
+  PetscCallMPI(MPI_Comm_rank(comm, &rank));
+  PetscCallMPI(MPI_Bcast(&m_failed, 1, MPI_INT, 0, comm));
+  PetscCheck(!m_failed, comm, PETSC_ERR_LIB, "%s: %s", what, rank == 0 ? m_message.c_str() : elsewhere);
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

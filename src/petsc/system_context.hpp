@@ -12,7 +12,9 @@
 
 #include <petscmat.h>
 
+#include <exception>
 #include <memory>
+#include <string>
 #include <vector>
 
 struct HssbemSystemContext {
@@ -61,6 +63,30 @@ public:
 private:
   VecScatter m_scatter = nullptr;
   Vec        m_in = nullptr, m_out = nullptr;
+};
+
+/* C++ exceptions of the engine on rank 0, where the compression lives, at the PETSc edge: Run()
+   calls fn and keeps the message of what it throws; Check(), after the collective steps that
+   every rank takes anyway (the scatter of a product, say), raises it as a PETSc error on every
+   rank, so that no rank waits for one that has left. */
+class HssbemRootGuard {
+public:
+  template <class Fn>
+  void Run(Fn &&fn)
+  {
+    try {
+      fn();
+    } catch (const std::exception &e) {
+      m_failed  = 1;
+      m_message = e.what();
+    }
+  }
+  /* PETSC_ERR_LIB "<what>: <message>" on every rank (other ranks read `elsewhere` for the message). */
+  PetscErrorCode Check(MPI_Comm comm, const char *what, const char *elsewhere);
+
+private:
+  int         m_failed = 0;
+  std::string m_message;
 };
 
 /* y += c Q (Qᵀ x) for the rigid-mode regularisation (full vectors on one rank). */

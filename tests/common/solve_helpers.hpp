@@ -90,9 +90,7 @@ inline Solved solve(ProblemSpec spec, const QuadratureOptions &quad = {})
 {
   Solved out{setup_problem(std::move(spec), ProblemOverrides{}), {}};
   BemOperator op(*out.setup.disc, out.setup.material, quad);
-  std::vector<double> x;
-  HssbemSolveInfo info;
-  PetscCallAbort(PETSC_COMM_WORLD, HssbemSolveSetup(PETSC_COMM_WORLD, out.setup, op, HSSBEM_MAT_DENSE, PETSC_TRUE, &x, &info, nullptr));
+  const std::vector<double> x = solve_problem(PETSC_COMM_WORLD, out.setup, op, OperatorType::Dense, true);
   out.sol = split_unknowns(out.setup.selection, x);
   if (out.setup.pure_traction) remove_rigid_motion(*out.setup.disc, out.sol.u);
   return out;

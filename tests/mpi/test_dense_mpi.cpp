@@ -22,19 +22,14 @@ std::vector<double> serial_reference(const ProblemSpec &spec)
 {
   ProblemSetup s = setup_problem(spec, ProblemOverrides{});
   BemOperator op(*s.disc, s.material);
-  std::vector<double> x;
-  HssbemSolveInfo info;
-  PetscCallAbort(PETSC_COMM_SELF, HssbemSolveSetup(PETSC_COMM_SELF, s, op, HSSBEM_MAT_DENSE, PETSC_TRUE, &x, &info, nullptr));
-  return x;
+  return solve_problem(PETSC_COMM_SELF, s, op, OperatorType::Dense, true);
 }
 
 std::vector<double> parallel_solution(const ProblemSpec &spec, HssbemSolveInfo *info)
 {
   ProblemSetup s = setup_problem(spec, ProblemOverrides{});
   BemOperator op(*s.disc, s.material);
-  std::vector<double> x;
-  PetscCallAbort(PETSC_COMM_WORLD, HssbemSolveSetup(PETSC_COMM_WORLD, s, op, HSSBEM_MAT_DENSE, PETSC_TRUE, &x, info, nullptr));
-  return x;
+  return solve_problem(PETSC_COMM_WORLD, s, op, OperatorType::Dense, true, info);
 }
 
 double max_rel_diff(const std::vector<double> &a, const std::vector<double> &b)

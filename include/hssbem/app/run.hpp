@@ -1,24 +1,39 @@
-/* One batch solve, from problem file to result file: what the hssbem driver runs. */
+/// \file run.hpp
+/// The hssbem application: problem file → operator → solve → post-processing → result file,
+/// on top of the PETSc face (petsc/system.h). Errors are C++ exceptions: ProblemError,
+/// MeshError, OutputError, ... from the layers below with a message naming the file and the
+/// item at fault, and PetscFailure (app/petsc_call.hpp) when PETSc reported the error itself.
 #pragma once
 
-#include "hssbem/petsc/compat.h"
-
+#include "hssbem/bem/bem_operator.hpp"
 #include "hssbem/bem/quadrature.hpp"
-#include "hssbem/petsc/dense.h"
+#include "hssbem/core/operator_type.hpp"
 #include "hssbem/petsc/system.h"
 #include "hssbem/problem/setup.hpp"
 
-#include <petscsys.h>
+#include <mpi.h>
+
 #include <map>
 #include <string>
 #include <vector>
 
-/* Set up, build the operator (mat_type: HSSBEM_MAT_HSS, HSSBEM_MAT_H2 or HSSBEM_MAT_DENSE), solve, post-process
-   and write. Input errors throw std::exception (same on every rank, since every rank reads the
-   same files); PETSc failures return an error code. */
-PetscErrorCode HssbemRun(MPI_Comm comm, const std::string &problem_file, const hssbem::ProblemOverrides &overrides, const hssbem::QuadratureOptions &quad, const char *mat_type);
+namespace hssbem {
 
-/* Build the system of a prepared problem as mat_type and solve it; x_out receives the unknowns (3 per dof
-   node) on rank 0, or on every rank with to_all. Phase times are added to seconds when given. */
-PetscErrorCode HssbemSolveSetup(MPI_Comm comm, const hssbem::ProblemSetup &s, const hssbem::BemOperator &op, const char *mat_type, PetscBool to_all, std::vector<double> *x_out, HssbemSolveInfo *info,
-                                std::map<std::string, double> *seconds);
+/// The hssbem driver, after PetscInitialize() and HssbemInitializePackage(): read the options,
+/// then solve the problem file, or with -help and no problem file list the solver's options.
+/// Throws std::runtime_error without a problem file.
+void run_driver(MPI_Comm comm);
+
+/// Solve one problem file end to end on comm: set up (mesh, material, boundary conditions),
+/// build the system with the operator of `type`, solve it with the main KSP, post-process and
+/// write the result file (rank 0). Input errors are the same on every rank, since every rank
+/// reads the same files.
+void run_problem(MPI_Comm comm, const std::string &problem_file, const ProblemOverrides &overrides, const QuadratureOptions &quad, OperatorType type);
+
+/// Build the system of a prepared problem with the operator of `type` and solve it: the unknowns
+/// (3 per dof node, node order) on rank 0 (empty elsewhere), or on every rank with to_all.
+/// Fills info when given, and adds the seconds of the assembly and the solve to `seconds`.
+std::vector<double> solve_problem(MPI_Comm comm, const ProblemSetup &s, const BemOperator &op, OperatorType type, bool to_all, HssbemSolveInfo *info = nullptr,
+                                  std::map<std::string, double> *seconds = nullptr);
+
+} // namespace hssbem

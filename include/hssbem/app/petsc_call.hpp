@@ -1,0 +1,46 @@
+/// \file petsc_call.hpp
+/// The one place where the application layer turns a PETSc error code into a C++ exception (the
+/// other direction of PetscCallCXX). app/ throws like every C++ layer; the PETSc face returns
+/// PetscErrorCode. Every PETSc call in app/ goes through HssbemCallThrow (MPI calls through
+/// HssbemCallMPIThrow), the way PETSc code goes through PetscCall.
+#pragma once
+
+#include "hssbem/petsc/compat.h"
+
+#include <petscsys.h>
+
+#include <stdexcept>
+
+namespace hssbem {
+
+/// A PETSc call failed. PETSc has printed its error message and traceback already; code() is
+/// the PetscErrorCode, what() the message of the error.
+class PetscFailure : public std::runtime_error {
+public:
+  explicit PetscFailure(PetscErrorCode code);
+  PetscErrorCode code() const { return m_code; }
+
+private:
+  PetscErrorCode m_code;
+};
+
+/// PETSC_ERR_MPI, with the message PetscCallMPI() gives, for a failed MPI call (code != MPI_SUCCESS).
+PetscErrorCode mpi_error(int code, int line, const char *func, const char *file);
+
+} // namespace hssbem
+
+/// HssbemCallThrow(expr): PetscCall() for a function that throws instead of returning an error
+/// code. On failure it adds this frame to PETSc's traceback and throws hssbem::PetscFailure.
+#define HssbemCallThrow(...) \
+  do { \
+    const PetscErrorCode ierr_hssbem_ = __VA_ARGS__; \
+    if (PetscUnlikely(ierr_hssbem_ != PETSC_SUCCESS)) \
+      throw hssbem::PetscFailure(PetscError(PETSC_COMM_SELF, __LINE__, PETSC_FUNCTION_NAME, __FILE__, ierr_hssbem_, PETSC_ERROR_REPEAT, " ")); \
+  } while (0)
+
+/// HssbemCallMPIThrow(expr): the same for an MPI call, as PetscCallMPI() is to PetscCall().
+#define HssbemCallMPIThrow(...) \
+  do { \
+    const int mpierr_hssbem_ = __VA_ARGS__; \
+    if (PetscUnlikely(mpierr_hssbem_ != MPI_SUCCESS)) throw hssbem::PetscFailure(hssbem::mpi_error(mpierr_hssbem_, __LINE__, PETSC_FUNCTION_NAME, __FILE__)); \
+  } while (0)

@@ -1,0 +1,32 @@
+// PETSc error codes as C++ exceptions (see petsc_call.hpp).
+#include "hssbem/app/petsc_call.hpp"
+
+#include <string>
+
+namespace hssbem {
+
+namespace {
+
+/// The message of the last PETSc error, or the generic text of its code.
+std::string describe(PetscErrorCode code)
+{
+  const char *text     = nullptr;
+  char       *specific = nullptr;
+  if (PetscErrorMessage(code, &text, &specific) != PETSC_SUCCESS) return "PETSc error " + std::to_string(code);
+  if (specific && *specific) return specific;
+  return text ? text : "PETSc error " + std::to_string(code);
+}
+
+} // namespace
+
+PetscFailure::PetscFailure(PetscErrorCode code) : std::runtime_error(describe(code)), m_code(code) {}
+
+PetscErrorCode mpi_error(int code, int line, const char *func, const char *file)
+{
+  char msg[MPI_MAX_ERROR_STRING];
+  int  len = 0;
+  MPI_Error_string(code, msg, &len);
+  return PetscError(PETSC_COMM_SELF, line, func, file, PETSC_ERR_MPI, PETSC_ERROR_INITIAL, "MPI error %d %s", code, msg);
+}
+
+} // namespace hssbem
