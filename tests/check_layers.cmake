@@ -1,4 +1,4 @@
-# Checks that each layer of the library includes only the layers below it.
+# Checks that each layer of the library includes only the layers below it (CONTRIBUTING.md).
 #
 #   cmake -DSOURCE_DIR=<repository> -P tests/check_layers.cmake
 #

@@ -1,6 +1,6 @@
 /* The collocation system of a BEM problem as PETSc objects: the matrix A (dense, or a MatShell
-   backed by the HSS or the H² engine) and the right-hand side b. The public entry point of the library for
-   programs that run their own KSP (see examples/). */
+   backed by the HSS or the H² engine) and the right-hand side b. The public entry point of the
+   library for programs that run their own KSP (see examples/). */
 #pragma once
 
 #include "hssbem/petsc/compat.h"
@@ -13,7 +13,8 @@
 #include <string>
 #include <vector>
 
-/* Operator representations, for -bem_mat_type and HssbemCreateSystem(). */
+/* Operator representations, for -bem_mat_type, HssbemCreateSystem() and HssbemKSPCreate(): the
+   names of hssbem::OperatorType (core/operator_type.hpp); any other mat_type is an error. */
 #define HSSBEM_MAT_HSS   "hss"
 #define HSSBEM_MAT_DENSE "dense"
 #define HSSBEM_MAT_H2    "h2"
@@ -30,7 +31,7 @@
    - mat_type HSSBEM_MAT_DENSE: MATDENSE, filled row by row with the operator primitive.
    With rigid_modes (orthonormal, row-major 3N × 6, see orthonormal_rigid_modes()), A gets
    + rigid_regularization_weight · Q Qᵀ (pure-traction problems).
-   Either matrix carries the problem (operator, pattern, modes), so -pc_type hss can factor it.
+   Every such matrix carries the system (operator, pattern, modes), so -pc_type hss can factor it.
    op must outlive A. */
 PetscErrorCode HssbemCreateSystem(MPI_Comm comm, const hssbem::BemOperator &op, const hssbem::SystemSelection &sel, const std::vector<double> *rigid_modes, const char *mat_type, Mat *A,
                                   Vec *b);
