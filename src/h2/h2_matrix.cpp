@@ -74,46 +74,93 @@ const H2Block *H2Matrix::near_block(int a, int b) const
 
 H2Block *H2Matrix::near_block(int a, int b) { return const_cast<H2Block *>(static_cast<const H2Matrix &>(*this).near_block(a, b)); }
 
-void H2Matrix::apply(const double *X, int ldx, double *Y, int ldy, int nrhs) const
+namespace {
+
+/// Upward pass over the row (rows = true) or column bases: moments[c] = B_cᵀ (c's candidate
+/// part of X), deepest level first; `block` rows of X per point.
+std::vector<DenseMatrix> upward_moments(const ClusterTree &tree, const std::vector<NestedBasis> &bases, bool rows, int block, const double *X, int ldx, int nrhs)
 {
-  PhaseScope phase(Phase::Matvec);
+  std::vector<DenseMatrix> xh(tree.num_clusters());
+  for (int l = tree.levels() - 1; l >= 1; --l)
+    for_each_cluster(tree.clusters_at_level(l), [&](int c) {
+      const Cluster &cl = tree.cluster(c);
+      const DenseMatrix &B = rows ? bases[c].U : bases[c].V;
+      xh[c] = DenseMatrix(B.n, nrhs);
+      if (B.n == 0) return;
+      if (cl.left < 0) {
+        lapack::gemm('T', 'N', B.n, nrhs, B.m, 1.0, B.data(), B.ld(), X + static_cast<long>(block) * cl.begin, ldx, 0.0, xh[c].data(), xh[c].ld());
+      } else {
+        const DenseMatrix &a = xh[cl.left], &b = xh[cl.right];
+        lapack::gemm('T', 'N', B.n, nrhs, a.m, 1.0, B.data(), B.ld(), a.data(), a.ld(), 0.0, xh[c].data(), xh[c].ld());
+        lapack::gemm('T', 'N', B.n, nrhs, b.m, 1.0, B.data() + a.m, B.ld(), b.data(), b.ld(), 1.0, xh[c].data(), xh[c].ld());
+      }
+    });
+  return xh;
+}
+
+/// Downward transfers over the row (rows = true) or column bases, top down: each child's
+/// potential gains its part of the parent's, pot[child] += B_parent(child's rows) pot[parent].
+void downward_transfers(const ClusterTree &tree, const std::vector<NestedBasis> &bases, bool rows, std::vector<DenseMatrix> &pot, int nrhs)
+{
+  for (int l = 1; l < tree.levels(); ++l)
+    for_each_cluster(tree.clusters_at_level(l), [&](int c) {
+      const Cluster &cl = tree.cluster(c);
+      const DenseMatrix &B = rows ? bases[c].U : bases[c].V;
+      if (cl.left < 0 || B.n == 0) return;
+      DenseMatrix &ya = pot[cl.left], &yb = pot[cl.right];
+      lapack::gemm('N', 'N', ya.m, nrhs, B.n, 1.0, B.data(), B.ld(), pot[c].data(), pot[c].ld(), 1.0, ya.data(), ya.ld());
+      lapack::gemm('N', 'N', yb.m, nrhs, B.n, 1.0, B.data() + ya.m, B.ld(), pot[c].data(), pot[c].ld(), 1.0, yb.data(), yb.ld());
+    });
+}
+
+} // namespace
+
+std::vector<DenseMatrix> H2Matrix::skeleton_far_field(const double *X, int ldx, int nrhs) const
+{
   const int nc = m_tree.num_clusters();
   std::vector<int> all(nc);
   std::iota(all.begin(), all.end(), 0);
-  std::vector<DenseMatrix> xh(nc), yh(nc);
-  // Upward pass: xh_τ = V_τᵀ (candidate part of x), deepest level first.
-  for (int l = m_tree.levels() - 1; l >= 1; --l)
-    for_each_cluster(m_tree.clusters_at_level(l), [&](int c) {
-      const Cluster &cl = m_tree.cluster(c);
-      const DenseMatrix &V = m_bases[c].V;
-      xh[c] = DenseMatrix(V.n, nrhs);
-      if (V.n == 0) return;
-      if (cl.left < 0) {
-        lapack::gemm('T', 'N', V.n, nrhs, V.m, 1.0, V.data(), V.ld(), X + static_cast<long>(m_col_block) * cl.begin, ldx, 0.0, xh[c].data(), xh[c].ld());
-      } else {
-        const DenseMatrix &a = xh[cl.left], &b = xh[cl.right];
-        lapack::gemm('T', 'N', V.n, nrhs, a.m, 1.0, V.data(), V.ld(), a.data(), a.ld(), 0.0, xh[c].data(), xh[c].ld());
-        lapack::gemm('T', 'N', V.n, nrhs, b.m, 1.0, V.data() + a.m, V.ld(), b.data(), b.ld(), 1.0, xh[c].data(), xh[c].ld());
-      }
-    });
+  const std::vector<DenseMatrix> xh = upward_moments(m_tree, m_bases, false, m_col_block, X, ldx, nrhs);
+  std::vector<DenseMatrix> yh(nc);
   // Far blocks: yh_a = Σ_b K(S_a, C_b) xh_b.
   for_each_cluster(all, [&](int a) {
     yh[a] = DenseMatrix(m_bases[a].U.n, nrhs);
     std::vector<double> buf;
     for (const H2Block &B : m_far[a]) B.multiply_add(xh[B.col_cluster].data(), xh[B.col_cluster].ld(), yh[a].data(), yh[a].ld(), nrhs, buf);
   });
-  // Downward pass: children's yh += U_τ yh_τ; leaves add U yh and their near blocks.
-  for (int l = 1; l < m_tree.levels(); ++l)
-    for_each_cluster(m_tree.clusters_at_level(l), [&](int c) {
-      const Cluster &cl = m_tree.cluster(c);
-      const DenseMatrix &U = m_bases[c].U;
-      if (cl.left >= 0) {
-        if (U.n == 0) return;
-        DenseMatrix &ya = yh[cl.left], &yb = yh[cl.right];
-        lapack::gemm('N', 'N', ya.m, nrhs, U.n, 1.0, U.data(), U.ld(), yh[c].data(), yh[c].ld(), 1.0, ya.data(), ya.ld());
-        lapack::gemm('N', 'N', yb.m, nrhs, U.n, 1.0, U.data() + ya.m, U.ld(), yh[c].data(), yh[c].ld(), 1.0, yb.data(), yb.ld());
-      }
-    });
+  downward_transfers(m_tree, m_bases, true, yh, nrhs);
+  return yh;
+}
+
+std::vector<DenseMatrix> H2Matrix::skeleton_far_field_transposed(const double *Y, int ldy, int nrhs) const
+{
+  const int nc = m_tree.num_clusters();
+  const std::vector<DenseMatrix> yh = upward_moments(m_tree, m_bases, true, m_row_block, Y, ldy, nrhs);
+  // Far blocks transposed, gathered per column cluster: xh_b = Σ_a K(S_a, C_b)ᵀ yh_a.
+  std::vector<std::vector<std::pair<int, int>>> by_col(nc);
+  for (int a = 0; a < nc; ++a)
+    for (std::size_t i = 0; i < m_far[a].size(); ++i) by_col[m_far[a][i].col_cluster].push_back({a, static_cast<int>(i)});
+  std::vector<int> all(nc);
+  std::iota(all.begin(), all.end(), 0);
+  std::vector<DenseMatrix> xh(nc);
+  for_each_cluster(all, [&](int b) {
+    xh[b] = DenseMatrix(m_bases[b].V.n, nrhs);
+    std::vector<double> buf;
+    for (const auto &[a, i] : by_col[b]) {
+      const H2Block &B = m_far[a][i];
+      if (B.M.m > 0 && B.M.n > 0)
+        lapack::gemm('T', 'N', B.M.n, nrhs, B.M.m, 1.0, B.data(buf), B.M.ld(), yh[a].data(), yh[a].ld(), 1.0, xh[b].data(), xh[b].ld());
+    }
+  });
+  downward_transfers(m_tree, m_bases, false, xh, nrhs);
+  return xh;
+}
+
+void H2Matrix::apply(const double *X, int ldx, double *Y, int ldy, int nrhs) const
+{
+  PhaseScope phase(Phase::Matvec);
+  const std::vector<DenseMatrix> yh = skeleton_far_field(X, ldx, nrhs);
+  // Leaves: the far field through their row bases, plus their near blocks.
   for_each_cluster(m_tree.leaves(), [&](int c) {
     const Cluster &cl = m_tree.cluster(c);
     double *y = Y + static_cast<long>(m_row_block) * cl.begin;

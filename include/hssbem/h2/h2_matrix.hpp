@@ -102,6 +102,13 @@ public:
 
   /// Y = K X for nrhs columns in cluster order, as HssMatrix::apply. O(N·r) per column.
   void apply(const double *X, int ldx, double *Y, int ldy, int nrhs = 1) const;
+  /// The far field of X at every row skeleton: out[a] (|S_a| × nrhs) is what the far blocks of a
+  /// and of its ancestors contribute to K(S_a, :) X (no near blocks). X: col_block() rows per
+  /// point, cluster order. The product's upward, far and downward passes without the leaves.
+  std::vector<DenseMatrix> skeleton_far_field(const double *X, int ldx, int nrhs) const;
+  /// The same for Kᵀ: out[b] (|C_b| × nrhs) is what the far blocks of b and of its ancestors
+  /// contribute to (Kᵀ Y)(C_b, :), for Y with row_block() rows per point.
+  std::vector<DenseMatrix> skeleton_far_field_transposed(const double *Y, int ldy, int nrhs) const;
 
   /// Recompute rank, block and memory figures.
   void update_stats();
