@@ -1,4 +1,5 @@
 #include "hssbem/petsc/log.h"
+#include "hssbem/petsc/pc_h2.h"
 #include "hssbem/petsc/pc_hss.h"
 #include "hssbem/core/phase.hpp"
 
@@ -38,7 +39,7 @@ PetscErrorCode HssbemFinalizePackage(void)
 /*@C
   HssbemInitializePackage - Registers the class id and the log events of hssbem (one per phase,
   so -log_view shows where the time goes; the compression engines' phases through their phase
-  hook) and the PC type "hss" (PCHSS). Called once after PetscInitialize(); later calls do
+  hook) and the PC types "hss" (PCHSS) and "h2" (PCH2). Called once after PetscInitialize(); later calls do
   nothing.
 
   Level: beginner
@@ -70,6 +71,7 @@ PetscErrorCode HssbemInitializePackage(void)
   PetscCall(PetscLogEventRegister("H2FSolve", HSSBEM_CLASSID, &H2F_Solve));
   hssbem::set_phase_hook(PhaseHook_Private);
   PetscCall(PCRegister(PCHSS, PCCreate_HSS));
+  PetscCall(PCRegister(PCH2, PCCreate_H2));
   PetscCall(PetscRegisterFinalize(HssbemFinalizePackage));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
