@@ -152,6 +152,45 @@ bool lu_regular(DenseMatrix &A, std::vector<int> &piv)
   return umin > 1e-14 * amax; // the HSS factorization's test (ulv.cpp)
 }
 
+namespace {
+
+/// B ← B A⁻¹ for the getrf factors (LU, piv) of A (m × m); B has m columns.
+void right_solve(DenseMatrix &B, const DenseMatrix &LU, const std::vector<int> &piv)
+{
+  const int m = LU.m;
+  if (B.m == 0 || m == 0) return;
+  lapack::trsm('R', 'U', 'N', 'N', B.m, m, 1.0, LU.data(), LU.ld(), B.data(), B.ld());
+  lapack::trsm('R', 'L', 'N', 'U', B.m, m, 1.0, LU.data(), LU.ld(), B.data(), B.ld());
+  for (int i = m - 1; i >= 0; --i)
+    if (piv[i] - 1 != i) std::swap_ranges(B.data() + static_cast<std::size_t>(i) * B.m, B.data() + static_cast<std::size_t>(i + 1) * B.m, B.data() + static_cast<std::size_t>(piv[i] - 1) * B.m);
+}
+
+} // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Step 0: the block-Jacobi change of variables.
+
+void Frontier::precondition(int X, Step *st)
+{
+  DenseMatrix &XX = m_M[X].at(X);
+  st->box = m_D[X];
+  st->D = XX;
+  if (!lu_regular(st->D, st->dpiv))
+    throw H2Breakdown("H2 factorization broke down: the diagonal block of box " + std::to_string(X) + " (" + std::to_string(XX.m) + " unknowns) is singular to working precision");
+  const int m = XX.m;
+  XX = DenseMatrix(m, m);
+  for (int i = 0; i < m; ++i) XX(i, i) = 1.0;
+  for (int Y : neighbours(X)) right_solve(m_M[Y].at(X), st->D, st->dpiv);
+  for (int Z : m_fill_cols[X]) right_solve(m_F[Z].at(X), st->D, st->dpiv);
+  // X's columns as the far field sees them, K(F, C) Ŵᵀ and c Φ Ψᵀ: the same product on Ŵᵀ and Ψᵀ.
+  for (DenseMatrix *W : {&m_Ew[X], &m_Psi[X]}) {
+    if (W->n == 0 || W->m == 0) continue;
+    DenseMatrix Wt = transposed(*W);
+    right_solve(Wt, st->D, st->dpiv);
+    *W = transposed(Wt);
+  }
+}
+
 // ---------------------------------------------------------------------------------------------
 // Step 1: the skeleton.
 
@@ -162,8 +201,8 @@ BoxSkeleton Frontier::skeleton(int X, double tol) const
   if (m_Eu[X].n > 0 && m_sketch.row[X].n > 0) parts.push_back(product(m_Eu[X], m_sketch.row[X]));
   if (m_Ew[X].n > 0 && m_sketch.col[X].n > 0) parts.push_back(product(m_Ew[X], m_sketch.col[X]));
   if (m_pat.regularised())
-    for (int columns = 0; columns < 2; ++columns) {
-      DenseMatrix P = regularisation_rows(m_D[X], columns == 1);
+    for (const DenseMatrix *R : {&m_Phi[X], &m_Psi[X]}) {
+      DenseMatrix P = *R;
       for (double &v : P.a) v *= m_pat.c;
       parts.push_back(std::move(P));
     }
@@ -183,15 +222,15 @@ BoxSkeleton Frontier::skeleton(int X, double tol) const
 // ---------------------------------------------------------------------------------------------
 // Steps 2 and 3: sparsify, eliminate, Schur complement.
 
-Step Frontier::eliminate(int X, const BoxSkeleton &sk, double *flops, std::vector<NewFill> *fresh)
+void Frontier::eliminate(int X, const BoxSkeleton &sk, Step *out, double *flops, std::vector<NewFill> *fresh)
 {
   const int k = static_cast<int>(sk.S.size()), r = static_cast<int>(sk.R.size());
   const std::vector<int> nb = neighbours(X);
-  Step st;
+  Step &st = *out;
   for (int i : sk.S) st.S.push_back(m_D[X][i]);
   for (int i : sk.R) st.R.push_back(m_D[X][i]);
   st.T = sk.T;
-  if (r == 0) return st;
+  if (r == 0) return;
   // Local order [S, R]; rows R -= Tᵀ rows S, columns R -= columns S T.
   std::vector<int> order = sk.S;
   order.insert(order.end(), sk.R.begin(), sk.R.end());
@@ -283,8 +322,11 @@ Step Frontier::eliminate(int X, const BoxSkeleton &sk, double *flops, std::vecto
   m_D[X] = st.S;
   m_Eu[X] = dense::rows_at(m_Eu[X], sk.S);
   m_Ew[X] = dense::rows_at(m_Ew[X], sk.S);
+  if (m_pat.regularised()) {
+    m_Phi[X] = dense::rows_at(m_Phi[X], sk.S);
+    m_Psi[X] = dense::rows_at(m_Psi[X], sk.S);
+  }
   for (int Y : targets) st.I.insert(st.I.end(), m_D[Y].begin(), m_D[Y].end());
-  return st;
 }
 
 void Frontier::add_fill(std::vector<NewFill> &&fresh)
@@ -302,7 +344,7 @@ void Frontier::add_fill(std::vector<NewFill> &&fresh)
 std::size_t Step::bytes() const
 {
   const std::size_t panels = Lps.empty() ? Lp.bytes() + Up.bytes() : (Lps.size() + Ups.size()) * sizeof(float);
-  return panels + T.bytes() + LU.bytes() + (S.size() + R.size() + I.size() + piv.size()) * sizeof(int);
+  return panels + T.bytes() + LU.bytes() + D.bytes() + (box.size() + dpiv.size() + S.size() + R.size() + I.size() + piv.size()) * sizeof(int);
 }
 
 void Step::demote()
@@ -338,22 +380,30 @@ void Step::forward(double *b, std::vector<double> &work) const
 void Step::backward(double *b, std::vector<double> &work) const
 {
   const int k = static_cast<int>(S.size()), r = static_cast<int>(R.size()), nI = static_cast<int>(I.size());
-  if (r == 0) return;
-  work.resize(static_cast<std::size_t>(k) + r + nI);
-  double *xs = work.data(), *xr = xs + k, *xi = xr + r;
-  for (int i = 0; i < r; ++i) xr[i] = b[R[i]];
-  for (int i = 0; i < nI; ++i) xi[i] = b[I[i]];
-  if (nI > 0) {
-    if (Ups.empty()) lapack::gemv('N', r, nI, -1.0, Up.data(), Up.ld(), xi, 1.0, xr);
-    else gemv_single(r, nI, -1.0, Ups.data(), xi, xr);
+  if (r > 0) {
+    work.resize(static_cast<std::size_t>(k) + r + nI);
+    double *xs = work.data(), *xr = xs + k, *xi = xr + r;
+    for (int i = 0; i < r; ++i) xr[i] = b[R[i]];
+    for (int i = 0; i < nI; ++i) xi[i] = b[I[i]];
+    if (nI > 0) {
+      if (Ups.empty()) lapack::gemv('N', r, nI, -1.0, Up.data(), Up.ld(), xi, 1.0, xr);
+      else gemv_single(r, nI, -1.0, Ups.data(), xi, xr);
+    }
+    trsv('U', 'N', r, LU.data(), LU.ld(), xr);
+    for (int i = 0; i < r; ++i) b[R[i]] = xr[i];
+    if (k > 0) {
+      for (int i = 0; i < k; ++i) xs[i] = b[S[i]];
+      lapack::gemv('N', k, r, -1.0, T.data(), T.ld(), xr, 1.0, xs);
+      for (int i = 0; i < k; ++i) b[S[i]] = xs[i];
+    }
   }
-  trsv('U', 'N', r, LU.data(), LU.ld(), xr);
-  for (int i = 0; i < r; ++i) b[R[i]] = xr[i];
-  if (k > 0) {
-    for (int i = 0; i < k; ++i) xs[i] = b[S[i]];
-    lapack::gemv('N', k, r, -1.0, T.data(), T.ld(), xr, 1.0, xs);
-    for (int i = 0; i < k; ++i) b[S[i]] = xs[i];
-  }
+  // The unknowns were A_XX x: x = A_XX⁻¹ (that).
+  const int m = static_cast<int>(box.size());
+  if (m == 0) return;
+  work.resize(m);
+  for (int i = 0; i < m; ++i) work[i] = b[box[i]];
+  lapack::getrs('N', m, 1, D.data(), D.ld(), dpiv.data(), work.data(), m);
+  for (int i = 0; i < m; ++i) b[box[i]] = work[i];
 }
 
 } // namespace hssbem::h2f

@@ -46,6 +46,8 @@ Frontier::Frontier(const H2Matrix &K, const FarFieldSketch &sketch, const Patter
   m_D.resize(nc);
   m_Eu.resize(nc);
   m_Ew.resize(nc);
+  m_Phi.resize(nc);
+  m_Psi.resize(nc);
   m_M.resize(nc);
   m_F.resize(nc);
   m_fill_cols.resize(nc);
@@ -57,11 +59,21 @@ Frontier::Frontier(const H2Matrix &K, const FarFieldSketch &sketch, const Patter
     for (int i = 0; i < 3 * cl.size(); ++i) m_D[c][i] = 3 * cl.begin + i;
     m_Eu[c] = K.basis(c).U;
     m_Ew[c] = leaf_col_basis(c);
+    if (m_pat.regularised()) {
+      const std::size_t N = static_cast<std::size_t>(m_pat.dofs());
+      m_Phi[c] = DenseMatrix(static_cast<int>(m_D[c].size()), 6);
+      m_Psi[c] = DenseMatrix(static_cast<int>(m_D[c].size()), 6);
+      for (int j = 0; j < 6; ++j)
+        for (std::size_t i = 0; i < m_D[c].size(); ++i) {
+          m_Phi[c](static_cast<int>(i), j) = m_pat.phi[m_D[c][i] + j * N];
+          m_Psi[c](static_cast<int>(i), j) = m_pat.psi[m_D[c][i] + j * N];
+        }
+    }
   }
   for (int a : m_front)
     for (int b : m_part.near[a]) {
       DenseMatrix B = leaf_near(a, b);
-      add_regularisation(B, m_D[a], m_D[b]);
+      add_regularisation(B, a, b);
       m_M[a].emplace(b, std::move(B));
     }
 }
@@ -94,20 +106,10 @@ DenseMatrix Frontier::leaf_near(int a, int b) const
   return out;
 }
 
-DenseMatrix Frontier::regularisation_rows(const std::vector<int> &rows, bool columns) const
-{
-  const std::vector<double> &P = columns ? m_pat.psi : m_pat.phi;
-  const std::size_t N = static_cast<std::size_t>(m_pat.dofs());
-  DenseMatrix out(static_cast<int>(rows.size()), 6);
-  for (int j = 0; j < 6; ++j)
-    for (std::size_t i = 0; i < rows.size(); ++i) out(static_cast<int>(i), j) = P[rows[i] + j * N];
-  return out;
-}
-
-void Frontier::add_regularisation(DenseMatrix &B, const std::vector<int> &rows, const std::vector<int> &cols) const
+void Frontier::add_regularisation(DenseMatrix &B, int P, int Q) const
 {
   if (!m_pat.regularised() || B.m == 0 || B.n == 0) return;
-  const DenseMatrix a = regularisation_rows(rows, false), b = regularisation_rows(cols, true);
+  const DenseMatrix &a = m_Phi[P], &b = m_Psi[Q];
   lapack::gemm('N', 'T', B.m, B.n, 6, m_pat.c, a.data(), a.ld(), b.data(), b.ld(), 1.0, B.data(), B.ld());
 }
 
@@ -154,7 +156,7 @@ DenseMatrix Frontier::far_part(int P, int Q) const
     for (int b = Q; b >= 0; b = m_tree.cluster(b).parent) {
       if (!m_part.is_far(a, b)) continue;
       DenseMatrix out = multiply(multiply(restricted_basis(P, a, true), widened(find_far_block(m_K, a, b))), restricted_basis(Q, b, false), 'T');
-      add_regularisation(out, m_D[P], m_D[Q]);
+      add_regularisation(out, P, Q);
       const auto it = m_F[P].find(Q);
       if (it != m_F[P].end())
         for (std::size_t i = 0; i < out.a.size(); ++i) out.a[i] += it->second.a[i];
@@ -198,6 +200,10 @@ void Frontier::merge(int l)
     const int a = cp.left, b = cp.right;
     m_D[P] = m_D[a];
     m_D[P].insert(m_D[P].end(), m_D[b].begin(), m_D[b].end());
+    if (m_pat.regularised()) {
+      m_Phi[P] = dense::vcat(m_Phi[a], m_Phi[b]);
+      m_Psi[P] = dense::vcat(m_Psi[a], m_Psi[b]);
+    }
     for (int rows = 0; rows < 2; ++rows) {
       const DenseMatrix &B = rows ? m_K.basis(P).U : m_K.basis(P).V;
       const DenseMatrix &Ea = rows ? m_Eu[a] : m_Ew[a], &Eb = rows ? m_Eu[b] : m_Ew[b];
@@ -225,6 +231,8 @@ void Frontier::merge(int l)
       m_D[P].clear();
       m_Eu[P] = DenseMatrix();
       m_Ew[P] = DenseMatrix();
+      m_Phi[P] = DenseMatrix();
+      m_Psi[P] = DenseMatrix();
     }
   m_front.swap(front);
   m_in_front.swap(in_front);

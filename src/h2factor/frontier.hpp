@@ -24,6 +24,9 @@ struct Pattern {
 
 /// One box's elimination, as the solve replays it (global dof indices of A-hat).
 struct Step {
+  std::vector<int> box;     ///< the box's unknowns before the step (the order of D)
+  DenseMatrix D;            ///< LU factors of the box's diagonal block A_XX: the unknowns became A_XX x (Frontier::precondition)
+  std::vector<int> dpiv;
   std::vector<int> S, R, I; ///< skeleton, redundant, and the unknowns the Schur complement touched
   DenseMatrix T;            ///< |S| × |R| interpolation: rows R -= Tᵀ rows S, columns R -= columns S T
   DenseMatrix LU;           ///< |R| × |R| LU factors (getrf) of the sparsified R block
@@ -69,14 +72,20 @@ public:
   /// The close boxes of the frontier other than X.
   std::vector<int> neighbours(int X) const;
 
+  /// Step 0: the unknowns of X become A_XX x_X (a block-Jacobi change of variables), so that X's
+  /// diagonal block is the identity and the pivot block of step 3 is I + TᵀT, well conditioned
+  /// whatever the mix of H and G columns in X. The LU of A_XX goes to st (box, D, dpiv). Throws
+  /// H2Breakdown when A_XX is singular to working precision.
+  void precondition(int X, Step *st);
   /// Step 1: the joint row/column skeleton of X at relative tolerance tol.
   BoxSkeleton skeleton(int X, double tol) const;
   /// Steps 2–3: sparsify with the skeleton, eliminate the redundant unknowns, add the Schur
-  /// complement to the blocks of X's skeleton and neighbours; X keeps its skeleton. Adds the
-  /// Schur complement's flops to *flops. Fill-in on pairs that had none goes to *fresh, for
-  /// add_fill(). Throws H2Breakdown for a singular pivot block. Boxes with disjoint closed
-  /// neighbourhoods may be eliminated concurrently (nothing else changes the block store then).
-  Step eliminate(int X, const BoxSkeleton &sk, double *flops, std::vector<NewFill> *fresh);
+  /// complement to the blocks of X's skeleton and neighbours; X keeps its skeleton. The rest of
+  /// the step goes to st; adds the Schur complement's flops to *flops. Fill-in on pairs that had
+  /// none goes to *fresh, for add_fill(). Throws H2Breakdown for a singular pivot block. Boxes
+  /// with disjoint closed neighbourhoods may go through steps 0–3 concurrently (nothing else
+  /// changes the block store then).
+  void eliminate(int X, const BoxSkeleton &sk, Step *st, double *flops, std::vector<NewFill> *fresh);
   /// Store fill-in blocks that eliminate() created.
   void add_fill(std::vector<NewFill> &&fresh);
   /// The frontier of level l − 1 from that of level l.
@@ -87,8 +96,7 @@ public:
 private:
   DenseMatrix leaf_col_basis(int c) const;
   DenseMatrix leaf_near(int a, int b) const;
-  void add_regularisation(DenseMatrix &B, const std::vector<int> &rows, const std::vector<int> &cols) const;
-  DenseMatrix regularisation_rows(const std::vector<int> &rows, bool columns) const;
+  void add_regularisation(DenseMatrix &B, int P, int Q) const;
   DenseMatrix restricted_basis(int P, int a, bool rows) const;
   DenseMatrix far_part(int P, int Q) const;
   DenseMatrix assemble_close(int P, int Q, int l) const;
@@ -105,6 +113,7 @@ private:
   std::vector<char> m_in_front;
   std::vector<std::vector<int>> m_D;          ///< active unknowns of each frontier box
   std::vector<DenseMatrix> m_Eu, m_Ew;        ///< H² row and column bases restricted to m_D (expanded)
+  std::vector<DenseMatrix> m_Phi, m_Psi;      ///< regularisation c Φ Ψᵀ: Φ and Ψ restricted to m_D (|m_D| × 6)
   std::vector<std::map<int, DenseMatrix>> m_M; ///< blocks between close frontier boxes (current values)
   std::vector<std::map<int, DenseMatrix>> m_F; ///< fill-in between boxes that are not close (updates only)
   std::vector<std::vector<int>> m_fill_cols;   ///< m_fill_cols[X]: boxes Z with a block m_F[Z][X]

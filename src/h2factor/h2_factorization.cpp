@@ -163,10 +163,11 @@ H2Factorization::H2Factorization(H2FactorCache &cache, const SystemSelection &se
         for_each_cluster(cls, [&](int X) {
           Timer t;
           const int m = static_cast<int>(front.active(X).size());
+          front.precondition(X, &steps[X]);
           const h2f::BoxSkeleton sk = front.skeleton(X, options.rel_tol);
           t_skel[X] = t.seconds();
           t.restart();
-          steps[X] = front.eliminate(X, sk, &flops[X], &fills[X]);
+          front.eliminate(X, sk, &steps[X], &flops[X], &fills[X]);
           t_elim[X] = t.seconds();
           steps[X].candidates = m;
         });
@@ -184,7 +185,7 @@ H2Factorization::H2Factorization(H2FactorCache &cache, const SystemSelection &se
           m_stats.time_eliminate += t_elim[X];
           if (m_stats.single_panels) steps[X].demote();
           ls.bytes += steps[X].bytes();
-          if (!st.R.empty()) m_f->steps.push_back(std::move(steps[X]));
+          m_f->steps.push_back(std::move(steps[X]));
         }
       }
     }
