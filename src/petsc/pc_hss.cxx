@@ -81,7 +81,7 @@ PetscErrorCode PCSetUp_HSS(PC pc)
   HssbemSystemContext *p;
   MPI_Comm             comm = PetscObjectComm((PetscObject)pc);
   PetscMPIInt          rank;
-  HssbemRootGuard      guard;
+  HssbemGuard          guard;
   int                  breakdown = 0;
 
   PetscFunctionBegin;
@@ -91,8 +91,10 @@ PetscErrorCode PCSetUp_HSS(PC pc)
   hss->factors.reset();
   hss->sys.reset();
   hss->failure.clear();
-  if (rank == 0) guard.Run([&] { FactorOnRoot(hss, *p); });
-  PetscCall(guard.Check(comm, "PC hss", "set-up failed on rank 0"));
+  guard.Run("PCSetUp", [&] {
+    if (rank == 0) FactorOnRoot(hss, *p); /* the compression lives on rank 0 */
+  });
+  PetscCall(guard.Check(comm, "PC hss set-up"));
   breakdown = rank == 0 && !hss->failure.empty();
   PetscCallMPI(MPI_Bcast(&breakdown, 1, MPI_INT, 0, comm));
   if (breakdown) {
@@ -106,7 +108,7 @@ PetscErrorCode PCSetUp_HSS(PC pc)
 PetscErrorCode PCApply_HSS(PC pc, Vec x, Vec y)
 {
   PC_HSS            *hss = (PC_HSS *)pc->data;
-  HssbemRootGuard    guard;
+  HssbemGuard        guard;
   const PetscScalar *xa;
   PetscScalar       *ya;
   PCFailedReason     reason;
@@ -120,14 +122,15 @@ PetscErrorCode PCApply_HSS(PC pc, Vec x, Vec y)
   PetscCall(hss->ex->SetUp(x));
   PetscCall(hss->ex->Gather(x, &xa));
   PetscCall(hss->ex->GetOut(&ya));
-  if (hss->factors) guard.Run([&] {
-      const std::vector<double> b(xa, xa + 3 * hss->sys->op().num_nodes());
-      const std::vector<double> z = hss->sys->solve(*hss->factors, b);
-      std::copy(z.begin(), z.end(), ya);
-    });
+  guard.Run("PCApply", [&] {
+    if (!hss->factors) return; /* rank 0 holds them */
+    const std::vector<double> b(xa, xa + 3 * hss->sys->op().num_nodes());
+    const std::vector<double> z = hss->sys->solve(*hss->factors, b);
+    std::copy(z.begin(), z.end(), ya);
+  });
   PetscCall(hss->ex->RestoreGather(&xa));
   PetscCall(hss->ex->ScatterOut(&ya, y));
-  PetscCall(guard.Check(PetscObjectComm((PetscObject)pc), "PC hss", "failed on rank 0"));
+  PetscCall(guard.Check(PetscObjectComm((PetscObject)pc), "PC hss"));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

@@ -229,15 +229,50 @@ PetscErrorCode HssbemOwnedNodes(MPI_Comm comm, PetscInt nnodes, PetscInt *nstart
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-PetscErrorCode HssbemRootGuard::Check(MPI_Comm comm, const char *what, const char *elsewhere)
+PetscErrorCode HssbemAgreeOnError(MPI_Comm comm, PetscErrorCode *code, std::string *message, PetscMPIInt *lowest, PetscMPIInt *nfailed)
 {
-  PetscMPIInt rank;
+  PetscMPIInt rank, size, key, failed = *code ? 1 : 0;
+  int         head[2] = {(int)*code, 0};
 
   PetscFunctionBegin;
   PetscCallMPI(MPI_Comm_rank(comm, &rank));
-  PetscCallMPI(MPI_Bcast(&m_failed, 1, MPI_INT, 0, comm));
-  PetscCheck(!m_failed, comm, PETSC_ERR_LIB, "%s: %s", what, rank == 0 ? m_message.c_str() : elsewhere);
+  PetscCallMPI(MPI_Comm_size(comm, &size));
+  key = failed ? rank : size;
+  PetscCallMPI(MPI_Allreduce(&key, lowest, 1, MPI_INT, MPI_MIN, comm));
+  PetscCallMPI(MPI_Allreduce(&failed, nfailed, 1, MPI_INT, MPI_SUM, comm));
+  if (*lowest == size) {
+    *lowest = -1;
+    PetscFunctionReturn(PETSC_SUCCESS);
+  }
+  if (rank == *lowest) head[1] = (int)message->size();
+  PetscCallMPI(MPI_Bcast(head, 2, MPI_INT, *lowest, comm));
+  *code = (PetscErrorCode)head[0];
+  PetscCallCXX(message->resize((size_t)head[1]));
+  if (head[1] > 0) PetscCallMPI(MPI_Bcast(&(*message)[0], head[1], MPI_CHAR, *lowest, comm));
   PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+void HssbemGuard::Fail(PetscErrorCode code, const char *message) noexcept
+{
+  m_code = code;
+  try {
+    m_message = message ? message : "out of memory";
+  } catch (...) {
+    m_code = PETSC_ERR_MEM; /* the message itself did not fit: say what is sure */
+    m_message.clear();
+  }
+}
+
+PetscErrorCode HssbemGuard::Check(MPI_Comm comm, const char *what)
+{
+  PetscMPIInt lowest, nfailed, size;
+
+  PetscFunctionBegin;
+  PetscCall(HssbemAgreeOnError(comm, &m_code, &m_message, &lowest, &nfailed));
+  if (lowest < 0) PetscFunctionReturn(PETSC_SUCCESS);
+  PetscCallMPI(MPI_Comm_size(comm, &size));
+  const std::string where = nfailed < size ? " (on rank " + std::to_string(lowest) + ")" : "";
+  SETERRQ(comm, m_code, "%s: %s%s", what, m_message.empty() ? "out of memory" : m_message.c_str(), where.c_str());
 }
 
 HssbemRootExchange::~HssbemRootExchange()
