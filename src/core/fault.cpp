@@ -29,6 +29,8 @@ bool parse_fault_kind(const std::string &name, FaultKind *kind)
   return true;
 }
 
+bool fault_armed(const char *site) { return g_armed && g_plan.site == site; }
+
 void fault_point(const char *site)
 {
   if (!g_armed || g_plan.site != site) return;

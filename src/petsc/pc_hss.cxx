@@ -1,6 +1,7 @@
 /* PC "hss": ULV factorization of the BEM system matrix from an HSS compression, as a direct
    solver (-ksp_type preonly) or a preconditioner at a loose tolerance (see pc_hss.h). */
 #include "hssbem/petsc/pc_hss.h"
+#include "hssbem/core/fault.hpp"
 #include "hssbem/core/timer.hpp"
 #include "hssbem/hss/truncate.hpp"
 #include "hssbem/hss/ulv.hpp"
@@ -68,6 +69,7 @@ void FactorOnRoot(PC_HSS *hss, const HssbemSystemContext &p)
   hss->seconds_compress = timer.seconds();
   timer.restart();
   try {
+    if (hssbem::fault_armed("Breakdown")) throw hssbem::HssBreakdown("HSS factorization broke down (injected fault at Breakdown)");
     hss->factors = hss->sys->factor(p.sel, p.modes.empty() ? nullptr : &p.modes);
   } catch (const hssbem::HssBreakdown &e) {
     hss->failure = e.what();

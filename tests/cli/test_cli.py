@@ -23,9 +23,11 @@ import os
 import random
 import re
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
+import time
 import unittest
 
 DRIVER = None
@@ -165,7 +167,8 @@ class CliTestCase(unittest.TestCase):
         found = []
         for root, dirs, files in os.walk(self.tmp):
             for name in files + dirs:
-                if (name.endswith(".h5") or name.endswith(".xdmf") or ".tmp." in name):
+                if (name.endswith(".h5") or name.endswith(".xdmf") or ".tmp." in name
+                        or ".bak." in name):
                     found.append(os.path.relpath(os.path.join(root, name), self.tmp))
         return sorted(found)
 
@@ -765,6 +768,187 @@ class ParallelTests(CliTestCase):
         self.problem()
         r = self.run_problem(np=2, timeout=TIMEOUT_RUN)
         self.assertSucceeds(r, self.out, self.path("out.xdmf"))
+
+
+# ---------------------------------------------------------------------------------------------
+# The one error path: every failure ends with one "hssbem: error:" line, exit status 1,
+# PetscFinalize (shown by -options_left, which PETSc acts on there) and no PETSc traceback, on
+# any number of ranks, with no rank left waiting. Faults are injected with -hssbem_fault.
+
+
+class ErrorPathTests(CliTestCase):
+    def setUp(self):
+        super().setUp()
+        self.write_cube()
+        self.problem()
+
+    def assertOneCleanError(self, r, *patterns):
+        self.assertFailsCleanly(r, *patterns)
+        self.assertEqual(r.returncode, 1, r.describe())
+        self.assertEqual(len(re.findall(r"hssbem: error: ", r.output)), 1,
+                         "expected exactly one error line\n" + r.describe())
+        self.assertNotRegex(r.output, r"PETSC ERROR|Caught signal|MPI_ABORT", r.describe())
+        # PetscFinalize ran: it is where PETSc acts on -options_left.
+        self.assertRegex(r.output, r"There are no unused options|There are options you set",
+                         "PetscFinalize did not run\n" + r.describe())
+
+    def run_failing(self, *args, np=None):
+        return self.run_problem("problem.json", "-options_left", *args, np=np,
+                                timeout=TIMEOUT_RUN)
+
+    def test_issue_cases_end_with_one_line(self):
+        for args, pattern in ((["-ksp_rtoll", "1e-8"], r"-ksp_rtoll"),
+                              (["-mat_hss_rel_tol", "-1"], r"-mat_hss_rel_tol"),
+                              (["-mat_hss_leaf_size", "0"], r"-mat_hss_leaf_size"),
+                              (["-bem_mat_type", "sparse"], r"-bem_mat_type sparse"),
+                              (["-E", "abc"], r"option -E abc: .*no numeric value"),
+                              (["-bem_mat_type", "dense", "-ksp_type", "gmres", "-ksp_rtol", "x"],
+                               r"option -ksp_rtol x"),
+                              (["-bem_mat_type", "h2", "-mat_h2_single_precision", "maybe"],
+                               r"option -mat_h2_single_precision maybe")):
+            with self.subTest(args=args):
+                self.assertOneCleanError(self.run_failing(*args), pattern)
+
+    def test_diverged_solve(self):
+        r = self.run_failing("-bem_mat_type", "dense", "-ksp_type", "gmres", "-pc_type", "none",
+                             "-ksp_max_it", "2")
+        self.assertOneCleanError(r, r"linear solve failed: DIVERGED_ITS after 2 iterations")
+
+    def test_breakdown_is_a_diverged_solve(self):
+        # A breakdown of the HSS factorization (injected: the driver regularises the singular
+        # pure-traction case) stops KSP with DIVERGED_PC_FAILED, which the driver reports.
+        for np in (None, 2):
+            r = self.run_failing("-hssbem_fault", "Breakdown", np=np)
+            self.assertOneCleanError(r, r"linear solve failed: DIVERGED_PC_FAILED")
+
+    def test_fault_in_matmult(self):
+        r = self.run_failing("-ksp_type", "gmres", "-hssbem_fault", "MatMult")
+        self.assertOneCleanError(r, r"MatMult: injected fault at MatMult")
+
+    def test_allocation_failure_in_matmult(self):
+        r = self.run_failing("-bem_mat_type", "h2", "-hssbem_fault", "MatMult",
+                             "-hssbem_fault_kind", "oom")
+        self.assertOneCleanError(r, r"MatMult: out of memory")
+
+    def test_fault_in_pcapply(self):
+        r = self.run_failing("-hssbem_fault", "PCApply")
+        self.assertOneCleanError(r, r"PC hss: injected fault at PCApply")
+
+    def test_fault_in_pcsetup_two_ranks(self):
+        r = self.run_failing("-hssbem_fault", "PCSetUp", np=2)
+        self.assertOneCleanError(r, r"PC hss set-up: injected fault at PCSetUp")
+
+    def test_fault_on_one_rank_in_matmult(self):
+        r = self.run_failing("-ksp_type", "gmres", "-hssbem_fault", "MatMult",
+                             "-hssbem_fault_rank", "1", np=2)
+        self.assertOneCleanError(r, r"MatMult: injected fault at MatMult \(on rank 1\)")
+
+    def test_fault_on_one_rank_in_pcapply_three_ranks(self):
+        r = self.run_failing("-hssbem_fault", "PCApply", "-hssbem_fault_rank", "2", np=3)
+        self.assertOneCleanError(r, r"PC hss: injected fault at PCApply \(on rank 2\)")
+
+    def test_fault_on_one_rank_in_the_dense_assembly(self):
+        # Rank 1 fails while rank 0 would enter MatAssemblyBegin: both must stop.
+        r = self.run_failing("-bem_mat_type", "dense", "-hssbem_fault", "DenseAssembly",
+                             "-hssbem_fault_rank", "1", np=2)
+        self.assertOneCleanError(r, r"dense assembly: injected fault at DenseAssembly \(on rank 1\)")
+
+    def test_fault_on_one_rank_in_the_compression(self):
+        r = self.run_failing("-hssbem_fault", "Compression", "-hssbem_fault_rank", "1", np=2)
+        self.assertOneCleanError(r, r"HSS compression failed: injected fault")
+
+    def test_output_failure_two_ranks(self):
+        r = self.run_failing("-hssbem_fault", "Write", np=2)
+        self.assertOneCleanError(r, r"injected fault at Write")
+
+    def test_unguarded_fault_on_one_rank_aborts_the_job(self):
+        # The last resort: an error no guard makes collective (rank 1 leaves, rank 0 waits in a
+        # collective call) is printed by its rank, which aborts the job after the time-out.
+        r = self.run_problem("problem.json", "-hssbem_fault", "Driver", "-hssbem_fault_rank", "1",
+                             "-hssbem_error_timeout", "2", np=2, timeout=60)
+        self.assertNotEqual(r.returncode, 0, r.describe())
+        self.assertEqual(len(re.findall(r"hssbem: error: ", r.output)), 1, r.describe())
+        self.assertRegex(r.output, r"injected fault at Driver \(on rank 1; the other ranks did "
+                                   r"not stop: aborting\)", r.describe())
+        self.assertEqual(self.leftovers(), [], r.describe())
+
+    def test_traceback_on_request(self):
+        r = self.run_problem("problem.json", "-mat_hss_leaf_size", "0", "-hssbem_traceback")
+        self.assertFailsCleanly(r, r"-mat_hss_leaf_size")
+        self.assertRegex(r.output, r"PETSC ERROR", r.describe())
+
+
+# ---------------------------------------------------------------------------------------------
+# The result pair is replaced whole or not at all, also when the run is killed
+
+
+class OutputAtomicityTests(CliTestCase):
+    def setUp(self):
+        super().setUp()
+        self.write_cube()
+        self.problem()
+
+    def files(self):
+        out = {}
+        for name in ("out.h5", "out.xdmf"):
+            if os.path.exists(self.path(name)):
+                with open(self.path(name), "rb") as f:
+                    out[name] = f.read()
+        return out
+
+    def start_paused(self, *args):
+        """A run paused with its temporary files complete, before any rename; returns it."""
+        cmd = [DRIVER, "-problem", "problem.json", "-o", self.out, "-hssbem_fault", "Write",
+               "-hssbem_fault_kind", "pause", "-hssbem_fault_seconds", "100"] + list(args)
+        proc = subprocess.Popen(cmd, cwd=self.tmp, env=ENV, stdout=subprocess.PIPE,
+                                stderr=subprocess.PIPE, universal_newlines=True)
+        temps = [self.path("out.h5.tmp.%d" % proc.pid), self.path("out.xdmf.tmp.%d" % proc.pid)]
+        deadline = time.time() + TIMEOUT_RUN
+        while not all(os.path.exists(t) for t in temps):
+            if proc.poll() is not None or time.time() > deadline:
+                proc.kill()
+                out, err = proc.communicate()
+                self.fail("the run did not reach the write\n%s\n%s" % (out, err))
+            time.sleep(0.05)
+        return proc
+
+    def kill(self, proc, sig):
+        proc.send_signal(sig)
+        proc.communicate(timeout=60)
+        return proc.returncode
+
+    def test_sigkill_during_the_write_leaves_no_result(self):
+        proc = self.start_paused()
+        self.kill(proc, signal.SIGKILL)
+        self.assertEqual(self.files(), {})
+
+    def test_sigkill_during_the_write_keeps_the_earlier_result(self):
+        self.assertSucceeds(self.run_problem(timeout=TIMEOUT_RUN), self.out)
+        before = self.files()
+        self.assertEqual(len(before), 2)
+        proc = self.start_paused("-E", "2000")  # a different answer
+        self.kill(proc, signal.SIGKILL)
+        self.assertEqual(self.files(), before)
+
+    def test_sigterm_and_sigint_remove_the_temporary_files(self):
+        self.assertSucceeds(self.run_problem(timeout=TIMEOUT_RUN), self.out)
+        before = self.files()
+        for sig in (signal.SIGTERM, signal.SIGINT):
+            with self.subTest(signal=sig):
+                proc = self.start_paused("-E", "2000")
+                self.assertNotEqual(self.kill(proc, sig), 0)
+                self.assertEqual(self.files(), before)
+                self.assertEqual(self.leftovers(), ["out.h5", "out.xdmf"])
+
+    def test_failed_second_rename_keeps_the_earlier_pair(self):
+        self.assertSucceeds(self.run_problem(timeout=TIMEOUT_RUN), self.out)
+        before = self.files()
+        r = self.run_problem("problem.json", "-E", "2000", "-hssbem_fault", "Commit",
+                             timeout=TIMEOUT_RUN)
+        self.assertNotEqual(r.returncode, 0, r.describe())
+        self.assertRegex(r.output, r"hssbem: error: injected fault at Commit", r.describe())
+        self.assertEqual(self.files(), before)
+        self.assertEqual(self.leftovers(), ["out.h5", "out.xdmf"])
 
 
 # ---------------------------------------------------------------------------------------------

@@ -36,4 +36,8 @@ bool parse_fault_kind(const std::string &name, FaultKind *kind);
 /// `site` (and this rank), nothing otherwise. Call it outside OpenMP regions.
 void fault_point(const char *site);
 
+/// True when `site` is armed for this rank: for sites that raise an error type of their own (a
+/// factorization breakdown, say) instead of fault_point()'s.
+bool fault_armed(const char *site);
+
 } // namespace hssbem
