@@ -182,12 +182,26 @@ std::vector<double> solve_problem(MPI_Comm comm, const ProblemSetup &s, const Be
   return xall;
 }
 
-void run_problem(MPI_Comm comm, const std::string &problem_file, const ProblemOverrides &overrides, const QuadratureOptions &quad, OperatorType type)
+/// The operator of the run: the one asked for, or auto's choice with the reason for the log line.
+OperatorType resolve_operator(MPI_Comm comm, std::optional<OperatorType> asked, long long unknowns, std::string *why)
+{
+  if (asked) return *asked;
+  MachineLimits limits;
+  HssbemCallThrow(HssbemMachineLimits(comm, &limits));
+  const OperatorType type = choose_operator(unknowns, limits);
+  if (type == OperatorType::Dense) *why = " (auto: below " + std::to_string(k_auto_dense_max_unknowns) + " unknowns)";
+  else if (unknowns < k_auto_dense_max_unknowns) *why = " (auto: the dense operator does not fit this machine)";
+  else *why = " (auto: from " + std::to_string(k_auto_dense_max_unknowns) + " unknowns on)";
+  return type;
+}
+
+void run_problem(MPI_Comm comm, const std::string &problem_file, const ProblemOverrides &overrides, const QuadratureOptions &quad, std::optional<OperatorType> asked)
 {
   std::map<std::string, double> seconds; // per phase, for the result file
   const Timer                   timer;
   PetscMPIInt                   size;
   HssbemSolveInfo               info;
+  std::string                   why;
 
   HssbemCallMPIThrow(MPI_Comm_size(comm, &size));
   const ProblemSetup s = set_up(comm, problem_file, overrides);
@@ -195,9 +209,10 @@ void run_problem(MPI_Comm comm, const std::string &problem_file, const ProblemOv
   const BemOperator op(*s.disc, s.material, quad);
   run_collectively(comm, [&] { check_interior_points(op, s.spec); });
   seconds["setup"] += timer.seconds();
-  HssbemCallThrow(PetscPrintf(comm, "hssbem: %s: %d vertices, %d triangles, %d dof nodes (%d sharp vertices), %d unknowns, %d ranks, %s operator\n", s.spec.mesh_path.c_str(),
+  const OperatorType type = resolve_operator(comm, asked, 3LL * s.disc->num_nodes(), &why);
+  HssbemCallThrow(PetscPrintf(comm, "hssbem: %s: %d vertices, %d triangles, %d dof nodes (%d sharp vertices), %d unknowns, %d ranks, %s operator%s\n", s.spec.mesh_path.c_str(),
                               s.mesh->num_vertices(), s.mesh->num_triangles(), s.disc->num_nodes(), s.disc->num_sharp_vertices(), 3 * s.disc->num_nodes(), size,
-                              operator_type_name(type)));
+                              operator_type_name(type), why.c_str()));
   fault_point("Driver"); /* tests: an error no guard makes collective (the last resort of app/main.hpp) */
   const std::vector<double> xall = solve_problem(comm, s, op, type, false, &info, &seconds);
   HssbemCallThrow(PetscPrintf(comm, "hssbem: solved with %s/%s%s%s: %" PetscInt_FMT " iterations, relative residual %.3e\n", info.ksp_type.c_str(), info.pc_type.c_str(),
@@ -215,7 +230,7 @@ void run_driver(MPI_Comm comm)
   }
   if (!opts.help) throw std::runtime_error("no problem file; give -problem FILE.json (-help lists the options)");
   KSP ksp; // -help without a problem: list the solver's options too
-  HssbemCallThrow(HssbemKSPCreate(comm, operator_type_name(opts.operator_type), &ksp));
+  HssbemCallThrow(HssbemKSPCreate(comm, operator_type_name(opts.operator_type.value_or(OperatorType::Hss)), &ksp)); /* hss: lists PC hss's options too */
   HssbemCallThrow(KSPDestroy(&ksp));
 }
 

@@ -9,6 +9,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
+#include <memory>
 #include <optional>
 #include <string>
 
@@ -174,6 +176,60 @@ PetscErrorCode HssbemH2OptionsFromDatabase(MPI_Comm comm, const char *prefix, hs
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* Bytes of memory of this node: MemTotal, or the cgroup's limit when lower. */
+static double NodeMemoryBytes_Private(void)
+{
+  double        bytes = 0;
+  std::ifstream meminfo("/proc/meminfo");
+  std::string   key;
+  double        kb;
+  while (meminfo >> key >> kb) {
+    if (key == "MemTotal:") {
+      bytes = kb * 1024.0;
+      break;
+    }
+    meminfo.ignore(1 << 10, '\n');
+  }
+  std::ifstream cgroup("/sys/fs/cgroup/memory.max");
+  double        limit;
+  if (cgroup >> limit && limit > 0 && (bytes == 0 || limit < bytes)) bytes = limit; /* "max" reads as no number */
+  return bytes > 0 ? bytes : 1e300;
+}
+
+PetscErrorCode HssbemMachineLimits(MPI_Comm comm, hssbem::MachineLimits *limits)
+{
+  MPI_Comm    node;
+  PetscMPIInt size, on_node;
+  PetscReal   given = 0;
+  double      memory;
+
+  PetscFunctionBegin;
+  PetscCallMPI(MPI_Comm_size(comm, &size));
+  PetscCallMPI(MPI_Comm_split_type(comm, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node));
+  PetscCallMPI(MPI_Comm_size(node, &on_node));
+  PetscCallMPI(MPI_Comm_free(&node));
+  PetscCall(PetscOptionsGetReal(NULL, NULL, "-hssbem_memory_limit", &given, NULL));
+  memory = given > 0 ? (double)given : NodeMemoryBytes_Private();
+  PetscCallMPI(MPI_Allreduce(&memory, &limits->node_memory_bytes, 1, MPI_DOUBLE, MPI_MIN, comm));
+  PetscCallMPI(MPI_Allreduce(&on_node, &limits->ranks_per_node, 1, MPI_INT, MPI_MAX, comm));
+  limits->ranks     = size;
+  limits->index_max = PETSC_MAX_INT;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Refuses (on comm) a system of `type` that does not fit this machine, before it is allocated. */
+static PetscErrorCode CheckSize_Private(MPI_Comm comm, hssbem::OperatorType type, PetscInt nnodes, bool single)
+{
+  hssbem::MachineLimits limits;
+  std::string           why;
+
+  PetscFunctionBegin;
+  PetscCall(HssbemMachineLimits(comm, &limits));
+  PetscCallCXX(why = hssbem::size_refusal(type, 3 * (long long)nnodes, single, limits));
+  PetscCheck(why.empty(), comm, PETSC_ERR_MEM, "%s", why.c_str());
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 /*@C
   HssbemCreateSystem - Creates the system matrix A (dense, HSS or H²) and right-hand side b of a
   boundary-condition pattern; see system.h.
@@ -186,11 +242,11 @@ PetscErrorCode HssbemCreateSystem(MPI_Comm comm, const hssbem::BemOperator &op, 
                                   Vec *b)
 {
   hssbem::OperatorType type;
-  HssbemSystemContext *ctx;
+  std::unique_ptr<HssbemSystemContext> ctx; /* owned here until A owns it: an error path frees it */
 
   PetscFunctionBegin;
   PetscCall(HssbemOperatorTypeFromName(comm, mat_type, &type));
-  PetscCallCXX(ctx = new HssbemSystemContext);
+  PetscCallCXX(ctx = std::make_unique<HssbemSystemContext>());
   ctx->op   = &op;
   ctx->type = type;
   PetscCallCXX(ctx->sel = sel);
@@ -199,21 +255,25 @@ PetscErrorCode HssbemCreateSystem(MPI_Comm comm, const hssbem::BemOperator &op, 
   const bool pressure = std::any_of(sel.pressure.begin(), sel.pressure.end(), [](double p) { return !std::isnan(p); });
   switch (type) {
   case hssbem::OperatorType::Dense:
+    PetscCall(CheckSize_Private(comm, type, op.num_nodes(), false));
     PetscCall(HssbemAssembleDense(comm, op, sel, rigid_modes, A, b));
     break;
   case hssbem::OperatorType::H2:
     ctx->h2_options.pressure_columns = pressure;
     PetscCall(HssbemH2OptionsFromDatabase(comm, NULL, &ctx->h2_options));
-    PetscCall(HssbemMatCreateCompressed_Private(comm, ctx, A, b));
+    PetscCall(CheckSize_Private(comm, type, op.num_nodes(), ctx->h2_options.single_precision));
+    PetscCall(HssbemMatCreateCompressed_Private(comm, ctx.get(), A, b));
     break;
   case hssbem::OperatorType::Hss:
     ctx->hss_options.rel_tol          = 1e-8;
     ctx->hss_options.pressure_columns = pressure;
     PetscCall(HssbemHssOptionsFromDatabase(comm, NULL, &ctx->hss_options));
-    PetscCall(HssbemMatCreateCompressed_Private(comm, ctx, A, b));
+    PetscCall(CheckSize_Private(comm, type, op.num_nodes(), false));
+    PetscCall(HssbemMatCreateCompressed_Private(comm, ctx.get(), A, b));
     break;
   }
-  PetscCall(ComposeSystemContext_Private(*A, ctx));
+  PetscCall(ComposeSystemContext_Private(*A, ctx.get()));
+  ctx.release();
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
