@@ -830,11 +830,11 @@ class ErrorPathTests(CliTestCase):
         # A breakdown of the HSS factorization (injected: the driver regularises the singular
         # pure-traction case) stops KSP with DIVERGED_PC_FAILED, which the driver reports.
         for np in (None, 2):
-            r = self.run_failing("-hssbem_fault", "Breakdown", np=np)
+            r = self.run_failing("-bem_mat_type", "hss", "-hssbem_fault", "Breakdown", np=np)
             self.assertOneCleanError(r, r"linear solve failed: DIVERGED_PC_FAILED")
 
     def test_fault_in_matmult(self):
-        r = self.run_failing("-ksp_type", "gmres", "-hssbem_fault", "MatMult")
+        r = self.run_failing("-bem_mat_type", "hss", "-ksp_type", "gmres", "-hssbem_fault", "MatMult")
         self.assertOneCleanError(r, r"MatMult: injected fault at MatMult")
 
     def test_allocation_failure_in_matmult(self):
@@ -843,20 +843,20 @@ class ErrorPathTests(CliTestCase):
         self.assertOneCleanError(r, r"MatMult: out of memory")
 
     def test_fault_in_pcapply(self):
-        r = self.run_failing("-hssbem_fault", "PCApply")
+        r = self.run_failing("-bem_mat_type", "hss", "-hssbem_fault", "PCApply")
         self.assertOneCleanError(r, r"PC hss: injected fault at PCApply")
 
     def test_fault_in_pcsetup_two_ranks(self):
-        r = self.run_failing("-hssbem_fault", "PCSetUp", np=2)
+        r = self.run_failing("-bem_mat_type", "hss", "-hssbem_fault", "PCSetUp", np=2)
         self.assertOneCleanError(r, r"PC hss set-up: injected fault at PCSetUp")
 
     def test_fault_on_one_rank_in_matmult(self):
-        r = self.run_failing("-ksp_type", "gmres", "-hssbem_fault", "MatMult",
+        r = self.run_failing("-bem_mat_type", "hss", "-ksp_type", "gmres", "-hssbem_fault", "MatMult",
                              "-hssbem_fault_rank", "1", np=2)
         self.assertOneCleanError(r, r"MatMult: injected fault at MatMult \(on rank 1\)")
 
     def test_fault_on_one_rank_in_pcapply_three_ranks(self):
-        r = self.run_failing("-hssbem_fault", "PCApply", "-hssbem_fault_rank", "2", np=3)
+        r = self.run_failing("-bem_mat_type", "hss", "-hssbem_fault", "PCApply", "-hssbem_fault_rank", "2", np=3)
         self.assertOneCleanError(r, r"PC hss: injected fault at PCApply \(on rank 2\)")
 
     def test_fault_on_one_rank_in_the_dense_assembly(self):
@@ -866,7 +866,7 @@ class ErrorPathTests(CliTestCase):
         self.assertOneCleanError(r, r"dense assembly: injected fault at DenseAssembly \(on rank 1\)")
 
     def test_fault_on_one_rank_in_the_compression(self):
-        r = self.run_failing("-hssbem_fault", "Compression", "-hssbem_fault_rank", "1", np=2)
+        r = self.run_failing("-bem_mat_type", "hss", "-hssbem_fault", "Compression", "-hssbem_fault_rank", "1", np=2)
         self.assertOneCleanError(r, r"HSS compression failed: injected fault")
 
     def test_output_failure_two_ranks(self):
