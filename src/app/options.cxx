@@ -35,7 +35,9 @@ PetscErrorCode OptionString_Private(const char *key, const char *text, std::stri
 . -E <real>, -nu <real>       - Young's modulus and Poisson's ratio (override the problem file)
 . -o <file.h5>                - result file (overrides the problem file)
 . -bem_feature_angle <deg>    - dihedral angle above which an edge is sharp (double nodes)
-. -bem_mat_type <hss|h2|dense> - operator representation: HSS-compressed MatShell (default), H²-compressed MatShell, or dense
+. -bem_mat_type <auto|dense|h2|hss> - operator: auto (default: dense below a measured size, H² above), dense, H²- or HSS-compressed MatShell
+. -hssbem_memory_limit <bytes> - memory per node that the size check assumes (default: the machine's)
+. -hssbem_traceback           - keep PETSc's error traceback (for debugging; the driver prints one line otherwise)
 . -mat_bem_quad_order <n>     - Gauss points per direction on singular triangles
 . -mat_bem_near_ratio <r>     - subdivide triangles closer than r diameters
 . -mat_bem_far_ratio <r>      - 3-point rule beyond r diameters (0: never, the default)
@@ -43,9 +45,10 @@ PetscErrorCode OptionString_Private(const char *key, const char *text, std::stri
 */
 PetscErrorCode ProcessOptions_Private(MPI_Comm comm, AppOptions *opts)
 {
-  PetscBool   help, has_E, has_nu;
+  PetscBool   help, has_E, has_nu, traceback = PETSC_FALSE; /* -hssbem_traceback is acted on by app/main.cxx; listed here for -help */
+  PetscReal   memory_limit = 0;                               /* -hssbem_memory_limit: read by HssbemMachineLimits() */
   PetscReal   E = 0, nu = 0, feature_angle = opts->overrides.feature_angle_deg;
-  std::string mesh = opts->overrides.mesh.value_or(""), output = opts->overrides.output.value_or(""), mat_type = operator_type_name(opts->operator_type);
+  std::string mesh = opts->overrides.mesh.value_or(""), output = opts->overrides.output.value_or(""), mat_type = opts->operator_type ? operator_type_name(*opts->operator_type) : "auto";
   QuadratureOptions &quad = opts->quad;
 
   PetscFunctionBegin;
@@ -58,7 +61,9 @@ PetscErrorCode ProcessOptions_Private(MPI_Comm comm, AppOptions *opts)
   PetscCall(PetscOptionsReal("-E", "Young's modulus (default: the problem file's)", "", E, &E, &has_E));
   PetscCall(PetscOptionsReal("-nu", "Poisson's ratio (default: the problem file's)", "", nu, &nu, &has_nu));
   PetscCall(PetscOptionsReal("-bem_feature_angle", "Dihedral angle (degrees) above which an edge is sharp", "", feature_angle, &feature_angle, NULL));
-  PetscCall(OptionString_Private("-bem_mat_type", "Operator representation: hss (compressed, MatShell), h2 (compressed, strong admissibility, MatShell) or dense", &mat_type, PetscOptionsObject));
+  PetscCall(OptionString_Private("-bem_mat_type", "Operator: auto (dense below a measured size, H2 above), dense, h2 (compressed, strong admissibility, MatShell) or hss (compressed, MatShell)", &mat_type, PetscOptionsObject));
+  PetscCall(PetscOptionsReal("-hssbem_memory_limit", "Memory per node (bytes) that the size check assumes (0: the machine's)", "", memory_limit, &memory_limit, NULL));
+  PetscCall(PetscOptionsBool("-hssbem_traceback", "Keep PETSc's error traceback (debugging)", "", traceback, &traceback, NULL));
   PetscCall(PetscOptionsInt("-mat_bem_quad_order", "Gauss points per direction on singular triangles", "", quad.duffy_order, &quad.duffy_order, NULL));
   PetscCall(PetscOptionsReal("-mat_bem_near_ratio", "Subdivide triangles closer than this many diameters", "", quad.near_ratio, &quad.near_ratio, NULL));
   PetscCall(PetscOptionsReal("-mat_bem_far_ratio", "Use the 3-point rule beyond this many diameters (0: never)", "", quad.far_ratio, &quad.far_ratio, NULL));
@@ -70,19 +75,21 @@ PetscErrorCode ProcessOptions_Private(MPI_Comm comm, AppOptions *opts)
   if (has_nu) opts->overrides.nu = nu;
   opts->overrides.feature_angle_deg = feature_angle;
   const std::optional<OperatorType> type = parse_operator_type(mat_type);
-  PetscCheck(type, comm, PETSC_ERR_ARG_UNKNOWN_TYPE, "-bem_mat_type %s is not available; use hss, h2 or dense", mat_type.c_str());
-  opts->operator_type = *type;
-  if (opts->operator_type == OperatorType::Hss || opts->help) {
+  PetscCheck(type || mat_type == "auto", comm, PETSC_ERR_ARG_UNKNOWN_TYPE, "-bem_mat_type %s is not available; use auto, dense, h2 or hss", mat_type.c_str());
+  opts->operator_type = type;
+  /* auto reads (and checks) the options of both compressed formats: whichever it picks uses them */
+  if (!type || *type == OperatorType::Hss || opts->help) {
     HssOptions hss;
     hss.rel_tol = 1e-8;
     PetscCall(HssbemHssOptionsFromDatabase(comm, NULL, &hss));
   }
-  if (opts->operator_type == OperatorType::H2 || opts->help) {
+  if (!type || *type == OperatorType::H2 || opts->help) {
     H2Options h2;
     PetscCall(HssbemH2OptionsFromDatabase(comm, NULL, &h2));
   }
-  PetscCheck(quad.far_ratio == 0 || !is_compressed(opts->operator_type), comm, PETSC_ERR_ARG_INCOMP,
-             "-mat_bem_far_ratio must be 0 with -bem_mat_type %s: the 3-point far rule breaks the smooth far field the compression relies on", mat_type.c_str());
+  PetscCheck(quad.far_ratio == 0 || (type && !is_compressed(*type)), comm, PETSC_ERR_ARG_INCOMP,
+             "-mat_bem_far_ratio must be 0 with -bem_mat_type %s: the 3-point far rule breaks the smooth far field the compression relies on (use -bem_mat_type dense)", mat_type.c_str());
+  PetscCheck(memory_limit >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-hssbem_memory_limit must be >= 0 (0: the machine's memory)");
   PetscCheck(quad.duffy_order >= 2 && quad.duffy_order <= 64, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_bem_quad_order must lie in [2, 64]");
   PetscCheck(quad.near_ratio > 0 && (quad.far_ratio == 0 || quad.far_ratio >= quad.near_ratio), comm, PETSC_ERR_ARG_OUTOFRANGE,
              "need -mat_bem_near_ratio > 0 and -mat_bem_far_ratio either 0 (off) or at least -mat_bem_near_ratio");
@@ -143,6 +150,12 @@ AppOptions read_app_options(MPI_Comm comm)
   AppOptions opts;
   HssbemCallThrow(ProcessOptions_Private(comm, &opts));
   return opts;
+}
+
+OperatorType choose_operator(long long unknowns, const MachineLimits &limits)
+{
+  if (unknowns < k_auto_dense_max_unknowns && size_refusal(OperatorType::Dense, unknowns, false, limits).empty()) return OperatorType::Dense;
+  return OperatorType::H2;
 }
 
 void check_unused_options(MPI_Comm comm, bool before_solve) { HssbemCallThrow(CheckUnusedOptions_Private(comm, before_solve)); }

@@ -1,5 +1,8 @@
 // PETSc error codes as C++ exceptions (see petsc_call.hpp).
 #include "hssbem/app/petsc_call.hpp"
+#include "hssbem/petsc/errors.h"
+
+#include <new>
 
 #include <string>
 
@@ -20,6 +23,24 @@ std::string describe(PetscErrorCode code)
 } // namespace
 
 PetscFailure::PetscFailure(PetscErrorCode code) : std::runtime_error(describe(code)), m_code(code) {}
+
+void run_collectively(MPI_Comm comm, const std::function<void()> &fn)
+{
+  PetscErrorCode code = 0;
+  std::string    message;
+  PetscMPIInt    lowest, nfailed;
+  try {
+    fn();
+  } catch (const std::bad_alloc &) {
+    code    = PETSC_ERR_MEM;
+    message = "out of memory";
+  } catch (const std::exception &e) {
+    code    = PETSC_ERR_LIB;
+    message = e.what();
+  }
+  HssbemCallThrow(HssbemAgreeOnError(comm, &code, &message, &lowest, &nfailed));
+  if (lowest >= 0) throw std::runtime_error(message);
+}
 
 PetscErrorCode mpi_error(int code, int line, const char *func, const char *file)
 {

@@ -5,6 +5,7 @@
 #include "hssbem/app/petsc_call.hpp"
 #include "hssbem/bem/post.hpp"
 #include "hssbem/bem/rigid_modes.hpp"
+#include "hssbem/core/fault.hpp"
 #include "hssbem/core/timer.hpp"
 #include "hssbem/io/hdf5_output.hpp"
 #include "hssbem/petsc/log.h"
@@ -12,6 +13,7 @@
 #include <cmath>
 #include <exception>
 #include <map>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -31,12 +33,21 @@ private:
   PetscLogEvent m_event;
 };
 
-ProblemSetup set_up(const std::string &file, const ProblemOverrides &ov)
+/// Every rank reads the problem and the mesh (they need the geometry); rank 0 alone checks the
+/// output path, since rank 0 alone writes it. A failure on any rank (files that differ between
+/// nodes, say) ends every rank with the same message.
+ProblemSetup set_up(MPI_Comm comm, const std::string &file, const ProblemOverrides &ov)
 {
-  const EventScope event(BEM_Mesh);
-  ProblemSetup     s = setup_problem(file, ov);
-  if (!s.output.empty()) check_output_path(s.output);
-  return s;
+  const EventScope            event(BEM_Mesh);
+  std::optional<ProblemSetup> s;
+  PetscMPIInt                 rank;
+
+  HssbemCallMPIThrow(MPI_Comm_rank(comm, &rank));
+  run_collectively(comm, [&] {
+    s.emplace(setup_problem(file, ov));
+    if (rank == 0 && !s->output.empty()) check_output_path(s->output);
+  });
+  return std::move(*s);
 }
 
 void check_interior_points(const BemOperator &op, const ProblemSpec &spec)
@@ -112,36 +123,27 @@ void write_on_root(MPI_Comm comm, const ProblemSetup &s, const BemOperator &op, 
                    std::map<std::string, double> seconds)
 {
   PetscMPIInt rank, size;
-  int         failed = 0;
-  std::string message;
 
   HssbemCallMPIThrow(MPI_Comm_rank(comm, &rank));
   HssbemCallMPIThrow(MPI_Comm_size(comm, &size));
-  if (rank == 0) {
-    try {
-      ResultData  r;
-      const Timer timer;
-      {
-        const EventScope event(BEM_Post);
-        fill_result(s, op, xall, r);
-      }
-      seconds["post"] += timer.seconds();
-      describe(s, info, type, size, r);
-      r.timings = seconds;
-      if (!s.output.empty()) {
-        {
-          const EventScope event(BEM_Output);
-          write_result(s.output, r);
-        }
-        HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF, "hssbem: wrote %s\n", s.output.c_str()));
-      }
-    } catch (const std::exception &e) {
-      failed  = 1;
-      message = e.what();
+  run_collectively(comm, [&] {
+    if (rank != 0) return;
+    ResultData  r;
+    const Timer timer;
+    {
+      const EventScope event(BEM_Post);
+      fill_result(s, op, xall, r);
     }
-  }
-  HssbemCallMPIThrow(MPI_Bcast(&failed, 1, MPI_INT, 0, comm));
-  if (failed) throw std::runtime_error(rank == 0 ? message : std::string("output failed on rank 0"));
+    seconds["post"] += timer.seconds();
+    describe(s, info, type, size, r);
+    r.timings = seconds;
+    if (s.output.empty()) return;
+    {
+      const EventScope event(BEM_Output);
+      write_result(s.output, r);
+    }
+    HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF, "hssbem: wrote %s\n", s.output.c_str()));
+  });
 }
 
 } // namespace
@@ -180,22 +182,38 @@ std::vector<double> solve_problem(MPI_Comm comm, const ProblemSetup &s, const Be
   return xall;
 }
 
-void run_problem(MPI_Comm comm, const std::string &problem_file, const ProblemOverrides &overrides, const QuadratureOptions &quad, OperatorType type)
+/// The operator of the run: the one asked for, or auto's choice with the reason for the log line.
+OperatorType resolve_operator(MPI_Comm comm, std::optional<OperatorType> asked, long long unknowns, std::string *why)
+{
+  if (asked) return *asked;
+  MachineLimits limits;
+  HssbemCallThrow(HssbemMachineLimits(comm, &limits));
+  const OperatorType type = choose_operator(unknowns, limits);
+  if (type == OperatorType::Dense) *why = " (auto: below " + std::to_string(k_auto_dense_max_unknowns) + " unknowns)";
+  else if (unknowns < k_auto_dense_max_unknowns) *why = " (auto: the dense operator does not fit this machine)";
+  else *why = " (auto: from " + std::to_string(k_auto_dense_max_unknowns) + " unknowns on)";
+  return type;
+}
+
+void run_problem(MPI_Comm comm, const std::string &problem_file, const ProblemOverrides &overrides, const QuadratureOptions &quad, std::optional<OperatorType> asked)
 {
   std::map<std::string, double> seconds; // per phase, for the result file
   const Timer                   timer;
   PetscMPIInt                   size;
   HssbemSolveInfo               info;
+  std::string                   why;
 
   HssbemCallMPIThrow(MPI_Comm_size(comm, &size));
-  const ProblemSetup s = set_up(problem_file, overrides);
+  const ProblemSetup s = set_up(comm, problem_file, overrides);
   for (const auto &n : s.notices) HssbemCallThrow(PetscPrintf(comm, "hssbem: notice: %s\n", n.c_str()));
   const BemOperator op(*s.disc, s.material, quad);
-  check_interior_points(op, s.spec);
+  run_collectively(comm, [&] { check_interior_points(op, s.spec); });
   seconds["setup"] += timer.seconds();
-  HssbemCallThrow(PetscPrintf(comm, "hssbem: %s: %d vertices, %d triangles, %d dof nodes (%d sharp vertices), %d unknowns, %d ranks, %s operator\n", s.spec.mesh_path.c_str(),
+  const OperatorType type = resolve_operator(comm, asked, 3LL * s.disc->num_nodes(), &why);
+  HssbemCallThrow(PetscPrintf(comm, "hssbem: %s: %d vertices, %d triangles, %d dof nodes (%d sharp vertices), %d unknowns, %d ranks, %s operator%s\n", s.spec.mesh_path.c_str(),
                               s.mesh->num_vertices(), s.mesh->num_triangles(), s.disc->num_nodes(), s.disc->num_sharp_vertices(), 3 * s.disc->num_nodes(), size,
-                              operator_type_name(type)));
+                              operator_type_name(type), why.c_str()));
+  fault_point("Driver"); /* tests: an error no guard makes collective (the last resort of app/main.hpp) */
   const std::vector<double> xall = solve_problem(comm, s, op, type, false, &info, &seconds);
   HssbemCallThrow(PetscPrintf(comm, "hssbem: solved with %s/%s%s%s: %" PetscInt_FMT " iterations, relative residual %.3e\n", info.ksp_type.c_str(), info.pc_type.c_str(),
                               info.solver_type.empty() ? "" : "/", info.solver_type.c_str(), info.iterations, (double)info.residual));
@@ -212,7 +230,7 @@ void run_driver(MPI_Comm comm)
   }
   if (!opts.help) throw std::runtime_error("no problem file; give -problem FILE.json (-help lists the options)");
   KSP ksp; // -help without a problem: list the solver's options too
-  HssbemCallThrow(HssbemKSPCreate(comm, operator_type_name(opts.operator_type), &ksp));
+  HssbemCallThrow(HssbemKSPCreate(comm, operator_type_name(opts.operator_type.value_or(OperatorType::Hss)), &ksp)); /* hss: lists PC hss's options too */
   HssbemCallThrow(KSPDestroy(&ksp));
 }
 

@@ -43,20 +43,36 @@ bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' |
 
 } // namespace
 
-SurfaceMesh read_mesh(const std::string &path)
+namespace {
+
+/// The parser of a format, chosen by extension; throws MeshError for an unknown one.
+SurfaceMesh (*parser_for(const std::string &path))(const std::string &, const std::string &)
 {
   const std::string ext = lower_extension(path);
   if (ext == ".msh")
-    return detail::read_msh(path);
+    return detail::parse_msh;
   if (ext == ".stl")
-    return detail::read_stl(path);
+    return detail::parse_stl;
   if (ext == ".off")
-    return detail::read_off(path);
+    return detail::parse_off;
   if (ext == ".obj")
-    return detail::read_obj(path);
+    return detail::parse_obj;
   const std::string what = ext.empty() ? "has no extension" : "has unknown extension '" + ext + "'";
   throw MeshError("mesh file '" + path + "' " + what +
                   " (supported formats: .msh (Gmsh ASCII 2.2/4.1), .stl, .off, .obj)");
+}
+
+} // namespace
+
+SurfaceMesh read_mesh(const std::string &path)
+{
+  const auto parse = parser_for(path);
+  return parse(detail::read_file_bytes(path), path);
+}
+
+SurfaceMesh parse_mesh(const std::string &bytes, const std::string &name)
+{
+  return parser_for(name)(bytes, name);
 }
 
 namespace detail {

@@ -351,10 +351,6 @@ long long MshReader::count_line(const char *section, const char *what)
 
 } // namespace
 
-SurfaceMesh read_msh(const std::string &path)
-{
-  const std::string text = read_file_bytes(path);
-  return MshReader(text, path).read();
-}
+SurfaceMesh parse_msh(const std::string &text, const std::string &path) { return MshReader(text, path).read(); }
 
 } // namespace hssbem::detail

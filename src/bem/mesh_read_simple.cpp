@@ -271,9 +271,8 @@ int obj_corner(LineReader &in, std::size_t i, int num_vertices)
 
 } // namespace
 
-SurfaceMesh read_stl(const std::string &path)
+SurfaceMesh parse_stl(const std::string &bytes, const std::string &path)
 {
-  const std::string bytes = read_file_bytes(path);
   // Binary files may also begin with "solid", so the exact binary size decides first.
   if (sized_as_binary_stl(bytes))
     return read_binary_stl(bytes, path);
@@ -287,9 +286,8 @@ SurfaceMesh read_stl(const std::string &path)
                   std::to_string(bytes.size()) + " bytes (truncated or not an STL file)");
 }
 
-SurfaceMesh read_off(const std::string &path)
+SurfaceMesh parse_off(const std::string &text, const std::string &path)
 {
-  const std::string text = read_file_bytes(path);
   LineReader in(text, path, '#');
   SurfaceMesh mesh;
   mesh.source = path;
@@ -311,9 +309,8 @@ SurfaceMesh read_off(const std::string &path)
   return mesh;
 }
 
-SurfaceMesh read_obj(const std::string &path)
+SurfaceMesh parse_obj(const std::string &text, const std::string &path)
 {
-  const std::string text = read_file_bytes(path);
   LineReader in(text, path, '#');
   SurfaceMesh mesh;
   mesh.source = path;

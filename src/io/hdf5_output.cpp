@@ -4,7 +4,10 @@
 /// place only when complete, so a crash or an error never leaves a file that looks finished.
 #include "hssbem/io/hdf5_output.hpp"
 
+#include "file_commit.hpp"
 #include "xdmf.hpp"
+
+#include "hssbem/core/fault.hpp"
 
 #include <hdf5.h>
 
@@ -24,6 +27,7 @@ namespace hssbem {
 namespace {
 
 namespace fs = std::filesystem;
+using detail::FileSetCommit;
 
 /// Every error of the writer has this one form, naming the final (not the temporary) path.
 [[noreturn]] void fail(const std::string &path, const std::string &reason)
@@ -40,12 +44,6 @@ std::string errno_text(int err) { return std::system_category().message(err); }
   fail(path, what + ": " + errno_text(err));
 }
 
-/// `<file>.tmp.<pid>`: the pid keeps concurrent writers of the same result apart.
-std::string temp_name(const std::string &file)
-{
-  return file + ".tmp." + std::to_string(static_cast<long long>(::getpid()));
-}
-
 /// out.h5 -> out.xdmf; a dot in a directory name is not taken for an extension.
 std::string xdmf_path(const std::string &path)
 {
@@ -53,30 +51,6 @@ std::string xdmf_path(const std::string &path)
 }
 
 // --- temporary files ------------------------------------------------------------------------
-
-/// Unlinks the temporary files of a write that did not finish. unlink (not remove) so that a
-/// directory squatting on a temporary name is never deleted.
-class TempFiles {
-public:
-  TempFiles() = default;
-  TempFiles(const TempFiles &) = delete;
-  TempFiles &operator=(const TempFiles &) = delete;
-  ~TempFiles()
-  {
-    for (const std::string &p : paths_)
-      ::unlink(p.c_str());
-  }
-  /// Registered before creation: a create that fails halfway may still leave a file.
-  void add(const std::string &p) { paths_.push_back(p); }
-  /// The file has been renamed away; its temporary name is no longer ours.
-  void release(const std::string &p)
-  {
-    paths_.erase(std::remove(paths_.begin(), paths_.end(), p), paths_.end());
-  }
-
-private:
-  std::vector<std::string> paths_;
-};
 
 /// Flushes `file` to disk, so that the rename that follows never exposes a file whose data is
 /// still only in the page cache.
@@ -128,14 +102,6 @@ void write_text_file(const std::string &file, const std::string &text, const std
   if (::close(fd) != 0) {
     const int err = errno;
     fail_sys(path, err, "cannot close '" + file + "'");
-  }
-}
-
-void rename_into_place(const std::string &from, const std::string &to, const std::string &path)
-{
-  if (std::rename(from.c_str(), to.c_str()) != 0) {
-    const int err = errno;
-    fail_sys(path, err, "cannot rename '" + from + "' to '" + to + "'");
   }
 }
 
@@ -621,18 +587,14 @@ void write_result(const std::string &path, const ResultData &data)
   validate(path, data);
   const H5ErrorSilencer quiet;
   const std::string xdmf = xdmf_path(path);
-  const std::string h5_tmp = temp_name(path), xdmf_tmp = temp_name(xdmf);
-  TempFiles temps;
-  temps.add(h5_tmp);
+  FileSetCommit files(path); // removes the temporary files on error and on SIGINT/SIGTERM/SIGHUP
+  const std::string h5_tmp = files.add(path), xdmf_tmp = files.add(xdmf);
   write_h5(h5_tmp, path, data);
   sync_file(h5_tmp, path);
-  temps.add(xdmf_tmp);
   write_text_file(xdmf_tmp, detail::xdmf_document(make_grid(path, data)), path);
+  fault_point("Write"); // tests: the temporary files are complete, nothing is renamed yet
   // The h5 goes first: a sidecar must never point at a file that is not there yet.
-  rename_into_place(h5_tmp, path, path);
-  temps.release(h5_tmp);
-  rename_into_place(xdmf_tmp, xdmf, path);
-  temps.release(xdmf_tmp);
+  files.commit();
 }
 
 } // namespace hssbem

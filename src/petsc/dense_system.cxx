@@ -7,6 +7,8 @@
 
 #include <algorithm>
 #include <exception>
+#include <memory>
+#include <new>
 #include <string>
 #include <numeric>
 #include <vector>
@@ -25,42 +27,48 @@ static void AddRigidRegularization_Private(const std::vector<double> &Q, PetscIn
 }
 
 /* Rows [nstart, nstart + nlocal) (nodes) into the column-major local block a (3 nlocal x 3 nn) and
-   rhs. Chunks of rows are independent: threads share them, each with its own operator workspace. */
-static PetscErrorCode FillLocalRows_Private(const hssbem::BemOperator &op, const hssbem::SystemSelection &sel, const std::vector<double> *rigid_modes, PetscInt nstart, PetscInt nlocal,
-                                            PetscScalar *a, PetscScalar *rhs)
+   rhs. Chunks of rows are independent: threads share them, each with its own operator workspace.
+   Throws what the operator throws (no PETSc error handling inside the parallel region: the
+   first failure is kept and rethrown after it). With nlocal = 0 (more ranks than nodes) it does
+   nothing. */
+static void FillLocalRows_Private(const hssbem::BemOperator &op, const hssbem::SystemSelection &sel, const std::vector<double> *rigid_modes, PetscInt nstart, PetscInt nlocal,
+                                  PetscScalar *a, PetscScalar *rhs)
 {
-  const PetscInt nn = op.num_nodes(), N = 3 * nn, m = 3 * nlocal, chunk = 16;
-  std::vector<int> J(nn);
-  bool             failed = false;
-  std::string      message;
+  const PetscInt     nn = op.num_nodes(), N = 3 * nn, m = 3 * nlocal, chunk = 16;
+  std::vector<int>   J(nn);
+  std::exception_ptr failure;
 
-  PetscFunctionBegin;
   std::iota(J.begin(), J.end(), 0);
+  auto keep = [&failure] {
+#pragma omp critical(hssbem_dense_fill)
+    if (!failure) failure = std::current_exception();
+  };
 #pragma omp parallel
   {
-    hssbem::BemOperator::Workspace ws(op);
-    std::vector<double>            rows(3 * chunk * (size_t)N);
+    std::unique_ptr<hssbem::BemOperator::Workspace> ws;
+    std::vector<double>                             rows;
+    try {
+      ws = std::make_unique<hssbem::BemOperator::Workspace>(op);
+      rows.resize(3 * chunk * (size_t)N);
+    } catch (...) {
+      keep();
+    }
 #pragma omp for schedule(dynamic, 1)
     for (PetscInt r0 = 0; r0 < nlocal; r0 += chunk) {
-      std::vector<int> I(std::min(chunk, nlocal - r0));
-      std::iota(I.begin(), I.end(), (int)(nstart + r0));
-      try { // no PETSc error handling inside the parallel region: remember and report after it
-        hssbem::fill_system_block(op, sel, I, J, rows.data(), N, rhs + 3 * r0, ws);
-      } catch (const std::exception &e) {
-#pragma omp critical
-        {
-          failed  = true;
-          message = e.what();
-        }
-        continue;
+      if (!ws || rows.empty()) continue;
+      try { // exceptions must not leave the worksharing loop: the first is kept and rethrown after the region
+        std::vector<int> I(std::min(chunk, nlocal - r0));
+        std::iota(I.begin(), I.end(), (int)(nstart + r0));
+        hssbem::fill_system_block(op, sel, I, J, rows.data(), N, rhs + 3 * r0, *ws);
+        if (rigid_modes) AddRigidRegularization_Private(*rigid_modes, 3 * (nstart + r0), 3 * I.size(), N, rows.data());
+        for (PetscInt c = 0; c < N; ++c) // column-major destination: consecutive writes per column
+          for (size_t r = 0; r < 3 * I.size(); ++r) a[(size_t)c * m + 3 * r0 + r] = rows[r * N + c];
+      } catch (...) {
+        keep();
       }
-      if (rigid_modes) AddRigidRegularization_Private(*rigid_modes, 3 * (nstart + r0), 3 * I.size(), N, rows.data());
-      for (PetscInt c = 0; c < N; ++c) // column-major destination: consecutive writes per column
-        for (size_t r = 0; r < 3 * I.size(); ++r) a[(size_t)c * m + 3 * r0 + r] = rows[r * N + c];
     }
   }
-  PetscCheck(!failed, PETSC_COMM_SELF, PETSC_ERR_LIB, "assembly failed: %s", message.c_str());
-  PetscFunctionReturn(PETSC_SUCCESS);
+  if (failure) std::rethrow_exception(failure);
 }
 
 /*@C
@@ -74,6 +82,7 @@ PetscErrorCode HssbemAssembleDense(MPI_Comm comm, const hssbem::BemOperator &op,
   const PetscInt nn = op.num_nodes(), N = 3 * nn;
   PetscInt       nstart = 0, nlocal = 0;
   PetscScalar   *a, *rhs;
+  HssbemGuard    guard;
 
   PetscFunctionBegin;
   PetscCall(PetscLogEventBegin(BEM_Assembly, 0, 0, 0, 0));
@@ -83,9 +92,10 @@ PetscErrorCode HssbemAssembleDense(MPI_Comm comm, const hssbem::BemOperator &op,
   PetscCall(MatCreateVecs(*A, NULL, b));
   PetscCall(MatDenseGetArrayWrite(*A, &a));
   PetscCall(VecGetArrayWrite(*b, &rhs));
-  PetscCall(FillLocalRows_Private(op, sel, rigid_modes, nstart, nlocal, a, rhs));
+  guard.Run("DenseAssembly", [&] { FillLocalRows_Private(op, sel, rigid_modes, nstart, nlocal, a, rhs); });
   PetscCall(VecRestoreArrayWrite(*b, &rhs));
   PetscCall(MatDenseRestoreArrayWrite(*A, &a));
+  PetscCall(guard.Check(comm, "dense assembly")); /* before the collective assembly: a rank that failed alone must not leave the others waiting there */
   PetscCall(MatAssemblyBegin(*A, MAT_FINAL_ASSEMBLY));
   PetscCall(MatAssemblyEnd(*A, MAT_FINAL_ASSEMBLY));
   PetscCall(PetscLogFlops(0.0));

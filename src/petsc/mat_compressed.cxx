@@ -27,7 +27,7 @@ PetscErrorCode MatCompressedGetContext(Mat A, Mat_Compressed **ctx)
 PetscErrorCode MatMult_Compressed(Mat A, Vec x, Vec y)
 {
   Mat_Compressed    *ctx;
-  HssbemRootGuard    guard;
+  HssbemGuard        guard;
   const PetscScalar *xa;
   PetscScalar       *ya;
 
@@ -37,20 +37,21 @@ PetscErrorCode MatMult_Compressed(Mat A, Vec x, Vec y)
   PetscCall(ctx->ex.SetUp(x));
   PetscCall(ctx->ex.Gather(x, &xa));
   PetscCall(ctx->ex.GetOut(&ya));
-  if (p.compressed()) guard.Run([&] {
-      p.compressed()->apply(p.sel, xa, ya);
-      if (!p.modes.empty()) HssbemAddRegularization(p.modes, xa, ya);
-    });
+  guard.Run("MatMult", [&] {
+    if (!p.compressed()) return; /* the compression lives on rank 0 */
+    p.compressed()->apply(p.sel, xa, ya);
+    if (!p.modes.empty()) HssbemAddRegularization(p.modes, xa, ya);
+  });
   PetscCall(ctx->ex.RestoreGather(&xa));
   PetscCall(ctx->ex.ScatterOut(&ya, y));
-  PetscCall(guard.Check(PetscObjectComm((PetscObject)A), "MatMult", "failed on rank 0"));
+  PetscCall(guard.Check(PetscObjectComm((PetscObject)A), "MatMult"));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
 PetscErrorCode MatGetDiagonal_Compressed(Mat A, Vec d)
 {
   Mat_Compressed *ctx;
-  HssbemRootGuard guard;
+  HssbemGuard     guard;
   PetscScalar    *da;
 
   PetscFunctionBegin;
@@ -58,18 +59,19 @@ PetscErrorCode MatGetDiagonal_Compressed(Mat A, Vec d)
   const HssbemSystemContext &p = *ctx->sys;
   PetscCall(ctx->ex.SetUp(d));
   PetscCall(ctx->ex.GetOut(&da));
-  if (p.compressed()) guard.Run([&] {
-      const std::vector<double> diag = p.compressed()->diagonal(p.sel);
-      for (std::size_t i = 0; i < diag.size(); ++i) {
-        da[i] = diag[i];
-        if (!p.modes.empty()) {
-          const double *q = &p.modes[6 * i];
-          da[i] += hssbem::rigid_regularization_weight * (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3] + q[4] * q[4] + q[5] * q[5]);
-        }
+  guard.Run("MatGetDiagonal", [&] {
+    if (!p.compressed()) return;
+    const std::vector<double> diag = p.compressed()->diagonal(p.sel);
+    for (std::size_t i = 0; i < diag.size(); ++i) {
+      da[i] = diag[i];
+      if (!p.modes.empty()) {
+        const double *q = &p.modes[6 * i];
+        da[i] += hssbem::rigid_regularization_weight * (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3] + q[4] * q[4] + q[5] * q[5]);
       }
-    });
+    }
+  });
   PetscCall(ctx->ex.ScatterOut(&da, d));
-  PetscCall(guard.Check(PetscObjectComm((PetscObject)A), "MatGetDiagonal", "failed on rank 0"));
+  PetscCall(guard.Check(PetscObjectComm((PetscObject)A), "MatGetDiagonal"));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -163,7 +165,7 @@ PetscErrorCode HssbemMatCreateCompressed_Private(MPI_Comm comm, HssbemSystemCont
   const PetscInt             nn = op.num_nodes(), N = 3 * nn;
   PetscInt                   nstart, nlocal;
   PetscMPIInt                rank;
-  HssbemRootGuard            guard;
+  HssbemGuard                guard;
   std::vector<double>        b0;
   Mat_Compressed            *ctx;
   PetscScalar               *ba;
@@ -171,7 +173,8 @@ PetscErrorCode HssbemMatCreateCompressed_Private(MPI_Comm comm, HssbemSystemCont
   PetscFunctionBegin;
   PetscCall(PetscLogEventBegin(BEM_Assembly, 0, 0, 0, 0));
   PetscCallMPI(MPI_Comm_rank(comm, &rank));
-  if (rank == 0) guard.Run([&] {
+  guard.Run("Compression", [&] {
+      if (rank != 0) return; /* the compression lives on rank 0 */
       if (h2) {
         auto K  = std::make_shared<hssbem::H2BemSystem>(op, sys->h2_options);
         b0      = K->rhs(sys->sel);
@@ -182,7 +185,7 @@ PetscErrorCode HssbemMatCreateCompressed_Private(MPI_Comm comm, HssbemSystemCont
         sys->hss = K;
       }
     });
-  PetscCall(guard.Check(comm, h2 ? "H2 compression failed" : "HSS compression failed", "see rank 0"));
+  PetscCall(guard.Check(comm, h2 ? "H2 compression failed" : "HSS compression failed"));
   PetscCall(HssbemOwnedNodes(comm, nn, &nstart, &nlocal));
   PetscCallCXX(ctx = new Mat_Compressed);
   ctx->sys = sys;

@@ -93,7 +93,7 @@ PetscErrorCode PCSetUp_H2(PC pc)
   HssbemSystemContext *p;
   MPI_Comm             comm = PetscObjectComm((PetscObject)pc);
   PetscMPIInt          rank;
-  HssbemRootGuard      guard;
+  HssbemGuard          guard;
   int                  breakdown = 0;
 
   PetscFunctionBegin;
@@ -103,8 +103,10 @@ PetscErrorCode PCSetUp_H2(PC pc)
   h2->factors.reset();
   h2->failure.clear();
   h2->inverse_error = -1;
-  if (rank == 0) guard.Run([&] { FactorOnRoot(h2, *p); });
-  PetscCall(guard.Check(comm, "PC h2", "set-up failed on rank 0"));
+  guard.Run("PCSetUp", [&] {
+    if (rank == 0) FactorOnRoot(h2, *p); /* the H² matrix lives on rank 0 */
+  });
+  PetscCall(guard.Check(comm, "PC h2 set-up"));
   breakdown = rank == 0 && !h2->failure.empty();
   PetscCallMPI(MPI_Bcast(&breakdown, 1, MPI_INT, 0, comm));
   if (breakdown) {
@@ -118,7 +120,7 @@ PetscErrorCode PCSetUp_H2(PC pc)
 PetscErrorCode PCApply_H2(PC pc, Vec x, Vec y)
 {
   PC_H2             *h2 = (PC_H2 *)pc->data;
-  HssbemRootGuard    guard;
+  HssbemGuard        guard;
   const PetscScalar *xa;
   PetscScalar       *ya;
   PCFailedReason     reason;
@@ -132,10 +134,12 @@ PetscErrorCode PCApply_H2(PC pc, Vec x, Vec y)
   PetscCall(h2->ex->SetUp(x));
   PetscCall(h2->ex->Gather(x, &xa));
   PetscCall(h2->ex->GetOut(&ya));
-  if (h2->factors) guard.Run([&] { h2->factors->solve(xa, ya); });
+  guard.Run("PCApply", [&] {
+    if (h2->factors) h2->factors->solve(xa, ya); /* rank 0 holds them */
+  });
   PetscCall(h2->ex->RestoreGather(&xa));
   PetscCall(h2->ex->ScatterOut(&ya, y));
-  PetscCall(guard.Check(PetscObjectComm((PetscObject)pc), "PC h2", "failed on rank 0"));
+  PetscCall(guard.Check(PetscObjectComm((PetscObject)pc), "PC h2"));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

@@ -1,6 +1,7 @@
 /* PC "hss": ULV factorization of the BEM system matrix from an HSS compression, as a direct
    solver (-ksp_type preonly) or a preconditioner at a loose tolerance (see pc_hss.h). */
 #include "hssbem/petsc/pc_hss.h"
+#include "hssbem/core/fault.hpp"
 #include "hssbem/core/timer.hpp"
 #include "hssbem/hss/truncate.hpp"
 #include "hssbem/hss/ulv.hpp"
@@ -68,6 +69,7 @@ void FactorOnRoot(PC_HSS *hss, const HssbemSystemContext &p)
   hss->seconds_compress = timer.seconds();
   timer.restart();
   try {
+    if (hssbem::fault_armed("Breakdown")) throw hssbem::HssBreakdown("HSS factorization broke down (injected fault at Breakdown)");
     hss->factors = hss->sys->factor(p.sel, p.modes.empty() ? nullptr : &p.modes);
   } catch (const hssbem::HssBreakdown &e) {
     hss->failure = e.what();
@@ -81,7 +83,7 @@ PetscErrorCode PCSetUp_HSS(PC pc)
   HssbemSystemContext *p;
   MPI_Comm             comm = PetscObjectComm((PetscObject)pc);
   PetscMPIInt          rank;
-  HssbemRootGuard      guard;
+  HssbemGuard          guard;
   int                  breakdown = 0;
 
   PetscFunctionBegin;
@@ -91,8 +93,10 @@ PetscErrorCode PCSetUp_HSS(PC pc)
   hss->factors.reset();
   hss->sys.reset();
   hss->failure.clear();
-  if (rank == 0) guard.Run([&] { FactorOnRoot(hss, *p); });
-  PetscCall(guard.Check(comm, "PC hss", "set-up failed on rank 0"));
+  guard.Run("PCSetUp", [&] {
+    if (rank == 0) FactorOnRoot(hss, *p); /* the compression lives on rank 0 */
+  });
+  PetscCall(guard.Check(comm, "PC hss set-up"));
   breakdown = rank == 0 && !hss->failure.empty();
   PetscCallMPI(MPI_Bcast(&breakdown, 1, MPI_INT, 0, comm));
   if (breakdown) {
@@ -106,7 +110,7 @@ PetscErrorCode PCSetUp_HSS(PC pc)
 PetscErrorCode PCApply_HSS(PC pc, Vec x, Vec y)
 {
   PC_HSS            *hss = (PC_HSS *)pc->data;
-  HssbemRootGuard    guard;
+  HssbemGuard        guard;
   const PetscScalar *xa;
   PetscScalar       *ya;
   PCFailedReason     reason;
@@ -120,14 +124,15 @@ PetscErrorCode PCApply_HSS(PC pc, Vec x, Vec y)
   PetscCall(hss->ex->SetUp(x));
   PetscCall(hss->ex->Gather(x, &xa));
   PetscCall(hss->ex->GetOut(&ya));
-  if (hss->factors) guard.Run([&] {
-      const std::vector<double> b(xa, xa + 3 * hss->sys->op().num_nodes());
-      const std::vector<double> z = hss->sys->solve(*hss->factors, b);
-      std::copy(z.begin(), z.end(), ya);
-    });
+  guard.Run("PCApply", [&] {
+    if (!hss->factors) return; /* rank 0 holds them */
+    const std::vector<double> b(xa, xa + 3 * hss->sys->op().num_nodes());
+    const std::vector<double> z = hss->sys->solve(*hss->factors, b);
+    std::copy(z.begin(), z.end(), ya);
+  });
   PetscCall(hss->ex->RestoreGather(&xa));
   PetscCall(hss->ex->ScatterOut(&ya, y));
-  PetscCall(guard.Check(PetscObjectComm((PetscObject)pc), "PC hss", "failed on rank 0"));
+  PetscCall(guard.Check(PetscObjectComm((PetscObject)pc), "PC hss"));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

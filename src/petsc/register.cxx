@@ -1,6 +1,7 @@
 #include "hssbem/petsc/log.h"
 #include "hssbem/petsc/pc_h2.h"
 #include "hssbem/petsc/pc_hss.h"
+#include "hssbem/core/fault.hpp"
 #include "hssbem/core/phase.hpp"
 
 #include <petscksp.h>
@@ -23,6 +24,36 @@ static void PhaseHook_Private(hssbem::Phase phase, bool begin)
 
 static PetscBool HssbemPackageInitialized = PETSC_FALSE;
 
+/* Test-only fault injection (core/fault.hpp), from options that -help does not list:
+   -hssbem_fault <site>           a fault point: MatMult, MatGetDiagonal, PCSetUp, PCApply,
+                                  Compression, DenseAssembly, Write, Commit (the result file)
+   -hssbem_fault_kind <kind>      error (default), oom (std::bad_alloc) or pause
+   -hssbem_fault_rank <r>         only on rank r of PETSC_COMM_WORLD (default: every rank)
+   -hssbem_fault_seconds <s>      how long a pause lasts (default 60) */
+static PetscErrorCode ArmFaultFromOptions_Private(void)
+{
+  char              site[64] = "", kind[16] = "error";
+  PetscInt          rank    = -1;
+  PetscReal         seconds = 60;
+  PetscBool         set;
+  PetscMPIInt       me;
+  hssbem::FaultPlan plan;
+
+  PetscFunctionBegin;
+  PetscCall(PetscOptionsGetString(NULL, NULL, "-hssbem_fault", site, sizeof(site), &set));
+  if (!set) PetscFunctionReturn(PETSC_SUCCESS);
+  PetscCall(PetscOptionsGetString(NULL, NULL, "-hssbem_fault_kind", kind, sizeof(kind), NULL));
+  PetscCall(PetscOptionsGetInt(NULL, NULL, "-hssbem_fault_rank", &rank, NULL));
+  PetscCall(PetscOptionsGetReal(NULL, NULL, "-hssbem_fault_seconds", &seconds, NULL));
+  PetscCheck(hssbem::parse_fault_kind(kind, &plan.kind), PETSC_COMM_WORLD, PETSC_ERR_ARG_UNKNOWN_TYPE, "-hssbem_fault_kind %s: use error, oom or pause", kind);
+  PetscCallMPI(MPI_Comm_rank(PETSC_COMM_WORLD, &me));
+  PetscCallCXX(plan.site = site);
+  plan.rank    = (int)rank;
+  plan.seconds = (double)seconds;
+  PetscCallCXX(hssbem::arm_fault(plan, me));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 /*@C
   HssbemFinalizePackage - Resets the package state so HssbemInitializePackage() can run again.
 
@@ -33,6 +64,7 @@ PetscErrorCode HssbemFinalizePackage(void)
   PetscFunctionBegin;
   HssbemPackageInitialized = PETSC_FALSE;
   hssbem::set_phase_hook(nullptr);
+  hssbem::arm_fault(hssbem::FaultPlan{}, 0);
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -72,6 +104,7 @@ PetscErrorCode HssbemInitializePackage(void)
   hssbem::set_phase_hook(PhaseHook_Private);
   PetscCall(PCRegister(PCHSS, PCCreate_HSS));
   PetscCall(PCRegister(PCH2, PCCreate_H2));
+  PetscCall(ArmFaultFromOptions_Private());
   PetscCall(PetscRegisterFinalize(HssbemFinalizePackage));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

@@ -9,6 +9,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
+#include <memory>
 #include <optional>
 #include <string>
 
@@ -174,6 +176,60 @@ PetscErrorCode HssbemH2OptionsFromDatabase(MPI_Comm comm, const char *prefix, hs
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* Bytes of memory of this node: MemTotal, or the cgroup's limit when lower. */
+static double NodeMemoryBytes_Private(void)
+{
+  double        bytes = 0;
+  std::ifstream meminfo("/proc/meminfo");
+  std::string   key;
+  double        kb;
+  while (meminfo >> key >> kb) {
+    if (key == "MemTotal:") {
+      bytes = kb * 1024.0;
+      break;
+    }
+    meminfo.ignore(1 << 10, '\n');
+  }
+  std::ifstream cgroup("/sys/fs/cgroup/memory.max");
+  double        limit;
+  if (cgroup >> limit && limit > 0 && (bytes == 0 || limit < bytes)) bytes = limit; /* "max" reads as no number */
+  return bytes > 0 ? bytes : 1e300;
+}
+
+PetscErrorCode HssbemMachineLimits(MPI_Comm comm, hssbem::MachineLimits *limits)
+{
+  MPI_Comm    node;
+  PetscMPIInt size, on_node;
+  PetscReal   given = 0;
+  double      memory;
+
+  PetscFunctionBegin;
+  PetscCallMPI(MPI_Comm_size(comm, &size));
+  PetscCallMPI(MPI_Comm_split_type(comm, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node));
+  PetscCallMPI(MPI_Comm_size(node, &on_node));
+  PetscCallMPI(MPI_Comm_free(&node));
+  PetscCall(PetscOptionsGetReal(NULL, NULL, "-hssbem_memory_limit", &given, NULL));
+  memory = given > 0 ? (double)given : NodeMemoryBytes_Private();
+  PetscCallMPI(MPI_Allreduce(&memory, &limits->node_memory_bytes, 1, MPI_DOUBLE, MPI_MIN, comm));
+  PetscCallMPI(MPI_Allreduce(&on_node, &limits->ranks_per_node, 1, MPI_INT, MPI_MAX, comm));
+  limits->ranks     = size;
+  limits->index_max = PETSC_MAX_INT;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Refuses (on comm) a system of `type` that does not fit this machine, before it is allocated. */
+static PetscErrorCode CheckSize_Private(MPI_Comm comm, hssbem::OperatorType type, PetscInt nnodes, bool single)
+{
+  hssbem::MachineLimits limits;
+  std::string           why;
+
+  PetscFunctionBegin;
+  PetscCall(HssbemMachineLimits(comm, &limits));
+  PetscCallCXX(why = hssbem::size_refusal(type, 3 * (long long)nnodes, single, limits));
+  PetscCheck(why.empty(), comm, PETSC_ERR_MEM, "%s", why.c_str());
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 /*@C
   HssbemCreateSystem - Creates the system matrix A (dense, HSS or H²) and right-hand side b of a
   boundary-condition pattern; see system.h.
@@ -186,11 +242,11 @@ PetscErrorCode HssbemCreateSystem(MPI_Comm comm, const hssbem::BemOperator &op, 
                                   Vec *b)
 {
   hssbem::OperatorType type;
-  HssbemSystemContext *ctx;
+  std::unique_ptr<HssbemSystemContext> ctx; /* owned here until A owns it: an error path frees it */
 
   PetscFunctionBegin;
   PetscCall(HssbemOperatorTypeFromName(comm, mat_type, &type));
-  PetscCallCXX(ctx = new HssbemSystemContext);
+  PetscCallCXX(ctx = std::make_unique<HssbemSystemContext>());
   ctx->op   = &op;
   ctx->type = type;
   PetscCallCXX(ctx->sel = sel);
@@ -199,21 +255,25 @@ PetscErrorCode HssbemCreateSystem(MPI_Comm comm, const hssbem::BemOperator &op, 
   const bool pressure = std::any_of(sel.pressure.begin(), sel.pressure.end(), [](double p) { return !std::isnan(p); });
   switch (type) {
   case hssbem::OperatorType::Dense:
+    PetscCall(CheckSize_Private(comm, type, op.num_nodes(), false));
     PetscCall(HssbemAssembleDense(comm, op, sel, rigid_modes, A, b));
     break;
   case hssbem::OperatorType::H2:
     ctx->h2_options.pressure_columns = pressure;
     PetscCall(HssbemH2OptionsFromDatabase(comm, NULL, &ctx->h2_options));
-    PetscCall(HssbemMatCreateCompressed_Private(comm, ctx, A, b));
+    PetscCall(CheckSize_Private(comm, type, op.num_nodes(), ctx->h2_options.single_precision));
+    PetscCall(HssbemMatCreateCompressed_Private(comm, ctx.get(), A, b));
     break;
   case hssbem::OperatorType::Hss:
     ctx->hss_options.rel_tol          = 1e-8;
     ctx->hss_options.pressure_columns = pressure;
     PetscCall(HssbemHssOptionsFromDatabase(comm, NULL, &ctx->hss_options));
-    PetscCall(HssbemMatCreateCompressed_Private(comm, ctx, A, b));
+    PetscCall(CheckSize_Private(comm, type, op.num_nodes(), false));
+    PetscCall(HssbemMatCreateCompressed_Private(comm, ctx.get(), A, b));
     break;
   }
-  PetscCall(ComposeSystemContext_Private(*A, ctx));
+  PetscCall(ComposeSystemContext_Private(*A, ctx.get()));
+  ctx.release();
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -229,15 +289,50 @@ PetscErrorCode HssbemOwnedNodes(MPI_Comm comm, PetscInt nnodes, PetscInt *nstart
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-PetscErrorCode HssbemRootGuard::Check(MPI_Comm comm, const char *what, const char *elsewhere)
+PetscErrorCode HssbemAgreeOnError(MPI_Comm comm, PetscErrorCode *code, std::string *message, PetscMPIInt *lowest, PetscMPIInt *nfailed)
 {
-  PetscMPIInt rank;
+  PetscMPIInt rank, size, key, failed = *code ? 1 : 0;
+  int         head[2] = {(int)*code, 0};
 
   PetscFunctionBegin;
   PetscCallMPI(MPI_Comm_rank(comm, &rank));
-  PetscCallMPI(MPI_Bcast(&m_failed, 1, MPI_INT, 0, comm));
-  PetscCheck(!m_failed, comm, PETSC_ERR_LIB, "%s: %s", what, rank == 0 ? m_message.c_str() : elsewhere);
+  PetscCallMPI(MPI_Comm_size(comm, &size));
+  key = failed ? rank : size;
+  PetscCallMPI(MPI_Allreduce(&key, lowest, 1, MPI_INT, MPI_MIN, comm));
+  PetscCallMPI(MPI_Allreduce(&failed, nfailed, 1, MPI_INT, MPI_SUM, comm));
+  if (*lowest == size) {
+    *lowest = -1;
+    PetscFunctionReturn(PETSC_SUCCESS);
+  }
+  if (rank == *lowest) head[1] = (int)message->size();
+  PetscCallMPI(MPI_Bcast(head, 2, MPI_INT, *lowest, comm));
+  *code = (PetscErrorCode)head[0];
+  PetscCallCXX(message->resize((size_t)head[1]));
+  if (head[1] > 0) PetscCallMPI(MPI_Bcast(&(*message)[0], head[1], MPI_CHAR, *lowest, comm));
   PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+void HssbemGuard::Fail(PetscErrorCode code, const char *message) noexcept
+{
+  m_code = code;
+  try {
+    m_message = message ? message : "out of memory";
+  } catch (...) {
+    m_code = PETSC_ERR_MEM; /* the message itself did not fit: say what is sure */
+    m_message.clear();
+  }
+}
+
+PetscErrorCode HssbemGuard::Check(MPI_Comm comm, const char *what)
+{
+  PetscMPIInt lowest, nfailed, size;
+
+  PetscFunctionBegin;
+  PetscCall(HssbemAgreeOnError(comm, &m_code, &m_message, &lowest, &nfailed));
+  if (lowest < 0) PetscFunctionReturn(PETSC_SUCCESS);
+  PetscCallMPI(MPI_Comm_size(comm, &size));
+  const std::string where = nfailed < size ? " (on rank " + std::to_string(lowest) + ")" : "";
+  SETERRQ(comm, m_code, "%s: %s%s", what, m_message.empty() ? "out of memory" : m_message.c_str(), where.c_str());
 }
 
 HssbemRootExchange::~HssbemRootExchange()

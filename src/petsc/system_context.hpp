@@ -4,8 +4,10 @@
 #pragma once
 
 #include "hssbem/petsc/compat.h"
+#include "hssbem/petsc/errors.h"
 
 #include "hssbem/bem/bem_operator.hpp"
+#include "hssbem/core/fault.hpp"
 #include "hssbem/core/operator_type.hpp"
 #include "hssbem/h2/h2_system.hpp"
 #include "hssbem/hss/hss_system.hpp"
@@ -14,6 +16,7 @@
 
 #include <exception>
 #include <memory>
+#include <new>
 #include <string>
 #include <vector>
 
@@ -65,28 +68,42 @@ private:
   Vec        m_in = nullptr, m_out = nullptr;
 };
 
-/* C++ exceptions of the engine on rank 0, where the compression lives, at the PETSc edge: Run()
-   calls fn and keeps the message of what it throws; Check(), after the collective steps that
-   every rank takes anyway (the scatter of a product, say), raises it as a PETSc error on every
-   rank, so that no rank waits for one that has left. */
-class HssbemRootGuard {
+/* The one guard of C++ work inside a PETSc function or callback (MatMult, MatGetDiagonal, PCSetUp,
+   PCApply, the assembly, ...), on any number of ranks. Run() calls fn on this rank (every rank,
+   or only those that have work) and keeps what it throws, std::bad_alloc included, instead of
+   letting it cross PETSc; `site` names a fault point (core/fault.hpp) armed by tests. Check(),
+   collective and called after the collective steps every rank takes anyway (the scatter of a
+   product, say), raises the error of the lowest failing rank on every rank of comm, as
+   PETSC_ERR_MEM for an allocation failure and PETSC_ERR_LIB otherwise, with the message
+   "<what>: <message>": no rank is left waiting for one that has left. */
+class HssbemGuard {
 public:
   template <class Fn>
-  void Run(Fn &&fn)
+  void Run(const char *site, Fn &&fn) noexcept
   {
     try {
+      if (site) hssbem::fault_point(site);
       fn();
+    } catch (const std::bad_alloc &) {
+      Fail(PETSC_ERR_MEM, nullptr);
     } catch (const std::exception &e) {
-      m_failed  = 1;
-      m_message = e.what();
+      Fail(PETSC_ERR_LIB, e.what());
+    } catch (...) {
+      Fail(PETSC_ERR_LIB, "unknown exception");
     }
   }
-  /* PETSC_ERR_LIB "<what>: <message>" on every rank (other ranks read `elsewhere` for the message). */
-  PetscErrorCode Check(MPI_Comm comm, const char *what, const char *elsewhere);
+  template <class Fn>
+  void Run(Fn &&fn) noexcept
+  {
+    Run(nullptr, fn);
+  }
+  PetscErrorCode Check(MPI_Comm comm, const char *what);
 
 private:
-  int         m_failed = 0;
-  std::string m_message;
+  void Fail(PetscErrorCode code, const char *message) noexcept;
+
+  PetscErrorCode m_code = 0;
+  std::string    m_message;
 };
 
 /* y += c Q (Qᵀ x) for the rigid-mode regularisation (full vectors on one rank). */

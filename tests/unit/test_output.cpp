@@ -1,6 +1,7 @@
 /// \file test_output.cpp
 /// Result writer: every dataset and attribute read back through the HDF5 C API, the XDMF
 /// sidecar, atomic replacement and the clean-up after errors.
+#include "hssbem/core/fault.hpp"
 #include "hssbem/io/hdf5_output.hpp"
 
 #include <gtest/gtest.h>
@@ -476,6 +477,46 @@ TEST_F(OutputTest, FailedWriteKeepsThePreviousResult)
   ResultData d = tetrahedron();
   d.attributes_str["E"] = "clash";
   EXPECT_THROW(write_result(h5_, d), OutputError);
+  EXPECT_EQ(listing(), (Strings{"out.h5", "out.xdmf"}));
+  EXPECT_EQ(slurp(h5_), before);
+}
+
+TEST_F(OutputTest, FailureBetweenTheRenamesPutsTheEarlierPairBack)
+{
+  // The new .h5 is in place when the .xdmf's rename fails: the earlier .h5 must come back, so
+  // that the pair on disk is the earlier one, whole.
+  write_result(h5_, tetrahedron());
+  const std::string h5_before = slurp(h5_), xdmf_before = slurp(xdmf_);
+  ResultData d = tetrahedron();
+  d.displacement = vectors(9, 4);
+  d.interior_points.clear();
+  d.interior_displacement.clear();
+  arm_fault({"Commit", FaultKind::Error, -1, 0}, 0);
+  EXPECT_THROW(write_result(h5_, d), std::runtime_error);
+  arm_fault({}, 0);
+  EXPECT_EQ(listing(), (Strings{"out.h5", "out.xdmf"}));
+  EXPECT_EQ(slurp(h5_), h5_before);
+  EXPECT_EQ(slurp(xdmf_), xdmf_before);
+  write_result(h5_, d); // and the next write goes through
+  EXPECT_NE(slurp(h5_), h5_before);
+  EXPECT_EQ(listing(), (Strings{"out.h5", "out.xdmf"}));
+}
+
+TEST_F(OutputTest, FailureBetweenTheRenamesLeavesNothingWithoutAPredecessor)
+{
+  arm_fault({"Commit", FaultKind::Error, -1, 0}, 0);
+  EXPECT_THROW(write_result(h5_, tetrahedron()), std::runtime_error);
+  arm_fault({}, 0);
+  EXPECT_TRUE(listing().empty());
+}
+
+TEST_F(OutputTest, FailureBeforeTheCommitKeepsThePreviousResult)
+{
+  write_result(h5_, tetrahedron());
+  const std::string before = slurp(h5_);
+  arm_fault({"Write", FaultKind::OutOfMemory, -1, 0}, 0);
+  EXPECT_THROW(write_result(h5_, tetrahedron()), std::bad_alloc);
+  arm_fault({}, 0);
   EXPECT_EQ(listing(), (Strings{"out.h5", "out.xdmf"}));
   EXPECT_EQ(slurp(h5_), before);
 }

@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <string>
+
 #include <cstdio>
 
 using namespace hssbem;
@@ -58,7 +60,7 @@ TEST(Verification, KelvinMixedConvergesAtSecondOrder)
 
 class SpherePressure : public ::testing::TestWithParam<double> {};
 
-TEST_P(SpherePressure, UniformCompressionWithinOnePercent)
+TEST_P(SpherePressure, UniformCompressionToQuadratureAccuracy)
 {
   const double nu = GetParam(), E = 1000.0, p = 100.0;
   const Solved s = solve(pressure_spec("sphere_l1.msh", E, nu, p));
@@ -66,7 +68,9 @@ TEST_P(SpherePressure, UniformCompressionWithinOnePercent)
   for (int i = 0; i < s.setup.disc->num_nodes(); ++i) exact.push_back((-p * (1 - 2 * nu) / E) * s.setup.disc->node_position(i));
   const double err = rel_error_modulo_rigid(*s.setup.disc, s.sol.u, exact);
   std::printf("sphere pressure nu=%.2f: relative error %.3e\n", nu, err);
-  EXPECT_LE(err, 1e-2);
+  // Pressure is exact on the faceted sphere, so the error is the quadrature's: measured 1.9e-8
+  // (nu 0.3) and 2.4e-7 (nu 0.49); a few times that.
+  EXPECT_LE(err, nu < 0.4 ? 1e-7 : 1e-6);
   EXPECT_TRUE(s.setup.pure_traction);
 }
 
@@ -118,7 +122,9 @@ TEST_P(RigidMotion, GivesNoTraction)
   for (const auto &t : s.sol.t) tmax = std::max(tmax, norm(t));
   const double rel = tmax / (E * norm(w));
   std::printf("rigid motion on %s: max |t| / (E |w|) = %.3e\n", GetParam(), rel);
-  EXPECT_LE(rel, 1e-2);
+  // Measured 8.9e-8 (sphere_l1), 5.2e-5 (cube_l1), 3.4e-5 (cardioid_832): a few times that.
+  const std::string mesh = GetParam();
+  EXPECT_LE(rel, mesh == "sphere_l1.msh" ? 5e-7 : 2e-4);
 }
 
 INSTANTIATE_TEST_SUITE_P(Verification, RigidMotion, ::testing::Values("sphere_l1.msh", "cube_l1.msh", "cardioid_832.msh"));
@@ -163,7 +169,7 @@ TEST_P(CubePatch, LinearDisplacementGivesExactTractionOnFacesEdgesAndCorners)
   }
   std::printf("cube patch %s: max traction error / max traction = %.3e (%d sharp vertices)\n", GetParam(), err / scale, s.setup.disc->num_sharp_vertices());
   EXPECT_EQ(s.setup.disc->num_sharp_vertices(), 8 + 12 * (m.num_vertices() == 98 ? 3 : 7));
-  EXPECT_LE(err / scale, 1e-3);
+  EXPECT_LE(err / scale, 3e-4); // measured 8.2e-5 on both levels
 }
 
 INSTANTIATE_TEST_SUITE_P(Verification, CubePatch, ::testing::Values("cube_l0.msh", "cube_l1.msh"));
@@ -192,8 +198,8 @@ TEST(Verification, CubeUniaxialTensionExactFieldAndReaction)
   }
   const auto R = reactions(*s.setup.disc, s.sol.t);
   std::printf("cube tension: max displacement error %.3e (relative to s0/E), reaction on z0 (%.4f, %.4f, %.4f)\n", err, R.at("z0")[0], R.at("z0")[1], R.at("z0")[2]);
-  EXPECT_LE(err, 1e-3);
-  EXPECT_NEAR(R.at("z0")[2], -s0, 1e-3 * s0);
-  EXPECT_NEAR(R.at("z0")[0], 0.0, 1e-3 * s0);
+  EXPECT_LE(err, 1e-4);                               // measured 2.3e-5
+  EXPECT_NEAR(R.at("z0")[2], -s0, 5e-5 * s0);          // measured -10.0001
+  EXPECT_NEAR(R.at("z0")[0], 0.0, 5e-5 * s0);
   EXPECT_NEAR(R.at("z1")[2], s0, 1e-9 * s0);
 }

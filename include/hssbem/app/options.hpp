@@ -6,10 +6,12 @@
 
 #include "hssbem/bem/quadrature.hpp"
 #include "hssbem/core/operator_type.hpp"
+#include "hssbem/core/size_limits.hpp"
 #include "hssbem/problem/setup.hpp"
 
 #include <mpi.h>
 
+#include <optional>
 #include <string>
 
 namespace hssbem {
@@ -18,10 +20,22 @@ namespace hssbem {
 struct AppOptions {
   std::string problem;                            ///< -problem: the problem file (required unless -help)
   ProblemOverrides overrides;                     ///< -mesh, -o, -E, -nu, -bem_feature_angle: they win over the problem file
-  OperatorType operator_type = OperatorType::Hss; ///< -bem_mat_type: hss, h2 or dense
+  std::optional<OperatorType> operator_type;      ///< -bem_mat_type: hss, h2 or dense; none: auto (the default, see choose_operator())
   QuadratureOptions quad;                         ///< -mat_bem_*
   bool help = false;                              ///< -help: list the options (PETSc prints each as it is read)
 };
+
+/// -bem_mat_type auto picks the dense operator below this many unknowns and the H² operator
+/// (with its default solver) from it on. Measured with benchmarks/bench_hss.py --solver h2
+/// --family sphere --tol 1e-6 (bench_h2: H² at the driver's defaults, tol 1e-6, leaf 64, eta 0,
+/// double-precision blocks, GMRES(100) + Jacobi to rtol 1e-8, beside dense assembly + LU in the
+/// same run; 1 process, 2 threads): the README's "Choosing the operator" table. Re-measure when
+/// the H² path gets a faster solver (a direct H² factorization, issue 16).
+inline constexpr long long k_auto_dense_max_unknowns = 9000;
+
+/// The operator -bem_mat_type auto takes for `unknowns` unknowns on this machine: dense below
+/// k_auto_dense_max_unknowns when the dense operator fits (size_refusal()), else H².
+OperatorType choose_operator(long long unknowns, const MachineLimits &limits);
 
 /// Read -problem, -mesh, -E, -nu, -o, -bem_feature_angle, -bem_mat_type and -mat_bem_*, and check
 /// the -mat_hss_* (or -mat_h2_*) options of the operator type, which the system builder reads

@@ -9,12 +9,13 @@
 
 #include <petscsys.h>
 
+#include <functional>
 #include <stdexcept>
 
 namespace hssbem {
 
-/// A PETSc call failed. PETSc has printed its error message and traceback already; code() is
-/// the PetscErrorCode, what() the message of the error.
+/// A PETSc call failed. code() is the PetscErrorCode, what() the message of the error (PETSc
+/// prints nothing itself while the driver's error path, app/main.hpp, is in place).
 class PetscFailure : public std::runtime_error {
 public:
   explicit PetscFailure(PetscErrorCode code);
@@ -23,6 +24,12 @@ public:
 private:
   PetscErrorCode m_code;
 };
+
+/// Run fn on this rank of comm and agree with the other ranks (collective): if fn threw on any
+/// rank, every rank throws std::runtime_error with the message of the lowest failing rank, so
+/// that a failure met by some ranks only (a file system that differs between nodes, rank-0 work
+/// such as the output) ends every rank the same way instead of leaving some waiting.
+void run_collectively(MPI_Comm comm, const std::function<void()> &fn);
 
 /// PETSC_ERR_MPI, with the message PetscCallMPI() gives, for a failed MPI call (code != MPI_SUCCESS).
 PetscErrorCode mpi_error(int code, int line, const char *func, const char *file);

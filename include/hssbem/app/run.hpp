@@ -14,6 +14,7 @@
 #include <mpi.h>
 
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -28,7 +29,9 @@ void run_driver(MPI_Comm comm);
 /// build the system with the operator of `type`, solve it with the main KSP, post-process and
 /// write the result file (rank 0). Input errors are the same on every rank, since every rank
 /// reads the same files.
-void run_problem(MPI_Comm comm, const std::string &problem_file, const ProblemOverrides &overrides, const QuadratureOptions &quad, OperatorType type);
+/// With no type (-bem_mat_type auto), the operator is chosen by choose_operator() (app/options.hpp)
+/// once the problem's size is known, and the log line says so.
+void run_problem(MPI_Comm comm, const std::string &problem_file, const ProblemOverrides &overrides, const QuadratureOptions &quad, std::optional<OperatorType> type);
 
 /// Build the system of a prepared problem with the operator of `type` and solve it: the unknowns
 /// (3 per dof node, node order) on rank 0 (empty elsewhere), or on every rank with to_all.

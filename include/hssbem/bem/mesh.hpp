@@ -38,6 +38,10 @@ struct SurfaceMesh {
 /// Throws MeshError naming the file (and line) for a missing, unreadable or malformed file.
 SurfaceMesh read_mesh(const std::string &path);
 
+/// The same from the file's bytes (`name` chooses the format by its extension and names the
+/// file in messages): what the fuzzers (tests/fuzz/) drive.
+SurfaceMesh parse_mesh(const std::string &bytes, const std::string &name);
+
 /// Validate topology and fix orientation: closed (every edge in exactly two triangles),
 /// manifold (edges and vertex fans), no degenerate or duplicate triangles, consistent orientation
 /// in each connected component, outward normals (a component nested inside another is a cavity and
@@ -83,10 +87,11 @@ private:
   std::vector<std::string_view> m_tokens;
 };
 
-SurfaceMesh read_msh(const std::string &path);  ///< Gmsh ASCII 2.2 / 4.1
-SurfaceMesh read_stl(const std::string &path);  ///< ASCII or binary STL
-SurfaceMesh read_off(const std::string &path);  ///< OFF (polygons fan-triangulated)
-SurfaceMesh read_obj(const std::string &path);  ///< Wavefront OBJ (v and f records)
+/// The readers parse the file's bytes; `path` names it in messages.
+SurfaceMesh parse_msh(const std::string &text, const std::string &path);  ///< Gmsh ASCII 2.2 / 4.1
+SurfaceMesh parse_stl(const std::string &bytes, const std::string &path); ///< ASCII or binary STL
+SurfaceMesh parse_off(const std::string &text, const std::string &path);  ///< OFF (polygons fan-triangulated)
+SurfaceMesh parse_obj(const std::string &text, const std::string &path);  ///< Wavefront OBJ (v and f records)
 
 } // namespace detail
 

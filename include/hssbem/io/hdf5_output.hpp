@@ -43,7 +43,10 @@ struct ResultData {
 void check_output_path(const std::string &path);
 
 /// Write `path` (HDF5) and `path` with extension .xdmf beside it. Both are written under temporary
-/// names and renamed when complete, so a crash never leaves a file that looks complete.
+/// names (`<name>.tmp.<pid>`) and renamed into place together when complete: the earlier pair is
+/// replaced whole or not at all (a failed second rename puts the first back), a crash never
+/// leaves a file that looks complete, and SIGINT/SIGTERM/SIGHUP during the write remove the
+/// temporary files before the signal takes its course.
 /// Layout: /mesh/{vertices, triangles, triangle_region, sharp_vertex}, /fields/{displacement,
 /// traction, traction_corner}, /bc/displacement_prescribed, /reactions/<region>,
 /// /interior/{points, displacement}, root attributes, /timings attributes; empty optional

@@ -6,6 +6,7 @@
 #include "hssbem/petsc/compat.h"
 
 #include "hssbem/bem/bem_operator.hpp"
+#include "hssbem/core/size_limits.hpp"
 #include "hssbem/h2/h2_compression.hpp"
 #include "hssbem/hss/hss_compression.hpp"
 
@@ -35,6 +36,12 @@
    op must outlive A. */
 PetscErrorCode HssbemCreateSystem(MPI_Comm comm, const hssbem::BemOperator &op, const hssbem::SystemSelection &sel, const std::vector<double> *rigid_modes, const char *mat_type, Mat *A,
                                   Vec *b);
+
+/* The machine as the size check sees it (collective): the smallest node memory over the ranks
+   (MemTotal, or the cgroup's memory.max when lower, or -hssbem_memory_limit <bytes> when given),
+   the most ranks on one node, and PETSC_MAX_INT. HssbemCreateSystem() refuses a system that
+   hssbem::size_refusal() says does not fit, before allocating it. */
+PetscErrorCode HssbemMachineLimits(MPI_Comm comm, hssbem::MachineLimits *limits);
 
 /* Read -<prefix>mat_hss_rel_tol, _leaf_size, _max_rank, _proxy_ratio, _proxy_points into opts
    (which holds the defaults on entry) and check them. */

@@ -1,0 +1,35 @@
+/// \file size_limits.hpp
+/// What each operator path can take: the index width and the memory of the machine. A problem
+/// beyond them is refused before anything is allocated, naming its size and a path that can
+/// take it (the PETSc face checks in HssbemCreateSystem(); -bem_mat_type auto picks within them).
+#pragma once
+
+#include "hssbem/core/operator_type.hpp"
+
+#include <string>
+
+namespace hssbem {
+
+/// The machine as the size check sees it.
+struct MachineLimits {
+  double    node_memory_bytes = 0; ///< memory of one node (the smallest, over the ranks' nodes)
+  int       ranks = 1;             ///< ranks in the run
+  int       ranks_per_node = 1;    ///< ranks that share a node (the most on any node)
+  long long index_max = 2147483647; ///< largest index of the linear-algebra library (PetscInt)
+};
+
+/// Bytes the operator `type` needs at its peak for `unknowns` unknowns (whole run):
+/// - dense: the matrix and its LU factor, 16 N² (PETSc's dense LU and ScaLAPACK keep both);
+/// - H²: measured 44 kB per unknown with single-precision blocks (disk organ, tol 1e-5, the
+///   README's sweep) and 1.8 times that in double precision, plus 25 % margin;
+/// - HSS: measured 268 MB at 2 994 unknowns at tol 1e-8, growing as N^1.5 (the ranks grow as the
+///   square root of a cluster's size), plus 25 % margin.
+/// Estimates for a refusal with a margin, not a forecast.
+double estimated_bytes(OperatorType type, long long unknowns, bool single_precision);
+
+/// Why `type` cannot take `unknowns` unknowns on this machine: its entries or a rank's block
+/// exceed the index width, or it needs more memory than the nodes have; with the size, the need
+/// and the path that can take it. Empty when it fits.
+std::string size_refusal(OperatorType type, long long unknowns, bool single_precision, const MachineLimits &m);
+
+} // namespace hssbem

@@ -1,0 +1,55 @@
+// The fuzzed entry points, shared by the libFuzzer harnesses (fuzz_entry.cpp) and the regression
+// test of the main build (test_fuzz_regressions.cpp): each reads one input as a user's file would
+// be read, and may only fail with the reader's own error (MeshError, ProblemError). Anything
+// else — another exception, a crash, a sanitizer report — is a bug.
+#pragma once
+
+#include "hssbem/bem/mesh.hpp"
+#include "hssbem/problem/problem.hpp"
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace hssbem::fuzz {
+
+/// A mesh file as the driver reads it: parse, then validate and orient.
+inline void mesh_input(const std::string &bytes, const char *name)
+{
+  try {
+    SurfaceMesh              mesh = parse_mesh(bytes, name);
+    std::vector<std::string> notices;
+    validate_and_orient(mesh, notices);
+  } catch (const MeshError &) {
+  }
+}
+
+/// A closed tetrahedron with two regions, for the problem file's rules to select from.
+inline SurfaceMesh rule_mesh()
+{
+  SurfaceMesh m;
+  m.vertices        = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  m.triangles       = {{{0, 2, 1}}, {{0, 1, 3}}, {{0, 3, 2}}, {{1, 2, 3}}};
+  m.triangle_region = {1, 1, 2, 2};
+  m.region_tags     = {{"base", 1}, {"top", 2}};
+  return m;
+}
+
+/// A problem file: parse, then apply its rules to a small mesh.
+inline void problem_input(const std::string &bytes)
+{
+  try {
+    const ProblemSpec spec = parse_problem(bytes, "fuzz.json");
+    (void)apply_rules(spec.rules, rule_mesh(), spec.file);
+  } catch (const ProblemError &) {
+  }
+}
+
+inline void fuzz_msh(const std::string &b) { mesh_input(b, "fuzz.msh"); }
+inline void fuzz_stl(const std::string &b) { mesh_input(b, "fuzz.stl"); }
+inline void fuzz_off(const std::string &b) { mesh_input(b, "fuzz.off"); }
+inline void fuzz_obj(const std::string &b) { mesh_input(b, "fuzz.obj"); }
+inline void fuzz_problem(const std::string &b) { problem_input(b); }
+
+} // namespace hssbem::fuzz

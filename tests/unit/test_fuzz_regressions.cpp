@@ -1,0 +1,58 @@
+/// \file test_fuzz_regressions.cpp
+/// Replays every input kept in tests/fuzz/regressions/<harness>/ (crashes the fuzzers found,
+/// fixed) and the shipped meshes and examples through the fuzzers' entry points
+/// (tests/fuzz/fuzz_targets.hpp): each may fail only with the reader's own error.
+#include "fuzz_targets.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string slurp(const fs::path &p)
+{
+  std::ifstream      in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+/// Runs `entry` on every file of `dir` (if it exists); returns how many.
+int replay(const fs::path &dir, void (*entry)(const std::string &))
+{
+  int n = 0;
+  if (!fs::is_directory(dir)) return 0;
+  for (const auto &f : fs::directory_iterator(dir)) {
+    if (!f.is_regular_file()) continue;
+    SCOPED_TRACE(f.path().string());
+    EXPECT_NO_THROW(entry(slurp(f.path())));
+    ++n;
+  }
+  return n;
+}
+
+const fs::path regressions = fs::path(HSSBEM_FUZZ_DIR) / "regressions";
+
+TEST(FuzzRegressions, MeshInputs)
+{
+  using namespace hssbem::fuzz;
+  replay(regressions / "msh", fuzz_msh);
+  replay(regressions / "stl", fuzz_stl);
+  replay(regressions / "off", fuzz_off);
+  replay(regressions / "obj", fuzz_obj);
+  EXPECT_GE(replay(HSSBEM_MESHES, fuzz_msh), 10); // the shipped meshes, as seeds are
+}
+
+TEST(FuzzRegressions, ProblemInputs)
+{
+  using namespace hssbem::fuzz;
+  replay(regressions / "problem", fuzz_problem);
+  EXPECT_GE(replay(fs::path(HSSBEM_MESHES) / "examples", fuzz_problem), 5);
+}
+
+} // namespace

@@ -1,0 +1,71 @@
+/// \file test_size_limits.cpp
+/// The size check: which problems each operator path refuses, and that the refusal names the
+/// size and a path that can take it; -bem_mat_type auto's choice.
+#include "hssbem/app/options.hpp"
+#include "hssbem/core/size_limits.hpp"
+
+#include <gtest/gtest.h>
+
+using namespace hssbem;
+
+namespace {
+
+MachineLimits machine(double gib, int ranks = 1, int per_node = 1)
+{
+  MachineLimits m;
+  m.node_memory_bytes = gib * 1073741824.0;
+  m.ranks             = ranks;
+  m.ranks_per_node    = per_node;
+  m.index_max         = 2147483647;
+  return m;
+}
+
+TEST(SizeLimits, DenseBeyondTheIndexWidthIsRefusedNamingH2)
+{
+  // 47 000 unknowns on one rank: 2.2e9 entries, more than a 32-bit PetscInt indexes (and the
+  // memory would not suffice either on 24 GiB; with 1 TiB only the index width refuses).
+  const std::string why = size_refusal(OperatorType::Dense, 47001, false, machine(1024));
+  EXPECT_NE(why.find("47001 unknowns"), std::string::npos) << why;
+  EXPECT_NE(why.find("32-bit PetscInt"), std::string::npos) << why;
+  EXPECT_NE(why.find("use -bem_mat_type h2"), std::string::npos) << why;
+  // Split over 4 ranks the blocks fit the index width.
+  EXPECT_EQ(size_refusal(OperatorType::Dense, 47001, false, machine(1024, 4, 1)), "");
+}
+
+TEST(SizeLimits, DenseBeyondMemoryIsRefused)
+{
+  EXPECT_EQ(size_refusal(OperatorType::Dense, 30000, false, machine(24)), ""); // 14.4 GB
+  const std::string why = size_refusal(OperatorType::Dense, 42000, false, machine(24)); // 28 GB
+  EXPECT_NE(why.find("needs about 28.2 GB per node"), std::string::npos) << why;
+  EXPECT_NE(why.find("use -bem_mat_type h2"), std::string::npos) << why;
+  // Two ranks on one node share its memory: no help; on two nodes each holds half.
+  EXPECT_NE(size_refusal(OperatorType::Dense, 42000, false, machine(24, 2, 2)), "");
+  EXPECT_EQ(size_refusal(OperatorType::Dense, 42000, false, machine(24, 2, 1)), "");
+}
+
+TEST(SizeLimits, H2SuggestsSinglePrecisionThenNothing)
+{
+  EXPECT_EQ(size_refusal(OperatorType::H2, 150000, false, machine(24)), "");
+  const std::string single = size_refusal(OperatorType::H2, 300000, false, machine(24));
+  EXPECT_NE(single.find("-mat_h2_single_precision"), std::string::npos) << single;
+  EXPECT_EQ(size_refusal(OperatorType::H2, 300000, true, machine(24)), "");
+  const std::string none = size_refusal(OperatorType::H2, 2000000, true, machine(24));
+  EXPECT_NE(none.find("no operator path fits"), std::string::npos) << none;
+}
+
+TEST(SizeLimits, HssGrowsFasterThanH2)
+{
+  EXPECT_GT(estimated_bytes(OperatorType::Hss, 100000, false), estimated_bytes(OperatorType::H2, 100000, false));
+  EXPECT_NE(size_refusal(OperatorType::Hss, 100000, false, machine(24)).find("use -bem_mat_type h2"), std::string::npos);
+}
+
+TEST(AutoOperator, DenseBelowTheCrossoverH2AboveAndWhereDenseDoesNotFit)
+{
+  EXPECT_EQ(choose_operator(3000, machine(24)), OperatorType::Dense);
+  EXPECT_EQ(choose_operator(k_auto_dense_max_unknowns - 3, machine(24)), OperatorType::Dense);
+  EXPECT_EQ(choose_operator(k_auto_dense_max_unknowns, machine(24)), OperatorType::H2);
+  EXPECT_EQ(choose_operator(60000, machine(24)), OperatorType::H2);
+  EXPECT_EQ(choose_operator(3000, machine(0.1)), OperatorType::H2); // dense needs 0.144 GB
+}
+
+} // namespace
