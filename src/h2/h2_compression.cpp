@@ -89,7 +89,7 @@ H2Matrix compress_bem_operator_h2(const BemOperator &op, const H2Options &option
   std::vector<NestedBasis *> bases(tree.num_clusters());
   for (int c = 0; c < tree.num_clusters(); ++c) bases[c] = &K.basis(c);
   const int np = options.proxy_points > 0 ? options.proxy_points : default_proxy_points(options.rel_tol);
-  Skeletonizer skel(op, SkeletonizerOptions{options.rel_tol, options.max_rank, options.proxy_ratio, np, false}, tree, w, scales, bases);
+  Skeletonizer skel(op, SkeletonizerOptions{options.rel_tol, options.max_rank, options.proxy_ratio, np, false, true, true}, tree, w, scales, bases);
   const QuadratureReach &reach = skel.reach();
   std::vector<double> radius(tree.num_clusters());
   for (int c = 0; c < tree.num_clusters(); ++c) radius[c] = std::max(reach.row_r[c], reach.src_r[c]);
