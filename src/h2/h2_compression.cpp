@@ -109,9 +109,12 @@ H2Matrix compress_bem_operator_h2(const BemOperator &op, const H2Options &option
   timer.restart();
   for_each_cluster(all, [&](int a) {
     for (int b : part.far[a]) {
-      H2Block B{b, DenseMatrix(static_cast<int>(K.basis(a).row_skel.size()), static_cast<int>(K.basis(b).col_skel.size())), {}};
+      H2Block B;
+      B.col_cluster = b;
+      B.M = DenseMatrix(static_cast<int>(K.basis(a).row_skel.size()), static_cast<int>(K.basis(b).col_skel.size()));
       skel.block(K.basis(a).row_skel, K.basis(b).col_skel, B.M.data(), 1, B.M.ld());
-      if (options.single_precision) B.demote();
+      if (options.single_precision && options.low_rank_far) B.compress(options.rel_tol / 10);
+      else if (options.single_precision) B.demote();
       K.far_blocks(a).push_back(std::move(B));
     }
   });
@@ -125,7 +128,9 @@ H2Matrix compress_bem_operator_h2(const BemOperator &op, const H2Options &option
     const std::vector<int> rows = basis_candidates(tree, K.bases(), a, 3, true);
     for (int b : part.near[a]) {
       const std::vector<int> cols = basis_candidates(tree, K.bases(), b, w, false);
-      H2Block B{b, DenseMatrix(static_cast<int>(rows.size()), static_cast<int>(cols.size())), {}};
+      H2Block B;
+      B.col_cluster = b;
+      B.M = DenseMatrix(static_cast<int>(rows.size()), static_cast<int>(cols.size()));
       skel.block(rows, cols, B.M.data(), 1, B.M.ld());
       if (options.single_precision) B.demote();
       K.near_blocks(a).push_back(std::move(B));

@@ -15,50 +15,6 @@ int H2Stats::max_row_rank() const { return max_level_rank(levels, true); }
 
 int H2Stats::max_col_rank() const { return max_level_rank(levels, false); }
 
-void H2Block::demote()
-{
-  if (M.a.empty()) return;
-  single.assign(M.a.begin(), M.a.end());
-  M.a.clear();
-  M.a.shrink_to_fit();
-}
-
-const double *H2Block::data(std::vector<double> &buf) const
-{
-  if (!is_single()) return M.data();
-  buf.assign(single.begin(), single.end());
-  return buf.data();
-}
-
-namespace {
-
-/// y += A x for a column-major float matrix A (m × n) and double x, y: four columns at a time,
-/// widening each entry as it is used.
-void mixed_gemv(int m, int n, const float *A, const double *x, double *y)
-{
-  int j = 0;
-  for (; j + 4 <= n; j += 4) {
-    const float *a0 = A + static_cast<std::size_t>(j) * m, *a1 = a0 + m, *a2 = a1 + m, *a3 = a2 + m;
-    const double x0 = x[j], x1 = x[j + 1], x2 = x[j + 2], x3 = x[j + 3];
-    for (int i = 0; i < m; ++i)
-      y[i] += (static_cast<double>(a0[i]) * x0 + static_cast<double>(a1[i]) * x1) + (static_cast<double>(a2[i]) * x2 + static_cast<double>(a3[i]) * x3);
-  }
-  for (; j < n; ++j) {
-    const float *a = A + static_cast<std::size_t>(j) * m;
-    const double xj = x[j];
-    for (int i = 0; i < m; ++i) y[i] += static_cast<double>(a[i]) * xj;
-  }
-}
-
-} // namespace
-
-void H2Block::multiply_add(const double *X, int ldx, double *Y, int ldy, int nrhs, std::vector<double> &buf) const
-{
-  if (M.m == 0 || M.n == 0 || nrhs == 0) return;
-  if (is_single() && nrhs == 1) return mixed_gemv(M.m, M.n, single.data(), X, Y);
-  lapack::gemm('N', 'N', M.m, nrhs, M.n, 1.0, data(buf), M.ld(), X, ldx, 1.0, Y, ldy);
-}
-
 H2Matrix::H2Matrix(ClusterTree tree, int row_block, int col_block)
   : m_tree(std::move(tree)), m_row_block(row_block), m_col_block(col_block), m_col_scale(col_block, 1.0), m_bases(m_tree.num_clusters()),
     m_far(m_tree.num_clusters()), m_near(m_tree.num_clusters())

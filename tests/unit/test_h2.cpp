@@ -108,7 +108,7 @@ TEST_P(H2Accuracy, MatvecMatchesDenseOperator)
   // the leaves' ranks are full, so it saves no memory; benchmarks/ measures that on large ones.)
   EXPECT_GT(K.stats().far_blocks, 0);
   for (int a = 0; a < K.tree().num_clusters(); ++a)
-    for (H2Block &B : K.far_blocks(a)) std::fill(B.M.a.begin(), B.M.a.end(), 0.0);
+    for (H2Block &B : K.far_blocks(a)) B.clear();
   const double err_near = matvec_error(K, Kd, 7);
   std::printf("  without the far blocks: error %.2e\n", err_near);
   EXPECT_GT(err_near, 10 * c.tol); // so the bound above would fail without them
@@ -130,7 +130,7 @@ TEST(H2Accuracy, FarBlocksCarryWhatNearBlocksMiss)
   const auto Kd = dense_k(*L->op, K.col_block());
   const double err = matvec_error(K, Kd, 3);
   for (int c = 0; c < K.tree().num_clusters(); ++c)
-    for (H2Block &B : K.far_blocks(c)) std::fill(B.M.a.begin(), B.M.a.end(), 0.0);
+    for (H2Block &B : K.far_blocks(c)) B.clear();
   const double err_near = matvec_error(K, Kd, 3);
   std::printf("error %.2e, without far blocks %.2e\n", err, err_near);
   EXPECT_LE(err, 1e-5);
@@ -145,6 +145,7 @@ TEST(H2Accuracy, SinglePrecisionBlocksHalveTheMemory)
   o.eta = 0;
   const H2Matrix Kd = compress_bem_operator_h2(*L->op, o);
   o.single_precision = true;
+  o.low_rank_far = false; // the precision alone
   const H2Matrix Ks = compress_bem_operator_h2(*L->op, o);
   const auto dense = dense_k(*L->op, Kd.col_block());
   const double ed = matvec_error(Kd, dense, 4), es = matvec_error(Ks, dense, 4);
@@ -162,7 +163,9 @@ TEST(H2Block, SingleBlockProductWidensEachEntry)
   std::mt19937 gen(8);
   std::normal_distribution<double> N01;
   for (const int n : {1, 4, 7, 53}) {
-    H2Block B{0, DenseMatrix(37, n), {}};
+    H2Block B;
+    B.col_cluster = 0;
+    B.M = DenseMatrix(37, n);
     for (double &v : B.M.a) v = N01(gen);
     B.demote();
     ASSERT_TRUE(B.is_single());
@@ -177,6 +180,56 @@ TEST(H2Block, SingleBlockProductWidensEachEntry)
       EXPECT_GT(rel(Y, std::vector<double>(Y.size(), 1.0)), 0.1); // the product did add something
     }
   }
+}
+
+TEST(H2Block, LowRankBlockMatchesItsEntries)
+{
+  // A smooth block (1/|x − y| between separated clouds) stored in low-rank form: its entries are
+  // within the requested tolerance of the true ones, products with 1 and 3 columns match the
+  // expanded entries, data() expands them, it takes less memory than single precision, and a
+  // block that does not pay stays dense.
+  std::mt19937 gen(9);
+  std::uniform_real_distribution<double> U01;
+  std::normal_distribution<double> N01;
+  for (const auto [m, n] : {std::pair{60, 90}, std::pair{90, 60}}) {
+    H2Block B;
+    B.M = DenseMatrix(m, n);
+    std::vector<Vec3> x(m), y(n);
+    for (Vec3 &p : x) p = {U01(gen), U01(gen), U01(gen)};
+    for (Vec3 &p : y) p = {3 + U01(gen), U01(gen), U01(gen)};
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < m; ++i) B.M(i, j) = 1.0 / norm(x[i] - y[j]);
+    const DenseMatrix ref = B.M;
+    B.compress(1e-6);
+    ASSERT_TRUE(B.is_low_rank());
+    EXPECT_LT(B.bytes(), 4.0 * m * n);
+    double e = 0, s = 0;
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < m; ++i) e += std::pow(B.entry(i, j) - ref(i, j), 2), s += ref(i, j) * ref(i, j);
+    EXPECT_LE(std::sqrt(e / s), 1e-5);
+    std::vector<double> buf;
+    const double *full = B.data(buf);
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < m; ++i) ASSERT_NEAR(full[i + static_cast<std::size_t>(j) * m], B.entry(i, j), 1e-12);
+    for (const int nrhs : {1, 3}) {
+      std::vector<double> X(static_cast<std::size_t>(n) * nrhs), Y(static_cast<std::size_t>(m) * nrhs, 1.0), Yref(Y);
+      for (double &v : X) v = N01(gen);
+      B.multiply_add(X.data(), n, Y.data(), m, nrhs, buf);
+      for (int k = 0; k < nrhs; ++k)
+        for (int i = 0; i < m; ++i)
+          for (int j = 0; j < n; ++j) Yref[i + static_cast<std::size_t>(m) * k] += B.entry(i, j) * X[j + static_cast<std::size_t>(n) * k];
+      EXPECT_LE(rel(Y, Yref), 1e-12) << nrhs << " right-hand sides";
+    }
+    EXPECT_THROW(B.add(0, 0, 1.0), std::logic_error);
+    B.clear();
+    EXPECT_EQ(B.entry(3, 4), 0.0);
+  }
+  H2Block R;
+  R.M = DenseMatrix(20, 20);
+  for (double &v : R.M.a) v = N01(gen); // full rank: stays dense, in single precision
+  R.compress(1e-6);
+  EXPECT_FALSE(R.is_low_rank());
+  EXPECT_TRUE(R.is_single());
 }
 
 SurfaceMesh scaled(SurfaceMesh m, Vec3 s)

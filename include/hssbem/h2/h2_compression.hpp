@@ -33,6 +33,10 @@ struct H2Options {
   /// Store far and near blocks in single precision (half the memory; each entry rounds to a
   /// relative 6e-8, harmless for rel_tol ≥ 1e-6). Bases stay in double.
   bool single_precision = false;
+  /// With single_precision: store each far block in low-rank form (an ID at rel_tol / 10, the
+  /// factors in single precision) when that takes less memory. Measured on a 20k sphere at
+  /// 1e-5: far blocks 0.44 of their dense size, sampled error of K unchanged to 1 %.
+  bool low_rank_far = true;
 };
 
 /// Compress K = [H, G] (and Gn if asked) of `op`, rigid-body terms included. The operator's

@@ -23,31 +23,40 @@
 
 namespace hssbem {
 
-/// One stored block of an H² matrix: far (skeleton × skeleton) or near (leaf × leaf), in double
-/// precision (M) or, to halve the memory, in single precision (`single`, column-major with M's
-/// dimensions, M.a then empty). Products always compute in double: a single block is widened
-/// on the fly, so only its storage rounds (relative 6e-8 per entry).
+/// One stored block of an H² matrix: far (skeleton × skeleton) or near (leaf × leaf). M holds
+/// its dimensions always, and its entries when the block is dense in double precision. To save
+/// memory a block may instead be dense in single precision (`single`, column-major with M's
+/// dimensions), or of low rank in single precision: B ≈ A Wᵀ with A (M.m × rank) and W
+/// (M.n × rank) column-major in `lr_a`, `lr_w` (a far block of well-separated clusters has
+/// numerical rank well below its dimensions). Products always compute in double: stored floats are
+/// widened on the fly, so only the storage rounds (relative 6e-8 per stored number).
 struct H2Block {
   int col_cluster = -1;
   DenseMatrix M;
   std::vector<float> single;
+  int rank = -1; ///< ≥ 0: low rank, in lr_a and lr_w
+  std::vector<float> lr_a, lr_w;
 
   bool is_single() const { return !single.empty(); }
-  /// Move the entries to single precision (no-op for an empty block).
+  bool is_low_rank() const { return rank >= 0; }
+  /// Move the entries to single precision (no-op for an empty block or one not dense in double).
   void demote();
-  double entry(int i, int j) const { return is_single() ? single[i + static_cast<std::size_t>(j) * M.m] : M(i, j); }
-  void add(int i, int j, double v)
-  {
-    if (is_single()) single[i + static_cast<std::size_t>(j) * M.m] += static_cast<float>(v);
-    else M(i, j) += v;
-  }
-  std::size_t bytes() const { return M.bytes() + single.size() * sizeof(float); }
-  /// The entries in double: M's data, or `single` widened into buf.
+  /// From dense double entries: the low-rank form of the block (a column or row ID at relative
+  /// tolerance rel_tol, from the smaller side) when it takes less memory than single precision,
+  /// else single precision.
+  void compress(double rel_tol);
+  double entry(int i, int j) const;
+  /// Add v to entry (i, j) (a dense block only: throws std::logic_error for a low-rank one).
+  void add(int i, int j, double v);
+  /// Set every stored number to zero (the block then contributes nothing).
+  void clear();
+  std::size_t bytes() const { return M.bytes() + (single.size() + lr_a.size() + lr_w.size()) * sizeof(float); }
+  /// The entries in double: M's data, or the stored form expanded into buf.
   const double *data(std::vector<double> &buf) const;
-  /// Y += B X for nrhs columns (X: M.n × nrhs, Y: M.m × nrhs, column-major). A single block
-  /// with one column is widened entry by entry inside the product, so it reads 4 bytes per
-  /// entry instead of widening the block into buf first (the product is memory-bound); with
-  /// more columns it goes through data(buf) and one GEMM.
+  /// Y += B X for nrhs columns (X: M.n × nrhs, Y: M.m × nrhs, column-major). A single-precision
+  /// block with one column is widened entry by entry inside the product, so it reads 4 bytes per
+  /// stored number instead of widening the block into buf first (the product is memory-bound);
+  /// a dense one with more columns goes through data(buf) and one GEMM.
   void multiply_add(const double *X, int ldx, double *Y, int ldy, int nrhs, std::vector<double> &buf) const;
 };
 
