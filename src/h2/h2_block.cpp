@@ -3,6 +3,7 @@
 
 #include "hssbem/core/interpolative.hpp"
 #include "hssbem/core/lapack.hpp"
+#include "mixed_blas.hpp"
 
 #include <algorithm>
 #include <stdexcept>
@@ -12,35 +13,6 @@ namespace hssbem {
 namespace {
 
 using Size = std::size_t;
-
-/// y += A x for a column-major float matrix A (m × n) and double x, y: four columns at a time,
-/// widening each entry as it is used.
-void mixed_gemv(int m, int n, const float *A, const double *x, double *y)
-{
-  int j = 0;
-  for (; j + 4 <= n; j += 4) {
-    const float *a0 = A + Size(j) * m, *a1 = a0 + m, *a2 = a1 + m, *a3 = a2 + m;
-    const double x0 = x[j], x1 = x[j + 1], x2 = x[j + 2], x3 = x[j + 3];
-    for (int i = 0; i < m; ++i)
-      y[i] += (static_cast<double>(a0[i]) * x0 + static_cast<double>(a1[i]) * x1) + (static_cast<double>(a2[i]) * x2 + static_cast<double>(a3[i]) * x3);
-  }
-  for (; j < n; ++j) {
-    const float *a = A + Size(j) * m;
-    const double xj = x[j];
-    for (int i = 0; i < m; ++i) y[i] += static_cast<double>(a[i]) * xj;
-  }
-}
-
-/// y = Aᵀ x for a column-major float matrix A (m × n): one dot product per column.
-void mixed_gemv_t(int m, int n, const float *A, const double *x, double *y)
-{
-  for (int j = 0; j < n; ++j) {
-    const float *a = A + Size(j) * m;
-    double s = 0;
-    for (int i = 0; i < m; ++i) s += static_cast<double>(a[i]) * x[i];
-    y[j] = s;
-  }
-}
 
 void widen(const std::vector<float> &f, std::vector<double> &d) { d.assign(f.begin(), f.end()); }
 
@@ -125,8 +97,8 @@ void H2Block::multiply_add(const double *X, int ldx, double *Y, int ldy, int nrh
     if (rank == 0) return;
     std::vector<double> t(Size(rank) * nrhs);
     if (nrhs == 1) {
-      mixed_gemv_t(M.n, rank, lr_w.data(), X, t.data());
-      return mixed_gemv(M.m, rank, lr_a.data(), t.data(), Y);
+      mixed::gemv_t(M.n, rank, lr_w.data(), X, t.data());
+      return mixed::gemv(M.m, rank, lr_a.data(), t.data(), Y);
     }
     std::vector<double> w;
     widen(lr_w, w);
@@ -134,7 +106,7 @@ void H2Block::multiply_add(const double *X, int ldx, double *Y, int ldy, int nrh
     widen(lr_a, buf);
     return lapack::gemm('N', 'N', M.m, nrhs, rank, 1.0, buf.data(), M.m, t.data(), rank, 1.0, Y, ldy);
   }
-  if (is_single() && nrhs == 1) return mixed_gemv(M.m, M.n, single.data(), X, Y);
+  if (is_single() && nrhs == 1) return mixed::gemv(M.m, M.n, single.data(), X, Y);
   lapack::gemm('N', 'N', M.m, nrhs, M.n, 1.0, data(buf), M.ld(), X, ldx, 1.0, Y, ldy);
 }
 

@@ -47,6 +47,14 @@ void strong_sources(const ClusterTree &tree, const BlockPartition &p, int c, con
   }
 }
 
+/// The `block` indices per point of leaf c (its rows or columns).
+std::vector<int> leaf_indices(const ClusterTree &tree, int c, int block)
+{
+  std::vector<int> out(static_cast<std::size_t>(block) * tree.cluster(c).size());
+  std::iota(out.begin(), out.end(), block * tree.cluster(c).begin);
+  return out;
+}
+
 /// Add the rigid-body terms (rigid_body_blocks.hpp) to the near blocks that hold them.
 void add_rigid_body_terms(const BemOperator &op, H2Matrix &K)
 {
@@ -87,7 +95,7 @@ H2Matrix compress_bem_operator_h2(const BemOperator &op, const H2Options &option
   std::vector<double> scales(w);
   for (int q = 0; q < w; ++q) scales[q] = K.col_scale(q);
   std::vector<NestedBasis *> bases(tree.num_clusters());
-  for (int c = 0; c < tree.num_clusters(); ++c) bases[c] = &K.basis(c);
+  for (int c = 0; c < tree.num_clusters(); ++c) bases[c] = &K.bases()[c];
   const int np = options.proxy_points > 0 ? options.proxy_points : default_proxy_points(options.rel_tol);
   Skeletonizer skel(op, SkeletonizerOptions{options.rel_tol, options.max_rank, options.proxy_ratio, np, false, true, true}, tree, w, scales, bases);
   const QuadratureReach &reach = skel.reach();
@@ -102,6 +110,7 @@ H2Matrix compress_bem_operator_h2(const BemOperator &op, const H2Options &option
   // Bases, bottom-up; only clusters with a far block at or above them need one.
   const auto sources = [&](int c, const std::vector<int> &front, std::vector<int> &out) { strong_sources(tree, part, c, front, out); };
   for (int l = tree.levels() - 1; l >= 1; --l) skel.skeletonize_level(l, sources, &part.has_far, &part.has_far);
+  K.store_bases(options.single_precision);
 
   // Far blocks between skeletons.
   std::vector<int> all(tree.num_clusters());
@@ -111,8 +120,8 @@ H2Matrix compress_bem_operator_h2(const BemOperator &op, const H2Options &option
     for (int b : part.far[a]) {
       H2Block B;
       B.col_cluster = b;
-      B.M = DenseMatrix(static_cast<int>(K.basis(a).row_skel.size()), static_cast<int>(K.basis(b).col_skel.size()));
-      skel.block(K.basis(a).row_skel, K.basis(b).col_skel, B.M.data(), 1, B.M.ld());
+      B.M = DenseMatrix(static_cast<int>(K.row_skeleton(a).size()), static_cast<int>(K.col_skeleton(b).size()));
+      skel.block(K.row_skeleton(a), K.col_skeleton(b), B.M.data(), 1, B.M.ld());
       if (options.single_precision && options.low_rank_far) B.compress(options.rel_tol / 10);
       else if (options.single_precision) B.demote();
       K.far_blocks(a).push_back(std::move(B));
@@ -125,9 +134,9 @@ H2Matrix compress_bem_operator_h2(const BemOperator &op, const H2Options &option
   phase.emplace(Phase::NearField);
   timer.restart();
   for_each_cluster(tree.leaves(), [&](int a) {
-    const std::vector<int> rows = basis_candidates(tree, K.bases(), a, 3, true);
+    const std::vector<int> rows = leaf_indices(tree, a, 3);
     for (int b : part.near[a]) {
-      const std::vector<int> cols = basis_candidates(tree, K.bases(), b, w, false);
+      const std::vector<int> cols = leaf_indices(tree, b, w);
       H2Block B;
       B.col_cluster = b;
       B.M = DenseMatrix(static_cast<int>(rows.size()), static_cast<int>(cols.size()));

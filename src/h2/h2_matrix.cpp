@@ -5,9 +5,11 @@
 #include "hssbem/core/blas_threads.hpp"
 #include "hssbem/core/lapack.hpp"
 #include "hssbem/core/phase.hpp"
+#include "mixed_blas.hpp"
 
 #include <algorithm>
 #include <numeric>
+#include <stdexcept>
 
 namespace hssbem {
 
@@ -30,8 +32,142 @@ const H2Block *H2Matrix::near_block(int a, int b) const
 
 H2Block *H2Matrix::near_block(int a, int b) { return const_cast<H2Block *>(static_cast<const H2Matrix &>(*this).near_block(a, b)); }
 
+namespace {
+
+using Size = std::size_t;
+
+/// Rows of the candidates of a cluster: a leaf's rows of X (or Y), else its children's
+/// skeleton coefficients (left, then right). Row p is at ptr(p) with column stride ld(p).
+template <class T>
+struct CandidateRows {
+  T *base = nullptr; ///< a leaf's first row, stride `ld`
+  long ld = 0;
+  DenseMatrix *a = nullptr, *b = nullptr; ///< an inner cluster's children
+  T *ptr(int p) const
+  {
+    if (base) return base + p;
+    return p < a->m ? a->data() + p : b->data() + (p - a->m);
+  }
+  long stride(int p) const { return base ? ld : p < a->m ? a->ld() : b->ld(); }
+};
+
+/// out (k × nrhs, leading dimension ldo) = Uᵀ x, x the candidates' rows.
+template <class Elem>
+void interp_t(const StoredInterpolation &U, const CandidateRows<Elem> &x, int nrhs, double *out, int ldo, std::vector<double> &buf)
+{
+  const int k = U.rank(), nred = static_cast<int>(U.red_pos.size());
+  for (int r = 0; r < nrhs; ++r)
+    for (int t = 0; t < k; ++t) out[t + Size(r) * ldo] = x.ptr(U.skel_pos[t])[r * x.stride(U.skel_pos[t])];
+  if (k == 0 || nred == 0) return;
+  buf.resize(Size(nred) * nrhs);
+  for (int r = 0; r < nrhs; ++r)
+    for (int j = 0; j < nred; ++j) buf[j + Size(r) * nred] = x.ptr(U.red_pos[j])[r * x.stride(U.red_pos[j])];
+  if (!U.Tf.empty() && nrhs == 1) return mixed::gemv(k, nred, U.Tf.data(), buf.data(), out);
+  std::vector<double> wide;
+  const double *T = U.Td.data();
+  if (!U.Tf.empty()) wide.assign(U.Tf.begin(), U.Tf.end()), T = wide.data();
+  lapack::gemm('N', 'N', k, nrhs, nred, 1.0, T, k, buf.data(), nred, 1.0, out, ldo);
+}
+
+/// y += U yh (yh: k × nrhs, leading dimension ldh), y the candidates' rows.
+void interp_n(const StoredInterpolation &U, const double *yh, int ldh, int nrhs, const CandidateRows<double> &y, std::vector<double> &buf)
+{
+  const int k = U.rank(), nred = static_cast<int>(U.red_pos.size());
+  if (k == 0) return;
+  for (int r = 0; r < nrhs; ++r)
+    for (int t = 0; t < k; ++t) y.ptr(U.skel_pos[t])[r * y.stride(U.skel_pos[t])] += yh[t + Size(r) * ldh];
+  if (nred == 0) return;
+  buf.resize(Size(nred) * nrhs);
+  if (!U.Tf.empty() && nrhs == 1) {
+    mixed::gemv_t(k, nred, U.Tf.data(), yh, buf.data());
+  } else {
+    std::vector<double> wide;
+    const double *T = U.Td.data();
+    if (!U.Tf.empty()) wide.assign(U.Tf.begin(), U.Tf.end()), T = wide.data();
+    lapack::gemm('T', 'N', nred, nrhs, k, 1.0, T, k, yh, ldh, 0.0, buf.data(), nred);
+  }
+  for (int r = 0; r < nrhs; ++r)
+    for (int j = 0; j < nred; ++j) y.ptr(U.red_pos[j])[r * y.stride(U.red_pos[j])] += buf[j + Size(r) * nred];
+}
+
+} // namespace
+
+DenseMatrix StoredInterpolation::expand() const
+{
+  const int k = rank();
+  DenseMatrix U(candidates, k);
+  for (int t = 0; t < k; ++t) U(skel_pos[t], t) = 1.0;
+  for (Size j = 0; j < red_pos.size(); ++j)
+    for (int t = 0; t < k; ++t) U(red_pos[j], t) = Tf.empty() ? Td[t + j * k] : Tf[t + j * k];
+  return U;
+}
+
+StoredInterpolation StoredInterpolation::from(const DenseMatrix &U, const std::vector<int> &cands, const std::vector<int> &skel, bool single)
+{
+  StoredInterpolation s;
+  s.candidates = static_cast<int>(cands.size());
+  const int k = static_cast<int>(skel.size());
+  if (k == 0) return s; // no basis (the root, or a cluster without far blocks)
+  if (U.n != k || U.m != s.candidates) throw std::logic_error("StoredInterpolation: U does not match its candidates and skeleton");
+  std::vector<int> at(cands.size(), -1); // candidate position -> skeleton column
+  for (int t = 0; t < k; ++t) {
+    const int p = static_cast<int>(std::find(cands.begin(), cands.end(), skel[t]) - cands.begin());
+    if (p == s.candidates) throw std::logic_error("StoredInterpolation: a skeleton index is no candidate");
+    s.skel_pos.push_back(p);
+    at[p] = t;
+  }
+  for (int p = 0; p < s.candidates; ++p)
+    if (at[p] < 0) s.red_pos.push_back(p);
+  std::vector<double> T(Size(k) * s.red_pos.size());
+  for (Size j = 0; j < s.red_pos.size(); ++j)
+    for (int t = 0; t < k; ++t) T[t + j * k] = U(s.red_pos[j], t);
+  if (single) s.Tf.assign(T.begin(), T.end());
+  else s.Td = std::move(T);
+  return s;
+}
+
+NestedBasis H2Matrix::basis(int c) const
+{
+  if (!m_bases.empty()) return m_bases[c];
+  NestedBasis b;
+  b.row_skel = m_row_skel[c];
+  b.col_skel = m_col_skel[c];
+  b.U = m_U[c].expand();
+  b.V = m_V[c].expand();
+  b.row_forced = m_row_forced[c];
+  b.col_forced = m_col_forced[c];
+  return b;
+}
+
+void H2Matrix::store_bases(bool single)
+{
+  const int nc = m_tree.num_clusters();
+  m_U.assign(nc, {});
+  m_V.assign(nc, {});
+  m_row_forced.assign(nc, 0);
+  m_col_forced.assign(nc, 0);
+  std::vector<int> all(nc);
+  std::iota(all.begin(), all.end(), 0);
+  for_each_cluster(all, [&](int c) {
+    const NestedBasis &b = m_bases[c];
+    m_U[c] = StoredInterpolation::from(b.U, basis_candidates(m_tree, m_bases, c, m_row_block, true), b.row_skel, single);
+    m_V[c] = StoredInterpolation::from(b.V, basis_candidates(m_tree, m_bases, c, m_col_block, false), b.col_skel, single);
+    m_row_forced[c] = b.row_forced;
+    m_col_forced[c] = b.col_forced;
+  });
+  m_row_skel.resize(nc);
+  m_col_skel.resize(nc);
+  for (int c = 0; c < nc; ++c) {
+    m_row_skel[c] = std::move(m_bases[c].row_skel);
+    m_col_skel[c] = std::move(m_bases[c].col_skel);
+  }
+  m_bases.clear();
+  m_bases.shrink_to_fit();
+}
+
 void H2Matrix::apply(const double *X, int ldx, double *Y, int ldy, int nrhs) const
 {
+  if (!m_bases.empty()) throw std::logic_error("H2Matrix::apply: the bases are not stored yet (store_bases)");
   PhaseScope phase(Phase::Matvec);
   const int nc = m_tree.num_clusters();
   std::vector<int> all(nc);
@@ -41,20 +177,18 @@ void H2Matrix::apply(const double *X, int ldx, double *Y, int ldy, int nrhs) con
   for (int l = m_tree.levels() - 1; l >= 1; --l)
     for_each_cluster(m_tree.clusters_at_level(l), [&](int c) {
       const Cluster &cl = m_tree.cluster(c);
-      const DenseMatrix &V = m_bases[c].V;
-      xh[c] = DenseMatrix(V.n, nrhs);
-      if (V.n == 0) return;
-      if (cl.left < 0) {
-        lapack::gemm('T', 'N', V.n, nrhs, V.m, 1.0, V.data(), V.ld(), X + static_cast<long>(m_col_block) * cl.begin, ldx, 0.0, xh[c].data(), xh[c].ld());
-      } else {
-        const DenseMatrix &a = xh[cl.left], &b = xh[cl.right];
-        lapack::gemm('T', 'N', V.n, nrhs, a.m, 1.0, V.data(), V.ld(), a.data(), a.ld(), 0.0, xh[c].data(), xh[c].ld());
-        lapack::gemm('T', 'N', V.n, nrhs, b.m, 1.0, V.data() + a.m, V.ld(), b.data(), b.ld(), 1.0, xh[c].data(), xh[c].ld());
-      }
+      const StoredInterpolation &V = m_V[c];
+      xh[c] = DenseMatrix(V.rank(), nrhs);
+      if (V.rank() == 0) return;
+      CandidateRows<const double> x;
+      if (cl.left < 0) x.base = X + static_cast<long>(m_col_block) * cl.begin, x.ld = ldx;
+      else x.a = &xh[cl.left], x.b = &xh[cl.right];
+      std::vector<double> buf;
+      interp_t(V, x, nrhs, xh[c].data(), xh[c].ld(), buf);
     });
   // Far blocks: yh_a = Σ_b K(S_a, C_b) xh_b.
   for_each_cluster(all, [&](int a) {
-    yh[a] = DenseMatrix(m_bases[a].U.n, nrhs);
+    yh[a] = DenseMatrix(m_U[a].rank(), nrhs);
     std::vector<double> buf;
     for (const H2Block &B : m_far[a]) B.multiply_add(xh[B.col_cluster].data(), xh[B.col_cluster].ld(), yh[a].data(), yh[a].ld(), nrhs, buf);
   });
@@ -62,13 +196,11 @@ void H2Matrix::apply(const double *X, int ldx, double *Y, int ldy, int nrhs) con
   for (int l = 1; l < m_tree.levels(); ++l)
     for_each_cluster(m_tree.clusters_at_level(l), [&](int c) {
       const Cluster &cl = m_tree.cluster(c);
-      const DenseMatrix &U = m_bases[c].U;
-      if (cl.left >= 0) {
-        if (U.n == 0) return;
-        DenseMatrix &ya = yh[cl.left], &yb = yh[cl.right];
-        lapack::gemm('N', 'N', ya.m, nrhs, U.n, 1.0, U.data(), U.ld(), yh[c].data(), yh[c].ld(), 1.0, ya.data(), ya.ld());
-        lapack::gemm('N', 'N', yb.m, nrhs, U.n, 1.0, U.data() + ya.m, U.ld(), yh[c].data(), yh[c].ld(), 1.0, yb.data(), yb.ld());
-      }
+      if (cl.left < 0) return;
+      CandidateRows<double> y;
+      y.a = &yh[cl.left], y.b = &yh[cl.right];
+      std::vector<double> buf;
+      interp_n(m_U[c], yh[c].data(), yh[c].ld(), nrhs, y, buf);
     });
   for_each_cluster(m_tree.leaves(), [&](int c) {
     const Cluster &cl = m_tree.cluster(c);
@@ -77,8 +209,9 @@ void H2Matrix::apply(const double *X, int ldx, double *Y, int ldy, int nrhs) con
     for (int k = 0; k < nrhs; ++k) std::fill(y + static_cast<long>(k) * ldy, y + static_cast<long>(k) * ldy + m, 0.0);
     std::vector<double> buf;
     for (const H2Block &B : m_near[c]) B.multiply_add(X + static_cast<long>(m_col_block) * m_tree.cluster(B.col_cluster).begin, ldx, y, ldy, nrhs, buf);
-    const DenseMatrix &U = m_bases[c].U;
-    if (U.n > 0) lapack::gemm('N', 'N', U.m, nrhs, U.n, 1.0, U.data(), U.ld(), yh[c].data(), yh[c].ld(), 1.0, y, ldy);
+    CandidateRows<double> rows;
+    rows.base = y, rows.ld = ldy;
+    interp_n(m_U[c], yh[c].data(), yh[c].ld(), nrhs, rows, buf);
   });
 }
 
@@ -90,15 +223,18 @@ void H2Matrix::update_stats()
   m_stats.basis_bytes = m_stats.far_bytes = m_stats.near_bytes = 0;
   m_stats.far_blocks = m_stats.near_blocks = 0;
   for (int c = 0; c < m_tree.num_clusters(); ++c) {
-    const NestedBasis &b = m_bases[c];
-    m_stats.basis_bytes += b.U.bytes() + b.V.bytes() + (b.row_skel.size() + b.col_skel.size()) * sizeof(int);
+    const int kr = m_bases.empty() ? m_U[c].rank() : m_bases[c].U.n, kc = m_bases.empty() ? m_V[c].rank() : m_bases[c].V.n;
+    if (m_bases.empty())
+      m_stats.basis_bytes += m_U[c].bytes() + m_V[c].bytes() + (m_row_skel[c].size() + m_col_skel[c].size()) * sizeof(int);
+    else
+      m_stats.basis_bytes += m_bases[c].U.bytes() + m_bases[c].V.bytes() + (m_bases[c].row_skel.size() + m_bases[c].col_skel.size()) * sizeof(int);
     for (const H2Block &B : m_far[c]) m_stats.far_bytes += B.bytes() + sizeof(H2Block);
     for (const H2Block &B : m_near[c]) m_stats.near_bytes += B.bytes() + sizeof(H2Block);
     m_stats.far_blocks += static_cast<long>(m_far[c].size());
     m_stats.near_blocks += static_cast<long>(m_near[c].size());
     H2LevelStats &s = m_stats.levels[m_tree.cluster(c).level];
     s.far_blocks += static_cast<long>(m_far[c].size());
-    if (m_partition.has_far[c]) add_level_ranks(s, b); // the root never has far blocks
+    if (m_partition.has_far[c]) add_level_ranks(s, kr, kc); // the root never has far blocks
   }
   finish_level_means(m_stats.levels);
   m_stats.memory_bytes = m_stats.basis_bytes + m_stats.far_bytes + m_stats.near_bytes;

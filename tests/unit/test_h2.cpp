@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <random>
 
 using namespace hssbem;
 using namespace hssbem::test; // dense_k, matvec_error, rel
@@ -230,6 +231,88 @@ TEST(H2Block, LowRankBlockMatchesItsEntries)
   R.compress(1e-6);
   EXPECT_FALSE(R.is_low_rank());
   EXPECT_TRUE(R.is_single());
+}
+
+TEST(H2Matrix, BasisAccessorGivesTheBasesTheProductUses)
+{
+  // basis(c) rebuilds U and V in double (candidates × skeleton, interpolative form) from the
+  // stored form; a product written with them alone, level by level, equals apply().
+  auto L = load("sphere_l1.msh");
+  for (const bool single : {false, true}) {
+    H2Options o;
+    o.leaf_size = 16;
+    o.single_precision = single;
+    const H2Matrix K = compress_bem_operator_h2(*L->op, o);
+    const ClusterTree &tree = K.tree();
+    const int nc = tree.num_clusters();
+    std::vector<NestedBasis> B(nc);
+    for (int c = 0; c < nc; ++c) B[c] = K.basis(c);
+    for (int c = 0; c < nc; ++c) {
+      if (!K.partition().has_far[c]) continue;
+      EXPECT_EQ(B[c].row_skel, K.row_skeleton(c));
+      EXPECT_EQ(B[c].col_skel, K.col_skeleton(c));
+      const std::vector<int> rows = basis_candidates(tree, B, c, 3, true), cols = basis_candidates(tree, B, c, K.col_block(), false);
+      ASSERT_EQ(B[c].U.m, static_cast<int>(rows.size()));
+      ASSERT_EQ(B[c].U.n, static_cast<int>(B[c].row_skel.size()));
+      ASSERT_EQ(B[c].V.m, static_cast<int>(cols.size()));
+      for (int t = 0; t < B[c].U.n; ++t) {
+        const int p = static_cast<int>(std::find(rows.begin(), rows.end(), B[c].row_skel[t]) - rows.begin());
+        for (int u = 0; u < B[c].U.n; ++u) EXPECT_EQ(B[c].U(p, u), t == u ? 1.0 : 0.0);
+      }
+    }
+    // y = K x from the double bases and the blocks' entries.
+    const int n = tree.num_points(), w = K.col_block();
+    std::mt19937 gen(3);
+    std::normal_distribution<double> N01;
+    std::vector<double> x(static_cast<std::size_t>(w) * n), y(3L * n), yref(3L * n, 0.0);
+    for (double &v : x) v = N01(gen);
+    K.apply(x.data(), w * n, y.data(), 3 * n);
+    std::vector<std::vector<double>> xh(nc), yh(nc);
+    for (int l = tree.levels() - 1; l >= 1; --l)
+      for (int c : tree.clusters_at_level(l)) {
+        if (!K.partition().has_far[c]) continue;
+        const std::vector<int> cols = basis_candidates(tree, B, c, w, false);
+        const Cluster &cl = tree.cluster(c);
+        std::vector<double> xc(cols.size());
+        for (std::size_t p = 0; p < cols.size(); ++p) {
+          if (cl.left < 0) xc[p] = x[cols[p]];
+          else {
+            const int na = static_cast<int>(B[cl.left].col_skel.size());
+            xc[p] = static_cast<int>(p) < na ? xh[cl.left][p] : xh[cl.right][p - na];
+          }
+        }
+        xh[c].assign(B[c].V.n, 0.0);
+        for (int t = 0; t < B[c].V.n; ++t)
+          for (int p = 0; p < B[c].V.m; ++p) xh[c][t] += B[c].V(p, t) * xc[p];
+      }
+    for (int a = 0; a < nc; ++a) {
+      yh[a].assign(B[a].U.n, 0.0);
+      for (std::size_t f = 0; f < K.partition().far[a].size(); ++f) {
+        const H2Block &F = K.far_blocks(a)[f];
+        for (int i = 0; i < F.M.m; ++i)
+          for (int j = 0; j < F.M.n; ++j) yh[a][i] += F.entry(i, j) * xh[F.col_cluster][j];
+      }
+    }
+    for (int l = 1; l < tree.levels(); ++l)
+      for (int c : tree.clusters_at_level(l)) {
+        if (B[c].U.n == 0) continue;
+        const Cluster &cl = tree.cluster(c);
+        std::vector<double> yc(B[c].U.m, 0.0);
+        for (int t = 0; t < B[c].U.n; ++t)
+          for (int p = 0; p < B[c].U.m; ++p) yc[p] += B[c].U(p, t) * yh[c][t];
+        if (cl.left < 0) {
+          for (int p = 0; p < B[c].U.m; ++p) yref[3L * cl.begin + p] += yc[p];
+        } else {
+          const int na = static_cast<int>(B[cl.left].row_skel.size());
+          for (int p = 0; p < B[c].U.m; ++p) (p < na ? yh[cl.left][p] : yh[cl.right][p - na]) += yc[p];
+        }
+      }
+    for (int a : tree.leaves())
+      for (const H2Block &D : K.near_blocks(a))
+        for (int i = 0; i < D.M.m; ++i)
+          for (int j = 0; j < D.M.n; ++j) yref[3L * tree.cluster(a).begin + i] += D.entry(i, j) * x[static_cast<std::size_t>(w) * tree.cluster(D.col_cluster).begin + j];
+    EXPECT_LE(rel(y, yref), 1e-12) << (single ? "single" : "double");
+  }
 }
 
 SurfaceMesh scaled(SurfaceMesh m, Vec3 s)

@@ -60,6 +60,25 @@ struct H2Block {
   void multiply_add(const double *X, int ldx, double *Y, int ldy, int nrhs, std::vector<double> &buf) const;
 };
 
+/// One side of a cluster's nested basis as the H² matrix keeps it: U (or V) of NestedBasis in
+/// interpolative form without its identity rows. Row skel_pos[t] of U is unit vector t, row
+/// red_pos[j] holds the weights T(:, j); T (k × |red_pos|, column-major) is kept in single
+/// precision (Tf) or double (Td).
+struct StoredInterpolation {
+  int candidates = 0;
+  std::vector<int> skel_pos, red_pos; ///< positions among the candidates
+  std::vector<float> Tf;
+  std::vector<double> Td;
+
+  int rank() const { return static_cast<int>(skel_pos.size()); }
+  std::size_t bytes() const { return (skel_pos.size() + red_pos.size()) * sizeof(int) + Tf.size() * sizeof(float) + Td.size() * sizeof(double); }
+  /// U as NestedBasis holds it (candidates × k, double).
+  DenseMatrix expand() const;
+  /// From U (candidates × k) whose column t is the unit vector at the candidate skel[t] (global
+  /// indices; `cands` lists the candidates' global indices in order).
+  static StoredInterpolation from(const DenseMatrix &U, const std::vector<int> &cands, const std::vector<int> &skel, bool single);
+};
+
 struct H2LevelStats {
   int clusters = 0; ///< clusters with a basis
   int max_row_rank = 0, max_col_rank = 0;
@@ -96,9 +115,19 @@ public:
 
   BlockPartition &partition() { return m_partition; }
   const BlockPartition &partition() const { return m_partition; }
-  NestedBasis &basis(int c) { return m_bases[c]; }
-  const NestedBasis &basis(int c) const { return m_bases[c]; }
+  /// Cluster c's nested basis (skeletons, U and V in double, interpolative form), built from the
+  /// stored form: returned by value, so hold the returned object (or a reference bound to it),
+  /// not pointers into it. For the skeletons alone, row_skeleton() and col_skeleton() are free.
+  NestedBasis basis(int c) const;
+  const std::vector<int> &row_skeleton(int c) const { return m_row_skel[c]; }
+  const std::vector<int> &col_skeleton(int c) const { return m_col_skel[c]; }
+  /// The stored sides of c's basis (U, V without identity rows; see StoredInterpolation).
+  const StoredInterpolation &row_interpolation(int c) const { return m_U[c]; }
+  const StoredInterpolation &col_interpolation(int c) const { return m_V[c]; }
+  /// The bases while the compression builds them; store_bases() moves them into the stored form
+  /// (weights in single precision when `single`) and empties this.
   std::vector<NestedBasis> &bases() { return m_bases; }
+  void store_bases(bool single);
   /// Far blocks of row cluster a: K(S_a, C_b), one per b in partition().far[a], same order.
   std::vector<H2Block> &far_blocks(int a) { return m_far[a]; }
   const std::vector<H2Block> &far_blocks(int a) const { return m_far[a]; }
@@ -122,7 +151,10 @@ private:
   int m_row_block, m_col_block;
   std::vector<double> m_col_scale;
   BlockPartition m_partition;
-  std::vector<NestedBasis> m_bases;
+  std::vector<NestedBasis> m_bases; ///< during the compression only
+  std::vector<std::vector<int>> m_row_skel, m_col_skel;
+  std::vector<int> m_row_forced, m_col_forced;
+  std::vector<StoredInterpolation> m_U, m_V;
   std::vector<std::vector<H2Block>> m_far, m_near;
   H2Stats m_stats;
 };
