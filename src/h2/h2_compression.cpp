@@ -55,6 +55,24 @@ std::vector<int> leaf_indices(const ClusterTree &tree, int c, int block)
   return out;
 }
 
+/// Per leaf a: the leaves (ascending) whose columns a's rows couple to through rigid-body terms.
+std::vector<std::vector<int>> rigid_term_leaves(const BemOperator &op, const ClusterTree &tree)
+{
+  std::vector<std::vector<int>> out(tree.num_clusters());
+  const std::vector<int> leaf_of = tree.leaf_of_positions();
+  for (int i = 0; i < op.num_nodes(); ++i) {
+    int cols[3];
+    double wts[3];
+    const int a = leaf_of[tree.iperm()[i]], nc = op.rigid_body_columns(i, cols, wts);
+    for (int t = 0; t < nc; ++t) out[a].push_back(leaf_of[tree.iperm()[cols[t]]]);
+  }
+  for (std::vector<int> &v : out) {
+    std::sort(v.begin(), v.end());
+    v.erase(std::unique(v.begin(), v.end()), v.end());
+  }
+  return out;
+}
+
 /// Add the rigid-body terms (rigid_body_blocks.hpp) to the near blocks that hold them.
 void add_rigid_body_terms(const BemOperator &op, H2Matrix &K)
 {
@@ -133,6 +151,7 @@ H2Matrix compress_bem_operator_h2(const BemOperator &op, const H2Options &option
   // Near blocks (true entries) and the rigid-body terms.
   phase.emplace(Phase::NearField);
   timer.restart();
+  const std::vector<std::vector<int>> rigid = rigid_term_leaves(op, tree);
   for_each_cluster(tree.leaves(), [&](int a) {
     const std::vector<int> rows = leaf_indices(tree, a, 3);
     for (int b : part.near[a]) {
@@ -141,7 +160,11 @@ H2Matrix compress_bem_operator_h2(const BemOperator &op, const H2Options &option
       B.col_cluster = b;
       B.M = DenseMatrix(static_cast<int>(rows.size()), static_cast<int>(cols.size()));
       skel.block(rows, cols, B.M.data(), 1, B.M.ld());
-      if (options.single_precision) B.demote();
+      // Blocks that will receive rigid-body terms stay dense (the diagonal ones, and those of
+      // moved collocation points whose triangle reaches into another leaf).
+      const bool gets_rigid = std::binary_search(rigid[a].begin(), rigid[a].end(), b);
+      if (options.single_precision && options.low_rank_near && !gets_rigid) B.compress(options.rel_tol / 30);
+      else if (options.single_precision) B.demote();
       K.near_blocks(a).push_back(std::move(B));
     }
   });
