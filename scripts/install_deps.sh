@@ -1,6 +1,9 @@
 #!/usr/bin/env bash
 # Install hssbem's build and test dependencies from Debian 12's packages (needs root or sudo) and
-# make sure BLAS/LAPACK resolve to OpenBLAS (PETSc otherwise runs on the reference BLAS, ~10x slower).
+# make sure BLAS/LAPACK resolve to OpenBLAS (PETSc otherwise runs on the reference BLAS, ~10x slower),
+# in its OpenMP build: the engine calls BLAS both from its own OpenMP loops and outside them, and
+# the pthread build's busy-waiting threads then compete with OpenMP's (measured on 2 cores: the
+# H² GMRES solve 2.7x slower, the far-field sketch 3-4x slower with the pthread build).
 set -euo pipefail
 
 SUDO=""
@@ -9,7 +12,7 @@ if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
 packages=(
   build-essential cmake pkg-config          # compilers, build system
   petsc-dev libopenmpi-dev openmpi-bin      # PETSc 3.18 on Open MPI, mpiexec
-  libopenblas-dev libmetis-dev              # BLAS/LAPACK (OpenBLAS), METIS
+  libopenblas-dev libopenblas0-openmp libmetis-dev  # BLAS/LAPACK (OpenBLAS, OpenMP build), METIS
   libhdf5-openmpi-dev                       # HDF5 headers PETSc was built with
   libgtest-dev nlohmann-json3-dev           # unit tests, problem-file parser
   python3 python3-numpy python3-h5py        # CLI tests, benchmark scripts
@@ -25,11 +28,11 @@ for lib in libblas.so.3 liblapack.so.3; do
   name="${lib}-${arch}"
   query=$(update-alternatives --query "$name")
   current=$(sed -n 's/^Value: //p' <<<"$query")
-  if [[ "$current" == */openblas*/* ]]; then
-    echo "install_deps: $name -> $current (OpenBLAS)"
+  if [[ "$current" == */openblas-openmp/* ]]; then
+    echo "install_deps: $name -> $current (OpenBLAS, OpenMP build)"
   else
-    openblas=$(sed -n 's/^Alternative: \(.*openblas.*\)$/\1/p' <<<"$query" | head -n 1)
-    [ -n "$openblas" ] || { echo "install_deps: no OpenBLAS alternative for $name" >&2; exit 1; }
+    openblas=$(sed -n 's/^Alternative: \(.*openblas-openmp.*\)$/\1/p' <<<"$query" | head -n 1)
+    [ -n "$openblas" ] || { echo "install_deps: no OpenMP OpenBLAS alternative for $name" >&2; exit 1; }
     echo "install_deps: $name -> ${current:-none}; switching to $openblas"
     $SUDO update-alternatives --set "$name" "$openblas"
   fi

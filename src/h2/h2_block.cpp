@@ -110,4 +110,24 @@ void H2Block::multiply_add(const double *X, int ldx, double *Y, int ldy, int nrh
   lapack::gemm('N', 'N', M.m, nrhs, M.n, 1.0, data(buf), M.ld(), X, ldx, 1.0, Y, ldy);
 }
 
+void H2Block::multiply_add_transposed(const double *Y, int ldy, double *X, int ldx, int nrhs, std::vector<double> &buf) const
+{
+  if (M.m == 0 || M.n == 0 || nrhs == 0) return;
+  if (is_low_rank()) { // Bᵀ Y = W (Aᵀ Y)
+    if (rank == 0) return;
+    std::vector<double> t(Size(rank) * nrhs);
+    if (nrhs == 1) {
+      mixed::gemv_t(M.m, rank, lr_a.data(), Y, t.data());
+      return mixed::gemv(M.n, rank, lr_w.data(), t.data(), X);
+    }
+    std::vector<double> a;
+    widen(lr_a, a);
+    lapack::gemm('T', 'N', rank, nrhs, M.m, 1.0, a.data(), M.m, Y, ldy, 0.0, t.data(), rank);
+    widen(lr_w, buf);
+    return lapack::gemm('N', 'N', M.n, nrhs, rank, 1.0, buf.data(), M.n, t.data(), rank, 1.0, X, ldx);
+  }
+  if (is_single() && nrhs == 1) return mixed::gemv_t(M.m, M.n, single.data(), Y, X, true);
+  lapack::gemm('T', 'N', M.n, nrhs, M.m, 1.0, data(buf), M.ld(), Y, ldy, 1.0, X, ldx);
+}
+
 } // namespace hssbem

@@ -90,6 +90,41 @@ void interp_n(const StoredInterpolation &U, const double *yh, int ldh, int nrhs,
     for (int j = 0; j < nred; ++j) y.ptr(U.red_pos[j])[r * y.stride(U.red_pos[j])] += buf[j + Size(r) * nred];
 }
 
+/// Upward pass over stored bases (m_V for the columns, m_U for the rows): moments[c] = B_cᵀ
+/// (c's candidate part of X), deepest level first; `block` rows of X per point.
+std::vector<DenseMatrix> upward_moments(const ClusterTree &tree, const std::vector<StoredInterpolation> &bases, int block, const double *X, int ldx, int nrhs)
+{
+  std::vector<DenseMatrix> xh(tree.num_clusters());
+  for (int l = tree.levels() - 1; l >= 1; --l)
+    for_each_cluster(tree.clusters_at_level(l), [&](int c) {
+      const Cluster &cl = tree.cluster(c);
+      const StoredInterpolation &B = bases[c];
+      xh[c] = DenseMatrix(B.rank(), nrhs);
+      if (B.rank() == 0) return;
+      CandidateRows<const double> x;
+      if (cl.left < 0) x.base = X + static_cast<long>(block) * cl.begin, x.ld = ldx;
+      else x.a = &xh[cl.left], x.b = &xh[cl.right];
+      std::vector<double> buf;
+      interp_t(B, x, nrhs, xh[c].data(), xh[c].ld(), buf);
+    });
+  return xh;
+}
+
+/// Downward transfers over stored bases, top down: each child's potential gains its part of the
+/// parent's, pot[child] += B_parent(child's rows) pot[parent].
+void downward_transfers(const ClusterTree &tree, const std::vector<StoredInterpolation> &bases, std::vector<DenseMatrix> &pot, int nrhs)
+{
+  for (int l = 1; l < tree.levels(); ++l)
+    for_each_cluster(tree.clusters_at_level(l), [&](int c) {
+      const Cluster &cl = tree.cluster(c);
+      if (cl.left < 0) return;
+      CandidateRows<double> y;
+      y.a = &pot[cl.left], y.b = &pot[cl.right];
+      std::vector<double> buf;
+      interp_n(bases[c], pot[c].data(), pot[c].ld(), nrhs, y, buf);
+    });
+}
+
 } // namespace
 
 DenseMatrix StoredInterpolation::expand() const
@@ -165,43 +200,50 @@ void H2Matrix::store_bases(bool single)
   m_bases.shrink_to_fit();
 }
 
-void H2Matrix::apply(const double *X, int ldx, double *Y, int ldy, int nrhs) const
+std::vector<DenseMatrix> H2Matrix::skeleton_far_field(const double *X, int ldx, int nrhs) const
 {
-  if (!m_bases.empty()) throw std::logic_error("H2Matrix::apply: the bases are not stored yet (store_bases)");
-  PhaseScope phase(Phase::Matvec);
+  if (!m_bases.empty()) throw std::logic_error("H2Matrix: the bases are not stored yet (store_bases)");
   const int nc = m_tree.num_clusters();
   std::vector<int> all(nc);
   std::iota(all.begin(), all.end(), 0);
-  std::vector<DenseMatrix> xh(nc), yh(nc);
-  // Upward pass: xh_τ = V_τᵀ (candidate part of x), deepest level first.
-  for (int l = m_tree.levels() - 1; l >= 1; --l)
-    for_each_cluster(m_tree.clusters_at_level(l), [&](int c) {
-      const Cluster &cl = m_tree.cluster(c);
-      const StoredInterpolation &V = m_V[c];
-      xh[c] = DenseMatrix(V.rank(), nrhs);
-      if (V.rank() == 0) return;
-      CandidateRows<const double> x;
-      if (cl.left < 0) x.base = X + static_cast<long>(m_col_block) * cl.begin, x.ld = ldx;
-      else x.a = &xh[cl.left], x.b = &xh[cl.right];
-      std::vector<double> buf;
-      interp_t(V, x, nrhs, xh[c].data(), xh[c].ld(), buf);
-    });
+  const std::vector<DenseMatrix> xh = upward_moments(m_tree, m_V, m_col_block, X, ldx, nrhs);
+  std::vector<DenseMatrix> yh(nc);
   // Far blocks: yh_a = Σ_b K(S_a, C_b) xh_b.
   for_each_cluster(all, [&](int a) {
     yh[a] = DenseMatrix(m_U[a].rank(), nrhs);
     std::vector<double> buf;
     for (const H2Block &B : m_far[a]) B.multiply_add(xh[B.col_cluster].data(), xh[B.col_cluster].ld(), yh[a].data(), yh[a].ld(), nrhs, buf);
   });
-  // Downward pass: children's yh += U_τ yh_τ; leaves add U yh and their near blocks.
-  for (int l = 1; l < m_tree.levels(); ++l)
-    for_each_cluster(m_tree.clusters_at_level(l), [&](int c) {
-      const Cluster &cl = m_tree.cluster(c);
-      if (cl.left < 0) return;
-      CandidateRows<double> y;
-      y.a = &yh[cl.left], y.b = &yh[cl.right];
-      std::vector<double> buf;
-      interp_n(m_U[c], yh[c].data(), yh[c].ld(), nrhs, y, buf);
-    });
+  downward_transfers(m_tree, m_U, yh, nrhs);
+  return yh;
+}
+
+std::vector<DenseMatrix> H2Matrix::skeleton_far_field_transposed(const double *Y, int ldy, int nrhs) const
+{
+  if (!m_bases.empty()) throw std::logic_error("H2Matrix: the bases are not stored yet (store_bases)");
+  const int nc = m_tree.num_clusters();
+  const std::vector<DenseMatrix> yh = upward_moments(m_tree, m_U, m_row_block, Y, ldy, nrhs);
+  // Far blocks transposed, gathered per column cluster: xh_b = Σ_a K(S_a, C_b)ᵀ yh_a.
+  std::vector<std::vector<std::pair<int, int>>> by_col(nc);
+  for (int a = 0; a < nc; ++a)
+    for (std::size_t i = 0; i < m_far[a].size(); ++i) by_col[m_far[a][i].col_cluster].push_back({a, static_cast<int>(i)});
+  std::vector<int> all(nc);
+  std::iota(all.begin(), all.end(), 0);
+  std::vector<DenseMatrix> xh(nc);
+  for_each_cluster(all, [&](int b) {
+    xh[b] = DenseMatrix(m_V[b].rank(), nrhs);
+    std::vector<double> buf;
+    for (const auto &[a, i] : by_col[b]) m_far[a][i].multiply_add_transposed(yh[a].data(), yh[a].ld(), xh[b].data(), xh[b].ld(), nrhs, buf);
+  });
+  downward_transfers(m_tree, m_V, xh, nrhs);
+  return xh;
+}
+
+void H2Matrix::apply(const double *X, int ldx, double *Y, int ldy, int nrhs) const
+{
+  PhaseScope phase(Phase::Matvec);
+  const std::vector<DenseMatrix> yh = skeleton_far_field(X, ldx, nrhs);
+  // Leaves: the far field through their row bases, plus their near blocks.
   for_each_cluster(m_tree.leaves(), [&](int c) {
     const Cluster &cl = m_tree.cluster(c);
     double *y = Y + static_cast<long>(m_row_block) * cl.begin;

@@ -1,4 +1,5 @@
 #include "hssbem/petsc/log.h"
+#include "hssbem/petsc/pc_h2.h"
 #include "hssbem/petsc/pc_hss.h"
 #include "hssbem/core/phase.hpp"
 
@@ -7,11 +8,13 @@
 PetscClassId  HSSBEM_CLASSID;
 PetscLogEvent BEM_Mesh, BEM_Assembly, BEM_Solve, BEM_Post, BEM_Interior, BEM_Output;
 PetscLogEvent HSS_Tree, HSS_Compress, HSS_NearField, HSS_Truncate, HSS_Factor, HSS_Solve, HSS_MatMult;
+PetscLogEvent H2F_Factor, H2F_Sketch, H2F_Eliminate, H2F_Merge, H2F_Top, H2F_Solve;
 
 /* The engine's phases as log events (engine phases open and close on the calling thread). */
 static void PhaseHook_Private(hssbem::Phase phase, bool begin)
 {
-  static const PetscLogEvent *event[] = {&HSS_Tree, &HSS_Compress, &HSS_NearField, &HSS_Truncate, &HSS_Factor, &HSS_Solve, &HSS_MatMult};
+  static const PetscLogEvent *event[] = {&HSS_Tree, &HSS_Compress, &HSS_NearField, &HSS_Truncate, &HSS_Factor, &HSS_Solve, &HSS_MatMult,
+                                        &H2F_Factor, &H2F_Sketch, &H2F_Eliminate, &H2F_Merge, &H2F_Top, &H2F_Solve};
   static_assert(sizeof(event) / sizeof(event[0]) == static_cast<int>(hssbem::Phase::Count), "one log event per phase");
   const PetscLogEvent e = *event[static_cast<int>(phase)];
   if (begin) (void)PetscLogEventBegin(e, 0, 0, 0, 0);
@@ -36,7 +39,7 @@ PetscErrorCode HssbemFinalizePackage(void)
 /*@C
   HssbemInitializePackage - Registers the class id and the log events of hssbem (one per phase,
   so -log_view shows where the time goes; the compression engines' phases through their phase
-  hook) and the PC type "hss" (PCHSS). Called once after PetscInitialize(); later calls do
+  hook) and the PC types "hss" (PCHSS) and "h2" (PCH2). Called once after PetscInitialize(); later calls do
   nothing.
 
   Level: beginner
@@ -60,8 +63,15 @@ PetscErrorCode HssbemInitializePackage(void)
   PetscCall(PetscLogEventRegister("HSSFactor", HSSBEM_CLASSID, &HSS_Factor));
   PetscCall(PetscLogEventRegister("HSSSolve", HSSBEM_CLASSID, &HSS_Solve));
   PetscCall(PetscLogEventRegister("HSSMatMult", HSSBEM_CLASSID, &HSS_MatMult));
+  PetscCall(PetscLogEventRegister("H2Factor", HSSBEM_CLASSID, &H2F_Factor));
+  PetscCall(PetscLogEventRegister(" H2FSketch", HSSBEM_CLASSID, &H2F_Sketch));
+  PetscCall(PetscLogEventRegister(" H2FEliminate", HSSBEM_CLASSID, &H2F_Eliminate));
+  PetscCall(PetscLogEventRegister(" H2FMerge", HSSBEM_CLASSID, &H2F_Merge));
+  PetscCall(PetscLogEventRegister(" H2FTop", HSSBEM_CLASSID, &H2F_Top));
+  PetscCall(PetscLogEventRegister("H2FSolve", HSSBEM_CLASSID, &H2F_Solve));
   hssbem::set_phase_hook(PhaseHook_Private);
   PetscCall(PCRegister(PCHSS, PCCreate_HSS));
+  PetscCall(PCRegister(PCH2, PCCreate_H2));
   PetscCall(PetscRegisterFinalize(HssbemFinalizePackage));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

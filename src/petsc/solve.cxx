@@ -2,6 +2,7 @@
    format conversion the factorization needs (see system.h). */
 #include "hssbem/petsc/system.h"
 #include "hssbem/petsc/log.h"
+#include "hssbem/petsc/pc_h2.h"
 #include "hssbem/petsc/pc_hss.h"
 
 #include "system_context.hpp"
@@ -80,8 +81,9 @@ static PetscErrorCode KSPSolveInLayout_Private(KSP ksp, Mat op, Vec b, Vec x, Pe
 
 /*@C
   HssbemKSPCreate - Creates the main solver (no prefix) with the defaults of the matrix type
-  (-ksp_type preonly with -pc_type hss on the HSS matrix, GMRES(100) with -pc_type jacobi and
-  -ksp_rtol 1e-8 on the H² one, -pc_type lu on the dense one) and applies
+  (-ksp_type preonly with -pc_type hss on the HSS matrix; GMRES(100), right-preconditioned so that
+  -ksp_rtol 1e-8 bounds the true residual, with -pc_type h2 (the H² factorization at its default
+  tolerance) on the H² one; -pc_type lu on the dense one) and applies
   the options database, before there is a matrix, so that option errors surface before the
   expensive assembly.
 
@@ -100,9 +102,10 @@ PetscErrorCode HssbemKSPCreate(MPI_Comm comm, const char *mat_type, KSP *ksp)
   if (h2) {
     PetscCall(KSPGMRESSetRestart(*ksp, 100));
     PetscCall(KSPSetTolerances(*ksp, 1e-8, PETSC_DEFAULT, PETSC_DEFAULT, PETSC_DEFAULT));
+    PetscCall(KSPSetPCSide(*ksp, PC_RIGHT));
   }
   PetscCall(KSPGetPC(*ksp, &pc));
-  PetscCall(PCSetType(pc, type == hssbem::OperatorType::Hss ? PCHSS : h2 ? PCJACOBI : PCLU));
+  PetscCall(PCSetType(pc, type == hssbem::OperatorType::Hss ? PCHSS : h2 ? PCH2 : PCLU));
   PetscCall(KSPSetFromOptions(*ksp));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

@@ -823,11 +823,11 @@ class HssOptionTests(CliTestCase):
 
     def test_h2_matrix_matches_dense(self):
         self.cube()
-        # Leaves of 8 nodes and eta = 0 give the 150-node cube far blocks; GMRES + Jacobi by default.
+        # Leaves of 8 nodes and eta = 0 give the 150-node cube far blocks; GMRES + PC h2 by default.
         r = self.run_driver("-problem", "problem.json", "-o", "h2.h5", "-options_left", "-bem_mat_type", "h2",
                             "-mat_h2_leaf_size", "8", "-mat_h2_eta", "0", "-bem_mat_view", timeout=TIMEOUT_RUN)
         self.assertSucceeds(r, self.path("h2.h5"))
-        self.assertRegex(r.output, r"gmres/jacobi", r.describe())
+        self.assertRegex(r.output, r"gmres/h2", r.describe())
         self.assertRegex(r.output, r"BEM operator in H² form", r.describe())
         self.assertNotRegex(r.output, r" 0 far blocks", r.describe())
         self.assertNoUnusedOptions(r)

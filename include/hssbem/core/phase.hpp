@@ -1,5 +1,5 @@
 /// \file phase.hpp
-/// Named phases of the compression engines (HSS and H²), reported to an optional hook so a host
+/// Named phases of the compression engines (HSS and H²) and of the H² factorization, reported to an optional hook so a host
 /// (the PETSc layer: one PetscLogEvent per phase) can time them without the engines depending on
 /// it. The engines open and close phases on the calling thread only, never inside their OpenMP
 /// regions.
@@ -15,6 +15,12 @@ enum class Phase {
   Factorization, ///< ULV factorization
   Solve,         ///< ULV solve
   Matvec,        ///< HSS or H² product
+  H2Factorization, ///< H² factorization, the whole of it (the five below but the solve are inside)
+  H2Sketch,        ///< H² factorization: random sketch of the far-field couplings
+  H2Eliminate,     ///< H² factorization: skeletons and eliminations of the boxes, level by level
+  H2Merge,         ///< H² factorization: a level's remaining unknowns and blocks onto the parents
+  H2Top,           ///< H² factorization: dense LU of the unknowns left at the top
+  H2Solve,         ///< solve with the H² factorization
   Count
 };
 

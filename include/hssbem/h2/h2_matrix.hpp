@@ -58,6 +58,8 @@ struct H2Block {
   /// stored number instead of widening the block into buf first (the product is memory-bound);
   /// a dense one with more columns goes through data(buf) and one GEMM.
   void multiply_add(const double *X, int ldx, double *Y, int ldy, int nrhs, std::vector<double> &buf) const;
+  /// X += Bᵀ Y for nrhs columns (Y: M.m × nrhs, X: M.n × nrhs), in every stored form.
+  void multiply_add_transposed(const double *Y, int ldy, double *X, int ldx, int nrhs, std::vector<double> &buf) const;
 };
 
 /// One side of a cluster's nested basis as the H² matrix keeps it: U (or V) of NestedBasis in
@@ -140,6 +142,13 @@ public:
 
   /// Y = K X for nrhs columns in cluster order, as HssMatrix::apply. O(N·r) per column.
   void apply(const double *X, int ldx, double *Y, int ldy, int nrhs = 1) const;
+  /// The far field of X at every row skeleton: out[a] (|S_a| × nrhs) is what the far blocks of a
+  /// and of its ancestors contribute to K(S_a, :) X (no near blocks). X: col_block() rows per
+  /// point, cluster order. The product's upward, far and downward passes without the leaves.
+  std::vector<DenseMatrix> skeleton_far_field(const double *X, int ldx, int nrhs) const;
+  /// The same for Kᵀ: out[b] (|C_b| × nrhs) is what the far blocks of b and of its ancestors
+  /// contribute to (Kᵀ Y)(C_b, :), for Y with row_block() rows per point.
+  std::vector<DenseMatrix> skeleton_far_field_transposed(const double *Y, int ldy, int nrhs) const;
 
   /// Recompute rank, block and memory figures.
   void update_stats();

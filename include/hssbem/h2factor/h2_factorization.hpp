@@ -1,0 +1,133 @@
+/// \file h2_factorization.hpp
+/// A fast direct factorization of the BEM system A = K E_S on the H² matrix of K (strong
+/// admissibility): strong recursive skeletonization (Minden, Ho, Damle, Ying 2017; in the FMM-LU
+/// form of Sushnikova, Greengard, O'Neil, Rachh 2023), with the H² matrix's own nested bases in
+/// place of proxy surfaces.
+///
+/// The unknowns are factored box by box, bottom-up over the H² cluster tree. For a box X of the
+/// current level, with active unknowns D_X (all of a leaf's, or its children's skeletons):
+///  1. Skeleton. One interpolative decomposition of D_X against what X sees outside its close
+///     neighbours N(X) (the boxes the H² partition does not separate from X): the H² far field of
+///     X's rows and columns, in both directions at once (a joint row/column skeleton S_X), and the
+///     *modified* entries between X and boxes beyond N(X) that earlier eliminations created
+///     (fill-in). The far field comes from the H² bases restricted to D_X, weighted by a random
+///     sketch of the couplings beyond (far_sketch.hpp), so no kernel entry is evaluated.
+///  2. Sparsify. Rows and columns of the redundant unknowns R_X = D_X \ S_X minus their
+///     interpolation from S_X: they then couple to X and N(X) only (to the tolerance).
+///  3. Eliminate R_X (LU of the R_X block) and add the Schur complement to the explicit blocks of
+///     S_X ∪ N(X): blocks between close boxes, and fill-in blocks between boxes that are
+///     not close (they enter later skeletons as step 1 says).
+/// Then S_X is all that remains of X; a parent's unknowns are its children's skeletons. When no
+/// box of a level sees a far field any more, the remaining unknowns are factored densely (the top).
+///
+/// A is factored with its columns scaled as the H² matrix holds K (G columns × μ/L-like scales,
+/// see kernel_column_scales), so one relative tolerance serves H and G columns. A pure-traction
+/// problem adds c Φ Φᵀ (rigid modes, rank 6): as explicit entries in close blocks and as a rank-6
+/// part of every far field.
+///
+/// What a new boundary-condition pattern redoes: the whole elimination (skeletons, LU, Schur
+/// complements), from the H² matrix's near blocks, far blocks and bases. What it does not: any
+/// kernel evaluation, and the far-field sketch (a property of K, cached in H2FactorCache).
+#pragma once
+
+#include "hssbem/bem/bem_operator.hpp"
+#include "hssbem/h2/h2_matrix.hpp"
+#include "hssbem/h2factor/far_sketch.hpp"
+
+#include <cstddef>
+#include <functional>
+#include <memory>
+#include <stdexcept>
+#include <vector>
+
+namespace hssbem {
+
+/// Parameters of the factorization (filled from -pc_h2_* options by the PETSc layer).
+struct H2FactorOptions {
+  double rel_tol = 3e-3;   ///< relative tolerance of each skeleton (joint row/column ID)
+  int leaf_size = 0;       ///< dof nodes per box at the first level factored (≥ the H² leaves); 0: the H² leaves
+  int sketch_columns = 0;  ///< random vectors of the far-field sketch; 0: chosen from rel_tol
+  int top_size = 2000;     ///< factor the rest densely once at most this many unknowns remain
+  int single_panels = -1;  ///< elimination panels in single precision: 1, 0, or -1 (when rel_tol ≥ 1e-5)
+};
+
+/// A singular pivot block (e.g. a pure-traction problem without its rigid-mode regularisation).
+class H2Breakdown : public std::runtime_error {
+public:
+  using std::runtime_error::runtime_error;
+};
+
+struct H2FactorLevelStats {
+  int level = 0;               ///< tree level (0 = root)
+  int boxes = 0;               ///< boxes skeletonized
+  double mean_candidates = 0;  ///< unknowns per box before
+  int max_candidates = 0;
+  double mean_rank = 0;        ///< skeleton size
+  int max_rank = 0;
+  long long eliminated = 0;    ///< unknowns eliminated at this level
+  std::size_t bytes = 0;       ///< factors stored for this level
+  double seconds = 0;          ///< skeletons, elimination and merge of this level
+};
+
+struct H2FactorStats {
+  std::vector<H2FactorLevelStats> levels; ///< from the finest level factored up
+  int top_size = 0;                       ///< unknowns of the dense top block
+  std::size_t bytes = 0, top_bytes = 0;   ///< all factors; the top's LU
+  double time_sketch = 0;                 ///< far-field sketch (0 when cached)
+  double time_init = 0, time_skeleton = 0, time_eliminate = 0, time_merge = 0, time_top = 0;
+  double flops_schur = 0;                 ///< of the Schur complement products
+  int sketch_columns = 0;
+  bool single_panels = false;
+  double seconds() const { return time_sketch + time_init + time_skeleton + time_eliminate + time_merge + time_top; }
+};
+
+/// Per H² matrix, what every factorization of it may reuse (the far-field sketches, by size).
+/// Not thread-safe.
+class H2FactorCache {
+public:
+  explicit H2FactorCache(const H2Matrix &K) : m_K(&K) {}
+  const H2Matrix &matrix() const { return *m_K; }
+  /// The sketch with p columns, made on first use (seconds spent in *made, 0 when cached).
+  const FarFieldSketch &sketch(int p, double *made = nullptr);
+
+private:
+  const H2Matrix *m_K;
+  std::vector<std::unique_ptr<FarFieldSketch>> m_sketches;
+};
+
+class H2Factorization {
+public:
+  /// Factor A-hat = (K E_S + c Φ Φᵀ) D for the pattern `sel` on the H² matrix `cache.matrix()`
+  /// (which must outlive this object). `rigid_modes`: row-major 3N × 6 orthonormal modes (mesh
+  /// order) of a pure-traction problem's regularisation, or null. Throws H2Breakdown for a
+  /// singular pivot block, std::invalid_argument for bad options.
+  H2Factorization(H2FactorCache &cache, const SystemSelection &sel, const H2FactorOptions &options, const std::vector<double> *rigid_modes = nullptr);
+  ~H2Factorization();
+  H2Factorization(const H2Factorization &) = delete;
+  H2Factorization &operator=(const H2Factorization &) = delete;
+
+  /// x = A⁻¹ b, both with 3 values per node in mesh order (x may alias b).
+  void solve(const double *b, double *x) const;
+  const H2FactorStats &stats() const { return m_stats; }
+  const H2FactorOptions &options() const { return m_options; }
+  int num_unknowns() const;
+
+  struct Factors; ///< the elimination steps (private)
+
+private:
+  const H2Matrix &m_K;
+  H2FactorOptions m_options;
+  std::vector<int> m_slot;      ///< per A-hat column (cluster order): K's slot
+  std::unique_ptr<Factors> m_f;
+  H2FactorStats m_stats;
+};
+
+/// Sketch columns used for a tolerance when H2FactorOptions::sketch_columns is 0.
+int default_sketch_columns(double rel_tol);
+
+/// ‖I − A F⁻¹‖₂ estimated by power iterations from a random vector (the largest of the ratios
+/// ‖(I − A F⁻¹) v‖ / ‖v‖ met): how far the factorization is from an exact inverse of A, for
+/// apply_a(x, y): y = A x with the operator of the factored pattern (mesh order).
+double estimate_inverse_error(const H2Factorization &F, const std::function<void(const double *, double *)> &apply_a, int iterations = 5, unsigned seed = 1);
+
+} // namespace hssbem

@@ -1,0 +1,418 @@
+// One box of the H² factorization: its joint skeleton, the sparsification and elimination of its
+// redundant unknowns, and how the solve replays that step (see frontier.hpp).
+#include "frontier.hpp"
+
+#include "hssbem/core/dense_ops.hpp"
+#include "hssbem/core/interpolative.hpp"
+#include "hssbem/core/lapack.hpp"
+#include "hssbem/h2factor/h2_factorization.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+extern "C" {
+void dsyrk_(const char *uplo, const char *trans, const int *n, const int *k, const double *alpha, const double *a, const int *lda, const double *beta, double *c,
+            const int *ldc);
+void dpstrf_(const char *uplo, const int *n, double *a, const int *lda, int *piv, int *rank, const double *tol, double *work, int *info);
+void dlaswp_(const int *n, double *a, const int *lda, const int *k1, const int *k2, const int *ipiv, const int *incx);
+void dtrsv_(const char *uplo, const char *trans, const char *diag, const int *n, const double *a, const int *lda, double *x, const int *incx);
+}
+
+namespace hssbem::h2f {
+
+namespace {
+
+/// G += op(P) op(P)ᵀ (upper triangle), op(P) = P (trans 'N', P m × q) or Pᵀ (trans 'T', P q × m).
+void gram_add(DenseMatrix &G, const DenseMatrix &P, char trans)
+{
+  const int m = G.m, q = trans == 'N' ? P.n : P.m;
+  if (m == 0 || q == 0) return;
+  const double one = 1.0;
+  const int ld = P.ld();
+  dsyrk_("U", &trans, &m, &q, &one, P.data(), &ld, &one, G.data(), &m);
+}
+
+DenseMatrix product(const DenseMatrix &A, const DenseMatrix &B)
+{
+  DenseMatrix C(A.m, B.n);
+  if (A.m > 0 && B.n > 0 && A.n > 0) lapack::gemm('N', 'N', A.m, B.n, A.n, 1.0, A.data(), A.ld(), B.data(), B.ld(), 0.0, C.data(), C.ld());
+  return C;
+}
+
+/// Skeleton from the Gram G of the features (rows = candidates): a pivoted Cholesky of G is the
+/// column-pivoted QR of the features' transpose (same pivots, R = U), stopped where the pivot
+/// falls below tol² × the largest diagonal entry (the ID rule of interpolative.hpp, squared).
+BoxSkeleton skeleton_from_gram(DenseMatrix G, double tol)
+{
+  const int m = G.m;
+  BoxSkeleton sk;
+  double gmax = 0;
+  for (int i = 0; i < m; ++i) gmax = std::max(gmax, G(i, i));
+  if (!(gmax > 0)) {
+    for (int i = 0; i < m; ++i) sk.R.push_back(i);
+    sk.T = DenseMatrix(0, m);
+    return sk;
+  }
+  std::vector<int> piv(m);
+  std::vector<double> work(2 * static_cast<std::size_t>(m));
+  int rank = 0, info = 0;
+  const double threshold = tol * tol * gmax;
+  dpstrf_("U", &m, G.data(), &m, piv.data(), &rank, &threshold, work.data(), &info);
+  if (info < 0) throw std::runtime_error("H2 factorization: dpstrf failed");
+  for (int i = 0; i < m; ++i) (i < rank ? sk.S : sk.R).push_back(piv[i] - 1);
+  const int k = rank, r = m - rank;
+  sk.T = DenseMatrix(k, r);
+  for (int j = 0; j < r; ++j)
+    for (int i = 0; i < k; ++i) sk.T(i, j) = G(i, k + j);
+  if (k > 0 && r > 0) lapack::trsm('L', 'U', 'N', 'N', k, r, 1.0, G.data(), m, sk.T.data(), sk.T.ld());
+  return sk;
+}
+
+/// Skeleton from the features themselves (rows = candidates), by the ID of interpolative.hpp:
+/// exact where the Gram's squared tolerance would approach rounding.
+BoxSkeleton skeleton_from_features(const std::vector<DenseMatrix> &parts, int m, double tol)
+{
+  int nf = 0;
+  for (const DenseMatrix &P : parts) nf += P.n;
+  DenseMatrix F(m, nf);
+  int off = 0;
+  for (const DenseMatrix &P : parts) {
+    dense::put(F, 0, off, P);
+    off += P.n;
+  }
+  BoxSkeleton sk;
+  if (nf == 0) {
+    for (int i = 0; i < m; ++i) sk.R.push_back(i);
+    sk.T = DenseMatrix(0, m);
+    return sk;
+  }
+  const ColumnId id = row_id(F.data(), m, nf, F.ld(), IdOptions{tol, -1});
+  sk.S = id.skeleton;
+  sk.R = id.redundant;
+  sk.T = DenseMatrix(id.rank(), static_cast<int>(sk.R.size()));
+  std::copy(id.T.begin(), id.T.end(), sk.T.a.begin());
+  return sk;
+}
+
+DenseMatrix transposed(const DenseMatrix &B)
+{
+  DenseMatrix T(B.n, B.m);
+  for (int j = 0; j < B.n; ++j)
+    for (int i = 0; i < B.m; ++i) T(j, i) = B(i, j);
+  return T;
+}
+
+DenseMatrix columns_at(const DenseMatrix &M, const std::vector<int> &idx)
+{
+  DenseMatrix out(M.m, static_cast<int>(idx.size()));
+  for (std::size_t j = 0; j < idx.size(); ++j)
+    std::copy(&M.a[static_cast<std::size_t>(idx[j]) * M.m], &M.a[static_cast<std::size_t>(idx[j] + 1) * M.m], &out.a[j * M.m]);
+  return out;
+}
+
+void keep_columns(DenseMatrix &M, int k)
+{
+  M.a.resize(static_cast<std::size_t>(M.m) * k);
+  M.n = k;
+}
+
+void laswp(int ncols, double *a, int lda, int r, const int *piv)
+{
+  const int one = 1;
+  if (r > 0 && ncols > 0) dlaswp_(&ncols, a, &lda, &one, &r, piv, &one);
+}
+
+void trsv(char uplo, char diag, int n, const double *a, int lda, double *x)
+{
+  const int one = 1;
+  if (n > 0) dtrsv_(&uplo, "N", &diag, &n, a, &lda, x, &one);
+}
+
+/// y += alpha A x for a column-major float matrix A (m × n).
+void gemv_single(int m, int n, double alpha, const float *A, const double *x, double *y)
+{
+  for (int j = 0; j < n; ++j) {
+    const float *a = A + static_cast<std::size_t>(j) * m;
+    const double xj = alpha * x[j];
+    for (int i = 0; i < m; ++i) y[i] += static_cast<double>(a[i]) * xj;
+  }
+}
+
+} // namespace
+
+bool lu_regular(DenseMatrix &A, std::vector<int> &piv)
+{
+  const double amax = dense::max_abs(A);
+  piv.resize(A.m);
+  if (A.m == 0) return true;
+  if (lapack::getrf(A.m, A.data(), A.ld(), piv.data()) != 0) return false;
+  double umin = HUGE_VAL;
+  for (int i = 0; i < A.m; ++i) umin = std::min(umin, std::abs(A(i, i)));
+  return umin > 1e-14 * amax; // the HSS factorization's test (ulv.cpp)
+}
+
+namespace {
+
+/// A⁻¹ from its getrf factors (m × m).
+DenseMatrix inverse(const DenseMatrix &LU, const std::vector<int> &piv)
+{
+  const int m = LU.m;
+  DenseMatrix inv(m, m);
+  for (int i = 0; i < m; ++i) inv(i, i) = 1.0;
+  if (m > 0) lapack::getrs('N', m, m, LU.data(), LU.ld(), piv.data(), inv.data(), inv.ld());
+  return inv;
+}
+
+/// B ← B A⁻¹ (one product with the explicit inverse: a GEMM runs faster than two triangular solves).
+void right_multiply(DenseMatrix &B, const DenseMatrix &inv)
+{
+  if (B.m == 0 || B.n == 0) return;
+  DenseMatrix out(B.m, B.n);
+  lapack::gemm('N', 'N', B.m, B.n, B.n, 1.0, B.data(), B.ld(), inv.data(), inv.ld(), 0.0, out.data(), out.ld());
+  B = std::move(out);
+}
+
+} // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Step 0: the block-Jacobi change of variables.
+
+void Frontier::precondition(int X, Step *st)
+{
+  DenseMatrix &XX = m_M[X].at(X);
+  st->box = m_D[X];
+  st->D = XX;
+  if (!lu_regular(st->D, st->dpiv))
+    throw H2Breakdown("H2 factorization broke down: the diagonal block of box " + std::to_string(X) + " (" + std::to_string(XX.m) + " unknowns) is singular to working precision");
+  const int m = XX.m;
+  XX = DenseMatrix(m, m);
+  for (int i = 0; i < m; ++i) XX(i, i) = 1.0;
+  const DenseMatrix inv = inverse(st->D, st->dpiv);
+  for (int Y : neighbours(X)) right_multiply(m_M[Y].at(X), inv);
+  for (int Z : m_fill_cols[X]) right_multiply(m_F[Z].at(X), inv);
+  // X's columns as the far field sees them, K(F, C) Ŵᵀ and c Φ Ψᵀ: Ŵ ← A_XX⁻ᵀ Ŵ, Ψ likewise.
+  for (DenseMatrix *W : {&m_Ew[X], &m_Psi[X]}) {
+    if (W->n == 0 || W->m == 0) continue;
+    DenseMatrix out(W->m, W->n);
+    lapack::gemm('T', 'N', m, W->n, m, 1.0, inv.data(), inv.ld(), W->data(), W->ld(), 0.0, out.data(), out.ld());
+    *W = std::move(out);
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Step 1: the skeleton.
+
+BoxSkeleton Frontier::skeleton(int X, double tol) const
+{
+  const int m = static_cast<int>(m_D[X].size());
+  std::vector<DenseMatrix> parts; // features as columns (rows = candidates)
+  if (m_Eu[X].n > 0 && m_sketch.row[X].n > 0) parts.push_back(product(m_Eu[X], m_sketch.row[X]));
+  if (m_Ew[X].n > 0 && m_sketch.col[X].n > 0) parts.push_back(product(m_Ew[X], m_sketch.col[X]));
+  if (m_pat.regularised())
+    for (const DenseMatrix *R : {&m_Phi[X], &m_Psi[X]}) {
+      DenseMatrix P = *R;
+      for (double &v : P.a) v *= m_pat.c;
+      parts.push_back(std::move(P));
+    }
+  // The Gram loses what lies below the rounding of its squared entries: below ~1e-7, the ID.
+  if (tol < 1e-7) {
+    for (const auto &e : m_F[X]) parts.push_back(e.second);
+    for (int Z : m_fill_cols[X]) parts.push_back(transposed(m_F[Z].at(X)));
+    return skeleton_from_features(parts, m, tol);
+  }
+  DenseMatrix G(m, m);
+  for (const DenseMatrix &P : parts) gram_add(G, P, 'N');
+  for (const auto &e : m_F[X]) gram_add(G, e.second, 'N');
+  for (int Z : m_fill_cols[X]) gram_add(G, m_F[Z].at(X), 'T');
+  return skeleton_from_gram(std::move(G), tol);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Steps 2 and 3: sparsify, eliminate, Schur complement.
+
+void Frontier::eliminate(int X, const BoxSkeleton &sk, Step *out, double *flops, std::vector<NewFill> *fresh)
+{
+  const int k = static_cast<int>(sk.S.size()), r = static_cast<int>(sk.R.size());
+  const std::vector<int> nb = neighbours(X);
+  Step &st = *out;
+  for (int i : sk.S) st.S.push_back(m_D[X][i]);
+  for (int i : sk.R) st.R.push_back(m_D[X][i]);
+  st.T = sk.T;
+  if (r == 0) return;
+  // Local order [S, R]; rows R -= Tᵀ rows S, columns R -= columns S T.
+  std::vector<int> order = sk.S;
+  order.insert(order.end(), sk.R.begin(), sk.R.end());
+  const auto row_op = [&](DenseMatrix &B) {
+    B = dense::rows_at(B, order);
+    if (k > 0 && B.n > 0) lapack::gemm('T', 'N', r, B.n, k, -1.0, sk.T.data(), sk.T.ld(), B.data(), B.ld(), 1.0, B.data() + k, B.ld());
+  };
+  const auto col_op = [&](DenseMatrix &B) {
+    B = columns_at(B, order);
+    if (k > 0 && B.m > 0) lapack::gemm('N', 'N', B.m, r, k, -1.0, B.data(), B.ld(), sk.T.data(), sk.T.ld(), 1.0, B.data() + static_cast<std::size_t>(k) * B.m, B.ld());
+  };
+  DenseMatrix &XX = m_M[X].at(X);
+  row_op(XX);
+  col_op(XX);
+  for (int Y : nb) {
+    row_op(m_M[X].at(Y));
+    col_op(m_M[Y].at(X));
+  }
+  // Fill-in beyond the neighbours: the sparsified redundant part is below the tolerance.
+  for (auto &e : m_F[X]) {
+    row_op(e.second);
+    e.second = dense::row_block(e.second, 0, k);
+  }
+  for (int Z : m_fill_cols[X]) {
+    DenseMatrix &B = m_F[Z].at(X);
+    col_op(B);
+    keep_columns(B, k);
+  }
+  // LU of the redundant block, the panels of the Schur complement.
+  st.LU = dense::sub(XX, k, r, k, r);
+  st.piv.resize(r);
+  if (!lu_regular(st.LU, st.piv))
+    throw H2Breakdown("H2 factorization broke down: the pivot block of box " + std::to_string(X) + " (" + std::to_string(r) + " unknowns) is singular to working precision");
+  std::vector<int> targets{X};
+  targets.insert(targets.end(), nb.begin(), nb.end());
+  std::vector<int> off(targets.size() + 1, 0);
+  for (std::size_t t = 0; t < targets.size(); ++t) off[t + 1] = off[t] + (t == 0 ? k : static_cast<int>(m_D[targets[t]].size()));
+  const int nI = off.back();
+  st.Lp = DenseMatrix(nI, r);
+  st.Up = DenseMatrix(r, nI);
+  for (std::size_t t = 0; t < targets.size(); ++t) {
+    const int Y = targets[t], rows = off[t + 1] - off[t];
+    const DenseMatrix &AYR = t == 0 ? XX : m_M[Y].at(X), &ARY = t == 0 ? XX : m_M[X].at(Y);
+    for (int j = 0; j < r; ++j) {
+      const double *src = AYR.data() + static_cast<std::size_t>(k + j) * AYR.m;
+      std::copy(src, src + rows, &st.Lp(off[t], j));
+    }
+    for (int j = 0; j < rows; ++j) {
+      const double *src = ARY.data() + static_cast<std::size_t>(j) * ARY.m + k;
+      std::copy(src, src + r, &st.Up(0, off[t] + j));
+    }
+  }
+  if (nI > 0) {
+    lapack::trsm('R', 'U', 'N', 'N', nI, r, 1.0, st.LU.data(), st.LU.ld(), st.Lp.data(), st.Lp.ld());
+    laswp(nI, st.Up.data(), st.Up.ld(), r, st.piv.data());
+    lapack::trsm('L', 'L', 'N', 'U', r, nI, 1.0, st.LU.data(), st.LU.ld(), st.Up.data(), st.Up.ld());
+  }
+  // Schur complement: one product, then into the blocks it touches.
+  DenseMatrix W(nI, nI);
+  if (nI > 0) lapack::gemm('N', 'N', nI, nI, r, 1.0, st.Lp.data(), st.Lp.ld(), st.Up.data(), st.Up.ld(), 0.0, W.data(), W.ld());
+  *flops += 2.0 * nI * nI * r;
+  for (std::size_t ty = 0; ty < targets.size(); ++ty)
+    for (std::size_t tz = 0; tz < targets.size(); ++tz) {
+      const int Y = targets[ty], Z = targets[tz], my = off[ty + 1] - off[ty], mz = off[tz + 1] - off[tz];
+      DenseMatrix *B;
+      if (ty == 0) B = &m_M[X].at(tz == 0 ? X : Z);
+      else if (tz == 0) B = &m_M[Y].at(X);
+      else if (m_part.is_close(Y, Z)) B = &m_M[Y].at(Z);
+      else {
+        const auto it = m_F[Y].find(Z);
+        if (it != m_F[Y].end()) B = &it->second;
+        else {
+          fresh->push_back(NewFill{Y, Z, DenseMatrix(my, mz)});
+          B = &fresh->back().B;
+        }
+      }
+      for (int j = 0; j < mz; ++j) {
+        const double *src = &W(off[ty], off[tz] + j);
+        double *dst = B->data() + static_cast<std::size_t>(j) * B->m;
+        for (int i = 0; i < my; ++i) dst[i] -= src[i];
+      }
+    }
+  // X keeps its skeleton.
+  XX = dense::sub(XX, 0, k, 0, k);
+  for (int Y : nb) {
+    m_M[X].at(Y) = dense::row_block(m_M[X].at(Y), 0, k);
+    keep_columns(m_M[Y].at(X), k);
+  }
+  m_D[X] = st.S;
+  m_Eu[X] = dense::rows_at(m_Eu[X], sk.S);
+  m_Ew[X] = dense::rows_at(m_Ew[X], sk.S);
+  if (m_pat.regularised()) {
+    m_Phi[X] = dense::rows_at(m_Phi[X], sk.S);
+    m_Psi[X] = dense::rows_at(m_Psi[X], sk.S);
+  }
+  for (int Y : targets) st.I.insert(st.I.end(), m_D[Y].begin(), m_D[Y].end());
+}
+
+void Frontier::add_fill(std::vector<NewFill> &&fresh)
+{
+  for (NewFill &f : fresh) {
+    m_fill_cols[f.col].push_back(f.row);
+    m_F[f.row].emplace(f.col, std::move(f.B));
+  }
+  fresh.clear();
+}
+
+// ---------------------------------------------------------------------------------------------
+// The solve of one step.
+
+std::size_t Step::bytes() const
+{
+  const std::size_t panels = Lps.empty() ? Lp.bytes() + Up.bytes() : (Lps.size() + Ups.size()) * sizeof(float);
+  return panels + T.bytes() + LU.bytes() + D.bytes() + (box.size() + dpiv.size() + S.size() + R.size() + I.size() + piv.size()) * sizeof(int);
+}
+
+void Step::demote()
+{
+  Lps.assign(Lp.a.begin(), Lp.a.end());
+  Ups.assign(Up.a.begin(), Up.a.end());
+  Lp.a.clear();
+  Lp.a.shrink_to_fit();
+  Up.a.clear();
+  Up.a.shrink_to_fit();
+}
+
+void Step::forward(double *b, std::vector<double> &work) const
+{
+  const int k = static_cast<int>(S.size()), r = static_cast<int>(R.size()), nI = static_cast<int>(I.size());
+  if (r == 0) return;
+  work.resize(static_cast<std::size_t>(k) + r + nI);
+  double *bs = work.data(), *br = bs + k, *bi = br + r;
+  for (int i = 0; i < k; ++i) bs[i] = b[S[i]];
+  for (int i = 0; i < r; ++i) br[i] = b[R[i]];
+  if (k > 0) lapack::gemv('T', k, r, -1.0, T.data(), T.ld(), bs, 1.0, br);
+  laswp(1, br, r, r, piv.data());
+  trsv('L', 'U', r, LU.data(), LU.ld(), br);
+  for (int i = 0; i < nI; ++i) bi[i] = b[I[i]];
+  if (nI > 0) {
+    if (Lps.empty()) lapack::gemv('N', nI, r, -1.0, Lp.data(), Lp.ld(), br, 1.0, bi);
+    else gemv_single(nI, r, -1.0, Lps.data(), br, bi);
+  }
+  for (int i = 0; i < nI; ++i) b[I[i]] = bi[i];
+  for (int i = 0; i < r; ++i) b[R[i]] = br[i];
+}
+
+void Step::backward(double *b, std::vector<double> &work) const
+{
+  const int k = static_cast<int>(S.size()), r = static_cast<int>(R.size()), nI = static_cast<int>(I.size());
+  if (r > 0) {
+    work.resize(static_cast<std::size_t>(k) + r + nI);
+    double *xs = work.data(), *xr = xs + k, *xi = xr + r;
+    for (int i = 0; i < r; ++i) xr[i] = b[R[i]];
+    for (int i = 0; i < nI; ++i) xi[i] = b[I[i]];
+    if (nI > 0) {
+      if (Ups.empty()) lapack::gemv('N', r, nI, -1.0, Up.data(), Up.ld(), xi, 1.0, xr);
+      else gemv_single(r, nI, -1.0, Ups.data(), xi, xr);
+    }
+    trsv('U', 'N', r, LU.data(), LU.ld(), xr);
+    for (int i = 0; i < r; ++i) b[R[i]] = xr[i];
+    if (k > 0) {
+      for (int i = 0; i < k; ++i) xs[i] = b[S[i]];
+      lapack::gemv('N', k, r, -1.0, T.data(), T.ld(), xr, 1.0, xs);
+      for (int i = 0; i < k; ++i) b[S[i]] = xs[i];
+    }
+  }
+  // The unknowns were A_XX x: x = A_XX⁻¹ (that).
+  const int m = static_cast<int>(box.size());
+  if (m == 0) return;
+  work.resize(m);
+  for (int i = 0; i < m; ++i) work[i] = b[box[i]];
+  lapack::getrs('N', m, 1, D.data(), D.ld(), dpiv.data(), work.data(), m);
+  for (int i = 0; i < m; ++i) b[box[i]] = work[i];
+}
+
+} // namespace hssbem::h2f

@@ -1,0 +1,63 @@
+// Random sketches of the far-field couplings of an H² matrix (see far_sketch.hpp).
+#include "hssbem/h2factor/far_sketch.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+namespace hssbem {
+
+std::size_t FarFieldSketch::bytes() const
+{
+  std::size_t s = 0;
+  for (const DenseMatrix &M : row) s += M.bytes();
+  for (const DenseMatrix &M : col) s += M.bytes();
+  return s;
+}
+
+namespace {
+
+/// Copy the q columns of `part` (one per cluster) into columns [j0, j0 + q) of `whole`.
+void put_columns(std::vector<DenseMatrix> &whole, const std::vector<DenseMatrix> &part, int j0)
+{
+  for (std::size_t c = 0; c < whole.size(); ++c)
+    for (int j = 0; j < part[c].n; ++j)
+      std::copy(&part[c].a[static_cast<std::size_t>(j) * part[c].m], &part[c].a[static_cast<std::size_t>(j + 1) * part[c].m],
+                &whole[c].a[static_cast<std::size_t>(j0 + j) * whole[c].m]);
+}
+
+} // namespace
+
+FarFieldSketch far_field_sketch(const H2Matrix &K, int p, unsigned seed)
+{
+  const ClusterTree &tree = K.tree();
+  const int nc = tree.num_clusters(), n = tree.num_points(), w = K.col_block(), rb = K.row_block();
+  FarFieldSketch s;
+  s.columns = p;
+  s.row.resize(nc);
+  s.col.resize(nc);
+  for (int c = 0; c < nc; ++c) {
+    s.row[c] = DenseMatrix(K.row_interpolation(c).rank(), p);
+    s.col[c] = DenseMatrix(K.col_interpolation(c).rank(), p);
+  }
+  std::mt19937_64 gen(seed);
+  std::normal_distribution<double> normal;
+  const double scale = 1.0 / std::sqrt(static_cast<double>(p));
+  constexpr int chunk = 32;
+  std::vector<double> X, Y;
+  for (int j0 = 0; j0 < p; j0 += chunk) {
+    const int q = std::min(chunk, p - j0);
+    // Random K inputs on H and G columns (slots 0-5; a pressure column, slot 6, takes no part).
+    X.assign(static_cast<std::size_t>(w) * n * q, 0.0);
+    for (int j = 0; j < q; ++j)
+      for (int k = 0; k < n; ++k)
+        for (int t = 0; t < std::min(w, 6); ++t) X[static_cast<std::size_t>(j) * w * n + static_cast<std::size_t>(w) * k + t] = scale * normal(gen);
+    put_columns(s.row, K.skeleton_far_field(X.data(), w * n, q), j0);
+    Y.resize(static_cast<std::size_t>(rb) * n * q);
+    for (double &v : Y) v = scale * normal(gen);
+    put_columns(s.col, K.skeleton_far_field_transposed(Y.data(), rb * n, q), j0);
+  }
+  return s;
+}
+
+} // namespace hssbem

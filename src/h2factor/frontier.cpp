@@ -1,0 +1,292 @@
+// The frontier of the H² factorization: active boxes, their explicit blocks, merging a level
+// into its parents, and the dense top (see frontier.hpp).
+#include "frontier.hpp"
+
+#include "hssbem/core/dense_ops.hpp"
+#include "hssbem/core/lapack.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+
+namespace hssbem::h2f {
+
+namespace {
+
+DenseMatrix multiply(const DenseMatrix &A, const DenseMatrix &B, char tb = 'N')
+{
+  const int n = tb == 'N' ? B.n : B.m;
+  DenseMatrix C(A.m, n);
+  if (A.m > 0 && n > 0 && A.n > 0) lapack::gemm('N', tb, A.m, n, A.n, 1.0, A.data(), A.ld(), B.data(), B.ld(), 0.0, C.data(), C.ld());
+  return C;
+}
+
+const H2Block &find_far_block(const H2Matrix &K, int a, int b)
+{
+  for (const H2Block &B : K.far_blocks(a))
+    if (B.col_cluster == b) return B;
+  throw std::logic_error("H2 factorization: a far pair without its far block");
+}
+
+/// One side of cluster c's nested basis in double (rows: U, else V), candidates × rank.
+DenseMatrix basis_side(const H2Matrix &K, int c, bool rows) { return rows ? K.row_interpolation(c).expand() : K.col_interpolation(c).expand(); }
+
+int basis_rank(const H2Matrix &K, int c, bool rows) { return rows ? K.row_interpolation(c).rank() : K.col_interpolation(c).rank(); }
+
+DenseMatrix widened(const H2Block &B)
+{
+  DenseMatrix D(B.M.m, B.M.n);
+  std::vector<double> buf;
+  const double *d = B.data(buf);
+  std::copy(d, d + D.a.size(), D.a.begin());
+  return D;
+}
+
+} // namespace
+
+Frontier::Frontier(const H2Matrix &K, const FarFieldSketch &sketch, const Pattern &pattern)
+  : m_K(K), m_tree(K.tree()), m_part(K.partition()), m_sketch(sketch), m_pat(pattern), m_w(K.col_block())
+{
+  const int nc = m_tree.num_clusters();
+  m_in_front.assign(nc, 0);
+  m_D.resize(nc);
+  m_Eu.resize(nc);
+  m_Ew.resize(nc);
+  m_Phi.resize(nc);
+  m_Psi.resize(nc);
+  m_M.resize(nc);
+  m_F.resize(nc);
+  m_fill_cols.resize(nc);
+  m_front = m_tree.leaves();
+  for (int c : m_front) {
+    const Cluster &cl = m_tree.cluster(c);
+    m_in_front[c] = 1;
+    m_D[c].resize(3 * static_cast<std::size_t>(cl.size()));
+    for (int i = 0; i < 3 * cl.size(); ++i) m_D[c][i] = 3 * cl.begin + i;
+    m_Eu[c] = basis_side(K, c, true);
+    m_Ew[c] = leaf_col_basis(c);
+    if (m_pat.regularised()) {
+      const std::size_t N = static_cast<std::size_t>(m_pat.dofs());
+      m_Phi[c] = DenseMatrix(static_cast<int>(m_D[c].size()), 6);
+      m_Psi[c] = DenseMatrix(static_cast<int>(m_D[c].size()), 6);
+      for (int j = 0; j < 6; ++j)
+        for (std::size_t i = 0; i < m_D[c].size(); ++i) {
+          m_Phi[c](static_cast<int>(i), j) = m_pat.phi[m_D[c][i] + j * N];
+          m_Psi[c](static_cast<int>(i), j) = m_pat.psi[m_D[c][i] + j * N];
+        }
+    }
+  }
+  for (int a : m_front)
+    for (int b : m_part.near[a]) {
+      DenseMatrix B = leaf_near(a, b);
+      add_regularisation(B, a, b);
+      m_M[a].emplace(b, std::move(B));
+    }
+}
+
+DenseMatrix Frontier::leaf_col_basis(int c) const
+{
+  const Cluster &cl = m_tree.cluster(c);
+  const DenseMatrix V = basis_side(m_K, c, false);
+  DenseMatrix W(3 * cl.size(), V.n);
+  for (int k = cl.begin; k < cl.end; ++k)
+    for (int a = 0; a < 3; ++a) {
+      const int g = 3 * k + a, row = m_w * (k - cl.begin) + m_pat.slot[g];
+      for (int j = 0; j < V.n; ++j) W(3 * (k - cl.begin) + a, j) = m_pat.sign[g] * V(row, j);
+    }
+  return W;
+}
+
+DenseMatrix Frontier::leaf_near(int a, int b) const
+{
+  const H2Block *B = m_K.near_block(a, b);
+  if (!B) throw std::logic_error("H2 factorization: a near pair without its near block");
+  const Cluster &cb = m_tree.cluster(b);
+  const int m = 3 * m_tree.cluster(a).size();
+  DenseMatrix out(m, 3 * cb.size());
+  std::vector<double> buf;
+  const double *d = B->data(buf); // any stored form, in double
+  for (int k = cb.begin; k < cb.end; ++k)
+    for (int c = 0; c < 3; ++c) {
+      const int g = 3 * k + c, col = m_w * (k - cb.begin) + m_pat.slot[g], j = 3 * (k - cb.begin) + c;
+      const double *dc = d + static_cast<std::size_t>(col) * B->M.ld();
+      for (int i = 0; i < m; ++i) out(i, j) = m_pat.sign[g] * dc[i];
+    }
+  return out;
+}
+
+void Frontier::add_regularisation(DenseMatrix &B, int P, int Q) const
+{
+  if (!m_pat.regularised() || B.m == 0 || B.n == 0) return;
+  const DenseMatrix &a = m_Phi[P], &b = m_Psi[Q];
+  lapack::gemm('N', 'T', B.m, B.n, 6, m_pat.c, a.data(), a.ld(), b.data(), b.ld(), 1.0, B.data(), B.ld());
+}
+
+std::size_t Frontier::active_total() const
+{
+  std::size_t s = 0;
+  for (int X : m_front) s += m_D[X].size();
+  return s;
+}
+
+bool Frontier::level_has_far_field(int l) const
+{
+  if (m_pat.regularised()) return true;
+  for (int X : m_tree.clusters_at_level(l))
+    if (m_in_front[X] && (m_Eu[X].n > 0 || m_Ew[X].n > 0 || !m_F[X].empty() || !m_fill_cols[X].empty())) return true;
+  return false;
+}
+
+std::vector<int> Frontier::neighbours(int X) const
+{
+  std::vector<int> nb;
+  for (int Y : m_part.close[X])
+    if (m_in_front[Y] && Y != X) nb.push_back(Y);
+  return nb;
+}
+
+DenseMatrix Frontier::restricted_basis(int P, int a, bool rows) const
+{
+  DenseMatrix E = rows ? m_Eu[P] : m_Ew[P];
+  for (int x = P; x != a;) {
+    const int par = m_tree.cluster(x).parent, left = m_tree.cluster(par).left;
+    const DenseMatrix B = basis_side(m_K, par, rows);
+    const int kl = basis_rank(m_K, left, rows), kx = basis_rank(m_K, x, rows);
+    E = multiply(E, dense::sub(B, x == left ? 0 : kl, kx, 0, B.n));
+    x = par;
+  }
+  return E;
+}
+
+DenseMatrix Frontier::far_part(int P, int Q) const
+{
+  for (int a = P; a >= 0; a = m_tree.cluster(a).parent)
+    for (int b = Q; b >= 0; b = m_tree.cluster(b).parent) {
+      if (!m_part.is_far(a, b)) continue;
+      DenseMatrix out = multiply(multiply(restricted_basis(P, a, true), widened(find_far_block(m_K, a, b))), restricted_basis(Q, b, false), 'T');
+      add_regularisation(out, P, Q);
+      const auto it = m_F[P].find(Q);
+      if (it != m_F[P].end())
+        for (std::size_t i = 0; i < out.a.size(); ++i) out.a[i] += it->second.a[i];
+      return out;
+    }
+  throw std::logic_error("H2 factorization: no far block above a pair that is not close");
+}
+
+std::vector<int> Frontier::parts_of(int P, int l) const
+{
+  const Cluster &cp = m_tree.cluster(P);
+  if (cp.level == l - 1 && cp.left >= 0) return {cp.left, cp.right};
+  return {P};
+}
+
+DenseMatrix Frontier::assemble_close(int P, int Q, int l) const
+{
+  DenseMatrix B(static_cast<int>(m_D[P].size()), static_cast<int>(m_D[Q].size()));
+  int ro = 0;
+  for (int b : parts_of(P, l)) {
+    int co = 0;
+    for (int c : parts_of(Q, l)) {
+      const auto it = m_M[b].find(c);
+      dense::put(B, ro, co, it != m_M[b].end() ? it->second : far_part(b, c));
+      co += static_cast<int>(m_D[c].size());
+    }
+    ro += static_cast<int>(m_D[b].size());
+  }
+  return B;
+}
+
+void Frontier::merge(int l)
+{
+  std::vector<int> front = m_tree.clusters_at_level(l - 1);
+  for (int c : m_tree.leaves())
+    if (m_tree.cluster(c).level < l - 1) front.push_back(c);
+  // Unknowns and restricted bases of the new boxes: children's, concatenated and transferred.
+  for (int P : front) {
+    const Cluster &cp = m_tree.cluster(P);
+    if (!(cp.level == l - 1 && cp.left >= 0)) continue;
+    const int a = cp.left, b = cp.right;
+    m_D[P] = m_D[a];
+    m_D[P].insert(m_D[P].end(), m_D[b].begin(), m_D[b].end());
+    if (m_pat.regularised()) {
+      m_Phi[P] = dense::vcat(m_Phi[a], m_Phi[b]);
+      m_Psi[P] = dense::vcat(m_Psi[a], m_Psi[b]);
+    }
+    for (int rows = 0; rows < 2; ++rows) {
+      const DenseMatrix B = basis_side(m_K, P, rows);
+      const DenseMatrix &Ea = rows ? m_Eu[a] : m_Ew[a], &Eb = rows ? m_Eu[b] : m_Ew[b];
+      DenseMatrix &E = rows ? m_Eu[P] : m_Ew[P];
+      E = DenseMatrix(static_cast<int>(m_D[P].size()), B.n);
+      if (B.n == 0) continue;
+      if (B.m != Ea.n + Eb.n) throw std::logic_error("H2 factorization: a basis does not match its children's");
+      if (Ea.m > 0 && Ea.n > 0) lapack::gemm('N', 'N', Ea.m, B.n, Ea.n, 1.0, Ea.data(), Ea.ld(), B.data(), B.ld(), 0.0, E.data(), E.ld());
+      if (Eb.m > 0 && Eb.n > 0) lapack::gemm('N', 'N', Eb.m, B.n, Eb.n, 1.0, Eb.data(), Eb.ld(), B.data() + Ea.n, B.ld(), 0.0, E.data() + Ea.m, E.ld());
+    }
+  }
+  std::vector<char> in_front(m_tree.num_clusters(), 0);
+  for (int P : front) in_front[P] = 1;
+  // Blocks between close new boxes, from the children's blocks and far parts; fill-in between
+  // boxes whose parents are still not close stays fill-in, on the parents.
+  std::vector<std::map<int, DenseMatrix>> M(m_tree.num_clusters());
+  for (int P : front)
+    for (int Q : m_part.close[P])
+      if (in_front[Q]) M[P].emplace(Q, assemble_close(P, Q, l));
+  std::vector<std::map<int, DenseMatrix>> F = merged_fill(l);
+  m_M.swap(M);
+  m_F.swap(F);
+  for (int P : m_front) // boxes now inside a parent
+    if (!in_front[P]) {
+      m_D[P].clear();
+      m_Eu[P] = DenseMatrix();
+      m_Ew[P] = DenseMatrix();
+      m_Phi[P] = DenseMatrix();
+      m_Psi[P] = DenseMatrix();
+    }
+  m_front.swap(front);
+  m_in_front.swap(in_front);
+  for (auto &v : m_fill_cols) v.clear();
+  for (int P : m_front)
+    for (const auto &e : m_F[P]) m_fill_cols[e.first].push_back(P);
+}
+
+std::vector<std::map<int, DenseMatrix>> Frontier::merged_fill(int l) const
+{
+  const auto up = [&](int b) { return m_tree.cluster(b).level == l ? m_tree.cluster(b).parent : b; };
+  const auto offset = [&](int P, int b) {
+    int o = 0;
+    for (int x : parts_of(P, l)) {
+      if (x == b) break;
+      o += static_cast<int>(m_D[x].size());
+    }
+    return o;
+  };
+  std::vector<std::map<int, DenseMatrix>> F(m_tree.num_clusters());
+  for (int b : m_front)
+    for (const auto &[c, B] : m_F[b]) {
+      const int P = up(b), Q = up(c);
+      if (m_part.is_close(P, Q)) continue; // inside the close block of P and Q (assemble_close)
+      auto it = F[P].find(Q);
+      if (it == F[P].end()) it = F[P].emplace(Q, DenseMatrix(static_cast<int>(m_D[P].size()), static_cast<int>(m_D[Q].size()))).first;
+      const int ro = offset(P, b), co = offset(Q, c);
+      for (int j = 0; j < B.n; ++j)
+        for (int i = 0; i < B.m; ++i) it->second(ro + i, co + j) += B(i, j);
+    }
+  return F;
+}
+
+DenseMatrix Frontier::dense_top(std::vector<int> *dofs) const
+{
+  std::vector<int> off(m_front.size() + 1, 0);
+  for (std::size_t t = 0; t < m_front.size(); ++t) off[t + 1] = off[t] + static_cast<int>(m_D[m_front[t]].size());
+  DenseMatrix A(off.back(), off.back());
+  for (std::size_t s = 0; s < m_front.size(); ++s)
+    for (std::size_t t = 0; t < m_front.size(); ++t) {
+      const int P = m_front[s], Q = m_front[t];
+      const auto it = m_M[P].find(Q);
+      dense::put(A, off[s], off[t], it != m_M[P].end() ? it->second : far_part(P, Q));
+    }
+  dofs->clear();
+  for (int P : m_front) dofs->insert(dofs->end(), m_D[P].begin(), m_D[P].end());
+  return A;
+}
+
+} // namespace hssbem::h2f

@@ -1,0 +1,122 @@
+// Private to the H² factorization: the active boxes of one level and their explicit blocks (the
+// block store of strong recursive skeletonization), and the elimination steps it produces.
+#pragma once
+
+#include "hssbem/core/dense_matrix.hpp"
+#include "hssbem/h2/h2_matrix.hpp"
+#include "hssbem/h2factor/far_sketch.hpp"
+
+#include <map>
+#include <vector>
+
+namespace hssbem::h2f {
+
+/// The columns of A-hat on K: column g (dof 3k + c of cluster order) is sign[g] × (K S)(:, w k +
+/// slot[g]); with a regularisation, A-hat also holds c Φ Ψᵀ (Φ: N × 6 column-major, Ψ = D Φ).
+struct Pattern {
+  std::vector<int> slot;
+  std::vector<double> sign;
+  std::vector<double> phi, psi; ///< empty without regularisation
+  double c = 0;
+  int dofs() const { return static_cast<int>(slot.size()); }
+  bool regularised() const { return !phi.empty(); }
+};
+
+/// One box's elimination, as the solve replays it (global dof indices of A-hat).
+struct Step {
+  std::vector<int> box;     ///< the box's unknowns before the step (the order of D)
+  DenseMatrix D;            ///< LU factors of the box's diagonal block A_XX: the unknowns became A_XX x (Frontier::precondition)
+  std::vector<int> dpiv;
+  std::vector<int> S, R, I; ///< skeleton, redundant, and the unknowns the Schur complement touched
+  DenseMatrix T;            ///< |S| × |R| interpolation: rows R -= Tᵀ rows S, columns R -= columns S T
+  DenseMatrix LU;           ///< |R| × |R| LU factors (getrf) of the sparsified R block
+  std::vector<int> piv;
+  DenseMatrix Lp, Up;       ///< A(I, R) U⁻¹ (|I| × |R|) and L⁻¹ P A(R, I) (|R| × |I|), in double ...
+  std::vector<float> Lps, Ups; ///< ... or in single precision (then Lp, Up keep their sizes but no entries)
+  int candidates = 0;          ///< active unknowns of the box before (statistics)
+  std::size_t bytes() const;
+  /// Forward and backward halves of the solve of this step, on the whole vector b.
+  void forward(double *b, std::vector<double> &work) const;
+  void backward(double *b, std::vector<double> &work) const;
+  /// Move the panels to single precision.
+  void demote();
+};
+
+/// LU with partial pivoting of A in place (getrf); false when A is singular to working precision
+/// (a zero pivot, or the smallest |U_ii| at most 1e-14 of the largest |A_ij|, as for HSS).
+bool lu_regular(DenseMatrix &A, std::vector<int> &piv);
+
+/// A fill-in block that an elimination created between two boxes that are not close; kept aside
+/// while other boxes of the same colour class are eliminated, then added with add_fill().
+struct NewFill {
+  int row, col;
+  DenseMatrix B;
+};
+
+/// A box's skeleton: local indices into its active unknowns.
+struct BoxSkeleton {
+  std::vector<int> S, R;
+  DenseMatrix T; ///< |S| × |R|
+};
+
+class Frontier {
+public:
+  /// The leaves of K, with their near blocks in A-hat form.
+  Frontier(const H2Matrix &K, const FarFieldSketch &sketch, const Pattern &pattern);
+
+  const std::vector<int> &boxes() const { return m_front; }
+  const std::vector<int> &active(int X) const { return m_D[X]; }
+  std::size_t active_total() const;
+  /// Whether some box of level l has a far field or fill-in to skeletonize against.
+  bool level_has_far_field(int l) const;
+  /// The close boxes of the frontier other than X.
+  std::vector<int> neighbours(int X) const;
+
+  /// Step 0: the unknowns of X become A_XX x_X (a block-Jacobi change of variables), so that X's
+  /// diagonal block is the identity and the pivot block of step 3 is I + TᵀT, well conditioned
+  /// whatever the mix of H and G columns in X. The LU of A_XX goes to st (box, D, dpiv). Throws
+  /// H2Breakdown when A_XX is singular to working precision.
+  void precondition(int X, Step *st);
+  /// Step 1: the joint row/column skeleton of X at relative tolerance tol.
+  BoxSkeleton skeleton(int X, double tol) const;
+  /// Steps 2–3: sparsify with the skeleton, eliminate the redundant unknowns, add the Schur
+  /// complement to the blocks of X's skeleton and neighbours; X keeps its skeleton. The rest of
+  /// the step goes to st; adds the Schur complement's flops to *flops. Fill-in on pairs that had
+  /// none goes to *fresh, for add_fill(). Throws H2Breakdown for a singular pivot block. Boxes
+  /// with disjoint closed neighbourhoods may go through steps 0–3 concurrently (nothing else
+  /// changes the block store then).
+  void eliminate(int X, const BoxSkeleton &sk, Step *st, double *flops, std::vector<NewFill> *fresh);
+  /// Store fill-in blocks that eliminate() created.
+  void add_fill(std::vector<NewFill> &&fresh);
+  /// The frontier of level l − 1 from that of level l.
+  void merge(int l);
+  /// All remaining unknowns as one dense matrix (their dof indices in *dofs).
+  DenseMatrix dense_top(std::vector<int> *dofs) const;
+
+private:
+  DenseMatrix leaf_col_basis(int c) const;
+  DenseMatrix leaf_near(int a, int b) const;
+  void add_regularisation(DenseMatrix &B, int P, int Q) const;
+  DenseMatrix restricted_basis(int P, int a, bool rows) const;
+  DenseMatrix far_part(int P, int Q) const;
+  DenseMatrix assemble_close(int P, int Q, int l) const;
+  std::vector<std::map<int, DenseMatrix>> merged_fill(int l) const;
+  std::vector<int> parts_of(int P, int l) const;
+
+  const H2Matrix &m_K;
+  const ClusterTree &m_tree;
+  const BlockPartition &m_part;
+  const FarFieldSketch &m_sketch;
+  const Pattern &m_pat;
+  int m_w;
+  std::vector<int> m_front;
+  std::vector<char> m_in_front;
+  std::vector<std::vector<int>> m_D;          ///< active unknowns of each frontier box
+  std::vector<DenseMatrix> m_Eu, m_Ew;        ///< H² row and column bases restricted to m_D (expanded)
+  std::vector<DenseMatrix> m_Phi, m_Psi;      ///< regularisation c Φ Ψᵀ: Φ and Ψ restricted to m_D (|m_D| × 6)
+  std::vector<std::map<int, DenseMatrix>> m_M; ///< blocks between close frontier boxes (current values)
+  std::vector<std::map<int, DenseMatrix>> m_F; ///< fill-in between boxes that are not close (updates only)
+  std::vector<std::vector<int>> m_fill_cols;   ///< m_fill_cols[X]: boxes Z with a block m_F[Z][X]
+};
+
+} // namespace hssbem::h2f

@@ -1,0 +1,277 @@
+// The H² factorization: levels, colours, the dense top and the solve (see h2_factorization.hpp).
+#include "hssbem/h2factor/h2_factorization.hpp"
+
+#include "frontier.hpp"
+
+#include "hssbem/bem/rigid_modes.hpp"
+#include "hssbem/compress/pattern_columns.hpp"
+#include "hssbem/core/blas_threads.hpp"
+#include "hssbem/core/lapack.hpp"
+#include "hssbem/core/phase.hpp"
+#include "hssbem/core/timer.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <stdexcept>
+#include <string>
+
+namespace hssbem {
+
+struct H2Factorization::Factors {
+  h2f::Pattern pattern;
+  std::vector<h2f::Step> steps;
+  std::vector<int> top_dofs;
+  DenseMatrix top_lu;
+  std::vector<int> top_piv;
+};
+
+int default_sketch_columns(double rel_tol)
+{
+  // Enough to carry the far field's directions down to the tolerance (skeletons measured: ~50 at
+  // 3e-3, ~150 per side at 1e-7); at 40k, 3e-3: p = 40, 60, 85 gave ||I - A F^-1|| 4.2e-2, 3.8e-2,
+  // 3.6e-2 and the same iterations.
+  const double digits = std::max(1.0, -std::log10(rel_tol));
+  return std::clamp(static_cast<int>(std::lround(10 + 20 * digits)), 48, 320);
+}
+
+const FarFieldSketch &H2FactorCache::sketch(int p, double *made)
+{
+  if (made) *made = 0;
+  for (const auto &s : m_sketches)
+    if (s->columns == p) return *s;
+  Timer t;
+  m_sketches.push_back(std::make_unique<FarFieldSketch>(far_field_sketch(*m_K, p)));
+  if (made) *made = t.seconds();
+  return *m_sketches.back();
+}
+
+namespace {
+
+void check_options(const H2FactorOptions &o)
+{
+  if (!(o.rel_tol > 0 && o.rel_tol < 1)) throw std::invalid_argument("H2 factorization: the relative tolerance must lie in (0, 1)");
+  if (o.leaf_size < 0) throw std::invalid_argument("H2 factorization: the leaf size must be 0 (the matrix's) or positive");
+  if (o.sketch_columns < 0) throw std::invalid_argument("H2 factorization: the sketch size must be 0 (from the tolerance) or positive");
+  if (o.top_size < 0) throw std::invalid_argument("H2 factorization: the top size must be >= 0");
+}
+
+/// The columns of A-hat (slots and signs, cluster order) and the regularisation, if any.
+h2f::Pattern make_pattern(const H2Matrix &K, const SystemSelection &sel, const std::vector<double> *modes)
+{
+  const ClusterTree &tree = K.tree();
+  const int n = tree.num_points();
+  const std::size_t N = 3 * static_cast<std::size_t>(n);
+  if (sel.displacement_known.size() != static_cast<std::size_t>(n)) throw std::invalid_argument("H2 factorization: the pattern has the wrong number of nodes");
+  h2f::Pattern p;
+  p.slot.resize(N);
+  p.sign.resize(N);
+  for (int k = 0; k < n; ++k)
+    for (int a = 0; a < 3; ++a) p.slot[3 * k + a] = pattern_slot(sel, tree.perm()[k], a, &p.sign[3 * k + a]);
+  if (modes) {
+    if (modes->size() != 6 * N) throw std::invalid_argument("H2 factorization: rigid modes of the wrong size");
+    p.c = rigid_regularization_weight;
+    p.phi.resize(6 * N);
+    p.psi.resize(6 * N);
+    for (int k = 0; k < n; ++k)
+      for (int a = 0; a < 3; ++a)
+        for (int j = 0; j < 6; ++j) {
+          const std::size_t g = 3 * static_cast<std::size_t>(k) + a;
+          p.phi[g + j * N] = (*modes)[(3 * static_cast<std::size_t>(tree.perm()[k]) + a) * 6 + j];
+          p.psi[g + j * N] = p.phi[g + j * N] * K.col_scale(p.slot[g]);
+        }
+  }
+  return p;
+}
+
+/// The level of the first boxes factored: the highest whose clusters hold at most leaf_size
+/// nodes (0: the leaves' level).
+int first_level(const ClusterTree &tree, int leaf_size)
+{
+  int l = tree.levels() - 1;
+  if (leaf_size <= 0) return l;
+  while (l > 1) {
+    int largest = 0;
+    for (int c : tree.clusters_at_level(l - 1)) largest = std::max(largest, tree.cluster(c).size());
+    if (largest > leaf_size) break;
+    --l;
+  }
+  return l;
+}
+
+/// Boxes of one level in classes whose closed neighbourhoods are disjoint, in tree order:
+/// boxes of one class can be eliminated concurrently, classes one after another.
+std::vector<std::vector<int>> colour_classes(const h2f::Frontier &F, const std::vector<int> &boxes, int nclusters)
+{
+  std::vector<std::vector<int>> closed(boxes.size()), touching(nclusters);
+  for (std::size_t i = 0; i < boxes.size(); ++i) {
+    closed[i] = F.neighbours(boxes[i]);
+    closed[i].push_back(boxes[i]);
+    for (int Y : closed[i]) touching[Y].push_back(static_cast<int>(i));
+  }
+  std::vector<int> colour(boxes.size(), -1);
+  std::vector<std::vector<int>> classes;
+  std::vector<char> used;
+  for (std::size_t i = 0; i < boxes.size(); ++i) {
+    used.assign(classes.size() + 1, 0);
+    for (int Y : closed[i])
+      for (int j : touching[Y])
+        if (colour[j] >= 0) used[colour[j]] = 1;
+    int c = 0;
+    while (used[c]) ++c;
+    colour[i] = c;
+    if (c == static_cast<int>(classes.size())) classes.emplace_back();
+    classes[c].push_back(boxes[i]);
+  }
+  return classes;
+}
+
+} // namespace
+
+H2Factorization::H2Factorization(H2FactorCache &cache, const SystemSelection &sel, const H2FactorOptions &options, const std::vector<double> *rigid_modes)
+  : m_K(cache.matrix()), m_options(options), m_f(std::make_unique<Factors>())
+{
+  PhaseScope whole(Phase::H2Factorization);
+  check_options(options);
+  const ClusterTree &tree = m_K.tree();
+  const int p = options.sketch_columns > 0 ? options.sketch_columns : default_sketch_columns(options.rel_tol);
+  const FarFieldSketch *sketch;
+  {
+    PhaseScope phase(Phase::H2Sketch);
+    sketch = &cache.sketch(p, &m_stats.time_sketch);
+  }
+  m_stats.sketch_columns = p;
+  m_stats.single_panels = options.single_panels < 0 ? options.rel_tol >= 1e-5 : options.single_panels == 1;
+  m_f->pattern = make_pattern(m_K, sel, rigid_modes);
+  m_slot = m_f->pattern.slot;
+
+  Timer timer;
+  h2f::Frontier front(m_K, *sketch, m_f->pattern);
+  const int l0 = first_level(tree, options.leaf_size);
+  for (int l = tree.levels() - 1; l > l0; --l) front.merge(l);
+  m_stats.time_init = timer.seconds();
+  for (int l = l0; l >= 1; --l) {
+    if (static_cast<int>(front.active_total()) <= options.top_size || !front.level_has_far_field(l)) break;
+    H2FactorLevelStats ls;
+    ls.level = l;
+    timer.restart();
+    {
+      PhaseScope phase(Phase::H2Eliminate);
+      std::vector<int> boxes;
+      for (int X : tree.clusters_at_level(l)) boxes.push_back(X);
+      std::vector<h2f::Step> steps(tree.num_clusters());
+      std::vector<double> flops(tree.num_clusters(), 0.0), t_skel(tree.num_clusters(), 0.0), t_elim(tree.num_clusters(), 0.0);
+      std::vector<std::vector<h2f::NewFill>> fills(tree.num_clusters());
+      for (const std::vector<int> &cls : colour_classes(front, boxes, tree.num_clusters())) {
+        for_each_cluster(cls, [&](int X) {
+          Timer t;
+          const int m = static_cast<int>(front.active(X).size());
+          front.precondition(X, &steps[X]);
+          const h2f::BoxSkeleton sk = front.skeleton(X, options.rel_tol);
+          t_skel[X] = t.seconds();
+          t.restart();
+          front.eliminate(X, sk, &steps[X], &flops[X], &fills[X]);
+          t_elim[X] = t.seconds();
+          steps[X].candidates = m;
+        });
+        for (int X : cls) {
+          front.add_fill(std::move(fills[X]));
+          const h2f::Step &st = steps[X];
+          ls.boxes += 1;
+          ls.mean_candidates += st.candidates;
+          ls.max_candidates = std::max(ls.max_candidates, st.candidates);
+          ls.mean_rank += static_cast<double>(st.S.size());
+          ls.max_rank = std::max(ls.max_rank, static_cast<int>(st.S.size()));
+          ls.eliminated += static_cast<long long>(st.R.size());
+          m_stats.flops_schur += flops[X];
+          m_stats.time_skeleton += t_skel[X];
+          m_stats.time_eliminate += t_elim[X];
+          if (m_stats.single_panels) steps[X].demote();
+          ls.bytes += steps[X].bytes();
+          m_f->steps.push_back(std::move(steps[X]));
+        }
+      }
+    }
+    if (ls.boxes > 0) {
+      ls.mean_candidates /= ls.boxes;
+      ls.mean_rank /= ls.boxes;
+    }
+    {
+      PhaseScope phase(Phase::H2Merge);
+      Timer t;
+      front.merge(l);
+      m_stats.time_merge += t.seconds();
+    }
+    ls.seconds = timer.seconds();
+    m_stats.levels.push_back(ls);
+  }
+  PhaseScope phase(Phase::H2Top);
+  timer.restart();
+  m_f->top_lu = front.dense_top(&m_f->top_dofs);
+  const int n = m_f->top_lu.m;
+  if (!h2f::lu_regular(m_f->top_lu, m_f->top_piv))
+    throw H2Breakdown("H2 factorization broke down: the top block (" + std::to_string(n) + " unknowns) is singular to working precision");
+  m_stats.time_top = timer.seconds();
+  m_stats.top_size = n;
+  m_stats.top_bytes = m_f->top_lu.bytes();
+  m_stats.bytes = m_stats.top_bytes;
+  for (const H2FactorLevelStats &ls : m_stats.levels) m_stats.bytes += ls.bytes;
+}
+
+H2Factorization::~H2Factorization() = default;
+
+int H2Factorization::num_unknowns() const { return m_f->pattern.dofs(); }
+
+void H2Factorization::solve(const double *b, double *x) const
+{
+  PhaseScope phase(Phase::H2Solve);
+  const ClusterTree &tree = m_K.tree();
+  const int n = tree.num_points();
+  std::vector<double> y(3 * static_cast<std::size_t>(n)), work;
+  for (int k = 0; k < n; ++k)
+    for (int a = 0; a < 3; ++a) y[3 * k + a] = b[3 * tree.perm()[k] + a];
+  for (const h2f::Step &s : m_f->steps) s.forward(y.data(), work);
+  const int nt = static_cast<int>(m_f->top_dofs.size());
+  if (nt > 0) {
+    work.resize(nt);
+    for (int i = 0; i < nt; ++i) work[i] = y[m_f->top_dofs[i]];
+    lapack::getrs('N', nt, 1, m_f->top_lu.data(), m_f->top_lu.ld(), m_f->top_piv.data(), work.data(), nt);
+    for (int i = 0; i < nt; ++i) y[m_f->top_dofs[i]] = work[i];
+  }
+  for (auto it = m_f->steps.rbegin(); it != m_f->steps.rend(); ++it) it->backward(y.data(), work);
+  // A-hat = A D: x = D y, back in mesh order.
+  for (int k = 0; k < n; ++k)
+    for (int a = 0; a < 3; ++a) x[3 * tree.perm()[k] + a] = y[3 * k + a] * m_K.col_scale(m_slot[3 * k + a]);
+}
+
+} // namespace hssbem
+
+namespace hssbem {
+
+double estimate_inverse_error(const H2Factorization &F, const std::function<void(const double *, double *)> &apply_a, int iterations, unsigned seed)
+{
+  const std::size_t N = static_cast<std::size_t>(F.num_unknowns());
+  std::mt19937_64 gen(seed);
+  std::normal_distribution<double> normal;
+  std::vector<double> v(N), z(N), w(N);
+  for (double &x : v) x = normal(gen);
+  const auto norm = [](const std::vector<double> &x) {
+    double s = 0;
+    for (double e : x) s += e * e;
+    return std::sqrt(s);
+  };
+  double worst = 0;
+  for (int it = 0; it < iterations; ++it) {
+    const double nv = norm(v);
+    if (!(nv > 0)) break;
+    F.solve(v.data(), z.data());
+    apply_a(z.data(), w.data());
+    for (std::size_t i = 0; i < N; ++i) w[i] = v[i] - w[i];
+    const double nw = norm(w);
+    worst = std::max(worst, nw / nv);
+    for (std::size_t i = 0; i < N; ++i) v[i] = w[i] / nw;
+  }
+  return worst;
+}
+
+} // namespace hssbem

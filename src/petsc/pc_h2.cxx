@@ -1,0 +1,386 @@
+/* PC "h2": the H² factorization (strong recursive skeletonization) of the BEM system matrix, as
+   a preconditioner for GMRES or, at a tight tolerance, a direct solver (see pc_h2.h). */
+#include "hssbem/petsc/pc_h2.h"
+#include "hssbem/core/timer.hpp"
+#include "hssbem/h2factor/h2_factorization.hpp"
+
+#include "mat_compressed.hpp"
+
+#include <petsc/private/pcimpl.h>
+
+#include <memory>
+#include <string>
+
+namespace {
+
+/* Where the factored H² matrix came from. */
+enum class Source { None, Matrix, Compressed };
+
+struct PC_H2 {
+  PetscReal rel_tol        = HSSBEM_PC_H2_DEFAULT_REL_TOL;
+  PetscInt  leaf_size      = 0;    /* 0: the H² matrix's leaves */
+  PetscInt  top_size       = 2000; /* unknowns factored densely at the top */
+  PetscInt  sketch_size    = 0;    /* 0: from the tolerance */
+  PetscInt  estimate_error = 0;    /* power iterations of the ‖I − A F⁻¹‖ estimate (0: none) */
+  /* set up (rank 0) */
+  Source                                       source = Source::None;
+  double                                       compressed_tol = 0;
+  std::shared_ptr<const hssbem::H2BemSystem>   sys;
+  std::shared_ptr<hssbem::H2FactorCache>       cache;
+  std::unique_ptr<hssbem::H2Factorization>     factors;
+  std::string                                  failure;
+  double                                       seconds_compress = 0, seconds_factor = 0, inverse_error = -1;
+  std::unique_ptr<HssbemRootExchange>          ex;
+};
+
+hssbem::H2FactorOptions FactorOptions(const PC_H2 &h2)
+{
+  hssbem::H2FactorOptions o;
+  o.rel_tol        = h2.rel_tol;
+  o.leaf_size      = (int)h2.leaf_size;
+  o.top_size       = (int)h2.top_size;
+  o.sketch_columns = (int)h2.sketch_size;
+  return o;
+}
+
+/* Rank 0: the H² matrix to factor (the matrix's own, or one compressed at the PC's tolerance). */
+void ChooseMatrixOnRoot(PC_H2 *h2, const HssbemSystemContext &p)
+{
+  const bool on_h2 = p.type == hssbem::OperatorType::H2 && p.h2;
+  if (on_h2 && h2->rel_tol >= p.h2_options.rel_tol) {
+    h2->sys            = p.h2;
+    h2->source         = Source::Matrix;
+    h2->compressed_tol = p.h2_options.rel_tol;
+    return;
+  }
+  hssbem::H2Options o = on_h2 ? p.h2_options : hssbem::H2Options{};
+  o.rel_tol           = h2->rel_tol;
+  o.pressure_columns  = false; /* the factorization needs H and G only */
+  hssbem::Timer timer;
+  h2->sys              = std::make_shared<hssbem::H2BemSystem>(*p.op, o);
+  h2->seconds_compress = timer.seconds();
+  h2->source           = Source::Compressed;
+  h2->compressed_tol   = o.rel_tol;
+}
+
+/* Rank 0: the factors (a breakdown in h2->failure, other errors as exceptions). */
+void FactorOnRoot(PC_H2 *h2, const HssbemSystemContext &p)
+{
+  const hssbem::H2BemSystem *before = h2->sys.get();
+  ChooseMatrixOnRoot(h2, p);
+  if (!h2->cache || h2->sys.get() != before) h2->cache = std::make_shared<hssbem::H2FactorCache>(h2->sys->matrix());
+  hssbem::Timer timer;
+  try {
+    h2->factors = std::make_unique<hssbem::H2Factorization>(*h2->cache, p.sel, FactorOptions(*h2), p.modes.empty() ? nullptr : &p.modes);
+  } catch (const hssbem::H2Breakdown &e) {
+    h2->failure = e.what();
+    return;
+  }
+  h2->seconds_factor = timer.seconds();
+  if (h2->estimate_error > 0) {
+    /* Against the operator the Krylov method applies: the MatShell's compression when there is one. */
+    const hssbem::CompressedBemSystem *A = p.compressed() ? p.compressed() : h2->sys.get();
+    h2->inverse_error = hssbem::estimate_inverse_error(*h2->factors, [&](const double *x, double *y) {
+      A->apply(p.sel, x, y);
+      if (!p.modes.empty()) HssbemAddRegularization(p.modes, x, y);
+    }, (int)h2->estimate_error);
+  }
+}
+
+PetscErrorCode PCSetUp_H2(PC pc)
+{
+  PC_H2               *h2 = (PC_H2 *)pc->data;
+  HssbemSystemContext *p;
+  MPI_Comm             comm = PetscObjectComm((PetscObject)pc);
+  PetscMPIInt          rank;
+  HssbemRootGuard      guard;
+  int                  breakdown = 0;
+
+  PetscFunctionBegin;
+  PetscCall(HssbemMatGetSystemContext(pc->pmat, &p));
+  PetscCheck(p, comm, PETSC_ERR_ARG_WRONG, "PC h2 factors BEM system matrices only: build the matrix with HssbemCreateSystem() (the hssbem driver does)");
+  PetscCallMPI(MPI_Comm_rank(comm, &rank));
+  h2->factors.reset();
+  h2->failure.clear();
+  h2->inverse_error = -1;
+  if (rank == 0) guard.Run([&] { FactorOnRoot(h2, *p); });
+  PetscCall(guard.Check(comm, "PC h2", "set-up failed on rank 0"));
+  breakdown = rank == 0 && !h2->failure.empty();
+  PetscCallMPI(MPI_Bcast(&breakdown, 1, MPI_INT, 0, comm));
+  if (breakdown) {
+    PetscCall(PetscInfo(pc, "H2 factorization broke down: %s\n", rank == 0 ? h2->failure.c_str() : "on rank 0"));
+    PetscCall(PCSetFailedReason(pc, PC_FACTOR_NUMERIC_ZEROPIVOT));
+  }
+  if (!h2->ex) PetscCallCXX(h2->ex = std::make_unique<HssbemRootExchange>());
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PCApply_H2(PC pc, Vec x, Vec y)
+{
+  PC_H2             *h2 = (PC_H2 *)pc->data;
+  HssbemRootGuard    guard;
+  const PetscScalar *xa;
+  PetscScalar       *ya;
+  PCFailedReason     reason;
+
+  PetscFunctionBegin;
+  PetscCall(PCGetFailedReason(pc, &reason));
+  if (reason) { /* a failed factorization: tell the Krylov method, do not crash */
+    PetscCall(VecSetInf(y));
+    PetscFunctionReturn(PETSC_SUCCESS);
+  }
+  PetscCall(h2->ex->SetUp(x));
+  PetscCall(h2->ex->Gather(x, &xa));
+  PetscCall(h2->ex->GetOut(&ya));
+  if (h2->factors) guard.Run([&] { h2->factors->solve(xa, ya); });
+  PetscCall(h2->ex->RestoreGather(&xa));
+  PetscCall(h2->ex->ScatterOut(&ya, y));
+  PetscCall(guard.Check(PetscObjectComm((PetscObject)pc), "PC h2", "failed on rank 0"));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PCReset_H2(PC pc)
+{
+  PC_H2 *h2 = (PC_H2 *)pc->data;
+
+  PetscFunctionBegin;
+  h2->factors.reset();
+  h2->cache.reset();
+  h2->sys.reset();
+  h2->ex.reset();
+  h2->source = Source::None;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PCDestroy_H2(PC pc)
+{
+  PetscFunctionBegin;
+  PetscCall(PCReset_H2(pc));
+  delete (PC_H2 *)pc->data;
+  pc->data = NULL;
+  PetscCall(PetscObjectComposeFunction((PetscObject)pc, "PCH2SetRelTol_C", NULL));
+  PetscCall(PetscObjectComposeFunction((PetscObject)pc, "PCH2SetLeafSize_C", NULL));
+  PetscCall(PetscObjectComposeFunction((PetscObject)pc, "PCH2SetTopSize_C", NULL));
+  PetscCall(PetscObjectComposeFunction((PetscObject)pc, "PCH2SetSketchSize_C", NULL));
+  PetscCall(PetscObjectComposeFunction((PetscObject)pc, "PCH2SetEstimateError_C", NULL));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode CheckOptions_Private(PC pc, const PC_H2 &h2)
+{
+  MPI_Comm comm = PetscObjectComm((PetscObject)pc);
+
+  PetscFunctionBegin;
+  PetscCheck(h2.rel_tol > 0 && h2.rel_tol < 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-pc_h2_rel_tol must lie in (0, 1)");
+  PetscCheck(h2.leaf_size >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-pc_h2_leaf_size must be 0 (the matrix's leaves) or positive");
+  PetscCheck(h2.top_size >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-pc_h2_top_size must be >= 0");
+  PetscCheck(h2.sketch_size >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-pc_h2_sketch_size must be 0 (from the tolerance) or positive");
+  PetscCheck(h2.estimate_error >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-pc_h2_estimate_error must be >= 0");
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PCSetFromOptions_H2(PC pc, PetscOptionItems *PetscOptionsObject)
+{
+  PC_H2 *h2 = (PC_H2 *)pc->data;
+
+  PetscFunctionBegin;
+  PetscOptionsHeadBegin(PetscOptionsObject, "H2 factorization options");
+  PetscCall(PetscOptionsReal("-pc_h2_rel_tol", "Relative tolerance of the factorization (of each skeleton)", "PCH2SetRelTol", h2->rel_tol, &h2->rel_tol, NULL));
+  PetscCall(PetscOptionsInt("-pc_h2_leaf_size", "Dof nodes per box at the first level factored (0: the H2 matrix's leaves)", "PCH2SetLeafSize", h2->leaf_size, &h2->leaf_size, NULL));
+  PetscCall(PetscOptionsInt("-pc_h2_top_size", "Unknowns factored densely at the top", "PCH2SetTopSize", h2->top_size, &h2->top_size, NULL));
+  PetscCall(PetscOptionsInt("-pc_h2_sketch_size", "Random vectors of the far-field sketch (0: from the tolerance)", "PCH2SetSketchSize", h2->sketch_size, &h2->sketch_size, NULL));
+  PetscCall(PetscOptionsInt("-pc_h2_estimate_error", "Power iterations of the ||I - A F^-1|| estimate shown by -ksp_view (0: none)", "PCH2SetEstimateError", h2->estimate_error, &h2->estimate_error, NULL));
+  PetscOptionsHeadEnd();
+  PetscCall(CheckOptions_Private(pc, *h2));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode ViewFactorization_Private(PetscViewer viewer, const hssbem::H2FactorStats &st)
+{
+  PetscFunctionBegin;
+  PetscCall(PetscViewerASCIIPrintf(viewer, "factorization: %.2f s (sketch %.2f, first boxes %.2f, skeletons %.2f, eliminations %.2f, merges %.2f, top %.2f; thread-seconds for skeletons and eliminations)\n",
+                                   st.seconds(), st.time_sketch, st.time_init, st.time_skeleton, st.time_eliminate, st.time_merge, st.time_top));
+  PetscCall(PetscViewerASCIIPrintf(viewer, "factors: %.1f MB (%s panels), dense top %d unknowns (%.1f MB), sketch of %d vectors\n", st.bytes / 1048576.0, st.single_panels ? "single-precision" : "double-precision",
+                                   st.top_size, st.top_bytes / 1048576.0, st.sketch_columns));
+  for (const hssbem::H2FactorLevelStats &l : st.levels)
+    PetscCall(PetscViewerASCIIPrintf(viewer, "level %d: %d boxes, %.0f unknowns per box (max %d) -> skeleton %.0f (max %d), %lld eliminated, %.1f MB, %.2f s\n", l.level, l.boxes, l.mean_candidates,
+                                     l.max_candidates, l.mean_rank, l.max_rank, l.eliminated, l.bytes / 1048576.0, l.seconds));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PCView_H2(PC pc, PetscViewer viewer)
+{
+  PC_H2   *h2 = (PC_H2 *)pc->data;
+  PetscBool ascii;
+
+  PetscFunctionBegin;
+  PetscCall(PetscObjectTypeCompare((PetscObject)viewer, PETSCVIEWERASCII, &ascii));
+  if (!ascii) PetscFunctionReturn(PETSC_SUCCESS);
+  PetscCall(PetscViewerASCIIPrintf(viewer, "  H2 factorization (strong recursive skeletonization): relative tolerance %g, leaf size %s, top %d\n", (double)h2->rel_tol,
+                                   h2->leaf_size > 0 ? std::to_string((int)h2->leaf_size).c_str() : "the matrix's", (int)h2->top_size));
+  if (!h2->sys) PetscFunctionReturn(PETSC_SUCCESS);
+  PetscCall(PetscViewerASCIIPushTab(viewer));
+  PetscCall(PetscViewerASCIIPushTab(viewer));
+  if (h2->source == Source::Matrix) PetscCall(PetscViewerASCIIPrintf(viewer, "of the matrix's H2 compression (at %g; no kernel entry evaluated)\n", h2->compressed_tol));
+  else {
+    PetscCall(PetscViewerASCIIPrintf(viewer, "of an H2 compression made at %g, %.2f s:\n", h2->compressed_tol, h2->seconds_compress));
+    PetscCall(HssbemViewH2Matrix_Private(viewer, h2->sys->matrix()));
+  }
+  if (h2->factors) {
+    PetscCall(ViewFactorization_Private(viewer, h2->factors->stats()));
+    if (h2->inverse_error >= 0) PetscCall(PetscViewerASCIIPrintf(viewer, "||I - A F^-1|| estimated at %.3e (%d power iterations)\n", h2->inverse_error, (int)h2->estimate_error));
+  } else PetscCall(PetscViewerASCIIPrintf(viewer, "factorization failed: %s\n", h2->failure.c_str()));
+  PetscCall(PetscViewerASCIIPopTab(viewer));
+  PetscCall(PetscViewerASCIIPopTab(viewer));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* The setters check the new value alone, then store it. */
+PetscErrorCode PCH2SetRelTol_H2(PC pc, PetscReal tol)
+{
+  PetscFunctionBegin;
+  PetscCheck(tol > 0 && tol < 1, PetscObjectComm((PetscObject)pc), PETSC_ERR_ARG_OUTOFRANGE, "the relative tolerance must lie in (0, 1)");
+  ((PC_H2 *)pc->data)->rel_tol = tol;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PCH2SetLeafSize_H2(PC pc, PetscInt n)
+{
+  PetscFunctionBegin;
+  PetscCheck(n >= 0, PetscObjectComm((PetscObject)pc), PETSC_ERR_ARG_OUTOFRANGE, "the leaf size must be 0 (the matrix's leaves) or positive");
+  ((PC_H2 *)pc->data)->leaf_size = n;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PCH2SetTopSize_H2(PC pc, PetscInt n)
+{
+  PetscFunctionBegin;
+  PetscCheck(n >= 0, PetscObjectComm((PetscObject)pc), PETSC_ERR_ARG_OUTOFRANGE, "the top size must be >= 0");
+  ((PC_H2 *)pc->data)->top_size = n;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PCH2SetSketchSize_H2(PC pc, PetscInt n)
+{
+  PetscFunctionBegin;
+  PetscCheck(n >= 0, PetscObjectComm((PetscObject)pc), PETSC_ERR_ARG_OUTOFRANGE, "the sketch size must be 0 (from the tolerance) or positive");
+  ((PC_H2 *)pc->data)->sketch_size = n;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PCH2SetEstimateError_H2(PC pc, PetscInt n)
+{
+  PetscFunctionBegin;
+  PetscCheck(n >= 0, PetscObjectComm((PetscObject)pc), PETSC_ERR_ARG_OUTOFRANGE, "the power iterations must be >= 0");
+  ((PC_H2 *)pc->data)->estimate_error = n;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+} // namespace
+
+/*MC
+  PCH2 - H² factorization of the BEM system matrix by strong recursive skeletonization (hssbem).
+
+  Options Database Keys:
++ -pc_h2_rel_tol <tol>        - relative tolerance of each skeleton (default 3e-3: a preconditioner)
+. -pc_h2_leaf_size <n>        - dof nodes per box at the first level factored (0: the H² leaves)
+. -pc_h2_top_size <n>         - unknowns factored densely at the top (default 2000)
+. -pc_h2_sketch_size <p>      - random vectors of the far-field sketch (0: from the tolerance)
+- -pc_h2_estimate_error <k>   - power iterations of the ||I - A F^-1|| estimate in -ksp_view (0: none)
+
+  Notes:
+  On the H² MatShell the factorization reads the matrix's own compression (no kernel entry
+  evaluated); on a dense or HSS matrix, or at a tolerance tighter than the H² matrix's, it
+  compresses an H² matrix at its own tolerance first. With GMRES at the default tolerance it is
+  a preconditioner; with -ksp_type preonly -pc_h2_rel_tol 1e-7 a direct solver to about that
+  tolerance. A pivot block singular to working precision sets PC_FACTOR_NUMERIC_ZEROPIVOT.
+
+  Level: beginner
+M*/
+PETSC_EXTERN PetscErrorCode PCCreate_H2(PC pc)
+{
+  PetscFunctionBegin;
+  PetscCallCXX(pc->data = new PC_H2);
+  pc->ops->setup          = PCSetUp_H2;
+  pc->ops->apply          = PCApply_H2;
+  pc->ops->reset          = PCReset_H2;
+  pc->ops->destroy        = PCDestroy_H2;
+  pc->ops->setfromoptions = PCSetFromOptions_H2;
+  pc->ops->view           = PCView_H2;
+  PetscCall(PetscObjectComposeFunction((PetscObject)pc, "PCH2SetRelTol_C", PCH2SetRelTol_H2));
+  PetscCall(PetscObjectComposeFunction((PetscObject)pc, "PCH2SetLeafSize_C", PCH2SetLeafSize_H2));
+  PetscCall(PetscObjectComposeFunction((PetscObject)pc, "PCH2SetTopSize_C", PCH2SetTopSize_H2));
+  PetscCall(PetscObjectComposeFunction((PetscObject)pc, "PCH2SetSketchSize_C", PCH2SetSketchSize_H2));
+  PetscCall(PetscObjectComposeFunction((PetscObject)pc, "PCH2SetEstimateError_C", PCH2SetEstimateError_H2));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/*@
+  PCH2SetRelTol - Sets the relative tolerance of the H² factorization (of each skeleton).
+
+  Logically Collective
+
+  Level: intermediate
+@*/
+PetscErrorCode PCH2SetRelTol(PC pc, PetscReal tol)
+{
+  PetscFunctionBegin;
+  PetscTryMethod(pc, "PCH2SetRelTol_C", (PC, PetscReal), (pc, tol));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/*@
+  PCH2SetLeafSize - Sets the dof nodes per box at the first level factored (0: the H² leaves).
+
+  Logically Collective
+
+  Level: intermediate
+@*/
+PetscErrorCode PCH2SetLeafSize(PC pc, PetscInt n)
+{
+  PetscFunctionBegin;
+  PetscTryMethod(pc, "PCH2SetLeafSize_C", (PC, PetscInt), (pc, n));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/*@
+  PCH2SetTopSize - Sets how many unknowns may remain for the dense top factorization.
+
+  Logically Collective
+
+  Level: advanced
+@*/
+PetscErrorCode PCH2SetTopSize(PC pc, PetscInt n)
+{
+  PetscFunctionBegin;
+  PetscTryMethod(pc, "PCH2SetTopSize_C", (PC, PetscInt), (pc, n));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/*@
+  PCH2SetSketchSize - Sets the random vectors of the far-field sketch (0: from the tolerance).
+
+  Logically Collective
+
+  Level: advanced
+@*/
+PetscErrorCode PCH2SetSketchSize(PC pc, PetscInt n)
+{
+  PetscFunctionBegin;
+  PetscTryMethod(pc, "PCH2SetSketchSize_C", (PC, PetscInt), (pc, n));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/*@
+  PCH2SetEstimateError - Sets the power iterations of the ||I - A F^-1|| estimate (0: none).
+
+  Logically Collective
+
+  Level: advanced
+@*/
+PetscErrorCode PCH2SetEstimateError(PC pc, PetscInt n)
+{
+  PetscFunctionBegin;
+  PetscTryMethod(pc, "PCH2SetEstimateError_C", (PC, PetscInt), (pc, n));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}

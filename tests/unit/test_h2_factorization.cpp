@@ -1,0 +1,272 @@
+// H² factorization (strong recursive skeletonization) against dense LU of the same system.
+#include "hssbem/bem/bem_operator.hpp"
+#include "hssbem/bem/rigid_modes.hpp"
+#include "hssbem/compress/pattern_columns.hpp"
+#include "hssbem/core/lapack.hpp"
+#include "hssbem/h2/h2_compression.hpp"
+#include "hssbem/h2factor/h2_factorization.hpp"
+#include "hss_test_helpers.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <memory>
+#include <random>
+#include <string>
+
+using namespace hssbem;
+using namespace hssbem::test; // dense_k, dense_a, random_pattern, rel
+
+namespace {
+
+struct Loaded {
+  SurfaceMesh mesh;
+  std::unique_ptr<Discretization> disc;
+  std::unique_ptr<BemOperator> op;
+};
+
+std::unique_ptr<Loaded> load(const std::string &name, double nu = 0.3)
+{
+  auto L = std::make_unique<Loaded>();
+  L->mesh = read_mesh(std::string(HSSBEM_MESHES) + "/" + name);
+  std::vector<std::string> notices;
+  validate_and_orient(L->mesh, notices);
+  L->disc = std::make_unique<Discretization>(L->mesh, 40.0);
+  L->op = std::make_unique<BemOperator>(*L->disc, Material::from_young(1.0, nu));
+  return L;
+}
+
+SystemSelection selection(int n, std::vector<std::array<bool, 3>> known)
+{
+  SystemSelection s;
+  s.displacement_known = std::move(known);
+  s.known.assign(n, Vec3{0, 0, 0});
+  return s;
+}
+
+std::vector<double> random_vector(std::size_t n, int seed)
+{
+  std::mt19937 gen(seed);
+  std::normal_distribution<double> N01;
+  std::vector<double> v(n);
+  for (double &x : v) x = N01(gen);
+  return v;
+}
+
+/// x = A⁻¹ b by dense LU, A column-major N × N.
+std::vector<double> dense_solve(std::vector<double> A, std::vector<double> b)
+{
+  const int N = static_cast<int>(b.size());
+  std::vector<int> piv(N);
+  EXPECT_EQ(lapack::getrf(N, A.data(), N, piv.data()), 0);
+  lapack::getrs('N', N, 1, A.data(), N, piv.data(), b.data(), N);
+  return b;
+}
+
+void print_stats(const H2FactorStats &st)
+{
+  for (const H2FactorLevelStats &l : st.levels)
+    std::printf("  level %d: %d boxes, candidates %.0f (max %d), rank %.0f (max %d), %lld eliminated, %.1f MB\n", l.level, l.boxes, l.mean_candidates,
+                l.max_candidates, l.mean_rank, l.max_rank, l.eliminated, l.bytes / 1e6);
+  std::printf("  top %d, factors %.1f MB, %.2f s (sketch %.2f, init %.2f, skeletons %.2f, eliminations %.2f, merges %.2f, top %.2f)\n", st.top_size, st.bytes / 1e6,
+              st.seconds(), st.time_sketch, st.time_init, st.time_skeleton, st.time_eliminate, st.time_merge, st.time_top);
+}
+
+struct Case {
+  const char *mesh;
+  double tol;
+  int leaf;
+  double p_known;        ///< probability that a component's displacement is known (traction unknown)
+  double min_eliminated; ///< fraction of the unknowns the levels must eliminate (the rest is the dense top)
+};
+
+class H2FactorAccuracy : public ::testing::TestWithParam<Case> {};
+
+TEST_P(H2FactorAccuracy, SolveMatchesDenseLU)
+{
+  const Case c = GetParam();
+  auto L = load(c.mesh);
+  const int n = L->op->num_nodes();
+  H2Options o;
+  o.rel_tol = c.tol / 100; // the factorization's error dominates the product's
+  o.leaf_size = c.leaf;
+  const H2Matrix K = compress_bem_operator_h2(*L->op, o);
+  const auto known = random_pattern(n, c.p_known, 17);
+  const SystemSelection sel = selection(n, known);
+  H2FactorCache cache(K);
+  H2FactorOptions fo;
+  fo.rel_tol = c.tol;
+  fo.top_size = 0; // factor every level that has a far field
+  const H2Factorization F(cache, sel, fo);
+  const std::vector<double> b = random_vector(3L * n, 5);
+  std::vector<double> x(b.size());
+  F.solve(b.data(), x.data());
+  const std::vector<double> xd = dense_solve(dense_a(dense_k(*L->op, 6), n, 6, known), b);
+  const double err = rel(x, xd);
+  const H2FactorStats &st = F.stats();
+  std::printf("%s tol %.0e leaf %d, %.0f%% u known: error vs dense LU %.2e\n", c.mesh, c.tol, c.leaf, 100 * c.p_known, err);
+  print_stats(st);
+  EXPECT_LE(err, 100 * c.tol);
+  // Not a dense LU in disguise: the levels eliminated a good part of A before the dense top.
+  ASSERT_FALSE(st.levels.empty());
+  long long eliminated = 0;
+  for (const H2FactorLevelStats &l : st.levels) eliminated += l.eliminated;
+  EXPECT_EQ(eliminated + st.top_size, 3LL * n);
+  EXPECT_GE(eliminated, c.min_eliminated * 3 * n);
+  // The estimate of ‖I − A F⁻¹‖ (with the H² product) follows the tolerance too.
+  const double inv_err = estimate_inverse_error(F, [&](const double *in, double *out) {
+    apply_compressed_k(K, pattern_product_input(sel, in, n, K.col_block()), out);
+  });
+  std::printf("  ||I - A F^-1|| ~ %.2e\n", inv_err);
+  EXPECT_LE(inv_err, 100 * c.tol);
+}
+
+INSTANTIATE_TEST_SUITE_P(Meshes, H2FactorAccuracy,
+                         ::testing::Values(Case{"sphere_l1.msh", 1e-3, 16, 0.3, 0.8}, Case{"sphere_l1.msh", 1e-6, 16, 0.3, 0.6},
+                                           Case{"sphere_l1.msh", 1e-9, 16, 0.3, 0.5}, Case{"sphere_l1.msh", 1e-6, 32, 0.7, 0.6},
+                                           Case{"cardioid_fine.msh", 1e-3, 32, 0.5, 0.5}, Case{"cardioid_fine.msh", 1e-6, 32, 0.5, 0.3},
+                                           Case{"cube_l1.msh", 1e-6, 16, 0.3, 0.5}, Case{"hollow_sphere_l0.msh", 1e-6, 16, 0.3, 0.05}));
+
+TEST(H2FactorAccuracy, LooseToleranceIsApproximate)
+{
+  // The bound above must mean something: at 1e-2 the factorization is visibly inexact.
+  auto L = load("sphere_l1.msh");
+  const int n = L->op->num_nodes();
+  H2Options o;
+  o.rel_tol = 1e-8;
+  o.leaf_size = 16;
+  const H2Matrix K = compress_bem_operator_h2(*L->op, o);
+  const auto known = random_pattern(n, 0.3, 17);
+  H2FactorCache cache(K);
+  H2FactorOptions fo;
+  fo.rel_tol = 1e-2;
+  fo.top_size = 0;
+  const H2Factorization F(cache, selection(n, known), fo);
+  const std::vector<double> b = random_vector(3L * n, 5);
+  std::vector<double> x(b.size());
+  F.solve(b.data(), x.data());
+  const double err = rel(x, dense_solve(dense_a(dense_k(*L->op, 6), n, 6, known), b));
+  std::printf("tol 1e-2: error %.2e\n", err);
+  EXPECT_GT(err, 1e-5);
+  EXPECT_LE(err, 1.0);
+}
+
+TEST(H2FactorPatterns, TwoPatternsOneCompression)
+{
+  // One H² matrix (and one cached sketch) serves a second pattern with 30 % of the vertices
+  // switched, without evaluating a kernel entry.
+  auto L = load("cardioid_832.msh");
+  const int n = L->op->num_nodes();
+  H2Options o;
+  o.rel_tol = 1e-8;
+  o.leaf_size = 16;
+  const H2Matrix K = compress_bem_operator_h2(*L->op, o);
+  const long long entries = K.stats().entries_evaluated;
+  const auto Kd = dense_k(*L->op, 6);
+  auto known = random_pattern(n, 0.5, 3);
+  H2FactorCache cache(K);
+  H2FactorOptions fo;
+  fo.rel_tol = 1e-6;
+  fo.top_size = 0;
+  const std::vector<double> b = random_vector(3L * n, 9);
+  for (int pass = 0; pass < 2; ++pass) {
+    const H2Factorization F(cache, selection(n, known), fo);
+    std::vector<double> x(b.size());
+    F.solve(b.data(), x.data());
+    const double err = rel(x, dense_solve(dense_a(Kd, n, 6, known), b));
+    std::printf("pattern %d: error %.2e, sketch %.3f s\n", pass, err, F.stats().time_sketch);
+    EXPECT_LE(err, 1e-4);
+    if (pass == 1) EXPECT_EQ(F.stats().time_sketch, 0.0); // the cached sketch
+    std::mt19937 gen(11);
+    std::bernoulli_distribution flip(0.3);
+    for (auto &k : known)
+      if (flip(gen)) k = {!k[0], !k[1], !k[2]};
+  }
+  EXPECT_EQ(K.stats().entries_evaluated, entries);
+}
+
+TEST(H2FactorPureTraction, RegularisedMatchesDense)
+{
+  // All tractions known: A = H is singular (rigid modes); A + c Φ Φᵀ is not.
+  auto L = load("sphere_l1.msh");
+  const int n = L->op->num_nodes();
+  H2Options o;
+  o.rel_tol = 1e-9;
+  o.leaf_size = 16;
+  const H2Matrix K = compress_bem_operator_h2(*L->op, o);
+  const std::vector<std::array<bool, 3>> known(n, {false, false, false});
+  const std::vector<double> modes = orthonormal_rigid_modes(*L->disc);
+  std::vector<double> A = dense_a(dense_k(*L->op, 6), n, 6, known);
+  const std::size_t N = 3L * n;
+  for (std::size_t i = 0; i < N; ++i)
+    for (std::size_t j = 0; j < N; ++j) {
+      double s = 0;
+      for (int q = 0; q < 6; ++q) s += modes[i * 6 + q] * modes[j * 6 + q];
+      A[i + j * N] += rigid_regularization_weight * s;
+    }
+  const std::vector<double> b = random_vector(N, 21);
+  const std::vector<double> xd = dense_solve(A, b);
+  H2FactorCache cache(K);
+  for (const double tol : {1e-3, 1e-7}) {
+    H2FactorOptions fo;
+    fo.rel_tol = tol;
+    fo.top_size = 0;
+    const H2Factorization F(cache, selection(n, known), fo, &modes);
+    std::vector<double> x(N);
+    F.solve(b.data(), x.data());
+    const double err = rel(x, xd);
+    std::printf("pure traction, tol %.0e: error %.2e, top %d\n", tol, err, F.stats().top_size);
+    EXPECT_LE(err, 100 * tol);
+    EXPECT_GT(F.stats().levels.size(), 0u);
+  }
+}
+
+TEST(H2FactorPureTraction, UnregularisedBreaksDown)
+{
+  // Without the regularisation the translations are exact null vectors of the H² matrix (its
+  // rigid-body terms are built so): factored densely, the top block is singular.
+  auto L = load("sphere_l0.msh");
+  const int n = L->op->num_nodes();
+  H2Options o;
+  o.leaf_size = 16;
+  const H2Matrix K = compress_bem_operator_h2(*L->op, o);
+  H2FactorCache cache(K);
+  H2FactorOptions fo;
+  fo.top_size = 3 * n; // all of it in the top
+  EXPECT_THROW(H2Factorization(cache, selection(n, std::vector<std::array<bool, 3>>(n, {false, false, false})), fo), H2Breakdown);
+  EXPECT_NO_THROW(H2Factorization(cache, selection(n, random_pattern(n, 0.5, 2)), fo));
+}
+
+TEST(H2FactorOptionsCheck, LeafSizeStartsHigherAndBadOptionsThrow)
+{
+  auto L = load("sphere_l1.msh");
+  const int n = L->op->num_nodes();
+  H2Options o;
+  o.rel_tol = 1e-8;
+  o.leaf_size = 16;
+  const H2Matrix K = compress_bem_operator_h2(*L->op, o);
+  H2FactorCache cache(K);
+  const SystemSelection sel = selection(n, random_pattern(n, 0.3, 4));
+  H2FactorOptions fo;
+  fo.rel_tol = 1e-6;
+  fo.top_size = 0;
+  const H2Factorization fine(cache, sel, fo);
+  fo.leaf_size = 64; // boxes of up to 64 nodes: two levels above the H² leaves (14-16 nodes)
+  const H2Factorization coarse(cache, sel, fo);
+  ASSERT_FALSE(fine.stats().levels.empty());
+  ASSERT_FALSE(coarse.stats().levels.empty());
+  EXPECT_EQ(coarse.stats().levels.front().level, fine.stats().levels.front().level - 2);
+  const std::vector<double> b = random_vector(3L * n, 2);
+  std::vector<double> x1(b.size()), x2(b.size());
+  fine.solve(b.data(), x1.data());
+  coarse.solve(b.data(), x2.data());
+  EXPECT_LE(rel(x2, x1), 1e-4);
+  fo = H2FactorOptions{};
+  fo.rel_tol = 0;
+  EXPECT_THROW(H2Factorization(cache, sel, fo), std::invalid_argument);
+  fo = H2FactorOptions{};
+  fo.leaf_size = -1;
+  EXPECT_THROW(H2Factorization(cache, sel, fo), std::invalid_argument);
+}
+
+} // namespace
