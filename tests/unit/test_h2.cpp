@@ -233,6 +233,39 @@ TEST(H2Block, LowRankBlockMatchesItsEntries)
   EXPECT_TRUE(R.is_single());
 }
 
+TEST(H2Block, TransposedProductInEveryForm)
+{
+  // X += Bᵀ Y for a block dense in double, dense in single and of low rank, with 1 and 3
+  // right-hand sides, against the block's (stored) entries.
+  std::mt19937 gen(10);
+  std::uniform_real_distribution<double> U01;
+  std::normal_distribution<double> N01;
+  const int m = 45, n = 70;
+  std::vector<Vec3> x(m), y(n);
+  for (Vec3 &p : x) p = {U01(gen), U01(gen), U01(gen)};
+  for (Vec3 &p : y) p = {3 + U01(gen), U01(gen), U01(gen)};
+  for (int form = 0; form < 3; ++form) {
+    H2Block B;
+    B.M = DenseMatrix(m, n);
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < m; ++i) B.M(i, j) = 1.0 / norm(x[i] - y[j]);
+    if (form == 1) B.demote();
+    if (form == 2) B.compress(1e-6);
+    ASSERT_EQ(B.is_single(), form == 1);
+    ASSERT_EQ(B.is_low_rank(), form == 2);
+    for (const int nrhs : {1, 3}) {
+      std::vector<double> Y(static_cast<std::size_t>(m) * nrhs), X(static_cast<std::size_t>(n) * nrhs, 1.0), Xref(X), buf;
+      for (double &v : Y) v = N01(gen);
+      B.multiply_add_transposed(Y.data(), m, X.data(), n, nrhs, buf);
+      for (int k = 0; k < nrhs; ++k)
+        for (int j = 0; j < n; ++j)
+          for (int i = 0; i < m; ++i) Xref[j + static_cast<std::size_t>(n) * k] += B.entry(i, j) * Y[i + static_cast<std::size_t>(m) * k];
+      EXPECT_LE(rel(X, Xref), 1e-12) << "form " << form << ", " << nrhs << " right-hand sides";
+      EXPECT_GT(rel(X, std::vector<double>(X.size(), 1.0)), 0.1); // the product did add something
+    }
+  }
+}
+
 TEST(H2Matrix, BasisAccessorGivesTheBasesTheProductUses)
 {
   // basis(c) rebuilds U and V in double (candidates × skeleton, interpolative form) from the
