@@ -7,15 +7,24 @@
 
 namespace hssbem {
 
-BemOperator::BemOperator(const Discretization &disc, const Material &material, const QuadratureOptions &options)
-  : m_disc(&disc), m_material(material), m_quad_options(options), m_quad(material, options)
+namespace {
+
+std::vector<Triangle> triangles_of(const SurfaceMesh &mesh)
 {
-  const SurfaceMesh &mesh = disc.mesh();
-  m_tri.resize(mesh.triangles.size());
+  std::vector<Triangle> tri(mesh.triangles.size());
   for (int t = 0; t < mesh.num_triangles(); ++t) {
     const auto &v = mesh.triangles[t];
-    m_tri[t] = Triangle{{mesh.vertices[v[0]], mesh.vertices[v[1]], mesh.vertices[v[2]]}, mesh.triangle_normal(t), mesh.triangle_area(t)};
+    tri[t] = Triangle{{mesh.vertices[v[0]], mesh.vertices[v[1]], mesh.vertices[v[2]]}, mesh.triangle_normal(t), mesh.triangle_area(t)};
   }
+  return tri;
+}
+
+} // namespace
+
+BemOperator::BemOperator(const Discretization &disc, const Material &material, const QuadratureOptions &options)
+  : m_disc(&disc), m_material(material), m_quad_options(options), m_quad(material, options), m_tri(triangles_of(disc.mesh())),
+    m_regular(material, options, m_tri)
+{
   m_rigid.assign(disc.num_nodes(), Mat3{});
   m_has_rigid.assign(disc.num_nodes(), 0);
   m_workspace = std::make_unique<Workspace>(*this);
@@ -121,6 +130,50 @@ void BemOperator::scatter(int t, const ElementIntegrals &ei, const std::vector<i
   }
 }
 
+void BemOperator::scatter(int t, const CornerSums &cs, const std::vector<int> &col_pos, const BlockRows &out, Mat3 *D) const
+{
+  double Ge[9], He[9];
+  for (int a = 0; a < 3; ++a) {
+    const int p = col_pos[m_disc->element_node(t, a)];
+    if (p < 0 && !D) continue;
+    cs.expand(a, Ge, He);
+    if (D)
+      for (int m = 0; m < 9; ++m) (*D)[m] -= He[m];
+    if (p < 0) continue;
+    for (int k = 0; k < 3; ++k) {
+      if (out.H)
+        for (int c = 0; c < 3; ++c) out.H[k * out.ld + 3 * p + c] += He[3 * k + c];
+      if (out.G)
+        for (int c = 0; c < 3; ++c) out.G[k * out.ld + 3 * p + c] += Ge[3 * k + c];
+      if (out.Gn) out.Gn[k * out.ldn + p] += Ge[3 * k] * m_tri[t].n[0] + Ge[3 * k + 1] * m_tri[t].n[1] + Ge[3 * k + 2] * m_tri[t].n[2];
+    }
+  }
+}
+
+void BemOperator::point_integrals(const Vec3 &x, int row, const BlockRows &out, Workspace &ws, Mat3 *D) const
+{
+  // Triangles that see x through the 7-point rule go to the batched rule; the others (x on the
+  // triangle: Duffy; x near it: subdivision) one by one.
+  ElementIntegrals ei;
+  ws.regular.clear();
+  for (int t : ws.elems) {
+    const bool on = row >= 0 && contains(row, t);
+    if (!on && m_regular.is_regular(x, t)) {
+      ws.regular.push_back(t);
+      continue;
+    }
+    element_integrals(x, row, t, ei);
+    scatter(t, ei, ws.col_pos, out);
+    if (D && !on)
+      for (int a = 0; a < 3; ++a)
+        for (int m = 0; m < 9; ++m) (*D)[m] -= ei.H[a][m];
+  }
+  const int n = static_cast<int>(ws.regular.size());
+  if (static_cast<int>(ws.sums.size()) < n) ws.sums.resize(n);
+  m_regular.sums(x, ws.regular.data(), n, ws.sums.data());
+  for (int k = 0; k < n; ++k) scatter(ws.regular[k], ws.sums[k], ws.col_pos, out, D);
+}
+
 void BemOperator::fill_hg(const std::vector<int> &I, const std::vector<int> &J, double *H, double *G, long ld) const
 {
   fill_hg(I, J, H, G, ld, nullptr, 0, *m_workspace);
@@ -143,14 +196,10 @@ void BemOperator::fill_hg_at_points(const std::vector<Vec3> &X, const std::vecto
   std::vector<int> &col_pos = ws.col_pos;
   for (std::size_t p = 0; p < J.size(); ++p) col_pos[J[p]] = static_cast<int>(p);
   elements_touching(J, ws);
-  ElementIntegrals ei;
   for (std::size_t r = 0; r < X.size(); ++r) {
     BlockRows out{H ? H + 3 * r * ld : nullptr, G ? G + 3 * r * ld : nullptr, Gn ? Gn + 3 * r * ldn : nullptr, ld, ldn};
     out.zero(J.size());
-    for (int t : ws.elems) {
-      element_integrals(X[r], -1, t, ei);
-      scatter(t, ei, col_pos, out);
-    }
+    point_integrals(X[r], -1, out, ws, nullptr);
   }
   for (int j : J) col_pos[j] = -1;
 }
@@ -179,7 +228,6 @@ void BemOperator::fill_rows(const std::vector<int> &I, const std::vector<int> &J
   for (std::size_t p = 0; p < J.size(); ++p) col_pos[J[p]] = static_cast<int>(p);
   const bool all = rigid == Rigid::with && static_cast<int>(J.size()) == num_nodes();
   elements_touching(J, ws);
-  ElementIntegrals ei;
   for (std::size_t r = 0; r < I.size(); ++r) {
     const int i = I[r];
     if (rigid == Rigid::with && !all && !m_has_rigid[i]) {
@@ -189,14 +237,7 @@ void BemOperator::fill_rows(const std::vector<int> &I, const std::vector<int> &J
     BlockRows out{H ? H + 3 * r * ld : nullptr, G ? G + 3 * r * ld : nullptr, Gn ? Gn + 3 * r * ldn : nullptr, ld, ldn};
     out.zero(J.size());
     Mat3 D{};
-    const Vec3 &x = m_disc->node(i).point;
-    for (int t : ws.elems) {
-      element_integrals(x, i, t, ei);
-      scatter(t, ei, col_pos, out);
-      if (all && !contains(i, t))
-        for (int a = 0; a < 3; ++a)
-          for (int m = 0; m < 9; ++m) D[m] -= ei.H[a][m];
-    }
+    point_integrals(m_disc->node(i).point, i, out, ws, all ? &D : nullptr);
     if (out.H && rigid == Rigid::with) add_rigid_body(i, all ? D : m_rigid[i], col_pos, out.H, ld);
   }
   for (int j : J) col_pos[j] = -1;

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -62,7 +63,9 @@ Skeleton select_skeleton(std::vector<double> &X, int nfeat, int ncand, const std
   for (int q = 0; q < ncand; ++q) (forced[q] ? forced_idx : free_idx).push_back(q);
   const int nfree = static_cast<int>(free_idx.size()), nforced = static_cast<int>(forced_idx.size());
   ColumnId cid;
-  if (nfree > 0 && nfeat > 0) {
+  if (nforced == 0 && nfeat > 0) {
+    cid = column_id(X.data(), nfeat, ncand, nfeat, id);
+  } else if (nfree > 0 && nfeat > 0) {
     // Gather the free columns.
     std::vector<double> Xf(static_cast<std::size_t>(nfeat) * nfree);
     for (int q = 0; q < nfree; ++q) std::copy(&X[static_cast<std::size_t>(free_idx[q]) * nfeat], &X[static_cast<std::size_t>(free_idx[q] + 1) * nfeat], &Xf[static_cast<std::size_t>(q) * nfeat]);
@@ -183,6 +186,7 @@ void Skeletonizer::skeletonize_level(int l, const Sources &sources, const std::v
   for (int c : m_tree.leaves())
     if (m_tree.cluster(c).level < l) front.push_back(c);
   m_in_front.assign(m_tree.num_clusters(), 0);
+  if (m_col_done.empty()) m_col_done.assign(m_tree.num_clusters(), 0);
   m_active_rows.assign(m_tree.num_clusters(), {});
   m_active_cols.assign(m_tree.num_clusters(), {});
   for (int c : front) {
@@ -190,46 +194,66 @@ void Skeletonizer::skeletonize_level(int l, const Sources &sources, const std::v
     m_active_rows[c] = basis_candidates(m_tree, m_bases, c, 3, true);
     m_active_cols[c] = basis_candidates(m_tree, m_bases, c, m_w, false);
   }
-  for_each_cluster(m_tree.clusters_at_level(l), [&](int c) {
-    std::vector<int> src;
-    sources(c, front, src);
-    skeletonize(c, src, !need_rows || (*need_rows)[c], !need_cols || (*need_cols)[c]);
-  });
+  const std::vector<int> &level = m_tree.clusters_at_level(l);
+  std::vector<std::vector<int>> src(level.size());
+  std::vector<int> index(level.size());
+  std::iota(index.begin(), index.end(), 0);
+  for_each_cluster(index, [&](int k) { sources(level[k], front, src[k]); });
+  const auto rows = [&](int k) { skeletonize_rows(level[k], src[k], !need_rows || (*need_rows)[level[k]]); };
+  const auto cols = [&](int k) { skeletonize_cols(level[k], src[k], !need_cols || (*need_cols)[level[k]]); };
+  if (m_opt.columns_first) {
+    // All of the level's column skeletons first: the row skeletons are then compressed against
+    // the sources' column skeletons instead of their candidates (fewer explicit samples).
+    for_each_cluster(index, cols);
+    for_each_cluster(index, rows);
+  } else {
+    for_each_cluster(index, [&](int k) {
+      cols(k);
+      rows(k);
+    });
+  }
 }
 
-void Skeletonizer::skeletonize(int c, const std::vector<int> &sources, bool need_rows, bool need_cols)
+Skeletonizer::Spheres Skeletonizer::spheres(int c) const
+{
+  const Cluster &cl = m_tree.cluster(c);
+  double h_max = 0;
+  for (int k = cl.begin; k < cl.end; ++k) h_max = std::max(h_max, m_reach.h[m_tree.perm()[k]]);
+  Spheres s;
+  s.r_row = m_opt.proxy_ratio * std::max(m_reach.row_r[c], h_max);
+  s.r_col = std::max(m_opt.proxy_ratio * m_reach.src_r[c], m_reach.reach_r[c]);
+  const int np = static_cast<int>(m_sphere.size());
+  s.w_row = std::sqrt(4 * M_PI * s.r_row * s.r_row / np / m_node_area) * m_node_area;
+  s.w_col = std::sqrt(4 * M_PI * s.r_col * s.r_col / np / m_node_area);
+  return s;
+}
+
+void Skeletonizer::skeletonize_rows(int c, const std::vector<int> &sources, bool need)
 {
   const Discretization &disc = m_op.discretization();
   const Cluster &cl = m_tree.cluster(c);
   const auto &perm = m_tree.perm();
-  const std::vector<int> &rows = m_active_rows[c], &cols = m_active_cols[c];
-  const int nrow = need_rows ? static_cast<int>(rows.size()) : 0, ncol = need_cols ? static_cast<int>(cols.size()) : 0;
-  double h_max = 0;
-  for (int k = cl.begin; k < cl.end; ++k) h_max = std::max(h_max, m_reach.h[perm[k]]);
-  const double r_row = m_opt.proxy_ratio * std::max(m_reach.row_r[c], h_max);
-  const double r_col = std::max(m_opt.proxy_ratio * m_reach.src_r[c], m_reach.reach_r[c]);
+  const std::vector<int> &rows = m_active_rows[c];
+  const int nrow = need ? static_cast<int>(rows.size()) : 0;
+  const Spheres sp = spheres(c);
   const int np = static_cast<int>(m_sphere.size());
-  const double w_row = std::sqrt(4 * M_PI * r_row * r_row / np / m_node_area) * m_node_area;
-  const double w_col = std::sqrt(4 * M_PI * r_col * r_col / np / m_node_area);
 
   Timer timer;
-  // Near columns (for the row skeleton) and near rows (for the column skeleton).
-  std::vector<int> near_cols, near_rows;
+  // Columns of the sources whose quadrature reaches inside the proxy sphere. A source whose
+  // columns are skeletonized already offers its skeleton (it stands for all of its columns
+  // against anything outside its own proxy spheres), the others their candidates.
+  std::vector<int> near_cols;
   for (int o : sources) {
+    if (nrow == 0) break;
     const Cluster &oc = m_tree.cluster(o);
-    const std::vector<int> &o_cols = m_in_front[o] ? m_active_cols[o] : m_bases[o]->col_skel;
-    const std::vector<int> &o_rows = m_in_front[o] ? m_active_rows[o] : m_bases[o]->row_skel;
-    const double d = norm(oc.centre - cl.centre);
-    if (nrow > 0 && d - m_reach.reach_r[o] < r_row)
-      for (int q : o_cols) {
-        const int j = perm[q / m_w];
-        if (norm(disc.node_position(j) - cl.centre) - m_reach.sigma[j] < r_row) near_cols.push_back(q);
-      }
-    if (ncol > 0 && d - m_reach.row_r[o] < r_col)
-      for (int r : o_rows)
-        if (norm(disc.node(perm[r / 3]).point - cl.centre) < r_col) near_rows.push_back(r);
+    const std::vector<int> &o_cols = m_in_front[o] && !m_col_done[o] ? m_active_cols[o] : m_bases[o]->col_skel;
+    if (norm(oc.centre - cl.centre) - m_reach.reach_r[o] >= sp.r_row) continue;
+    for (int q : o_cols) {
+      const int j = perm[q / m_w];
+      if (norm(disc.node_position(j) - cl.centre) - m_reach.sigma[j] < sp.r_row) near_cols.push_back(q);
+    }
   }
-  // Row skeleton: features of candidate row r = proxy sources, then near columns.
+  // Features of candidate row r: Kelvin sources at the proxy points, then the near columns.
   const int nfr = 3 * np + static_cast<int>(near_cols.size());
   std::vector<double> X(static_cast<std::size_t>(nfr) * nrow);
   if (nrow > 0) {
@@ -240,47 +264,74 @@ void Skeletonizer::skeletonize(int c, const std::vector<int> &sources, bool need
       const int a = rows[q] % 3;
       double *f = &X[static_cast<std::size_t>(q) * nfr];
       for (int p = 0; p < np; ++p) {
-        const Vec3 d = x - (cl.centre + r_row * m_sphere[p]);
+        const Vec3 d = x - (cl.centre + sp.r_row * m_sphere[p]);
         const double r2 = dot(d, d), ir = 1.0 / std::sqrt(r2);
-        for (int b = 0; b < 3; ++b) f[3 * p + b] = w_row * cu * ir * ((a == b ? diag : 0.0) + d[a] * d[b] / r2);
+        for (int b = 0; b < 3; ++b) f[3 * p + b] = sp.w_row * cu * ir * ((a == b ? diag : 0.0) + d[a] * d[b] / r2);
       }
     }
     block(rows, near_cols, X.data() + 3 * np, nfr, 1);
   }
-  // Column skeleton: features of candidate column q = fields at the proxy points, then near rows.
+  m_t_near[thread_index()] += timer.seconds();
+  timer.restart();
+  std::vector<char> forced(nrow, 0);
+  if (m_opt.force_rigid)
+    for (int q = 0; q < nrow; ++q) forced[q] = row_forced(c, perm[rows[q] / 3]);
+  Skeleton s = select_skeleton(X, nfr, nrow, forced, IdOptions{m_opt.rel_tol, m_opt.max_rank, m_opt.gram_ids});
+  NestedBasis &h = *m_bases[c];
+  h.row_skel.clear();
+  for (int q : s.local) h.row_skel.push_back(rows[q]);
+  h.U = need ? std::move(s.W) : DenseMatrix(static_cast<int>(rows.size()), 0);
+  h.row_forced = s.forced;
+  m_t_id[thread_index()] += timer.seconds();
+}
+
+void Skeletonizer::skeletonize_cols(int c, const std::vector<int> &sources, bool need)
+{
+  const Discretization &disc = m_op.discretization();
+  const Cluster &cl = m_tree.cluster(c);
+  const auto &perm = m_tree.perm();
+  const std::vector<int> &cols = m_active_cols[c];
+  const int ncol = need ? static_cast<int>(cols.size()) : 0;
+  const Spheres sp = spheres(c);
+  const int np = static_cast<int>(m_sphere.size());
+
+  Timer timer;
+  // Rows of the sources inside the proxy sphere (frontier sources: candidates; others: skeletons).
+  std::vector<int> near_rows;
+  for (int o : sources) {
+    if (ncol == 0) break;
+    const Cluster &oc = m_tree.cluster(o);
+    const std::vector<int> &o_rows = m_in_front[o] ? m_active_rows[o] : m_bases[o]->row_skel;
+    if (norm(oc.centre - cl.centre) - m_reach.row_r[o] >= sp.r_col) continue;
+    for (int r : o_rows)
+      if (norm(disc.node(perm[r / 3]).point - cl.centre) < sp.r_col) near_rows.push_back(r);
+  }
+  // Features of candidate column q: its field at the proxy points, then the near rows.
   const int nfc = 3 * np + static_cast<int>(near_rows.size());
   std::vector<double> Y(static_cast<std::size_t>(nfc) * ncol);
   if (ncol > 0) {
     std::vector<Vec3> P(np);
-    for (int p = 0; p < np; ++p) P[p] = cl.centre + r_col * m_sphere[p];
+    for (int p = 0; p < np; ++p) P[p] = cl.centre + sp.r_col * m_sphere[p];
     m_eval.at_points(P, cols, Y.data(), 1, nfc, ws());
     m_entries[thread_index()] += static_cast<long long>(3 * np) * ncol;
     for (int q = 0; q < ncol; ++q)
-      for (int f = 0; f < 3 * np; ++f) Y[f + static_cast<std::size_t>(q) * nfc] *= w_col;
+      for (int f = 0; f < 3 * np; ++f) Y[f + static_cast<std::size_t>(q) * nfc] *= sp.w_col;
     block(near_rows, cols, Y.data() + 3 * np, 1, nfc);
   }
   m_t_near[thread_index()] += timer.seconds();
 
   timer.restart();
-  const IdOptions id{m_opt.rel_tol, m_opt.max_rank};
-  NestedBasis &h = *m_bases[c];
-  h.row_skel.clear();
-  h.col_skel.clear();
-  std::vector<char> forced(nrow, 0);
-  if (m_opt.force_rigid)
-    for (int q = 0; q < nrow; ++q) forced[q] = row_forced(c, perm[rows[q] / 3]);
-  Skeleton rs = select_skeleton(X, nfr, nrow, forced, id);
-  forced.assign(ncol, 0);
+  std::vector<char> forced(ncol, 0);
   if (m_opt.force_rigid)
     for (int q = 0; q < ncol; ++q) forced[q] = cols[q] % m_w < 3 && col_forced(c, perm[cols[q] / m_w]);
-  Skeleton cs = select_skeleton(Y, nfc, ncol, forced, id);
-  for (int q : rs.local) h.row_skel.push_back(rows[q]);
-  for (int q : cs.local) h.col_skel.push_back(cols[q]);
-  h.U = need_rows ? std::move(rs.W) : DenseMatrix(static_cast<int>(rows.size()), 0);
-  h.V = need_cols ? std::move(cs.W) : DenseMatrix(static_cast<int>(cols.size()), 0);
-  h.row_forced = rs.forced;
-  h.col_forced = cs.forced;
+  Skeleton s = select_skeleton(Y, nfc, ncol, forced, IdOptions{m_opt.rel_tol, m_opt.max_rank, m_opt.gram_ids});
+  NestedBasis &h = *m_bases[c];
+  h.col_skel.clear();
+  for (int q : s.local) h.col_skel.push_back(cols[q]);
+  h.V = need ? std::move(s.W) : DenseMatrix(static_cast<int>(cols.size()), 0);
+  h.col_forced = s.forced;
   m_t_id[thread_index()] += timer.seconds();
+  m_col_done[c] = m_opt.columns_first && need;
 }
 
 } // namespace hssbem

@@ -57,6 +57,24 @@ std::vector<double> interpolation_matrix(const double *r, int ld, int k, int n)
 /// level-3 BLAS speed; below it, dgeqp3.
 constexpr int kSampledMin = 128;
 
+/// Column ID of the m×n matrix a (leading dimension ld) from the pivoted Cholesky factorization
+/// of aᵀa (see IdOptions::gram).
+ColumnId gram_id(const double *a, int m, int n, int ld, const IdOptions &options)
+{
+  std::vector<double> G(Size(n) * Size(n));
+  lapack::syrk_t(n, m, 1.0, a, ld, 0.0, G.data(), n);
+  double largest = 0;
+  for (int j = 0; j < n; ++j) largest = std::max(largest, G[Size(j) * Size(n) + Size(j)]);
+  std::vector<int> piv(static_cast<Size>(n));
+  int k = largest > 0 ? lapack::pstrf_upper(n, G.data(), n, piv.data(), options.rel_tol * options.rel_tol * largest) : 0;
+  if (largest <= 0) std::iota(piv.begin(), piv.end(), 1);
+  if (options.max_rank >= 0) k = std::min(k, options.max_rank);
+  ColumnId id;
+  for (int j = 0; j < n; ++j) (j < k ? id.skeleton : id.redundant).push_back(piv[Size(j)] - 1);
+  id.T = interpolation_matrix(G.data(), n, k, n);
+  return id;
+}
+
 /// Column ID of the m×n matrix in `work` (leading dimension ld), which is overwritten.
 ColumnId id_in_place(double *work, int m, int n, int ld, const IdOptions &options)
 {
@@ -66,6 +84,7 @@ ColumnId id_in_place(double *work, int m, int n, int ld, const IdOptions &option
     std::iota(id.redundant.begin(), id.redundant.end(), 0);
     return id;
   }
+  if (options.gram && options.rel_tol >= gram_min_tol) return gram_id(work, m, n, ld, options);
   if (std::min(m, n) >= kSampledMin) {
     const SampledQr qr = sampled_pivoted_qr(work, m, n, ld, options.rel_tol, options.max_rank);
     for (int j = 0; j < n; ++j) (j < qr.rank ? id.skeleton : id.redundant).push_back(qr.perm[Size(j)]);
@@ -107,6 +126,7 @@ ColumnId column_id(const double *A, int m, int n, int lda, const IdOptions &opti
   check_matrix(m, n, lda, "column_id");
   check_options(options);
   if (m == 0 || n == 0) return id_in_place(nullptr, m, n, 1, options);
+  if (options.gram && options.rel_tol >= gram_min_tol) return gram_id(A, m, n, lda, options); // reads A only
   std::vector<double> work(Size(m) * Size(n));
   for (int j = 0; j < n; ++j) std::copy(A + Size(j) * Size(lda), A + Size(j) * Size(lda) + m, work.begin() + Size(j) * Size(m));
   return id_in_place(work.data(), m, n, m, options);

@@ -2,6 +2,8 @@
 #include "hssbem/core/lapack.hpp"
 
 #include <algorithm>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 namespace hssbem::lapack {
@@ -136,6 +138,22 @@ void gemv(char trans, int m, int n, double alpha, const double *a, int lda, cons
     return;
   }
   dgemv_(&trans, &m, &n, &alpha, a, &lda, x, &one, &beta, y, &one);
+}
+
+void syrk_t(int n, int m, double alpha, const double *a, int lda, double beta, double *c, int ldc)
+{
+  if (n == 0) return;
+  dsyrk_("U", "T", &n, &m, &alpha, a, &lda, &beta, c, &ldc);
+}
+
+int pstrf_upper(int n, double *a, int lda, int *piv, double tol)
+{
+  if (n == 0) return 0;
+  std::vector<double> work(2 * static_cast<std::size_t>(n));
+  int rank = 0, info = 0;
+  dpstrf_("U", &n, a, &lda, piv, &rank, &tol, work.data(), &info);
+  if (info < 0) throw std::runtime_error("dpstrf: argument " + std::to_string(-info) + " is invalid");
+  return rank;
 }
 
 } // namespace hssbem::lapack

@@ -47,6 +47,32 @@ void strong_sources(const ClusterTree &tree, const BlockPartition &p, int c, con
   }
 }
 
+/// The `block` indices per point of leaf c (its rows or columns).
+std::vector<int> leaf_indices(const ClusterTree &tree, int c, int block)
+{
+  std::vector<int> out(static_cast<std::size_t>(block) * tree.cluster(c).size());
+  std::iota(out.begin(), out.end(), block * tree.cluster(c).begin);
+  return out;
+}
+
+/// Per leaf a: the leaves (ascending) whose columns a's rows couple to through rigid-body terms.
+std::vector<std::vector<int>> rigid_term_leaves(const BemOperator &op, const ClusterTree &tree)
+{
+  std::vector<std::vector<int>> out(tree.num_clusters());
+  const std::vector<int> leaf_of = tree.leaf_of_positions();
+  for (int i = 0; i < op.num_nodes(); ++i) {
+    int cols[3];
+    double wts[3];
+    const int a = leaf_of[tree.iperm()[i]], nc = op.rigid_body_columns(i, cols, wts);
+    for (int t = 0; t < nc; ++t) out[a].push_back(leaf_of[tree.iperm()[cols[t]]]);
+  }
+  for (std::vector<int> &v : out) {
+    std::sort(v.begin(), v.end());
+    v.erase(std::unique(v.begin(), v.end()), v.end());
+  }
+  return out;
+}
+
 /// Add the rigid-body terms (rigid_body_blocks.hpp) to the near blocks that hold them.
 void add_rigid_body_terms(const BemOperator &op, H2Matrix &K)
 {
@@ -87,9 +113,9 @@ H2Matrix compress_bem_operator_h2(const BemOperator &op, const H2Options &option
   std::vector<double> scales(w);
   for (int q = 0; q < w; ++q) scales[q] = K.col_scale(q);
   std::vector<NestedBasis *> bases(tree.num_clusters());
-  for (int c = 0; c < tree.num_clusters(); ++c) bases[c] = &K.basis(c);
+  for (int c = 0; c < tree.num_clusters(); ++c) bases[c] = &K.bases()[c];
   const int np = options.proxy_points > 0 ? options.proxy_points : default_proxy_points(options.rel_tol);
-  Skeletonizer skel(op, SkeletonizerOptions{options.rel_tol, options.max_rank, options.proxy_ratio, np, false}, tree, w, scales, bases);
+  Skeletonizer skel(op, SkeletonizerOptions{options.rel_tol, options.max_rank, options.proxy_ratio, np, false, true, true}, tree, w, scales, bases);
   const QuadratureReach &reach = skel.reach();
   std::vector<double> radius(tree.num_clusters());
   for (int c = 0; c < tree.num_clusters(); ++c) radius[c] = std::max(reach.row_r[c], reach.src_r[c]);
@@ -102,6 +128,7 @@ H2Matrix compress_bem_operator_h2(const BemOperator &op, const H2Options &option
   // Bases, bottom-up; only clusters with a far block at or above them need one.
   const auto sources = [&](int c, const std::vector<int> &front, std::vector<int> &out) { strong_sources(tree, part, c, front, out); };
   for (int l = tree.levels() - 1; l >= 1; --l) skel.skeletonize_level(l, sources, &part.has_far, &part.has_far);
+  K.store_bases(options.single_precision);
 
   // Far blocks between skeletons.
   std::vector<int> all(tree.num_clusters());
@@ -109,9 +136,12 @@ H2Matrix compress_bem_operator_h2(const BemOperator &op, const H2Options &option
   timer.restart();
   for_each_cluster(all, [&](int a) {
     for (int b : part.far[a]) {
-      H2Block B{b, DenseMatrix(static_cast<int>(K.basis(a).row_skel.size()), static_cast<int>(K.basis(b).col_skel.size())), {}};
-      skel.block(K.basis(a).row_skel, K.basis(b).col_skel, B.M.data(), 1, B.M.ld());
-      if (options.single_precision) B.demote();
+      H2Block B;
+      B.col_cluster = b;
+      B.M = DenseMatrix(static_cast<int>(K.row_skeleton(a).size()), static_cast<int>(K.col_skeleton(b).size()));
+      skel.block(K.row_skeleton(a), K.col_skeleton(b), B.M.data(), 1, B.M.ld());
+      if (options.single_precision && options.low_rank_far) B.compress(options.rel_tol / 10);
+      else if (options.single_precision) B.demote();
       K.far_blocks(a).push_back(std::move(B));
     }
   });
@@ -121,13 +151,20 @@ H2Matrix compress_bem_operator_h2(const BemOperator &op, const H2Options &option
   // Near blocks (true entries) and the rigid-body terms.
   phase.emplace(Phase::NearField);
   timer.restart();
+  const std::vector<std::vector<int>> rigid = rigid_term_leaves(op, tree);
   for_each_cluster(tree.leaves(), [&](int a) {
-    const std::vector<int> rows = basis_candidates(tree, K.bases(), a, 3, true);
+    const std::vector<int> rows = leaf_indices(tree, a, 3);
     for (int b : part.near[a]) {
-      const std::vector<int> cols = basis_candidates(tree, K.bases(), b, w, false);
-      H2Block B{b, DenseMatrix(static_cast<int>(rows.size()), static_cast<int>(cols.size())), {}};
+      const std::vector<int> cols = leaf_indices(tree, b, w);
+      H2Block B;
+      B.col_cluster = b;
+      B.M = DenseMatrix(static_cast<int>(rows.size()), static_cast<int>(cols.size()));
       skel.block(rows, cols, B.M.data(), 1, B.M.ld());
-      if (options.single_precision) B.demote();
+      // Blocks that will receive rigid-body terms stay dense (the diagonal ones, and those of
+      // moved collocation points whose triangle reaches into another leaf).
+      const bool gets_rigid = std::binary_search(rigid[a].begin(), rigid[a].end(), b);
+      if (options.single_precision && options.low_rank_near && !gets_rigid) B.compress(options.rel_tol / 30);
+      else if (options.single_precision) B.demote();
       K.near_blocks(a).push_back(std::move(B));
     }
   });

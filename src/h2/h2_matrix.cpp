@@ -5,59 +5,17 @@
 #include "hssbem/core/blas_threads.hpp"
 #include "hssbem/core/lapack.hpp"
 #include "hssbem/core/phase.hpp"
+#include "mixed_blas.hpp"
 
 #include <algorithm>
 #include <numeric>
+#include <stdexcept>
 
 namespace hssbem {
 
 int H2Stats::max_row_rank() const { return max_level_rank(levels, true); }
 
 int H2Stats::max_col_rank() const { return max_level_rank(levels, false); }
-
-void H2Block::demote()
-{
-  if (M.a.empty()) return;
-  single.assign(M.a.begin(), M.a.end());
-  M.a.clear();
-  M.a.shrink_to_fit();
-}
-
-const double *H2Block::data(std::vector<double> &buf) const
-{
-  if (!is_single()) return M.data();
-  buf.assign(single.begin(), single.end());
-  return buf.data();
-}
-
-namespace {
-
-/// y += A x for a column-major float matrix A (m × n) and double x, y: four columns at a time,
-/// widening each entry as it is used.
-void mixed_gemv(int m, int n, const float *A, const double *x, double *y)
-{
-  int j = 0;
-  for (; j + 4 <= n; j += 4) {
-    const float *a0 = A + static_cast<std::size_t>(j) * m, *a1 = a0 + m, *a2 = a1 + m, *a3 = a2 + m;
-    const double x0 = x[j], x1 = x[j + 1], x2 = x[j + 2], x3 = x[j + 3];
-    for (int i = 0; i < m; ++i)
-      y[i] += (static_cast<double>(a0[i]) * x0 + static_cast<double>(a1[i]) * x1) + (static_cast<double>(a2[i]) * x2 + static_cast<double>(a3[i]) * x3);
-  }
-  for (; j < n; ++j) {
-    const float *a = A + static_cast<std::size_t>(j) * m;
-    const double xj = x[j];
-    for (int i = 0; i < m; ++i) y[i] += static_cast<double>(a[i]) * xj;
-  }
-}
-
-} // namespace
-
-void H2Block::multiply_add(const double *X, int ldx, double *Y, int ldy, int nrhs, std::vector<double> &buf) const
-{
-  if (M.m == 0 || M.n == 0 || nrhs == 0) return;
-  if (is_single() && nrhs == 1) return mixed_gemv(M.m, M.n, single.data(), X, Y);
-  lapack::gemm('N', 'N', M.m, nrhs, M.n, 1.0, data(buf), M.ld(), X, ldx, 1.0, Y, ldy);
-}
 
 H2Matrix::H2Matrix(ClusterTree tree, int row_block, int col_block)
   : m_tree(std::move(tree)), m_row_block(row_block), m_col_block(col_block), m_col_scale(col_block, 1.0), m_bases(m_tree.num_clusters()),
@@ -76,66 +34,195 @@ H2Block *H2Matrix::near_block(int a, int b) { return const_cast<H2Block *>(stati
 
 namespace {
 
-/// Upward pass over the row (rows = true) or column bases: moments[c] = B_cᵀ (c's candidate
-/// part of X), deepest level first; `block` rows of X per point.
-std::vector<DenseMatrix> upward_moments(const ClusterTree &tree, const std::vector<NestedBasis> &bases, bool rows, int block, const double *X, int ldx, int nrhs)
+using Size = std::size_t;
+
+/// Rows of the candidates of a cluster: a leaf's rows of X (or Y), else its children's
+/// skeleton coefficients (left, then right). Row p is at ptr(p) with column stride ld(p).
+template <class T>
+struct CandidateRows {
+  T *base = nullptr; ///< a leaf's first row, stride `ld`
+  long ld = 0;
+  DenseMatrix *a = nullptr, *b = nullptr; ///< an inner cluster's children
+  T *ptr(int p) const
+  {
+    if (base) return base + p;
+    return p < a->m ? a->data() + p : b->data() + (p - a->m);
+  }
+  long stride(int p) const { return base ? ld : p < a->m ? a->ld() : b->ld(); }
+};
+
+/// out (k × nrhs, leading dimension ldo) = Uᵀ x, x the candidates' rows.
+template <class Elem>
+void interp_t(const StoredInterpolation &U, const CandidateRows<Elem> &x, int nrhs, double *out, int ldo, std::vector<double> &buf)
+{
+  const int k = U.rank(), nred = static_cast<int>(U.red_pos.size());
+  for (int r = 0; r < nrhs; ++r)
+    for (int t = 0; t < k; ++t) out[t + Size(r) * ldo] = x.ptr(U.skel_pos[t])[r * x.stride(U.skel_pos[t])];
+  if (k == 0 || nred == 0) return;
+  buf.resize(Size(nred) * nrhs);
+  for (int r = 0; r < nrhs; ++r)
+    for (int j = 0; j < nred; ++j) buf[j + Size(r) * nred] = x.ptr(U.red_pos[j])[r * x.stride(U.red_pos[j])];
+  if (!U.Tf.empty() && nrhs == 1) return mixed::gemv(k, nred, U.Tf.data(), buf.data(), out);
+  std::vector<double> wide;
+  const double *T = U.Td.data();
+  if (!U.Tf.empty()) wide.assign(U.Tf.begin(), U.Tf.end()), T = wide.data();
+  lapack::gemm('N', 'N', k, nrhs, nred, 1.0, T, k, buf.data(), nred, 1.0, out, ldo);
+}
+
+/// y += U yh (yh: k × nrhs, leading dimension ldh), y the candidates' rows.
+void interp_n(const StoredInterpolation &U, const double *yh, int ldh, int nrhs, const CandidateRows<double> &y, std::vector<double> &buf)
+{
+  const int k = U.rank(), nred = static_cast<int>(U.red_pos.size());
+  if (k == 0) return;
+  for (int r = 0; r < nrhs; ++r)
+    for (int t = 0; t < k; ++t) y.ptr(U.skel_pos[t])[r * y.stride(U.skel_pos[t])] += yh[t + Size(r) * ldh];
+  if (nred == 0) return;
+  buf.resize(Size(nred) * nrhs);
+  if (!U.Tf.empty() && nrhs == 1) {
+    mixed::gemv_t(k, nred, U.Tf.data(), yh, buf.data());
+  } else {
+    std::vector<double> wide;
+    const double *T = U.Td.data();
+    if (!U.Tf.empty()) wide.assign(U.Tf.begin(), U.Tf.end()), T = wide.data();
+    lapack::gemm('T', 'N', nred, nrhs, k, 1.0, T, k, yh, ldh, 0.0, buf.data(), nred);
+  }
+  for (int r = 0; r < nrhs; ++r)
+    for (int j = 0; j < nred; ++j) y.ptr(U.red_pos[j])[r * y.stride(U.red_pos[j])] += buf[j + Size(r) * nred];
+}
+
+/// Upward pass over stored bases (m_V for the columns, m_U for the rows): moments[c] = B_cᵀ
+/// (c's candidate part of X), deepest level first; `block` rows of X per point.
+std::vector<DenseMatrix> upward_moments(const ClusterTree &tree, const std::vector<StoredInterpolation> &bases, int block, const double *X, int ldx, int nrhs)
 {
   std::vector<DenseMatrix> xh(tree.num_clusters());
   for (int l = tree.levels() - 1; l >= 1; --l)
     for_each_cluster(tree.clusters_at_level(l), [&](int c) {
       const Cluster &cl = tree.cluster(c);
-      const DenseMatrix &B = rows ? bases[c].U : bases[c].V;
-      xh[c] = DenseMatrix(B.n, nrhs);
-      if (B.n == 0) return;
-      if (cl.left < 0) {
-        lapack::gemm('T', 'N', B.n, nrhs, B.m, 1.0, B.data(), B.ld(), X + static_cast<long>(block) * cl.begin, ldx, 0.0, xh[c].data(), xh[c].ld());
-      } else {
-        const DenseMatrix &a = xh[cl.left], &b = xh[cl.right];
-        lapack::gemm('T', 'N', B.n, nrhs, a.m, 1.0, B.data(), B.ld(), a.data(), a.ld(), 0.0, xh[c].data(), xh[c].ld());
-        lapack::gemm('T', 'N', B.n, nrhs, b.m, 1.0, B.data() + a.m, B.ld(), b.data(), b.ld(), 1.0, xh[c].data(), xh[c].ld());
-      }
+      const StoredInterpolation &B = bases[c];
+      xh[c] = DenseMatrix(B.rank(), nrhs);
+      if (B.rank() == 0) return;
+      CandidateRows<const double> x;
+      if (cl.left < 0) x.base = X + static_cast<long>(block) * cl.begin, x.ld = ldx;
+      else x.a = &xh[cl.left], x.b = &xh[cl.right];
+      std::vector<double> buf;
+      interp_t(B, x, nrhs, xh[c].data(), xh[c].ld(), buf);
     });
   return xh;
 }
 
-/// Downward transfers over the row (rows = true) or column bases, top down: each child's
-/// potential gains its part of the parent's, pot[child] += B_parent(child's rows) pot[parent].
-void downward_transfers(const ClusterTree &tree, const std::vector<NestedBasis> &bases, bool rows, std::vector<DenseMatrix> &pot, int nrhs)
+/// Downward transfers over stored bases, top down: each child's potential gains its part of the
+/// parent's, pot[child] += B_parent(child's rows) pot[parent].
+void downward_transfers(const ClusterTree &tree, const std::vector<StoredInterpolation> &bases, std::vector<DenseMatrix> &pot, int nrhs)
 {
   for (int l = 1; l < tree.levels(); ++l)
     for_each_cluster(tree.clusters_at_level(l), [&](int c) {
       const Cluster &cl = tree.cluster(c);
-      const DenseMatrix &B = rows ? bases[c].U : bases[c].V;
-      if (cl.left < 0 || B.n == 0) return;
-      DenseMatrix &ya = pot[cl.left], &yb = pot[cl.right];
-      lapack::gemm('N', 'N', ya.m, nrhs, B.n, 1.0, B.data(), B.ld(), pot[c].data(), pot[c].ld(), 1.0, ya.data(), ya.ld());
-      lapack::gemm('N', 'N', yb.m, nrhs, B.n, 1.0, B.data() + ya.m, B.ld(), pot[c].data(), pot[c].ld(), 1.0, yb.data(), yb.ld());
+      if (cl.left < 0) return;
+      CandidateRows<double> y;
+      y.a = &pot[cl.left], y.b = &pot[cl.right];
+      std::vector<double> buf;
+      interp_n(bases[c], pot[c].data(), pot[c].ld(), nrhs, y, buf);
     });
 }
 
 } // namespace
 
+DenseMatrix StoredInterpolation::expand() const
+{
+  const int k = rank();
+  DenseMatrix U(candidates, k);
+  for (int t = 0; t < k; ++t) U(skel_pos[t], t) = 1.0;
+  for (Size j = 0; j < red_pos.size(); ++j)
+    for (int t = 0; t < k; ++t) U(red_pos[j], t) = Tf.empty() ? Td[t + j * k] : Tf[t + j * k];
+  return U;
+}
+
+StoredInterpolation StoredInterpolation::from(const DenseMatrix &U, const std::vector<int> &cands, const std::vector<int> &skel, bool single)
+{
+  StoredInterpolation s;
+  s.candidates = static_cast<int>(cands.size());
+  const int k = static_cast<int>(skel.size());
+  if (k == 0) return s; // no basis (the root, or a cluster without far blocks)
+  if (U.n != k || U.m != s.candidates) throw std::logic_error("StoredInterpolation: U does not match its candidates and skeleton");
+  std::vector<int> at(cands.size(), -1); // candidate position -> skeleton column
+  for (int t = 0; t < k; ++t) {
+    const int p = static_cast<int>(std::find(cands.begin(), cands.end(), skel[t]) - cands.begin());
+    if (p == s.candidates) throw std::logic_error("StoredInterpolation: a skeleton index is no candidate");
+    s.skel_pos.push_back(p);
+    at[p] = t;
+  }
+  for (int p = 0; p < s.candidates; ++p)
+    if (at[p] < 0) s.red_pos.push_back(p);
+  std::vector<double> T(Size(k) * s.red_pos.size());
+  for (Size j = 0; j < s.red_pos.size(); ++j)
+    for (int t = 0; t < k; ++t) T[t + j * k] = U(s.red_pos[j], t);
+  if (single) s.Tf.assign(T.begin(), T.end());
+  else s.Td = std::move(T);
+  return s;
+}
+
+NestedBasis H2Matrix::basis(int c) const
+{
+  if (!m_bases.empty()) return m_bases[c];
+  NestedBasis b;
+  b.row_skel = m_row_skel[c];
+  b.col_skel = m_col_skel[c];
+  b.U = m_U[c].expand();
+  b.V = m_V[c].expand();
+  b.row_forced = m_row_forced[c];
+  b.col_forced = m_col_forced[c];
+  return b;
+}
+
+void H2Matrix::store_bases(bool single)
+{
+  const int nc = m_tree.num_clusters();
+  m_U.assign(nc, {});
+  m_V.assign(nc, {});
+  m_row_forced.assign(nc, 0);
+  m_col_forced.assign(nc, 0);
+  std::vector<int> all(nc);
+  std::iota(all.begin(), all.end(), 0);
+  for_each_cluster(all, [&](int c) {
+    const NestedBasis &b = m_bases[c];
+    m_U[c] = StoredInterpolation::from(b.U, basis_candidates(m_tree, m_bases, c, m_row_block, true), b.row_skel, single);
+    m_V[c] = StoredInterpolation::from(b.V, basis_candidates(m_tree, m_bases, c, m_col_block, false), b.col_skel, single);
+    m_row_forced[c] = b.row_forced;
+    m_col_forced[c] = b.col_forced;
+  });
+  m_row_skel.resize(nc);
+  m_col_skel.resize(nc);
+  for (int c = 0; c < nc; ++c) {
+    m_row_skel[c] = std::move(m_bases[c].row_skel);
+    m_col_skel[c] = std::move(m_bases[c].col_skel);
+  }
+  m_bases.clear();
+  m_bases.shrink_to_fit();
+}
+
 std::vector<DenseMatrix> H2Matrix::skeleton_far_field(const double *X, int ldx, int nrhs) const
 {
+  if (!m_bases.empty()) throw std::logic_error("H2Matrix: the bases are not stored yet (store_bases)");
   const int nc = m_tree.num_clusters();
   std::vector<int> all(nc);
   std::iota(all.begin(), all.end(), 0);
-  const std::vector<DenseMatrix> xh = upward_moments(m_tree, m_bases, false, m_col_block, X, ldx, nrhs);
+  const std::vector<DenseMatrix> xh = upward_moments(m_tree, m_V, m_col_block, X, ldx, nrhs);
   std::vector<DenseMatrix> yh(nc);
   // Far blocks: yh_a = Σ_b K(S_a, C_b) xh_b.
   for_each_cluster(all, [&](int a) {
-    yh[a] = DenseMatrix(m_bases[a].U.n, nrhs);
+    yh[a] = DenseMatrix(m_U[a].rank(), nrhs);
     std::vector<double> buf;
     for (const H2Block &B : m_far[a]) B.multiply_add(xh[B.col_cluster].data(), xh[B.col_cluster].ld(), yh[a].data(), yh[a].ld(), nrhs, buf);
   });
-  downward_transfers(m_tree, m_bases, true, yh, nrhs);
+  downward_transfers(m_tree, m_U, yh, nrhs);
   return yh;
 }
 
 std::vector<DenseMatrix> H2Matrix::skeleton_far_field_transposed(const double *Y, int ldy, int nrhs) const
 {
+  if (!m_bases.empty()) throw std::logic_error("H2Matrix: the bases are not stored yet (store_bases)");
   const int nc = m_tree.num_clusters();
-  const std::vector<DenseMatrix> yh = upward_moments(m_tree, m_bases, true, m_row_block, Y, ldy, nrhs);
+  const std::vector<DenseMatrix> yh = upward_moments(m_tree, m_U, m_row_block, Y, ldy, nrhs);
   // Far blocks transposed, gathered per column cluster: xh_b = Σ_a K(S_a, C_b)ᵀ yh_a.
   std::vector<std::vector<std::pair<int, int>>> by_col(nc);
   for (int a = 0; a < nc; ++a)
@@ -144,15 +231,11 @@ std::vector<DenseMatrix> H2Matrix::skeleton_far_field_transposed(const double *Y
   std::iota(all.begin(), all.end(), 0);
   std::vector<DenseMatrix> xh(nc);
   for_each_cluster(all, [&](int b) {
-    xh[b] = DenseMatrix(m_bases[b].V.n, nrhs);
+    xh[b] = DenseMatrix(m_V[b].rank(), nrhs);
     std::vector<double> buf;
-    for (const auto &[a, i] : by_col[b]) {
-      const H2Block &B = m_far[a][i];
-      if (B.M.m > 0 && B.M.n > 0)
-        lapack::gemm('T', 'N', B.M.n, nrhs, B.M.m, 1.0, B.data(buf), B.M.ld(), yh[a].data(), yh[a].ld(), 1.0, xh[b].data(), xh[b].ld());
-    }
+    for (const auto &[a, i] : by_col[b]) m_far[a][i].multiply_add_transposed(yh[a].data(), yh[a].ld(), xh[b].data(), xh[b].ld(), nrhs, buf);
   });
-  downward_transfers(m_tree, m_bases, false, xh, nrhs);
+  downward_transfers(m_tree, m_V, xh, nrhs);
   return xh;
 }
 
@@ -168,8 +251,9 @@ void H2Matrix::apply(const double *X, int ldx, double *Y, int ldy, int nrhs) con
     for (int k = 0; k < nrhs; ++k) std::fill(y + static_cast<long>(k) * ldy, y + static_cast<long>(k) * ldy + m, 0.0);
     std::vector<double> buf;
     for (const H2Block &B : m_near[c]) B.multiply_add(X + static_cast<long>(m_col_block) * m_tree.cluster(B.col_cluster).begin, ldx, y, ldy, nrhs, buf);
-    const DenseMatrix &U = m_bases[c].U;
-    if (U.n > 0) lapack::gemm('N', 'N', U.m, nrhs, U.n, 1.0, U.data(), U.ld(), yh[c].data(), yh[c].ld(), 1.0, y, ldy);
+    CandidateRows<double> rows;
+    rows.base = y, rows.ld = ldy;
+    interp_n(m_U[c], yh[c].data(), yh[c].ld(), nrhs, rows, buf);
   });
 }
 
@@ -181,15 +265,18 @@ void H2Matrix::update_stats()
   m_stats.basis_bytes = m_stats.far_bytes = m_stats.near_bytes = 0;
   m_stats.far_blocks = m_stats.near_blocks = 0;
   for (int c = 0; c < m_tree.num_clusters(); ++c) {
-    const NestedBasis &b = m_bases[c];
-    m_stats.basis_bytes += b.U.bytes() + b.V.bytes() + (b.row_skel.size() + b.col_skel.size()) * sizeof(int);
+    const int kr = m_bases.empty() ? m_U[c].rank() : m_bases[c].U.n, kc = m_bases.empty() ? m_V[c].rank() : m_bases[c].V.n;
+    if (m_bases.empty())
+      m_stats.basis_bytes += m_U[c].bytes() + m_V[c].bytes() + (m_row_skel[c].size() + m_col_skel[c].size()) * sizeof(int);
+    else
+      m_stats.basis_bytes += m_bases[c].U.bytes() + m_bases[c].V.bytes() + (m_bases[c].row_skel.size() + m_bases[c].col_skel.size()) * sizeof(int);
     for (const H2Block &B : m_far[c]) m_stats.far_bytes += B.bytes() + sizeof(H2Block);
     for (const H2Block &B : m_near[c]) m_stats.near_bytes += B.bytes() + sizeof(H2Block);
     m_stats.far_blocks += static_cast<long>(m_far[c].size());
     m_stats.near_blocks += static_cast<long>(m_near[c].size());
     H2LevelStats &s = m_stats.levels[m_tree.cluster(c).level];
     s.far_blocks += static_cast<long>(m_far[c].size());
-    if (m_partition.has_far[c]) add_level_ranks(s, b); // the root never has far blocks
+    if (m_partition.has_far[c]) add_level_ranks(s, kr, kc); // the root never has far blocks
   }
   finish_level_means(m_stats.levels);
   m_stats.memory_bytes = m_stats.basis_bytes + m_stats.far_bytes + m_stats.near_bytes;

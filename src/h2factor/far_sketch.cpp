@@ -37,8 +37,8 @@ FarFieldSketch far_field_sketch(const H2Matrix &K, int p, unsigned seed)
   s.row.resize(nc);
   s.col.resize(nc);
   for (int c = 0; c < nc; ++c) {
-    s.row[c] = DenseMatrix(K.basis(c).U.n, p);
-    s.col[c] = DenseMatrix(K.basis(c).V.n, p);
+    s.row[c] = DenseMatrix(K.row_interpolation(c).rank(), p);
+    s.col[c] = DenseMatrix(K.col_interpolation(c).rank(), p);
   }
   std::mt19937_64 gen(seed);
   std::normal_distribution<double> normal;

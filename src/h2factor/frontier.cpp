@@ -27,6 +27,11 @@ const H2Block &find_far_block(const H2Matrix &K, int a, int b)
   throw std::logic_error("H2 factorization: a far pair without its far block");
 }
 
+/// One side of cluster c's nested basis in double (rows: U, else V), candidates × rank.
+DenseMatrix basis_side(const H2Matrix &K, int c, bool rows) { return rows ? K.row_interpolation(c).expand() : K.col_interpolation(c).expand(); }
+
+int basis_rank(const H2Matrix &K, int c, bool rows) { return rows ? K.row_interpolation(c).rank() : K.col_interpolation(c).rank(); }
+
 DenseMatrix widened(const H2Block &B)
 {
   DenseMatrix D(B.M.m, B.M.n);
@@ -57,7 +62,7 @@ Frontier::Frontier(const H2Matrix &K, const FarFieldSketch &sketch, const Patter
     m_in_front[c] = 1;
     m_D[c].resize(3 * static_cast<std::size_t>(cl.size()));
     for (int i = 0; i < 3 * cl.size(); ++i) m_D[c][i] = 3 * cl.begin + i;
-    m_Eu[c] = K.basis(c).U;
+    m_Eu[c] = basis_side(K, c, true);
     m_Ew[c] = leaf_col_basis(c);
     if (m_pat.regularised()) {
       const std::size_t N = static_cast<std::size_t>(m_pat.dofs());
@@ -81,7 +86,7 @@ Frontier::Frontier(const H2Matrix &K, const FarFieldSketch &sketch, const Patter
 DenseMatrix Frontier::leaf_col_basis(int c) const
 {
   const Cluster &cl = m_tree.cluster(c);
-  const DenseMatrix &V = m_K.basis(c).V;
+  const DenseMatrix V = basis_side(m_K, c, false);
   DenseMatrix W(3 * cl.size(), V.n);
   for (int k = cl.begin; k < cl.end; ++k)
     for (int a = 0; a < 3; ++a) {
@@ -98,10 +103,13 @@ DenseMatrix Frontier::leaf_near(int a, int b) const
   const Cluster &cb = m_tree.cluster(b);
   const int m = 3 * m_tree.cluster(a).size();
   DenseMatrix out(m, 3 * cb.size());
+  std::vector<double> buf;
+  const double *d = B->data(buf); // any stored form, in double
   for (int k = cb.begin; k < cb.end; ++k)
     for (int c = 0; c < 3; ++c) {
       const int g = 3 * k + c, col = m_w * (k - cb.begin) + m_pat.slot[g], j = 3 * (k - cb.begin) + c;
-      for (int i = 0; i < m; ++i) out(i, j) = m_pat.sign[g] * B->entry(i, col);
+      const double *dc = d + static_cast<std::size_t>(col) * B->M.ld();
+      for (int i = 0; i < m; ++i) out(i, j) = m_pat.sign[g] * dc[i];
     }
   return out;
 }
@@ -141,9 +149,8 @@ DenseMatrix Frontier::restricted_basis(int P, int a, bool rows) const
   DenseMatrix E = rows ? m_Eu[P] : m_Ew[P];
   for (int x = P; x != a;) {
     const int par = m_tree.cluster(x).parent, left = m_tree.cluster(par).left;
-    const DenseMatrix &B = rows ? m_K.basis(par).U : m_K.basis(par).V;
-    const int kl = rows ? m_K.basis(left).U.n : m_K.basis(left).V.n;
-    const int kx = rows ? m_K.basis(x).U.n : m_K.basis(x).V.n;
+    const DenseMatrix B = basis_side(m_K, par, rows);
+    const int kl = basis_rank(m_K, left, rows), kx = basis_rank(m_K, x, rows);
     E = multiply(E, dense::sub(B, x == left ? 0 : kl, kx, 0, B.n));
     x = par;
   }
@@ -205,7 +212,7 @@ void Frontier::merge(int l)
       m_Psi[P] = dense::vcat(m_Psi[a], m_Psi[b]);
     }
     for (int rows = 0; rows < 2; ++rows) {
-      const DenseMatrix &B = rows ? m_K.basis(P).U : m_K.basis(P).V;
+      const DenseMatrix B = basis_side(m_K, P, rows);
       const DenseMatrix &Ea = rows ? m_Eu[a] : m_Ew[a], &Eb = rows ? m_Eu[b] : m_Ew[b];
       DenseMatrix &E = rows ? m_Eu[P] : m_Ew[P];
       E = DenseMatrix(static_cast<int>(m_D[P].size()), B.n);

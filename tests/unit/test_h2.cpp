@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <random>
 
 using namespace hssbem;
 using namespace hssbem::test; // dense_k, matvec_error, rel
@@ -108,7 +109,7 @@ TEST_P(H2Accuracy, MatvecMatchesDenseOperator)
   // the leaves' ranks are full, so it saves no memory; benchmarks/ measures that on large ones.)
   EXPECT_GT(K.stats().far_blocks, 0);
   for (int a = 0; a < K.tree().num_clusters(); ++a)
-    for (H2Block &B : K.far_blocks(a)) std::fill(B.M.a.begin(), B.M.a.end(), 0.0);
+    for (H2Block &B : K.far_blocks(a)) B.clear();
   const double err_near = matvec_error(K, Kd, 7);
   std::printf("  without the far blocks: error %.2e\n", err_near);
   EXPECT_GT(err_near, 10 * c.tol); // so the bound above would fail without them
@@ -130,7 +131,7 @@ TEST(H2Accuracy, FarBlocksCarryWhatNearBlocksMiss)
   const auto Kd = dense_k(*L->op, K.col_block());
   const double err = matvec_error(K, Kd, 3);
   for (int c = 0; c < K.tree().num_clusters(); ++c)
-    for (H2Block &B : K.far_blocks(c)) std::fill(B.M.a.begin(), B.M.a.end(), 0.0);
+    for (H2Block &B : K.far_blocks(c)) B.clear();
   const double err_near = matvec_error(K, Kd, 3);
   std::printf("error %.2e, without far blocks %.2e\n", err, err_near);
   EXPECT_LE(err, 1e-5);
@@ -145,6 +146,7 @@ TEST(H2Accuracy, SinglePrecisionBlocksHalveTheMemory)
   o.eta = 0;
   const H2Matrix Kd = compress_bem_operator_h2(*L->op, o);
   o.single_precision = true;
+  o.low_rank_far = false; // the precision alone
   const H2Matrix Ks = compress_bem_operator_h2(*L->op, o);
   const auto dense = dense_k(*L->op, Kd.col_block());
   const double ed = matvec_error(Kd, dense, 4), es = matvec_error(Ks, dense, 4);
@@ -162,7 +164,9 @@ TEST(H2Block, SingleBlockProductWidensEachEntry)
   std::mt19937 gen(8);
   std::normal_distribution<double> N01;
   for (const int n : {1, 4, 7, 53}) {
-    H2Block B{0, DenseMatrix(37, n), {}};
+    H2Block B;
+    B.col_cluster = 0;
+    B.M = DenseMatrix(37, n);
     for (double &v : B.M.a) v = N01(gen);
     B.demote();
     ASSERT_TRUE(B.is_single());
@@ -176,6 +180,171 @@ TEST(H2Block, SingleBlockProductWidensEachEntry)
       EXPECT_LE(rel(Y, Yref), 1e-14) << n << " columns, " << nrhs << " right-hand sides";
       EXPECT_GT(rel(Y, std::vector<double>(Y.size(), 1.0)), 0.1); // the product did add something
     }
+  }
+}
+
+TEST(H2Block, LowRankBlockMatchesItsEntries)
+{
+  // A smooth block (1/|x − y| between separated clouds) stored in low-rank form: its entries are
+  // within the requested tolerance of the true ones, products with 1 and 3 columns match the
+  // expanded entries, data() expands them, it takes less memory than single precision, and a
+  // block that does not pay stays dense.
+  std::mt19937 gen(9);
+  std::uniform_real_distribution<double> U01;
+  std::normal_distribution<double> N01;
+  for (const auto [m, n] : {std::pair{60, 90}, std::pair{90, 60}}) {
+    H2Block B;
+    B.M = DenseMatrix(m, n);
+    std::vector<Vec3> x(m), y(n);
+    for (Vec3 &p : x) p = {U01(gen), U01(gen), U01(gen)};
+    for (Vec3 &p : y) p = {3 + U01(gen), U01(gen), U01(gen)};
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < m; ++i) B.M(i, j) = 1.0 / norm(x[i] - y[j]);
+    const DenseMatrix ref = B.M;
+    B.compress(1e-6);
+    ASSERT_TRUE(B.is_low_rank());
+    EXPECT_LT(B.bytes(), 4.0 * m * n);
+    double e = 0, s = 0;
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < m; ++i) e += std::pow(B.entry(i, j) - ref(i, j), 2), s += ref(i, j) * ref(i, j);
+    EXPECT_LE(std::sqrt(e / s), 1e-5);
+    std::vector<double> buf;
+    const double *full = B.data(buf);
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < m; ++i) ASSERT_NEAR(full[i + static_cast<std::size_t>(j) * m], B.entry(i, j), 1e-12);
+    for (const int nrhs : {1, 3}) {
+      std::vector<double> X(static_cast<std::size_t>(n) * nrhs), Y(static_cast<std::size_t>(m) * nrhs, 1.0), Yref(Y);
+      for (double &v : X) v = N01(gen);
+      B.multiply_add(X.data(), n, Y.data(), m, nrhs, buf);
+      for (int k = 0; k < nrhs; ++k)
+        for (int i = 0; i < m; ++i)
+          for (int j = 0; j < n; ++j) Yref[i + static_cast<std::size_t>(m) * k] += B.entry(i, j) * X[j + static_cast<std::size_t>(n) * k];
+      EXPECT_LE(rel(Y, Yref), 1e-12) << nrhs << " right-hand sides";
+    }
+    EXPECT_THROW(B.add(0, 0, 1.0), std::logic_error);
+    B.clear();
+    EXPECT_EQ(B.entry(3, 4), 0.0);
+  }
+  H2Block R;
+  R.M = DenseMatrix(20, 20);
+  for (double &v : R.M.a) v = N01(gen); // full rank: stays dense, in single precision
+  R.compress(1e-6);
+  EXPECT_FALSE(R.is_low_rank());
+  EXPECT_TRUE(R.is_single());
+}
+
+TEST(H2Block, TransposedProductInEveryForm)
+{
+  // X += Bᵀ Y for a block dense in double, dense in single and of low rank, with 1 and 3
+  // right-hand sides, against the block's (stored) entries.
+  std::mt19937 gen(10);
+  std::uniform_real_distribution<double> U01;
+  std::normal_distribution<double> N01;
+  const int m = 45, n = 70;
+  std::vector<Vec3> x(m), y(n);
+  for (Vec3 &p : x) p = {U01(gen), U01(gen), U01(gen)};
+  for (Vec3 &p : y) p = {3 + U01(gen), U01(gen), U01(gen)};
+  for (int form = 0; form < 3; ++form) {
+    H2Block B;
+    B.M = DenseMatrix(m, n);
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < m; ++i) B.M(i, j) = 1.0 / norm(x[i] - y[j]);
+    if (form == 1) B.demote();
+    if (form == 2) B.compress(1e-6);
+    ASSERT_EQ(B.is_single(), form == 1);
+    ASSERT_EQ(B.is_low_rank(), form == 2);
+    for (const int nrhs : {1, 3}) {
+      std::vector<double> Y(static_cast<std::size_t>(m) * nrhs), X(static_cast<std::size_t>(n) * nrhs, 1.0), Xref(X), buf;
+      for (double &v : Y) v = N01(gen);
+      B.multiply_add_transposed(Y.data(), m, X.data(), n, nrhs, buf);
+      for (int k = 0; k < nrhs; ++k)
+        for (int j = 0; j < n; ++j)
+          for (int i = 0; i < m; ++i) Xref[j + static_cast<std::size_t>(n) * k] += B.entry(i, j) * Y[i + static_cast<std::size_t>(m) * k];
+      EXPECT_LE(rel(X, Xref), 1e-12) << "form " << form << ", " << nrhs << " right-hand sides";
+      EXPECT_GT(rel(X, std::vector<double>(X.size(), 1.0)), 0.1); // the product did add something
+    }
+  }
+}
+
+TEST(H2Matrix, BasisAccessorGivesTheBasesTheProductUses)
+{
+  // basis(c) rebuilds U and V in double (candidates × skeleton, interpolative form) from the
+  // stored form; a product written with them alone, level by level, equals apply().
+  auto L = load("sphere_l1.msh");
+  for (const bool single : {false, true}) {
+    H2Options o;
+    o.leaf_size = 16;
+    o.single_precision = single;
+    const H2Matrix K = compress_bem_operator_h2(*L->op, o);
+    const ClusterTree &tree = K.tree();
+    const int nc = tree.num_clusters();
+    std::vector<NestedBasis> B(nc);
+    for (int c = 0; c < nc; ++c) B[c] = K.basis(c);
+    for (int c = 0; c < nc; ++c) {
+      if (!K.partition().has_far[c]) continue;
+      EXPECT_EQ(B[c].row_skel, K.row_skeleton(c));
+      EXPECT_EQ(B[c].col_skel, K.col_skeleton(c));
+      const std::vector<int> rows = basis_candidates(tree, B, c, 3, true), cols = basis_candidates(tree, B, c, K.col_block(), false);
+      ASSERT_EQ(B[c].U.m, static_cast<int>(rows.size()));
+      ASSERT_EQ(B[c].U.n, static_cast<int>(B[c].row_skel.size()));
+      ASSERT_EQ(B[c].V.m, static_cast<int>(cols.size()));
+      for (int t = 0; t < B[c].U.n; ++t) {
+        const int p = static_cast<int>(std::find(rows.begin(), rows.end(), B[c].row_skel[t]) - rows.begin());
+        for (int u = 0; u < B[c].U.n; ++u) EXPECT_EQ(B[c].U(p, u), t == u ? 1.0 : 0.0);
+      }
+    }
+    // y = K x from the double bases and the blocks' entries.
+    const int n = tree.num_points(), w = K.col_block();
+    std::mt19937 gen(3);
+    std::normal_distribution<double> N01;
+    std::vector<double> x(static_cast<std::size_t>(w) * n), y(3L * n), yref(3L * n, 0.0);
+    for (double &v : x) v = N01(gen);
+    K.apply(x.data(), w * n, y.data(), 3 * n);
+    std::vector<std::vector<double>> xh(nc), yh(nc);
+    for (int l = tree.levels() - 1; l >= 1; --l)
+      for (int c : tree.clusters_at_level(l)) {
+        if (!K.partition().has_far[c]) continue;
+        const std::vector<int> cols = basis_candidates(tree, B, c, w, false);
+        const Cluster &cl = tree.cluster(c);
+        std::vector<double> xc(cols.size());
+        for (std::size_t p = 0; p < cols.size(); ++p) {
+          if (cl.left < 0) xc[p] = x[cols[p]];
+          else {
+            const int na = static_cast<int>(B[cl.left].col_skel.size());
+            xc[p] = static_cast<int>(p) < na ? xh[cl.left][p] : xh[cl.right][p - na];
+          }
+        }
+        xh[c].assign(B[c].V.n, 0.0);
+        for (int t = 0; t < B[c].V.n; ++t)
+          for (int p = 0; p < B[c].V.m; ++p) xh[c][t] += B[c].V(p, t) * xc[p];
+      }
+    for (int a = 0; a < nc; ++a) {
+      yh[a].assign(B[a].U.n, 0.0);
+      for (std::size_t f = 0; f < K.partition().far[a].size(); ++f) {
+        const H2Block &F = K.far_blocks(a)[f];
+        for (int i = 0; i < F.M.m; ++i)
+          for (int j = 0; j < F.M.n; ++j) yh[a][i] += F.entry(i, j) * xh[F.col_cluster][j];
+      }
+    }
+    for (int l = 1; l < tree.levels(); ++l)
+      for (int c : tree.clusters_at_level(l)) {
+        if (B[c].U.n == 0) continue;
+        const Cluster &cl = tree.cluster(c);
+        std::vector<double> yc(B[c].U.m, 0.0);
+        for (int t = 0; t < B[c].U.n; ++t)
+          for (int p = 0; p < B[c].U.m; ++p) yc[p] += B[c].U(p, t) * yh[c][t];
+        if (cl.left < 0) {
+          for (int p = 0; p < B[c].U.m; ++p) yref[3L * cl.begin + p] += yc[p];
+        } else {
+          const int na = static_cast<int>(B[cl.left].row_skel.size());
+          for (int p = 0; p < B[c].U.m; ++p) (p < na ? yh[cl.left][p] : yh[cl.right][p - na]) += yc[p];
+        }
+      }
+    for (int a : tree.leaves())
+      for (const H2Block &D : K.near_blocks(a))
+        for (int i = 0; i < D.M.m; ++i)
+          for (int j = 0; j < D.M.n; ++j) yref[3L * tree.cluster(a).begin + i] += D.entry(i, j) * x[static_cast<std::size_t>(w) * tree.cluster(D.col_cluster).begin + j];
+    EXPECT_LE(rel(y, yref), 1e-12) << (single ? "single" : "double");
   }
 }
 

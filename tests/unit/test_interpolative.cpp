@@ -327,3 +327,27 @@ TEST(Interpolative, BadArgumentsThrow)
   Matrix B(5, 4);
   EXPECT_THROW(hssbem::column_id_reconstruct(wrong, A.a.data(), 5, 4, 5, B.a.data(), 5), std::invalid_argument);
 }
+
+TEST(Interpolative, GramPivotsMeetTheSameBoundAsQr)
+{
+  // Pivoted Cholesky of AᵀA picks the greedy pivots of column-pivoted QR and stops by the same
+  // rule; from gram_min_tol up the Gram matrix resolves the residual norms, so the CPQR bound
+  // holds and the rank stays within a few of the QR rank. Below it, the QR path is taken.
+  const Matrix A = kernel_matrix(), At = transpose(A);
+  for (double tol : {1e-3, 1e-5, hssbem::gram_min_tol}) {
+    for (const Matrix *M : {&A, &At}) {
+      const ColumnId q = hssbem::column_id(M->a.data(), M->m, M->n, M->ld(), IdOptions{tol, -1, false});
+      const ColumnId g = hssbem::column_id(M->a.data(), M->m, M->n, M->ld(), IdOptions{tol, -1, true});
+      expect_partition(g, M->n);
+      EXPECT_LE(column_id_error(*M, g), error_bound(tol, M->n, g.rank())) << "tol " << tol;
+      EXPECT_NEAR(g.rank(), q.rank(), 3 + q.rank() / 10) << "tol " << tol;
+      EXPECT_LE(max_abs(g.T), 10.0);
+    }
+  }
+  const ColumnId capped = hssbem::column_id(A.a.data(), A.m, A.n, A.ld(), IdOptions{1e-5, 7, true});
+  EXPECT_EQ(capped.rank(), 7);
+  const ColumnId tight = hssbem::column_id(A.a.data(), A.m, A.n, A.ld(), IdOptions{1e-10, -1, true});
+  EXPECT_EQ(tight.rank(), column_id(A, 1e-10).rank()); // the QR path
+  Matrix Z(30, 20);
+  EXPECT_EQ(hssbem::column_id(Z.a.data(), Z.m, Z.n, Z.ld(), IdOptions{1e-5, -1, true}).rank(), 0);
+}

@@ -13,11 +13,40 @@
 #include "hssbem/bem/discretization.hpp"
 #include "hssbem/bem/kelvin.hpp"
 #include "hssbem/bem/quadrature.hpp"
+#include "hssbem/bem/regular_rule.hpp"
 
 #include <memory>
 #include <vector>
 
 namespace hssbem {
+
+/// A request for a few entries of H, G and Gn: rows are components of collocation points, columns
+/// are kinds of a node's columns (0–2: H's three components, 3–5: G's, 6: Gn's one column). A
+/// compression asks for a component or two of many nodes, so only those entries are accumulated
+/// from each triangle's integrals. Build with add_row/add_col, then finish().
+class EntrySelection {
+public:
+  /// Output row `out` is component `comp` of node `node`'s collocation point.
+  void add_row(int node, int comp, int out) { m_rows.push_back({node, comp, out}); }
+  /// Output column `out` is kind `kind` of node `node`.
+  void add_col(int node, int kind, int out) { m_cols.push_back({node, kind, out}); }
+  /// Group the requests by node (call once, after the last add).
+  void finish();
+
+  struct Group {
+    std::vector<int> nodes, start, what, out; ///< distinct nodes; CSR: entries start[p] .. start[p + 1] of nodes[p]
+  };
+  const Group &rows() const { return m_row_groups; }
+  const Group &cols() const { return m_col_groups; }
+
+private:
+  struct Item {
+    int node, what, out;
+  };
+  static Group group(std::vector<Item> &items);
+  std::vector<Item> m_rows, m_cols;
+  Group m_row_groups, m_col_groups;
+};
 
 class BemOperator {
 public:
@@ -32,6 +61,9 @@ public:
     std::vector<int> col_pos;   ///< node -> column position in J, or -1 (kept at -1 between calls)
     std::vector<char> elem_mark; ///< triangle already listed (kept at 0 between calls)
     std::vector<int> elems;      ///< triangles touching the columns
+    std::vector<int> regular;    ///< those a row sees through the 7-point rule
+    std::vector<CornerSums> sums; ///< their corner sums
+    std::vector<double> acc;      ///< per column node of a selection: its blocks summed over its triangles
   };
 
   BemOperator(const Discretization &disc, const Material &material, const QuadratureOptions &options = {});
@@ -69,6 +101,11 @@ public:
   /// points around a cluster): 3|X| rows, no rigid-body term. Thread-safe with a workspace.
   void fill_hg_at_points(const std::vector<Vec3> &X, const std::vector<int> &J, double *H, double *G, long ld, double *Gn, long ldn,
                          Workspace &ws) const;
+  /// out[r·rs + q·cs] += the requested entries of H, G, Gn (no rigid-body terms). Thread-safe
+  /// with one workspace per thread.
+  void add_selected(const EntrySelection &sel, double *out, long rs, long cs, Workspace &ws) const;
+  /// The same with the points X as rows: out row 3p + c is component c at X[p] (sel's rows unused).
+  void add_selected_at_points(const std::vector<Vec3> &X, const EntrySelection &sel, double *out, long rs, long cs, Workspace &ws) const;
   /// Columns j of the rigid-body term of row i and their weights w_j(x_i) (one column, weight 1,
   /// for a node collocated at its vertex; the corners of its triangle for a moved node): the
   /// term adds w_j(x_i) D_i to block (i, j) of H.
@@ -87,7 +124,16 @@ private:
     void zero(std::size_t ncols) const;
   };
   void scatter(int t, const ElementIntegrals &ei, const std::vector<int> &col_pos, const BlockRows &out) const;
+  void scatter(int t, const CornerSums &cs, const std::vector<int> &col_pos, const BlockRows &out, Mat3 *D) const;
+  /// The integrals of every triangle of ws.elems for point x (collocation point of `row`, or
+  /// any point when row < 0) added into out; D (if not null) -= those of H over the triangles
+  /// that do not contain the point.
+  void point_integrals(const Vec3 &x, int row, const BlockRows &out, Workspace &ws, Mat3 *D) const;
   void elements_touching(const std::vector<int> &J, Workspace &ws) const;
+  /// add_selected for one point x (collocation point of `row`, or any point when row < 0) and
+  /// its requested components comp[0..nr) going to output rows out_row[0..nr).
+  void add_selected_point(const Vec3 &x, int row, const int *comp, const int *out_row, int nr, const EntrySelection::Group &cols, double *out, long rs,
+                          long cs, Workspace &ws) const;
   enum class Rigid { with, without };
   void fill_rows(const std::vector<int> &I, const std::vector<int> &J, double *H, double *G, long ld, double *Gn, long ldn, Workspace &ws,
                  Rigid rigid) const;
@@ -98,6 +144,7 @@ private:
   QuadratureOptions m_quad_options;
   ElementQuadrature m_quad;
   std::vector<Triangle> m_tri;
+  RegularRule m_regular;
   std::vector<Mat3> m_rigid;
   std::vector<char> m_has_rigid;
   mutable std::unique_ptr<Workspace> m_workspace; ///< for the overload without a workspace

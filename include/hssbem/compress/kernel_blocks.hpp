@@ -29,13 +29,9 @@ public:
   void at_points(const std::vector<Vec3> &X, const std::vector<int> &cols, double *out, long rs, long cs, BemOperator::Workspace &ws) const;
 
 private:
-  struct Columns {
-    std::vector<int> nodes;       ///< distinct nodes, mesh order
-    std::vector<int> node_of, slot_of; ///< per requested column: index into nodes, slot 0..col_block-1
-  };
-  Columns split_columns(const std::vector<int> &cols) const;
-  void scatter(const Columns &J, std::size_t nrows, const std::vector<int> *row_node, const std::vector<int> *row_comp, const std::vector<double> &H,
-               const std::vector<double> &G, const std::vector<double> &Gn, double *out, long rs, long cs) const;
+  void select_columns(const std::vector<int> &cols, EntrySelection &sel) const;
+  static void zero(std::size_t nrows, std::size_t ncols, double *out, long rs, long cs);
+  void apply_scales(std::size_t nrows, const std::vector<int> &cols, double *out, long rs, long cs) const;
 
   const BemOperator &m_op;
   const ClusterTree &m_tree;

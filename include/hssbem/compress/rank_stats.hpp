@@ -14,9 +14,8 @@ namespace hssbem {
 /// Count one more cluster in a level's rank statistics (Level: clusters, max_row_rank,
 /// max_col_rank, mean_row_rank, mean_col_rank; the means hold sums until finish_level_means).
 template <class Level>
-void add_level_ranks(Level &s, const NestedBasis &b)
+void add_level_ranks(Level &s, int kr, int kc)
 {
-  const int kr = static_cast<int>(b.row_skel.size()), kc = static_cast<int>(b.col_skel.size());
   s.clusters += 1;
   s.max_row_rank = std::max(s.max_row_rank, kr);
   s.max_col_rank = std::max(s.max_col_rank, kc);
@@ -33,6 +32,13 @@ void finish_level_means(std::vector<Level> &levels)
       s.mean_row_rank /= s.clusters;
       s.mean_col_rank /= s.clusters;
     }
+}
+
+/// The same from a nested basis.
+template <class Level>
+void add_level_ranks(Level &s, const NestedBasis &b)
+{
+  add_level_ranks(s, static_cast<int>(b.row_skel.size()), static_cast<int>(b.col_skel.size()));
 }
 
 /// Largest row (rows = true) or column rank over per-level statistics (any type with

@@ -41,6 +41,13 @@ struct SkeletonizerOptions {
   /// skeleton, so that the term can be added to a skeleton coupling (HSS). Without it (H²) such
   /// terms must lie in near-field blocks.
   bool force_rigid = true;
+  /// Per level, find every column skeleton first, then compress each row skeleton against the
+  /// sources' column skeletons rather than their candidates: valid when a source's column basis
+  /// covers the cluster (strong admissibility: the cluster is far from it or from an ancestor),
+  /// and it halves the explicit row samples (H²).
+  bool columns_first = false;
+  /// IDs from the Gram matrix of the features (IdOptions::gram), for tolerances ≥ gram_min_tol.
+  bool gram_ids = false;
 };
 
 class Skeletonizer {
@@ -72,7 +79,13 @@ public:
   const QuadratureReach &reach() const { return m_reach; }
 
 private:
-  void skeletonize(int c, const std::vector<int> &sources, bool need_rows, bool need_cols);
+  struct Spheres {
+    double r_row, r_col; ///< proxy sphere radii for the row and the column skeleton
+    double w_row, w_col; ///< proxy weights (a proxy stands for about one node's area of sources)
+  };
+  Spheres spheres(int c) const;
+  void skeletonize_rows(int c, const std::vector<int> &sources, bool need);
+  void skeletonize_cols(int c, const std::vector<int> &sources, bool need);
   BemOperator::Workspace &ws();
   bool row_forced(int c, int node) const;
   bool col_forced(int c, int node) const;
@@ -91,6 +104,7 @@ private:
   std::vector<long long> m_entries;
   std::vector<double> m_t_near, m_t_id;
   std::vector<char> m_in_front;
+  std::vector<char> m_col_done; ///< columns_first: the cluster's column skeleton is final
   std::vector<std::vector<int>> m_active_rows, m_active_cols;
 };
 

@@ -24,6 +24,8 @@
 ///     ‖A(:, R) − A(:, S) T‖_F = ‖R22‖_F ≤ sqrt(n−k) · max_j ‖R22(:, j)‖ ≤ rel_tol · sqrt(n−k) · ‖A‖_F
 ///
 /// when the rank cap is inactive (the largest column norm of A is at most ‖A‖_F).
+/// With IdOptions::gram (and rel_tol ≥ gram_min_tol) the pivots and R come from a pivoted
+/// Cholesky factorization of AᵀA (dpstrf) instead: greedy pivots, the same stopping rule.
 /// Entries of T are small in practice (bounded by 1 for a strong rank-revealing QR; plain
 /// column pivoting carries no such guarantee but stays near it on kernel matrices).
 /// Inputs must be free of NaN and Inf; this is not checked.
@@ -37,7 +39,16 @@ namespace hssbem {
 struct IdOptions {
   double rel_tol = 1e-8; ///< keep pivots with |R_ii| > rel_tol·|R_11|; must be ≥ 0
   int max_rank = -1;     ///< cap on k; negative: no cap
+  /// Take the pivots from a pivoted Cholesky factorization of AᵀA instead of a pivoted QR of A
+  /// when rel_tol ≥ gram_min_tol: the same greedy pivots and stopping rule (the Cholesky factor is
+  /// R), one symmetric rank-k update of A at full level-3 speed instead of Householder updates.
+  /// The Gram matrix resolves residual norms down to about sqrt(machine epsilon)·‖A‖, hence the
+  /// floor. False: always QR.
+  bool gram = false;
 };
+
+/// Tolerances from which IdOptions::gram takes effect.
+constexpr double gram_min_tol = 1e-6;
 
 /// Result of a column ID (and, read transposed, of a row ID; see the file comment).
 struct ColumnId {

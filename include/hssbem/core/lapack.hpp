@@ -22,6 +22,8 @@ void dgetrs_(const char *trans, const int *n, const int *nrhs, const double *a, 
 void dgemv_(const char *trans, const int *m, const int *n, const double *alpha, const double *a, const int *lda, const double *x, const int *incx, const double *beta, double *y, const int *incy);
 void dgeqrt3_(const int *m, const int *n, double *a, const int *lda, double *t, const int *ldt, int *info);
 void dlarfb_(const char *side, const char *trans, const char *direct, const char *storev, const int *m, const int *n, const int *k, const double *v, const int *ldv, const double *t, const int *ldt, double *c, const int *ldc, double *work, const int *ldwork);
+void dsyrk_(const char *uplo, const char *trans, const int *n, const int *k, const double *alpha, const double *a, const int *lda, const double *beta, double *c, const int *ldc);
+void dpstrf_(const char *uplo, const int *n, double *a, const int *lda, int *piv, int *rank, const double *tol, double *work, int *info);
 void dgemm_(const char *transa, const char *transb, const int *m, const int *n, const int *k, const double *alpha, const double *a, const int *lda, const double *b, const int *ldb, const double *beta, double *c, const int *ldc);
 }
 
@@ -42,6 +44,12 @@ void trsm(char side, char uplo, char transa, char diag, int m, int n, double alp
 /// C ← alpha op(A) op(B) + beta C, C m×n, inner dimension k (dgemm).
 void gemm(char transa, char transb, int m, int n, int k, double alpha, const double *a, int lda, const double *b, int ldb, double beta, double *c, int ldc);
 
+/// C ← alpha Aᵀ A + beta C for the m×n matrix a (upper triangle of the n×n C; dsyrk 'U', 'T').
+void syrk_t(int n, int m, double alpha, const double *a, int lda, double beta, double *c, int ldc);
+/// Pivoted Cholesky Pᵀ A P = Uᵀ U (dpstrf 'U') of the n×n symmetric positive semidefinite a (upper
+/// triangle), stopped once the largest remaining diagonal entry is ≤ tol; piv is 1-based, as
+/// LAPACK returns it. Returns the rank (the number of rows of U computed).
+int pstrf_upper(int n, double *a, int lda, int *piv, double tol);
 /// QR (dgeqrf) of the m×n matrix a in place; tau gets min(m, n) entries. Returns info.
 int geqrf(int m, int n, double *a, int lda, double *tau);
 /// Recursive QR (dgeqrt3, level-3 BLAS throughout) of the m×n matrix a (m ≥ n) in place: R above

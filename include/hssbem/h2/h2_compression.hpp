@@ -33,6 +33,14 @@ struct H2Options {
   /// Store far and near blocks in single precision (half the memory; each entry rounds to a
   /// relative 6e-8, harmless for rel_tol ≥ 1e-6). Bases stay in double.
   bool single_precision = false;
+  /// With single_precision: store each far block in low-rank form (an ID at rel_tol / 10, the
+  /// factors in single precision) when that takes less memory. Measured on a 20k sphere at
+  /// 1e-5: far blocks 0.44 of their dense size, sampled error of K unchanged to 1 %.
+  bool low_rank_far = true;
+  /// With single_precision: likewise for the near blocks between different leaves (at
+  /// rel_tol / 30; those that receive rigid-body terms stay dense). Measured on the 20k sphere at
+  /// 1e-5: near blocks 253 -> 211 MB, sampled error of K unchanged (at rel_tol / 10: 199 MB, +4 %).
+  bool low_rank_near = true;
 };
 
 /// Compress K = [H, G] (and Gn if asked) of `op`, rigid-body terms included. The operator's

@@ -23,32 +23,62 @@
 
 namespace hssbem {
 
-/// One stored block of an H² matrix: far (skeleton × skeleton) or near (leaf × leaf), in double
-/// precision (M) or, to halve the memory, in single precision (`single`, column-major with M's
-/// dimensions, M.a then empty). Products always compute in double: a single block is widened
-/// on the fly, so only its storage rounds (relative 6e-8 per entry).
+/// One stored block of an H² matrix: far (skeleton × skeleton) or near (leaf × leaf). M holds
+/// its dimensions always, and its entries when the block is dense in double precision. To save
+/// memory a block may instead be dense in single precision (`single`, column-major with M's
+/// dimensions), or of low rank in single precision: B ≈ A Wᵀ with A (M.m × rank) and W
+/// (M.n × rank) column-major in `lr_a`, `lr_w` (a far block of well-separated clusters has
+/// numerical rank well below its dimensions). Products always compute in double: stored floats are
+/// widened on the fly, so only the storage rounds (relative 6e-8 per stored number).
 struct H2Block {
   int col_cluster = -1;
   DenseMatrix M;
   std::vector<float> single;
+  int rank = -1; ///< ≥ 0: low rank, in lr_a and lr_w
+  std::vector<float> lr_a, lr_w;
 
   bool is_single() const { return !single.empty(); }
-  /// Move the entries to single precision (no-op for an empty block).
+  bool is_low_rank() const { return rank >= 0; }
+  /// Move the entries to single precision (no-op for an empty block or one not dense in double).
   void demote();
-  double entry(int i, int j) const { return is_single() ? single[i + static_cast<std::size_t>(j) * M.m] : M(i, j); }
-  void add(int i, int j, double v)
-  {
-    if (is_single()) single[i + static_cast<std::size_t>(j) * M.m] += static_cast<float>(v);
-    else M(i, j) += v;
-  }
-  std::size_t bytes() const { return M.bytes() + single.size() * sizeof(float); }
-  /// The entries in double: M's data, or `single` widened into buf.
+  /// From dense double entries: the low-rank form of the block (a column or row ID at relative
+  /// tolerance rel_tol, from the smaller side) when it takes less memory than single precision,
+  /// else single precision.
+  void compress(double rel_tol);
+  double entry(int i, int j) const;
+  /// Add v to entry (i, j) (a dense block only: throws std::logic_error for a low-rank one).
+  void add(int i, int j, double v);
+  /// Set every stored number to zero (the block then contributes nothing).
+  void clear();
+  std::size_t bytes() const { return M.bytes() + (single.size() + lr_a.size() + lr_w.size()) * sizeof(float); }
+  /// The entries in double: M's data, or the stored form expanded into buf.
   const double *data(std::vector<double> &buf) const;
-  /// Y += B X for nrhs columns (X: M.n × nrhs, Y: M.m × nrhs, column-major). A single block
-  /// with one column is widened entry by entry inside the product, so it reads 4 bytes per
-  /// entry instead of widening the block into buf first (the product is memory-bound); with
-  /// more columns it goes through data(buf) and one GEMM.
+  /// Y += B X for nrhs columns (X: M.n × nrhs, Y: M.m × nrhs, column-major). A single-precision
+  /// block with one column is widened entry by entry inside the product, so it reads 4 bytes per
+  /// stored number instead of widening the block into buf first (the product is memory-bound);
+  /// a dense one with more columns goes through data(buf) and one GEMM.
   void multiply_add(const double *X, int ldx, double *Y, int ldy, int nrhs, std::vector<double> &buf) const;
+  /// X += Bᵀ Y for nrhs columns (Y: M.m × nrhs, X: M.n × nrhs), in every stored form.
+  void multiply_add_transposed(const double *Y, int ldy, double *X, int ldx, int nrhs, std::vector<double> &buf) const;
+};
+
+/// One side of a cluster's nested basis as the H² matrix keeps it: U (or V) of NestedBasis in
+/// interpolative form without its identity rows. Row skel_pos[t] of U is unit vector t, row
+/// red_pos[j] holds the weights T(:, j); T (k × |red_pos|, column-major) is kept in single
+/// precision (Tf) or double (Td).
+struct StoredInterpolation {
+  int candidates = 0;
+  std::vector<int> skel_pos, red_pos; ///< positions among the candidates
+  std::vector<float> Tf;
+  std::vector<double> Td;
+
+  int rank() const { return static_cast<int>(skel_pos.size()); }
+  std::size_t bytes() const { return (skel_pos.size() + red_pos.size()) * sizeof(int) + Tf.size() * sizeof(float) + Td.size() * sizeof(double); }
+  /// U as NestedBasis holds it (candidates × k, double).
+  DenseMatrix expand() const;
+  /// From U (candidates × k) whose column t is the unit vector at the candidate skel[t] (global
+  /// indices; `cands` lists the candidates' global indices in order).
+  static StoredInterpolation from(const DenseMatrix &U, const std::vector<int> &cands, const std::vector<int> &skel, bool single);
 };
 
 struct H2LevelStats {
@@ -87,9 +117,19 @@ public:
 
   BlockPartition &partition() { return m_partition; }
   const BlockPartition &partition() const { return m_partition; }
-  NestedBasis &basis(int c) { return m_bases[c]; }
-  const NestedBasis &basis(int c) const { return m_bases[c]; }
+  /// Cluster c's nested basis (skeletons, U and V in double, interpolative form), built from the
+  /// stored form: returned by value, so hold the returned object (or a reference bound to it),
+  /// not pointers into it. For the skeletons alone, row_skeleton() and col_skeleton() are free.
+  NestedBasis basis(int c) const;
+  const std::vector<int> &row_skeleton(int c) const { return m_row_skel[c]; }
+  const std::vector<int> &col_skeleton(int c) const { return m_col_skel[c]; }
+  /// The stored sides of c's basis (U, V without identity rows; see StoredInterpolation).
+  const StoredInterpolation &row_interpolation(int c) const { return m_U[c]; }
+  const StoredInterpolation &col_interpolation(int c) const { return m_V[c]; }
+  /// The bases while the compression builds them; store_bases() moves them into the stored form
+  /// (weights in single precision when `single`) and empties this.
   std::vector<NestedBasis> &bases() { return m_bases; }
+  void store_bases(bool single);
   /// Far blocks of row cluster a: K(S_a, C_b), one per b in partition().far[a], same order.
   std::vector<H2Block> &far_blocks(int a) { return m_far[a]; }
   const std::vector<H2Block> &far_blocks(int a) const { return m_far[a]; }
@@ -120,7 +160,10 @@ private:
   int m_row_block, m_col_block;
   std::vector<double> m_col_scale;
   BlockPartition m_partition;
-  std::vector<NestedBasis> m_bases;
+  std::vector<NestedBasis> m_bases; ///< during the compression only
+  std::vector<std::vector<int>> m_row_skel, m_col_skel;
+  std::vector<int> m_row_forced, m_col_forced;
+  std::vector<StoredInterpolation> m_U, m_V;
   std::vector<std::vector<H2Block>> m_far, m_near;
   H2Stats m_stats;
 };
