@@ -1027,7 +1027,7 @@ class HssOptionTests(CliTestCase):
         self.assertRegex(r.output, r"BEM operator in H² form", r.describe())
         self.assertNotRegex(r.output, r" 0 far blocks", r.describe())
         self.assertNoUnusedOptions(r)
-        # -mat_h2_rel_tol 1e-6 and -ksp_rtol 1e-8 by default.
+        # -mat_h2_rel_tol 1e-5 (single-precision blocks) and -ksp_rtol 1e-8 by default.
         self.assertAgreesWithDense("h2.h5", "h2", 1e-5)
 
     def test_bad_h2_options(self):
@@ -1119,7 +1119,8 @@ class HssOptionTests(CliTestCase):
                                    r"more than the 2 GB of memory there; use -bem_mat_type h2")
         self.assertErrorLine(r)
         self.assertNotRegex(r.output, r"solved", r.describe())
-        r = self.run_problem("problem.json", "-bem_mat_type", "h2", "-hssbem_memory_limit", "1e9")
+        r = self.run_problem("problem.json", "-bem_mat_type", "h2", "-mat_h2_single_precision", "false",
+                             "-hssbem_memory_limit", "1e9")
         self.assertFailsCleanly(r, r"the h2 operator of 11958 unknowns needs about 1\.18 GB per node, "
                                    r"more than the 1 GB of memory there; use -bem_mat_type h2 -mat_h2_single_precision")
 

@@ -161,10 +161,14 @@ Vec dense_solution(Mat Ad, Vec bd)
 
 /// sphere_l0 (251 nodes) would fit in one default leaf (256 nodes); leaves of 32 nodes give these
 /// tests a tree with three levels of skeletons. For H², leaves of 8 nodes and eta = 0 give it 452
-/// far blocks (the default leaf size, 64, leaves a mesh this small all near field).
+/// far blocks (the default leaf size, 64, leaves a mesh this small all near field), at 1e-6 in
+/// double precision (the driver's default is 1e-5 in single) for comparisons with dense LU.
 class SmallLeaves : public ::testing::Environment {
 public:
-  void SetUp() override { PetscCallAbort(PETSC_COMM_WORLD, PetscOptionsInsertString(NULL, "-mat_hss_leaf_size 32 -mat_h2_leaf_size 8 -mat_h2_eta 0")); }
+  void SetUp() override
+  {
+    PetscCallAbort(PETSC_COMM_WORLD, PetscOptionsInsertString(NULL, "-mat_hss_leaf_size 32 -mat_h2_leaf_size 8 -mat_h2_eta 0 -mat_h2_rel_tol 1e-6 -mat_h2_single_precision false"));
+  }
 };
 ::testing::Environment *const small_leaves = ::testing::AddGlobalTestEnvironment(new SmallLeaves);
 

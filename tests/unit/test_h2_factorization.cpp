@@ -106,7 +106,7 @@ TEST_P(H2FactorAccuracy, SolveMatchesDenseLU)
   const H2FactorStats &st = F.stats();
   std::printf("%s tol %.0e leaf %d, %.0f%% u known: error vs dense LU %.2e\n", c.mesh, c.tol, c.leaf, 100 * c.p_known, err);
   print_stats(st);
-  EXPECT_LE(err, 100 * c.tol);
+  EXPECT_LE(err, 10 * c.tol); // measured up to 1.5 tol
   // Not a dense LU in disguise: the levels eliminated a good part of A before the dense top.
   ASSERT_FALSE(st.levels.empty());
   long long eliminated = 0;
@@ -118,7 +118,7 @@ TEST_P(H2FactorAccuracy, SolveMatchesDenseLU)
     apply_compressed_k(K, pattern_product_input(sel, in, n, K.col_block()), out);
   });
   std::printf("  ||I - A F^-1|| ~ %.2e\n", inv_err);
-  EXPECT_LE(inv_err, 100 * c.tol);
+  EXPECT_LE(inv_err, 10 * c.tol);
 }
 
 INSTANTIATE_TEST_SUITE_P(Meshes, H2FactorAccuracy,
@@ -216,7 +216,7 @@ TEST(H2FactorPureTraction, RegularisedMatchesDense)
     F.solve(b.data(), x.data());
     const double err = rel(x, xd);
     std::printf("pure traction, tol %.0e: error %.2e, top %d\n", tol, err, F.stats().top_size);
-    EXPECT_LE(err, 100 * tol);
+    EXPECT_LE(err, 10 * tol); // measured 0.3 tol (1e-3), 0.02 tol (1e-7)
     EXPECT_GT(F.stats().levels.size(), 0u);
   }
 }

@@ -26,12 +26,12 @@ struct AppOptions {
 };
 
 /// -bem_mat_type auto picks the dense operator below this many unknowns and the H² operator
-/// (with its default solver) from it on. Measured with benchmarks/bench_hss.py --solver h2
-/// --family sphere --tol 1e-6 (bench_h2: H² at the driver's defaults, tol 1e-6, leaf 64, eta 0,
-/// double-precision blocks, GMRES(100) + Jacobi to rtol 1e-8, beside dense assembly + LU in the
-/// same run; 1 process, 2 threads): the README's "Choosing the operator" table. Re-measure when
-/// the H² path gets a faster solver (a direct H² factorization, issue 16).
-inline constexpr long long k_auto_dense_max_unknowns = 9000;
+/// (with its default solver, GMRES + PC h2) from it on. Measured with benchmarks/bench_h2_factor
+/// at the driver's H² defaults (tol 1e-5, single-precision blocks, leaf 64, eta 0; PC h2 at 3e-3,
+/// rtol 1e-8) beside dense assembly + LU in the same run, 1 process, 2 threads, sphere meshes:
+/// dense faster at 3 036 and 4 983 unknowns (2.3x, 1.2x), H² faster at 6 990 (1.4x) and 9 030
+/// (1.9x): the README's "Choosing the operator" table.
+inline constexpr long long k_auto_dense_max_unknowns = 6000;
 
 /// The operator -bem_mat_type auto takes for `unknowns` unknowns on this machine: dense below
 /// k_auto_dense_max_unknowns when the dense operator fits (size_refusal()), else H².
