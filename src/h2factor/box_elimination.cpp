@@ -106,8 +106,9 @@ DenseMatrix transposed(const DenseMatrix &B)
 DenseMatrix columns_at(const DenseMatrix &M, const std::vector<int> &idx)
 {
   DenseMatrix out(M.m, static_cast<int>(idx.size()));
-  for (std::size_t j = 0; j < idx.size(); ++j)
-    std::copy(&M.a[static_cast<std::size_t>(idx[j]) * M.m], &M.a[static_cast<std::size_t>(idx[j] + 1) * M.m], &out.a[j * M.m]);
+  const std::size_t m = static_cast<std::size_t>(M.m);
+  if (m == 0) return out;
+  for (std::size_t j = 0; j < idx.size(); ++j) std::copy_n(M.a.data() + static_cast<std::size_t>(idx[j]) * m, m, out.a.data() + j * m);
   return out;
 }
 

@@ -20,10 +20,11 @@ namespace {
 /// Copy the q columns of `part` (one per cluster) into columns [j0, j0 + q) of `whole`.
 void put_columns(std::vector<DenseMatrix> &whole, const std::vector<DenseMatrix> &part, int j0)
 {
-  for (std::size_t c = 0; c < whole.size(); ++c)
-    for (int j = 0; j < part[c].n; ++j)
-      std::copy(&part[c].a[static_cast<std::size_t>(j) * part[c].m], &part[c].a[static_cast<std::size_t>(j + 1) * part[c].m],
-                &whole[c].a[static_cast<std::size_t>(j0 + j) * whole[c].m]);
+  for (std::size_t c = 0; c < whole.size(); ++c) {
+    const std::size_t m = static_cast<std::size_t>(part[c].m);
+    if (m == 0) continue; // a cluster without a basis: nothing to copy (and no storage to point into)
+    for (int j = 0; j < part[c].n; ++j) std::copy_n(part[c].a.data() + j * m, m, whole[c].a.data() + static_cast<std::size_t>(j0 + j) * whole[c].m);
+  }
 }
 
 } // namespace
