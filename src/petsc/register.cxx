@@ -10,12 +10,14 @@ PetscClassId  HSSBEM_CLASSID;
 PetscLogEvent BEM_Mesh, BEM_Assembly, BEM_Solve, BEM_Post, BEM_Interior, BEM_Output;
 PetscLogEvent HSS_Tree, HSS_Compress, HSS_NearField, HSS_Truncate, HSS_Factor, HSS_Solve, HSS_MatMult;
 PetscLogEvent H2F_Factor, H2F_Sketch, H2F_Eliminate, H2F_Merge, H2F_Top, H2F_Solve;
+PetscLogEvent SCN_Setup, SCN_Update, SCN_Apply, SCN_Refactor, SCN_Krylov, SCN_Frame;
 
 /* The engine's phases as log events (engine phases open and close on the calling thread). */
 static void PhaseHook_Private(hssbem::Phase phase, bool begin)
 {
   static const PetscLogEvent *event[] = {&HSS_Tree, &HSS_Compress, &HSS_NearField, &HSS_Truncate, &HSS_Factor, &HSS_Solve, &HSS_MatMult,
-                                        &H2F_Factor, &H2F_Sketch, &H2F_Eliminate, &H2F_Merge, &H2F_Top, &H2F_Solve};
+                                        &H2F_Factor, &H2F_Sketch, &H2F_Eliminate, &H2F_Merge, &H2F_Top, &H2F_Solve,
+                                        &SCN_Setup,  &SCN_Update, &SCN_Apply,     &SCN_Refactor, &SCN_Krylov};
   static_assert(sizeof(event) / sizeof(event[0]) == static_cast<int>(hssbem::Phase::Count), "one log event per phase");
   const PetscLogEvent e = *event[static_cast<int>(phase)];
   if (begin) (void)PetscLogEventBegin(e, 0, 0, 0, 0);
@@ -101,6 +103,12 @@ PetscErrorCode HssbemInitializePackage(void)
   PetscCall(PetscLogEventRegister(" H2FMerge", HSSBEM_CLASSID, &H2F_Merge));
   PetscCall(PetscLogEventRegister(" H2FTop", HSSBEM_CLASSID, &H2F_Top));
   PetscCall(PetscLogEventRegister("H2FSolve", HSSBEM_CLASSID, &H2F_Solve));
+  PetscCall(PetscLogEventRegister("SceneSetup", HSSBEM_CLASSID, &SCN_Setup));
+  PetscCall(PetscLogEventRegister("SceneFrame", HSSBEM_CLASSID, &SCN_Frame));
+  PetscCall(PetscLogEventRegister(" SceneUpdate", HSSBEM_CLASSID, &SCN_Update));
+  PetscCall(PetscLogEventRegister(" SceneApply", HSSBEM_CLASSID, &SCN_Apply));
+  PetscCall(PetscLogEventRegister(" SceneRefactor", HSSBEM_CLASSID, &SCN_Refactor));
+  PetscCall(PetscLogEventRegister(" SceneKrylov", HSSBEM_CLASSID, &SCN_Krylov));
   hssbem::set_phase_hook(PhaseHook_Private);
   PetscCall(PCRegister(PCHSS, PCCreate_HSS));
   PetscCall(PCRegister(PCH2, PCCreate_H2));

@@ -1,5 +1,5 @@
 /// \file phase.hpp
-/// Named phases of the compression engines (HSS and H²) and of the H² factorization, reported to an optional hook so a host
+/// Named phases of the compression engines (HSS and H²), of the H² factorization and of scenes, reported to an optional hook so a host
 /// (the PETSc layer: one PetscLogEvent per phase) can time them without the engines depending on
 /// it. The engines open and close phases on the calling thread only, never inside their OpenMP
 /// regions.
@@ -21,6 +21,11 @@ enum class Phase {
   H2Merge,         ///< H² factorization: a level's remaining unknowns and blocks onto the parents
   H2Top,           ///< H² factorization: dense LU of the unknowns left at the top
   H2Solve,         ///< solve with the H² factorization
+  SceneSetup,      ///< scene: operator, reference factorization, W = A₀⁻¹ K₀'
+  SceneUpdate,     ///< scene: capacitance inverse updated or rebuilt for a new pattern
+  SceneApply,      ///< scene: the Woodbury (or LU) solve of a frame
+  SceneRefactor,   ///< scene: dense LU of a frame's system
+  SceneKrylov,     ///< scene: GMRES preconditioned by the last factorization
   Count
 };
 

@@ -11,6 +11,8 @@ PETSC_EXTERN PetscLogEvent BEM_Mesh, BEM_Assembly, BEM_Solve, BEM_Post, BEM_Inte
 PETSC_EXTERN PetscLogEvent HSS_Tree, HSS_Compress, HSS_NearField, HSS_Truncate, HSS_Factor, HSS_Solve, HSS_MatMult;
 /* Phases of the H² factorization (PC h2): the whole, its sketch, eliminations, merges and dense top; its solve. */
 PETSC_EXTERN PetscLogEvent H2F_Factor, H2F_Sketch, H2F_Eliminate, H2F_Merge, H2F_Top, H2F_Solve;
+/* Phases of a scene (frames): set-up, capacitance update, Woodbury/LU solve, refactorization, Krylov; and one whole frame. */
+PETSC_EXTERN PetscLogEvent SCN_Setup, SCN_Update, SCN_Apply, SCN_Refactor, SCN_Krylov, SCN_Frame;
 
 PETSC_EXTERN PetscErrorCode HssbemInitializePackage(void);
 PETSC_EXTERN PetscErrorCode HssbemFinalizePackage(void);

@@ -1,0 +1,167 @@
+/// \file dense_scene.hpp
+/// Real-time scenes: one geometry, a boundary-condition pattern and values that change every
+/// frame (a broad contact moving over the surface), re-solved at interactive rates.
+///
+/// Method. With K = [H, −G] (BemOperator), a pattern S picks per unknown j the column A_S(:, j)
+/// = H(:, j) (u_j unknown) or −G(:, j) (t_j unknown), and the right-hand side is
+/// b_S = −Σ_j K_S'(:, j) v_j with v_j the known value and K_S'(:, j) the column S does not use
+/// (pressure loads add −Σ p_n Gn(:, n)). The scene factors once the reference pattern S₀ (the
+/// base rules): A₀ = LU, then W = A₀⁻¹ K₀' (the columns S₀ does not use; N right-hand sides) and,
+/// with pressure loads, W_p = A₀⁻¹ Gn. A frame's pattern S differs from S₀ on the switched set
+/// J; then A₀⁻¹ A_S = I + (W(:, J) − E_J) E_Jᵀ and, by Sherman–Morrison–Woodbury,
+///     y = A₀⁻¹ b_S = −Σ_{j∉J} W(:, j) v_j − Σ_{j∈J} e_j v_j − Σ_n W_p(:, n) p_n,
+///     s = W(J, J)⁻¹ y(J),   x = y − W(:, J) s,   x(J) += s,
+/// so the capacitance matrix is the principal submatrix C = W(J, J) (and x(J) = s alone gives
+/// the switched unknowns — a contact's forces — in O(|J| · nnz(v)): the haptic loop). C⁻¹ is
+/// kept up to date as J changes (capacitance.hpp): a moving patch costs O(|J|² · changed).
+/// Per frame that is O(N (nnz(v) + |J|)) memory traffic plus the capacitance update, against
+/// (2/3) N³ for a dense LU per frame.
+///
+/// Strategies per frame (SceneStrategy): `solve` (pattern as the frame before: only the values
+/// changed), `update` (Woodbury with the capacitance inverse updated or rebuilt), `refactor`
+/// (dense LU of A_S: what the earlier frame-by-frame approach does; its factors serve the next
+/// frames while the pattern stays), `krylov` (GMRES on A_S, preconditioned by the last
+/// factorization made — the Woodbury form of the previous pattern or the last refactor — and
+/// started from the previous frame's fields). `auto` picks the cheapest by a cost model whose
+/// rates (memory bandwidth, flop rate) are measured at set-up and corrected after every frame by
+/// the measured time (report(): predicted and measured seconds).
+///
+/// Memory: W and the LU of A₀ (8 N² bytes each), H and G (16 N² bytes, for refactor, krylov and residuals; see
+/// SceneOptions::keep_operator), W_p and Gn (8 N² / 3 bytes each) with pressure loads, and one
+/// N² factor after a refactor. Thread-safety: one frame at a time.
+#pragma once
+
+#include "hssbem/bem/bem_operator.hpp"
+#include "hssbem/scene/capacitance.hpp"
+
+#include <array>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace hssbem {
+
+enum class SceneStrategy { Auto, Solve, Update, Refactor, Krylov };
+
+/// "auto", "solve", "update", "refactor", "krylov".
+const char *scene_strategy_name(SceneStrategy s);
+/// The strategy named s, or nothing.
+std::optional<SceneStrategy> parse_scene_strategy(const std::string &s);
+
+struct SceneOptions {
+  SceneStrategy strategy = SceneStrategy::Auto; ///< forced strategy, or auto
+  bool with_pressure = false;  ///< some frame has pressure loads: compute W_p = A₀⁻¹ Gn at set-up
+  bool keep_operator = true;   ///< keep H and G (needed by refactor, krylov and residual())
+  int refresh_every = 32;      ///< incremental capacitance updates before a rebuild from scratch
+  double krylov_rtol = 1e-10;  ///< GMRES relative tolerance (true residual) of the krylov strategy
+  int krylov_max_it = 200;     ///< and its iteration limit (reaching it is an error)
+};
+
+/// What a frame did.
+struct SceneFrameReport {
+  SceneStrategy strategy = SceneStrategy::Solve; ///< what was done (never auto)
+  long long switched = 0;   ///< |J|: unknowns of another type than in the reference pattern
+  long long changed = 0;    ///< unknowns whose type differs from the frame before
+  long long values = 0;     ///< nonzero known values (right-hand side columns)
+  long long iterations = 0; ///< GMRES iterations (krylov)
+  bool rebuilt = false;     ///< update: the capacitance inverse was rebuilt, not updated
+  double seconds = 0;       ///< wall time of the frame (update and solve)
+  double predicted = 0;     ///< the cost model's seconds for the strategy taken
+};
+
+/// A Krylov solve for the krylov strategy (the PETSc layer provides one, see scene_krylov.hpp):
+/// solve A x = b with x holding the initial guess on entry, apply_A(in, out) the operator and
+/// apply_M(in, out) the preconditioner (an approximate inverse); returns the iterations.
+/// Throws on divergence.
+struct KrylovSolver {
+  virtual ~KrylovSolver() = default;
+  virtual long long solve(int n, const std::function<void(const double *, double *)> &apply_A, const std::function<void(const double *, double *)> &apply_M,
+                          const double *b, double *x, double rtol, int max_it) = 0;
+};
+
+class DenseScene {
+public:
+  /// Set-up: assembles H and G (and Gn), factors the reference pattern `reference` (its values
+  /// are not used) and forms W. Throws std::runtime_error when the reference system is singular
+  /// (a pattern that leaves the body free to move: check the constraints first).
+  DenseScene(const BemOperator &op, const SystemSelection &reference, const SceneOptions &options = {},
+             std::unique_ptr<KrylovSolver> krylov = nullptr);
+  ~DenseScene();
+  DenseScene(const DenseScene &) = delete;
+  DenseScene &operator=(const DenseScene &) = delete;
+
+  /// Solve the frame `sel` (pattern, values, pressure; same nodes as the operator): x gets the
+  /// unknowns, 3 per node in node order (t where sel prescribes u, u elsewhere). `force` (not
+  /// auto) overrides the options' strategy for this frame; solve is refused (std::invalid_argument)
+  /// when the pattern changed. Returns what was done.
+  const SceneFrameReport &solve(const SystemSelection &sel, std::vector<double> &x, SceneStrategy force = SceneStrategy::Auto);
+
+  /// The haptic loop: after a frame with the same pattern, the unknowns of the switched set J
+  /// only (a contact's tractions, say) for new values in sel, in O(|J| · nnz(v)); out gets
+  /// (index, value) pairs in the order of switched(). Throws std::invalid_argument when sel's
+  /// pattern is not the one of the last update or solve.
+  void solve_switched(const SystemSelection &sel, std::vector<double> &out);
+  /// The switched set of the current capacitance inverse (unknown indices 3 node + component).
+  const std::vector<int> &switched() const { return m_cap.indices(); }
+
+  /// ‖A_S x − b_S‖ / ‖b_S‖ from H and G (needs keep_operator).
+  double residual(const SystemSelection &sel, const std::vector<double> &x) const;
+
+  int num_unknowns() const { return m_n; }
+  double setup_seconds() const { return m_setup_seconds; }
+  /// Bytes held (W, H, G, W_p, Gn, factors, capacitance).
+  std::size_t memory_bytes() const;
+  /// Measured rates of the cost model: bytes/s of a gathered matrix-vector product over W's
+  /// columns, and flop/s of GEMM and of LU.
+  double bandwidth() const { return m_bandwidth; }
+  double flop_rate() const { return m_flops; }
+  /// Predicted seconds of each strategy for the frame `sel` after the current state (solve:
+  /// infinity when the pattern changed).
+  std::array<double, 5> predict(const SystemSelection &sel) const;
+
+private:
+  void assemble(const BemOperator &op);
+  void factor_reference(const SystemSelection &reference);
+  void measure_rates();
+  std::vector<char> pattern_of(const SystemSelection &sel) const;
+  /// y = A₀⁻¹ b_S for the pattern of the switched set J (m_cap) and sel's values.
+  void reference_solve(const SystemSelection &sel, const std::vector<char> &pattern, std::vector<double> &y) const;
+  void woodbury_solve(const SystemSelection &sel, const std::vector<char> &pattern, std::vector<double> &x) const;
+  void update_capacitance(const std::vector<char> &pattern);
+  void refactor(const SystemSelection &sel, const std::vector<char> &pattern, std::vector<double> &x);
+  void lu_solve(const SystemSelection &sel, const std::vector<char> &pattern, std::vector<double> &x) const;
+  void krylov(const SystemSelection &sel, const std::vector<char> &pattern, std::vector<double> &x);
+  /// b_S (needs H and G).
+  void rhs(const SystemSelection &sel, const std::vector<char> &pattern, std::vector<double> &b) const;
+  void apply_system(const std::vector<char> &pattern, const double *x, double *y) const;
+  /// The last factorization as a preconditioner for pattern `pattern` (krylov).
+  void apply_previous(const std::vector<char> &pattern_prev, const double *r, double *z) const;
+  double predict_update(const std::vector<char> &pattern, bool *rebuild) const;
+
+  int m_n = 0, m_nodes = 0;
+  SceneOptions m_opt;
+  std::unique_ptr<KrylovSolver> m_krylov;
+  std::vector<char> m_ref;           ///< reference pattern: 1 where u is known (t unknown)
+  std::vector<double> m_W, m_Wp;     ///< A₀⁻¹ K₀' and A₀⁻¹ Gn, column-major
+  std::vector<double> m_H, m_G, m_Gn;///< the operator, column-major (keep_operator)
+  CapacitanceInverse m_cap;          ///< W(J, J)⁻¹ for the current switched set
+  std::vector<char> m_cap_pattern;   ///< the pattern m_cap serves
+  int m_updates_since_rebuild = 0;
+  std::vector<double> m_lu0;         ///< LU of the reference A₀ (column-major) and its pivots
+  std::vector<int> m_piv0;
+  std::vector<double> m_lu;          ///< LU of A_S after a refactor, column-major
+  std::vector<int> m_piv;
+  std::vector<char> m_lu_pattern;    ///< its pattern (empty: none)
+  std::vector<char> m_last_pattern;  ///< pattern of the previous frame
+  std::vector<Vec3> m_last_u, m_last_t; ///< fields of the previous frame (krylov's initial guess)
+  enum class Last { None, Woodbury, Lu } m_last_factor = Last::Woodbury; ///< the last factorization made
+  double m_scale_t = 1;              ///< ‖H‖_F / ‖G‖_F: the scale of −G columns against H columns (krylov)
+  double m_bandwidth = 1e10, m_flops = 1e10, m_lu_flops = 1e10;
+  std::array<double, 5> m_correction{{1, 1, 1, 1, 1}}; ///< measured / predicted, per strategy
+  double m_setup_seconds = 0;
+  SceneFrameReport m_report;
+};
+
+} // namespace hssbem

@@ -1,0 +1,106 @@
+/* GMRES for a scene's krylov strategy (see scene_krylov.h). */
+#include "hssbem/petsc/scene_krylov.h"
+
+#include <petscksp.h>
+
+#include <stdexcept>
+#include <string>
+
+namespace {
+
+struct Callbacks {
+  const std::function<void(const double *, double *)> *A, *M;
+};
+
+PetscErrorCode MatMult_SceneKrylov(Mat A, Vec x, Vec y)
+{
+  Callbacks         *cb;
+  const PetscScalar *in;
+  PetscScalar       *out;
+
+  PetscFunctionBegin;
+  PetscCall(MatShellGetContext(A, &cb));
+  PetscCall(VecGetArrayRead(x, &in));
+  PetscCall(VecGetArrayWrite(y, &out));
+  PetscCallCXX((*cb->A)(in, out));
+  PetscCall(VecRestoreArrayWrite(y, &out));
+  PetscCall(VecRestoreArrayRead(x, &in));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PCApply_SceneKrylov(PC pc, Vec x, Vec y)
+{
+  Callbacks         *cb;
+  const PetscScalar *in;
+  PetscScalar       *out;
+
+  PetscFunctionBegin;
+  PetscCall(PCShellGetContext(pc, &cb));
+  PetscCall(VecGetArrayRead(x, &in));
+  PetscCall(VecGetArrayWrite(y, &out));
+  PetscCallCXX((*cb->M)(in, out));
+  PetscCall(VecRestoreArrayWrite(y, &out));
+  PetscCall(VecRestoreArrayRead(x, &in));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode Solve_Private(int n, Callbacks *cb, const double *b, double *x, double rtol, int max_it, PetscInt *its, KSPConvergedReason *reason)
+{
+  Mat A;
+  KSP ksp;
+  PC  pc;
+  Vec vb, vx;
+
+  PetscFunctionBegin;
+  PetscCall(MatCreateShell(PETSC_COMM_SELF, n, n, n, n, cb, &A));
+  PetscCall(MatShellSetOperation(A, MATOP_MULT, (void (*)(void))MatMult_SceneKrylov));
+  PetscCall(VecCreateSeqWithArray(PETSC_COMM_SELF, 1, n, b, &vb));
+  PetscCall(VecCreateSeqWithArray(PETSC_COMM_SELF, 1, n, x, &vx));
+  PetscCall(KSPCreate(PETSC_COMM_SELF, &ksp));
+  PetscCall(KSPSetOptionsPrefix(ksp, "scene_"));
+  PetscCall(KSPSetType(ksp, KSPGMRES));
+  PetscCall(KSPGMRESSetRestart(ksp, 100));
+  PetscCall(KSPSetPCSide(ksp, PC_RIGHT));
+  PetscCall(KSPSetTolerances(ksp, rtol, PETSC_DEFAULT, PETSC_DEFAULT, max_it));
+  PetscCall(KSPSetInitialGuessNonzero(ksp, PETSC_TRUE));
+  PetscCall(KSPSetOperators(ksp, A, A));
+  PetscCall(KSPGetPC(ksp, &pc));
+  PetscCall(PCSetType(pc, PCSHELL));
+  PetscCall(PCShellSetContext(pc, cb));
+  PetscCall(PCShellSetApply(pc, PCApply_SceneKrylov));
+  PetscCall(KSPSetFromOptions(ksp));
+  PetscCall(KSPSolve(ksp, vb, vx));
+  PetscCall(KSPGetIterationNumber(ksp, its));
+  PetscCall(KSPGetConvergedReason(ksp, reason));
+  PetscCall(KSPDestroy(&ksp));
+  PetscCall(VecDestroy(&vb));
+  PetscCall(VecDestroy(&vx));
+  PetscCall(MatDestroy(&A));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+class PetscGmres : public hssbem::KrylovSolver {
+public:
+  long long solve(int n, const std::function<void(const double *, double *)> &apply_A, const std::function<void(const double *, double *)> &apply_M, const double *b,
+                  double *x, double rtol, int max_it) override
+  {
+    Callbacks          cb{&apply_A, &apply_M};
+    PetscInt           its    = 0;
+    KSPConvergedReason reason = KSP_CONVERGED_ITERATING;
+    const PetscErrorCode ierr = Solve_Private(n, &cb, b, x, rtol, max_it, &its, &reason);
+    if (ierr) {
+      const char *text = nullptr;
+      PetscErrorMessage(ierr, &text, NULL);
+      throw std::runtime_error(std::string("scene frame: GMRES failed: ") + (text ? text : "PETSc error"));
+    }
+    if (reason < 0) throw std::runtime_error(std::string("scene frame: GMRES did not converge: ") + KSPConvergedReasons[reason] + " after " + std::to_string(its) + " iterations");
+    return its;
+  }
+};
+
+} // namespace
+
+std::unique_ptr<hssbem::KrylovSolver> HssbemSceneKrylovCreate(void)
+{
+  return std::make_unique<PetscGmres>();
+}

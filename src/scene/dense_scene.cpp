@@ -1,0 +1,518 @@
+// The dense scene engine of dense_scene.hpp: reference factorization, Woodbury updates with an
+// incrementally kept capacitance inverse, refactorization and Krylov, chosen per frame.
+#include "hssbem/scene/dense_scene.hpp"
+
+#include "hssbem/core/lapack.hpp"
+#include "hssbem/core/phase.hpp"
+#include "hssbem/core/timer.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <exception>
+#include <limits>
+#include <numeric>
+#include <stdexcept>
+#include <string>
+
+namespace hssbem {
+
+namespace {
+
+constexpr double k_inf = std::numeric_limits<double>::infinity();
+
+std::size_t sq(int n) { return static_cast<std::size_t>(n) * n; }
+
+/// y += Σ_i coef[i] M(:, cols[i]) for the column-major n-row matrix M: a gathered product,
+/// threaded over row blocks (each thread streams its rows of the chosen columns).
+void gather_axpy(const double *M, int n, const std::vector<int> &cols, const std::vector<double> &coef, double *y)
+{
+  if (cols.empty()) return;
+  constexpr int block = 512;
+  const int nb = (n + block - 1) / block;
+#pragma omp parallel for schedule(static) if (static_cast<double>(n) * cols.size() > 2e5)
+  for (int b = 0; b < nb; ++b) {
+    const int r0 = b * block, r1 = std::min(n, r0 + block);
+    for (std::size_t i = 0; i < cols.size(); ++i) {
+      const double *m = M + static_cast<std::size_t>(cols[i]) * n;
+      const double c = coef[i];
+      for (int r = r0; r < r1; ++r) y[r] += c * m[r];
+    }
+  }
+}
+
+bool has_pressure(const SystemSelection &sel, int node) { return !sel.pressure.empty() && !std::isnan(sel.pressure[node]); }
+
+} // namespace
+
+const char *scene_strategy_name(SceneStrategy s)
+{
+  switch (s) {
+  case SceneStrategy::Auto: return "auto";
+  case SceneStrategy::Solve: return "solve";
+  case SceneStrategy::Update: return "update";
+  case SceneStrategy::Refactor: return "refactor";
+  case SceneStrategy::Krylov: return "krylov";
+  }
+  return "?";
+}
+
+std::optional<SceneStrategy> parse_scene_strategy(const std::string &s)
+{
+  for (SceneStrategy t : {SceneStrategy::Auto, SceneStrategy::Solve, SceneStrategy::Update, SceneStrategy::Refactor, SceneStrategy::Krylov})
+    if (s == scene_strategy_name(t)) return t;
+  return std::nullopt;
+}
+
+DenseScene::DenseScene(const BemOperator &op, const SystemSelection &reference, const SceneOptions &options, std::unique_ptr<KrylovSolver> krylov)
+    : m_n(3 * op.num_nodes()), m_nodes(op.num_nodes()), m_opt(options), m_krylov(std::move(krylov)), m_cap(nullptr, 3 * op.num_nodes())
+{
+  const Timer timer;
+  if (static_cast<int>(reference.displacement_known.size()) != m_nodes) throw std::invalid_argument("DenseScene: the reference pattern does not match the operator's nodes");
+  if (m_opt.refresh_every < 1) throw std::invalid_argument("DenseScene: refresh_every must be at least 1");
+  {
+    const PhaseScope phase(Phase::SceneSetup);
+    assemble(op);
+    factor_reference(reference);
+    measure_rates();
+  }
+  m_cap = CapacitanceInverse(m_W.data(), m_n);
+  m_cap.rebuild({});
+  m_cap_pattern = m_ref;
+  m_setup_seconds = timer.seconds();
+}
+
+DenseScene::~DenseScene() = default;
+
+/// H and G (and Gn) column-major, rows in chunks per thread with their own workspaces.
+void DenseScene::assemble(const BemOperator &op)
+{
+  const int nn = m_nodes, N = m_n, chunk = 8;
+  m_H.assign(sq(N), 0.0);
+  m_G.assign(sq(N), 0.0);
+  if (m_opt.with_pressure) m_Gn.assign(static_cast<std::size_t>(N) * nn, 0.0);
+  std::vector<int> J(nn);
+  std::iota(J.begin(), J.end(), 0);
+  std::exception_ptr failure;
+#pragma omp parallel
+  {
+    std::unique_ptr<BemOperator::Workspace> ws;
+    std::vector<double> H, G, Gn;
+    try {
+      ws = std::make_unique<BemOperator::Workspace>(op);
+      H.resize(3 * chunk * static_cast<std::size_t>(N));
+      G.resize(H.size());
+      if (m_opt.with_pressure) Gn.resize(3 * chunk * static_cast<std::size_t>(nn));
+    } catch (...) {
+#pragma omp critical(hssbem_scene_assembly)
+      if (!failure) failure = std::current_exception();
+    }
+#pragma omp for schedule(dynamic, 1)
+    for (int r0 = 0; r0 < nn; r0 += chunk) {
+      if (!ws) continue;
+      try {
+        std::vector<int> I(std::min(chunk, nn - r0));
+        std::iota(I.begin(), I.end(), r0);
+        op.fill_hg(I, J, H.data(), G.data(), N, m_opt.with_pressure ? Gn.data() : nullptr, nn, *ws);
+        for (std::size_t r = 0; r < 3 * I.size(); ++r) {
+          const std::size_t row = 3 * static_cast<std::size_t>(r0) + r;
+          for (int c = 0; c < N; ++c) {
+            m_H[row + static_cast<std::size_t>(c) * N] = H[r * N + c];
+            m_G[row + static_cast<std::size_t>(c) * N] = G[r * N + c];
+          }
+          if (m_opt.with_pressure)
+            for (int c = 0; c < nn; ++c) m_Gn[row + static_cast<std::size_t>(c) * N] = Gn[r * nn + c];
+        }
+      } catch (...) {
+#pragma omp critical(hssbem_scene_assembly)
+        if (!failure) failure = std::current_exception();
+      }
+    }
+  }
+  if (failure) std::rethrow_exception(failure);
+}
+
+std::vector<char> DenseScene::pattern_of(const SystemSelection &sel) const
+{
+  if (static_cast<int>(sel.displacement_known.size()) != m_nodes || static_cast<int>(sel.known.size()) != m_nodes)
+    throw std::invalid_argument("scene frame: the boundary conditions do not match the scene's nodes");
+  std::vector<char> p(m_n);
+  for (int j = 0; j < m_n; ++j) p[j] = sel.displacement_known[j / 3][j % 3] ? 1 : 0;
+  return p;
+}
+
+/// A₀ from the reference pattern, its LU, W = A₀⁻¹ K₀' and W_p = A₀⁻¹ Gn.
+void DenseScene::factor_reference(const SystemSelection &reference)
+{
+  const int N = m_n;
+  m_ref = pattern_of(SystemSelection{reference.displacement_known, std::vector<Vec3>(m_nodes), {}});
+  m_lu0.resize(sq(N));
+  m_W.resize(sq(N));
+#pragma omp parallel for schedule(static)
+  for (int j = 0; j < N; ++j) {
+    const double *h = &m_H[static_cast<std::size_t>(j) * N], *g = &m_G[static_cast<std::size_t>(j) * N];
+    double *a = &m_lu0[static_cast<std::size_t>(j) * N], *w = &m_W[static_cast<std::size_t>(j) * N];
+    for (int i = 0; i < N; ++i) {
+      a[i] = m_ref[j] ? -g[i] : h[i];
+      w[i] = m_ref[j] ? h[i] : -g[i];
+    }
+  }
+  double h2 = 0, g2 = 0;
+  for (std::size_t i = 0; i < m_H.size(); ++i) h2 += m_H[i] * m_H[i], g2 += m_G[i] * m_G[i];
+  m_scale_t = g2 > 0 ? std::sqrt(h2 / g2) : 1.0;
+  if (!m_opt.keep_operator) { // W and A₀ hold what the Woodbury path needs
+    std::vector<double>().swap(m_H);
+    std::vector<double>().swap(m_G);
+  }
+  m_piv0.resize(N);
+  const int info = lapack::getrf(N, m_lu0.data(), N, m_piv0.data());
+  if (info != 0) throw std::runtime_error("scene: the reference pattern's system is singular (LU pivot " + std::to_string(info) + " is zero); the base rules must hold the body");
+  lapack::getrs('N', N, N, m_lu0.data(), N, m_piv0.data(), m_W.data(), N);
+  if (m_opt.with_pressure) {
+    m_Wp = m_Gn;
+    lapack::getrs('N', N, m_nodes, m_lu0.data(), N, m_piv0.data(), m_Wp.data(), N);
+  }
+  if (!m_opt.keep_operator) std::vector<double>().swap(m_Gn);
+}
+
+/// The cost model's rates: a gathered product over all of W's columns (bytes/s), a GEMM (flop/s).
+void DenseScene::measure_rates()
+{
+  const int N = m_n;
+  std::vector<int> cols(N);
+  std::iota(cols.begin(), cols.end(), 0);
+  std::vector<double> coef(N, 1e-3), y(N, 0.0);
+  double best = k_inf;
+  for (int rep = 0; rep < 3; ++rep) {
+    const Timer t;
+    gather_axpy(m_W.data(), N, cols, coef, y.data());
+    best = std::min(best, t.seconds());
+  }
+  m_bandwidth = 8.0 * sq(N) / std::max(best, 1e-7);
+  const int m = std::min(N, 384);
+  std::vector<double> A(sq(m), 1e-3), B(sq(m), 2e-3), C(sq(m), 0.0);
+  best = k_inf;
+  for (int rep = 0; rep < 3; ++rep) {
+    const Timer t;
+    lapack::gemm('N', 'N', m, m, m, 1.0, A.data(), m, B.data(), m, 0.0, C.data(), m);
+    best = std::min(best, t.seconds());
+  }
+  m_flops = 2.0 * m * sq(m) / std::max(best, 1e-7);
+  m_lu_flops = 0.8 * m_flops; // LAPACK's blocked LU at these sizes runs at about 80 % of GEMM
+}
+
+void DenseScene::reference_solve(const SystemSelection &sel, const std::vector<char> &pattern, std::vector<double> &y) const
+{
+  y.assign(m_n, 0.0);
+  std::vector<int> cols, pcols;
+  std::vector<double> coef, pcoef;
+  for (int j = 0; j < m_n; ++j) {
+    const int node = j / 3;
+    if (!pattern[j] && has_pressure(sel, node)) continue; // traction of a pressure load: through W_p
+    const double v = sel.known[node][j % 3];
+    if (pattern[j] != m_ref[j]) y[j] -= v;
+    else if (v != 0.0) cols.push_back(j), coef.push_back(-v);
+  }
+  for (int node = 0; node < m_nodes; ++node)
+    if (has_pressure(sel, node)) pcols.push_back(node), pcoef.push_back(-sel.pressure[node]);
+  if (!pcols.empty() && m_Wp.empty()) throw std::invalid_argument("scene frame: pressure loads need a scene set up with pressure (SceneOptions::with_pressure)");
+  gather_axpy(m_W.data(), m_n, cols, coef, y.data());
+  gather_axpy(m_Wp.data(), m_n, pcols, pcoef, y.data());
+}
+
+void DenseScene::woodbury_solve(const SystemSelection &sel, const std::vector<char> &pattern, std::vector<double> &x) const
+{
+  reference_solve(sel, pattern, x);
+  const std::vector<int> &J = m_cap.indices();
+  const int k = m_cap.size();
+  std::vector<double> yJ(k), s(k);
+  for (int p = 0; p < k; ++p) yJ[p] = x[J[p]];
+  m_cap.apply(yJ.data(), s.data());
+  std::vector<double> minus_s(k);
+  for (int p = 0; p < k; ++p) minus_s[p] = -s[p];
+  gather_axpy(m_W.data(), m_n, J, minus_s, x.data());
+  for (int p = 0; p < k; ++p) x[J[p]] += s[p];
+}
+
+double DenseScene::predict_update(const std::vector<char> &pattern, bool *rebuild) const
+{
+  long long drop = 0, add = 0, k_new = 0;
+  for (int j = 0; j < m_n; ++j) {
+    const bool now = pattern[j] != m_ref[j], before = m_cap_pattern[j] != m_ref[j];
+    k_new += now;
+    drop += before && !now;
+    add += now && !before;
+  }
+  const double inc = CapacitanceInverse::update_flops(m_cap.size(), drop, add), full = CapacitanceInverse::rebuild_flops(k_new);
+  const bool must = m_updates_since_rebuild >= m_opt.refresh_every;
+  *rebuild = must || full <= inc;
+  if (drop == 0 && add == 0) *rebuild = false;
+  const double flops = (drop == 0 && add == 0) ? 0.0 : (*rebuild ? full : inc);
+  return flops / m_flops;
+}
+
+void DenseScene::update_capacitance(const std::vector<char> &pattern)
+{
+  const PhaseScope phase(Phase::SceneUpdate);
+  bool rebuild = false;
+  predict_update(pattern, &rebuild);
+  std::vector<int> drop, add, J;
+  for (int j = 0; j < m_n; ++j) {
+    const bool now = pattern[j] != m_ref[j], before = m_cap_pattern[j] != m_ref[j];
+    if (now) J.push_back(j);
+    if (before && !now) drop.push_back(j);
+    if (now && !before) add.push_back(j);
+  }
+  m_report.rebuilt = rebuild;
+  if (!rebuild) {
+    try {
+      m_cap.update(drop, add);
+      ++m_updates_since_rebuild;
+    } catch (const std::runtime_error &) { // a singular Schur complement on the way: start afresh
+      rebuild = m_report.rebuilt = true;
+    }
+  }
+  if (rebuild) {
+    m_cap.rebuild(J); // throws when W(J, J) itself is singular: the pattern's system is
+    m_updates_since_rebuild = 0;
+  }
+  m_cap_pattern = pattern;
+}
+
+void DenseScene::rhs(const SystemSelection &sel, const std::vector<char> &pattern, std::vector<double> &b) const
+{
+  if (m_H.empty()) throw std::invalid_argument("scene: this strategy needs the operator (SceneOptions::keep_operator)");
+  b.assign(m_n, 0.0);
+  std::vector<int> hc, gc, pc;
+  std::vector<double> hv, gv, pv;
+  for (int j = 0; j < m_n; ++j) {
+    const int node = j / 3;
+    const double v = sel.known[node][j % 3];
+    if (pattern[j]) {
+      if (v != 0.0) hc.push_back(j), hv.push_back(-v);
+    } else if (!has_pressure(sel, node) && v != 0.0) gc.push_back(j), gv.push_back(v);
+  }
+  for (int node = 0; node < m_nodes; ++node)
+    if (has_pressure(sel, node)) pc.push_back(node), pv.push_back(-sel.pressure[node]);
+  if (!pc.empty() && m_Gn.empty()) throw std::invalid_argument("scene frame: pressure loads need a scene set up with pressure (SceneOptions::with_pressure)");
+  gather_axpy(m_H.data(), m_n, hc, hv, b.data());
+  gather_axpy(m_G.data(), m_n, gc, gv, b.data());
+  gather_axpy(m_Gn.data(), m_n, pc, pv, b.data());
+}
+
+void DenseScene::apply_system(const std::vector<char> &pattern, const double *x, double *y) const
+{
+  std::vector<double> xu(m_n), xt(m_n);
+  for (int j = 0; j < m_n; ++j) (pattern[j] ? xt : xu)[j] = x[j];
+  lapack::gemv('N', m_n, m_n, 1.0, m_H.data(), m_n, xu.data(), 0.0, y);
+  lapack::gemv('N', m_n, m_n, -1.0, m_G.data(), m_n, xt.data(), 1.0, y);
+}
+
+void DenseScene::refactor(const SystemSelection &sel, const std::vector<char> &pattern, std::vector<double> &x)
+{
+  const PhaseScope phase(Phase::SceneRefactor);
+  if (m_H.empty()) throw std::invalid_argument("scene: refactor needs the operator (SceneOptions::keep_operator)");
+  const int N = m_n;
+  m_lu_pattern.clear();
+  m_lu.resize(sq(N));
+#pragma omp parallel for schedule(static)
+  for (int j = 0; j < N; ++j) {
+    const double *h = &m_H[static_cast<std::size_t>(j) * N], *g = &m_G[static_cast<std::size_t>(j) * N];
+    double *a = &m_lu[static_cast<std::size_t>(j) * N];
+    if (pattern[j])
+      for (int i = 0; i < N; ++i) a[i] = -g[i];
+    else std::copy_n(h, N, a);
+  }
+  m_piv.resize(N);
+  const int info = lapack::getrf(N, m_lu.data(), N, m_piv.data());
+  if (info != 0) throw std::runtime_error("scene frame: the system is singular (LU pivot " + std::to_string(info) + " is zero)");
+  m_lu_pattern = pattern;
+  lu_solve(sel, pattern, x);
+}
+
+void DenseScene::lu_solve(const SystemSelection &sel, const std::vector<char> &pattern, std::vector<double> &x) const
+{
+  rhs(sel, pattern, x);
+  lapack::getrs('N', m_n, 1, m_lu.data(), m_n, m_piv.data(), x.data(), m_n);
+}
+
+void DenseScene::apply_previous(const std::vector<char> &, const double *r, double *z) const
+{
+  if (m_last_factor == Last::Lu) {
+    std::copy_n(r, m_n, z);
+    lapack::getrs('N', m_n, 1, m_lu.data(), m_n, m_piv.data(), z, m_n);
+    return;
+  }
+  std::copy_n(r, m_n, z); // Woodbury form of the capacitance's pattern: (I + Z E_Jᵀ)⁻¹ A₀⁻¹ r
+  lapack::getrs('N', m_n, 1, m_lu0.data(), m_n, m_piv0.data(), z, m_n);
+  const std::vector<int> &J = m_cap.indices();
+  const int k = m_cap.size();
+  std::vector<double> yJ(k), s(k), minus_s(k);
+  for (int p = 0; p < k; ++p) yJ[p] = z[J[p]];
+  m_cap.apply(yJ.data(), s.data());
+  for (int p = 0; p < k; ++p) minus_s[p] = -s[p];
+  gather_axpy(m_W.data(), m_n, J, minus_s, z);
+  for (int p = 0; p < k; ++p) z[J[p]] += s[p];
+}
+
+/// A Krylov solve preconditioned by another pattern's inverse converges only when the columns
+/// that switched are on one scale: with D = diag(1 for H columns, s for −G columns), s = ‖H‖/‖G‖,
+/// the preconditioner is D_S D_prev⁻¹ A_prev⁻¹, so that A_S D_S (A_prev D_prev)⁻¹ = I + a
+/// perturbation of the size of the switched columns (unscaled, −G against H columns differ by
+/// μ/h, and GMRES stagnated on the cardioid).
+void DenseScene::krylov(const SystemSelection &sel, const std::vector<char> &pattern, std::vector<double> &x)
+{
+  const PhaseScope phase(Phase::SceneKrylov);
+  if (!m_krylov) throw std::invalid_argument("scene: the krylov strategy needs a Krylov solver (none was given)");
+  std::vector<double> b;
+  rhs(sel, pattern, b);
+  x.assign(m_n, 0.0);
+  if (!m_last_u.empty()) // the previous frame's fields, each unknown taking the quantity it now stands for
+    for (int j = 0; j < m_n; ++j) x[j] = pattern[j] ? m_last_t[j / 3][j % 3] : m_last_u[j / 3][j % 3];
+  const std::vector<char> prev = m_last_factor == Last::Lu ? m_lu_pattern : m_cap_pattern;
+  m_report.iterations = m_krylov->solve(
+      m_n, [&](const double *in, double *out) { apply_system(pattern, in, out); },
+      [&](const double *in, double *out) {
+        apply_previous(prev, in, out);
+        for (int j = 0; j < m_n; ++j) // see m_scale_t
+          if (pattern[j] != prev[j]) out[j] *= pattern[j] ? m_scale_t : 1.0 / m_scale_t;
+      },
+      b.data(),
+      x.data(), m_opt.krylov_rtol, m_opt.krylov_max_it);
+}
+
+std::array<double, 5> DenseScene::predict(const SystemSelection &sel) const
+{
+  const std::vector<char> pattern = pattern_of(sel);
+  const double N = m_n, bw = m_bandwidth;
+  long long k = 0, nv = 0, changed_cap = 0, changed_prev = 0;
+  const std::vector<char> &prev = m_last_factor == Last::Lu && !m_lu_pattern.empty() ? m_lu_pattern : m_cap_pattern;
+  for (int j = 0; j < m_n; ++j) {
+    k += pattern[j] != m_ref[j];
+    nv += sel.known[j / 3][j % 3] != 0.0;
+    changed_cap += pattern[j] != m_cap_pattern[j];
+    changed_prev += pattern[j] != prev[j];
+  }
+  const double apply = 8.0 * N * static_cast<double>(nv + k) / bw + 8.0 * static_cast<double>(k) * k / bw;
+  const double lu_solve = 16.0 * N * N / bw + 8.0 * N * nv / bw;
+  std::array<double, 5> t{};
+  t[static_cast<int>(SceneStrategy::Auto)] = k_inf;
+  t[static_cast<int>(SceneStrategy::Solve)] = changed_cap == 0 ? apply : (!m_lu_pattern.empty() && m_lu_pattern == pattern ? lu_solve : k_inf);
+  bool rebuild = false;
+  t[static_cast<int>(SceneStrategy::Update)] = predict_update(pattern, &rebuild) + apply;
+  t[static_cast<int>(SceneStrategy::Refactor)] = m_H.empty() ? k_inf : 16.0 * N * N / bw + 2.0 / 3.0 * N * N * N / m_lu_flops + lu_solve;
+  const double its = std::min<double>(static_cast<double>(changed_prev) + 1, m_opt.krylov_max_it);
+  const double per_it = 32.0 * N * N / bw + 8.0 * N * static_cast<double>(m_cap.size()) / bw;
+  t[static_cast<int>(SceneStrategy::Krylov)] = m_H.empty() || !m_krylov ? k_inf : its * per_it + 16.0 * N * N / bw;
+  for (int s = 1; s < 5; ++s) t[s] *= m_correction[s];
+  return t;
+}
+
+const SceneFrameReport &DenseScene::solve(const SystemSelection &sel, std::vector<double> &x, SceneStrategy force)
+{
+  const Timer timer;
+  const std::vector<char> pattern = pattern_of(sel);
+  const std::array<double, 5> predicted = predict(sel);
+  SceneStrategy s = force != SceneStrategy::Auto ? force : m_opt.strategy;
+  const bool same = pattern == m_cap_pattern || (!m_lu_pattern.empty() && pattern == m_lu_pattern);
+  if (s == SceneStrategy::Auto) {
+    if (same) s = SceneStrategy::Solve;
+    else {
+      s = SceneStrategy::Update;
+      for (SceneStrategy c : {SceneStrategy::Refactor, SceneStrategy::Krylov})
+        if (predicted[static_cast<int>(c)] < predicted[static_cast<int>(s)]) s = c;
+    }
+  }
+  if (s == SceneStrategy::Solve && !same)
+    throw std::invalid_argument("scene frame: strategy 'solve' reuses a factorization, but the boundary-condition pattern changed (use update, refactor, krylov or auto)");
+  m_report = SceneFrameReport{};
+  m_report.strategy = s;
+  const std::vector<char> &before = m_last_pattern.empty() ? m_ref : m_last_pattern;
+  for (int j = 0; j < m_n; ++j) {
+    m_report.switched += pattern[j] != m_ref[j];
+    m_report.changed += pattern[j] != before[j];
+    m_report.values += sel.known[j / 3][j % 3] != 0.0;
+  }
+  switch (s) {
+  case SceneStrategy::Solve: {
+    const PhaseScope phase(Phase::SceneApply);
+    if (pattern == m_cap_pattern) woodbury_solve(sel, pattern, x);
+    else lu_solve(sel, pattern, x);
+    break;
+  }
+  case SceneStrategy::Update: {
+    if (pattern != m_cap_pattern) update_capacitance(pattern);
+    const PhaseScope phase(Phase::SceneApply);
+    woodbury_solve(sel, pattern, x);
+    m_last_factor = Last::Woodbury;
+    break;
+  }
+  case SceneStrategy::Refactor:
+    refactor(sel, pattern, x);
+    m_last_factor = Last::Lu;
+    break;
+  case SceneStrategy::Krylov: krylov(sel, pattern, x); break;
+  case SceneStrategy::Auto: break;
+  }
+  m_last_pattern = pattern;
+  m_last_u.resize(m_nodes);
+  m_last_t.resize(m_nodes);
+  for (int j = 0; j < m_n; ++j) {
+    const double known = sel.known[j / 3][j % 3];
+    m_last_u[j / 3][j % 3] = pattern[j] ? known : x[j];
+    m_last_t[j / 3][j % 3] = pattern[j] ? x[j] : known;
+  }
+  m_report.seconds = timer.seconds();
+  m_report.predicted = predicted[static_cast<int>(s)];
+  const int si = static_cast<int>(s);
+  if (std::isfinite(m_report.predicted) && m_report.predicted > 0 && m_report.seconds > 0) // the model learns from what it measured
+    m_correction[si] = std::exp(0.7 * std::log(m_correction[si]) + 0.3 * std::log(m_correction[si] * m_report.seconds / m_report.predicted));
+  return m_report;
+}
+
+void DenseScene::solve_switched(const SystemSelection &sel, std::vector<double> &out)
+{
+  const std::vector<char> pattern = pattern_of(sel);
+  if (pattern != m_cap_pattern) throw std::invalid_argument("scene: solve_switched needs the pattern of the last update (solve the frame first)");
+  const std::vector<int> &J = m_cap.indices();
+  const int k = m_cap.size();
+  std::vector<double> yJ(k, 0.0);
+  for (int p = 0; p < k; ++p) {
+    const int j = J[p];
+    if (!(!pattern[j] && has_pressure(sel, j / 3))) yJ[p] = -sel.known[j / 3][j % 3];
+  }
+  for (int j = 0; j < m_n; ++j) {
+    const int node = j / 3;
+    if (pattern[j] != m_ref[j] || (!pattern[j] && has_pressure(sel, node))) continue;
+    const double v = sel.known[node][j % 3];
+    if (v == 0.0) continue;
+    const double *w = &m_W[static_cast<std::size_t>(j) * m_n];
+    for (int p = 0; p < k; ++p) yJ[p] -= w[J[p]] * v;
+  }
+  for (int node = 0; node < m_nodes; ++node)
+    if (has_pressure(sel, node)) {
+      if (m_Wp.empty()) throw std::invalid_argument("scene frame: pressure loads need a scene set up with pressure (SceneOptions::with_pressure)");
+      const double *w = &m_Wp[static_cast<std::size_t>(node) * m_n];
+      for (int p = 0; p < k; ++p) yJ[p] -= w[J[p]] * sel.pressure[node];
+    }
+  out.resize(k);
+  m_cap.apply(yJ.data(), out.data());
+}
+
+double DenseScene::residual(const SystemSelection &sel, const std::vector<double> &x) const
+{
+  const std::vector<char> pattern = pattern_of(sel);
+  std::vector<double> b, Ax(m_n);
+  rhs(sel, pattern, b);
+  apply_system(pattern, x.data(), Ax.data());
+  double r = 0, nb = 0;
+  for (int i = 0; i < m_n; ++i) r += (Ax[i] - b[i]) * (Ax[i] - b[i]), nb += b[i] * b[i];
+  return nb > 0 ? std::sqrt(r / nb) : std::sqrt(r);
+}
+
+std::size_t DenseScene::memory_bytes() const
+{
+  const std::size_t d = m_W.size() + m_Wp.size() + m_H.size() + m_G.size() + m_Gn.size() + m_lu0.size() + m_lu.size() + sq(m_cap.size());
+  return 8 * d;
+}
+
+} // namespace hssbem

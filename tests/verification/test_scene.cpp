@@ -1,0 +1,258 @@
+// Scenes (scene/dense_scene.hpp): every strategy against a from-scratch dense solve of the same
+// boundary conditions, on the paper's cardioid with a contact patch moving over it; the
+// capacitance inverse's updates against its rebuild.
+#include "hssbem/core/lapack.hpp"
+#include "hssbem/petsc/scene_krylov.h"
+#include "hssbem/problem/problem.hpp"
+#include "hssbem/scene/capacitance.hpp"
+#include "hssbem/scene/dense_scene.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numeric>
+#include <random>
+#include <string>
+
+namespace hssbem {
+namespace {
+
+// ---------------------------------------------------------------- capacitance inverse
+
+std::vector<double> random_matrix(int n, unsigned seed)
+{
+  std::mt19937 gen(seed);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::vector<double> W(static_cast<std::size_t>(n) * n);
+  for (double &w : W) w = u(gen) / n;
+  for (int i = 0; i < n; ++i) W[i + static_cast<std::size_t>(i) * n] += 1.0 + 0.5 * u(gen);
+  return W;
+}
+
+double max_diff(const CapacitanceInverse &a, const CapacitanceInverse &b)
+{
+  // same index set, possibly another order: compare entry (J_p, J_q)
+  double d = 0;
+  const int k = a.size();
+  for (int p = 0; p < k; ++p)
+    for (int q = 0; q < k; ++q) {
+      const int i = b.position(a.indices()[p]), j = b.position(a.indices()[q]);
+      d = std::max(d, std::abs(a.inverse()[p + q * k] - b.inverse()[i + j * k]));
+    }
+  return d;
+}
+
+TEST(Capacitance, UpdatesMatchTheRebuildAndInvertTheSubmatrix)
+{
+  const int n = 80;
+  const std::vector<double> W = random_matrix(n, 7);
+  CapacitanceInverse inc(W.data(), n), full(W.data(), n);
+  inc.rebuild({3, 10, 11, 40, 41, 42});
+  std::vector<int> set = {3, 10, 11, 40, 41, 42};
+  std::mt19937 gen(3);
+  for (int step = 0; step < 30; ++step) { // a window that moves: drop a few, add a few
+    std::vector<int> drop, add;
+    for (int j : set)
+      if (gen() % 4 == 0) drop.push_back(j);
+    for (int j = 0; j < n; ++j)
+      if (std::find(set.begin(), set.end(), j) == set.end() && gen() % 12 == 0) add.push_back(j);
+    inc.update(drop, add);
+    std::vector<int> next;
+    for (int j : set)
+      if (std::find(drop.begin(), drop.end(), j) == drop.end()) next.push_back(j);
+    next.insert(next.end(), add.begin(), add.end());
+    set = next;
+    full.rebuild(set);
+    ASSERT_EQ(inc.size(), static_cast<int>(set.size()));
+    EXPECT_LT(max_diff(inc, full), 1e-11) << "step " << step;
+  }
+  // C⁻¹ C = I for the final set (and the set is not trivial)
+  const int k = inc.size();
+  ASSERT_GE(k, 5);
+  double err = 0;
+  for (int p = 0; p < k; ++p)
+    for (int q = 0; q < k; ++q) {
+      double s = 0;
+      for (int r = 0; r < k; ++r) s += inc.inverse()[p + r * k] * W[inc.indices()[r] + static_cast<std::size_t>(inc.indices()[q]) * n];
+      err = std::max(err, std::abs(s - (p == q)));
+    }
+  EXPECT_LT(err, 1e-12);
+}
+
+TEST(Capacitance, RejectsIndicesNotInOrAlreadyInTheSet)
+{
+  const int n = 10;
+  const std::vector<double> W = random_matrix(n, 1);
+  CapacitanceInverse c(W.data(), n);
+  c.rebuild({1, 2});
+  EXPECT_THROW(c.update({5}, {}), std::invalid_argument);
+  EXPECT_THROW(c.update({}, {2}), std::invalid_argument);
+  EXPECT_THROW(c.rebuild({1, 1}), std::invalid_argument);
+  std::vector<double> Z(n * n, 0.0);
+  CapacitanceInverse s(Z.data(), n);
+  EXPECT_THROW(s.rebuild({0, 1}), std::runtime_error);
+}
+
+// ---------------------------------------------------------------- scenes on the cardioid
+
+struct Cardioid {
+  SurfaceMesh mesh;
+  std::unique_ptr<Discretization> disc;
+  std::unique_ptr<BemOperator> op;
+  std::vector<BoundaryRule> base;
+
+  Cardioid()
+  {
+    mesh = read_mesh(std::string(HSSBEM_MESHES) + "/cardioid_832.msh");
+    std::vector<std::string> notices;
+    validate_and_orient(mesh, notices);
+    disc = std::make_unique<Discretization>(mesh, 40.0);
+    op = std::make_unique<BemOperator>(*disc, Material::from_lame(1000.0, 500.0));
+    BoundaryRule clamp;
+    clamp.kind = BoundaryRule::Kind::Displacement;
+    clamp.where.kind = Selector::Kind::Region;
+    clamp.where.region_name = "base";
+    clamp.rows = {{0, 0, 0}};
+    base = {clamp};
+  }
+
+  /// Base rules plus a contact patch around angle phi at mid height pushed in by depth (all
+  /// three components prescribed when full, else only the radial ones, the rest traction-free),
+  /// and optionally a pressure load on the tip.
+  SystemSelection frame(double phi, double depth, bool full = false, double tip_pressure = 0) const
+  {
+    std::vector<BoundaryRule> rules = base;
+    BoundaryRule patch;
+    patch.kind = BoundaryRule::Kind::Displacement;
+    patch.where.kind = Selector::Kind::Sphere;
+    patch.where.center = {0.45 * std::cos(phi), 0.45 * std::sin(phi), 0.5};
+    patch.where.radius = 0.3;
+    const double nan = std::nan("");
+    patch.rows = {full ? Vec3{-depth * std::cos(phi), -depth * std::sin(phi), 0.0} : Vec3{-depth * std::cos(phi), nan, nan}};
+    rules.push_back(patch);
+    if (tip_pressure != 0) {
+      BoundaryRule p;
+      p.kind = BoundaryRule::Kind::Pressure;
+      p.where.kind = Selector::Kind::Sphere;
+      p.where.center = {0, 0, 1};
+      p.where.radius = 0.2;
+      p.pressure = {tip_pressure};
+      rules.push_back(p);
+    }
+    const NodeConditions nc = apply_rules(rules, *disc, "test");
+    return SystemSelection{nc.displacement_prescribed, nc.value, nc.pressure};
+  }
+
+  SystemSelection reference() const
+  {
+    const NodeConditions nc = apply_rules(base, *disc, "test");
+    return SystemSelection{nc.displacement_prescribed, nc.value, nc.pressure};
+  }
+
+  /// From-scratch dense solve of the same boundary conditions.
+  std::vector<double> dense(const SystemSelection &sel) const
+  {
+    const int nn = disc->num_nodes(), N = 3 * nn;
+    std::vector<int> all(nn);
+    std::iota(all.begin(), all.end(), 0);
+    std::vector<double> A(static_cast<std::size_t>(N) * N), b(N);
+    fill_system_block(*op, sel, all, all, A.data(), N, b.data());
+    std::vector<int> piv(N);
+    EXPECT_EQ(lapack::getrf(N, A.data(), N, piv.data()), 0);
+    lapack::getrs('T', N, 1, A.data(), N, piv.data(), b.data(), N); // A is row-major: solve with its transpose
+    return b;
+  }
+};
+
+const Cardioid &cardioid()
+{
+  static const Cardioid c;
+  return c;
+}
+
+double rel_diff(const std::vector<double> &a, const std::vector<double> &b)
+{
+  double num = 0, den = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) num += (a[i] - b[i]) * (a[i] - b[i]), den += b[i] * b[i];
+  return std::sqrt(num / den);
+}
+
+TEST(DenseScene, EveryStrategyMatchesADenseSolveOfTheFrame)
+{
+  const Cardioid &c = cardioid();
+  DenseScene scene(*c.op, c.reference(), SceneOptions{}, HssbemSceneKrylovCreate());
+  std::vector<double> x, first;
+  const SceneStrategy order[] = {SceneStrategy::Update, SceneStrategy::Update, SceneStrategy::Refactor, SceneStrategy::Krylov, SceneStrategy::Update,
+                                 SceneStrategy::Krylov, SceneStrategy::Auto};
+  for (int f = 0; f < 7; ++f) {
+    const SystemSelection sel = c.frame(0.25 * f, 0.04 + 0.002 * f, f % 3 == 2);
+    const SceneFrameReport &rep = scene.solve(sel, x, order[f]);
+    const std::vector<double> ref = c.dense(sel);
+    EXPECT_LT(rel_diff(x, ref), 1e-9) << "frame " << f << " (" << scene_strategy_name(rep.strategy) << ")";
+    EXPECT_LT(scene.residual(sel, x), 1e-10) << "frame " << f;
+    EXPECT_GE(rep.switched, 10) << "frame " << f; // the patch switches unknowns: not the reference
+    EXPECT_GT(rep.changed, 0) << "frame " << f;
+    if (order[f] != SceneStrategy::Auto) EXPECT_EQ(rep.strategy, order[f]);
+    if (rep.strategy == SceneStrategy::Krylov) {
+      EXPECT_GE(rep.iterations, 1);
+      EXPECT_LE(rep.iterations, rep.changed + 2); // the previous factorization differs by rank `changed`
+    }
+    if (f == 0) first = x;
+  }
+  EXPECT_GT(rel_diff(x, first), 1e-2); // the patch moved: the answer changed
+}
+
+TEST(DenseScene, ValuesOnlyFramesSolveAndTheHapticLoopGivesTheSwitchedUnknowns)
+{
+  const Cardioid &c = cardioid();
+  DenseScene scene(*c.op, c.reference());
+  std::vector<double> x, sw;
+  const SystemSelection sel = c.frame(1.0, 0.03);
+  EXPECT_EQ(scene.solve(sel, x).strategy, SceneStrategy::Update);
+  for (double depth : {0.01, 0.05}) {
+    const SystemSelection deeper = c.frame(1.0, depth);
+    const SceneFrameReport &rep = scene.solve(deeper, x);
+    EXPECT_EQ(rep.strategy, SceneStrategy::Solve); // auto: the pattern did not change
+    EXPECT_EQ(rep.changed, 0);
+    EXPECT_LT(rel_diff(x, c.dense(deeper)), 1e-9);
+    scene.solve_switched(deeper, sw);
+    ASSERT_EQ(sw.size(), scene.switched().size());
+    ASSERT_GE(sw.size(), 10u);
+    double d = 0, n = 0;
+    for (std::size_t p = 0; p < sw.size(); ++p) d = std::max(d, std::abs(sw[p] - x[scene.switched()[p]])), n = std::max(n, std::abs(x[scene.switched()[p]]));
+    EXPECT_LT(d, 1e-10 * n);
+    EXPECT_GT(n, 0.0);
+  }
+  EXPECT_THROW(scene.solve(c.frame(2.0, 0.03), x, SceneStrategy::Solve), std::invalid_argument);
+  EXPECT_THROW(scene.solve_switched(c.frame(2.0, 0.03), sw), std::invalid_argument);
+}
+
+TEST(DenseScene, PressureLoadsAndLongMovesKeepTheAccuracy)
+{
+  const Cardioid &c = cardioid();
+  SceneOptions opt;
+  opt.with_pressure = true;
+  opt.refresh_every = 1000; // incremental updates only: their error must not build up
+  DenseScene scene(*c.op, c.reference(), opt);
+  std::vector<double> x;
+  int incremental = 0;
+  for (int f = 0; f < 40; ++f) {
+    const SystemSelection sel = c.frame(0.05 * f, 0.03, false, f % 5 == 0 ? 50.0 : 0.0);
+    const SceneFrameReport &rep = scene.solve(sel, x, SceneStrategy::Update);
+    incremental += !rep.rebuilt && rep.changed > 0;
+    if (f % 13 == 0 || f == 39) EXPECT_LT(rel_diff(x, c.dense(sel)), 1e-9) << "frame " << f;
+  }
+  EXPECT_GT(incremental, 10); // the small moves were incremental updates
+  SceneOptions no_pressure;
+  DenseScene plain(*c.op, c.reference(), no_pressure);
+  EXPECT_THROW(plain.solve(c.frame(0, 0.03, false, 50.0), x), std::invalid_argument);
+}
+
+TEST(SceneStrategy, NamesRoundTrip)
+{
+  for (const char *s : {"auto", "solve", "update", "refactor", "krylov"}) EXPECT_STREQ(scene_strategy_name(*parse_scene_strategy(s)), s);
+  EXPECT_FALSE(parse_scene_strategy("woodbury"));
+}
+
+} // namespace
+} // namespace hssbem
