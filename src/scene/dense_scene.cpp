@@ -2,6 +2,7 @@
 // incrementally kept capacitance inverse, refactorization and Krylov, chosen per frame.
 #include "hssbem/scene/dense_scene.hpp"
 
+#include "hssbem/core/blas_threads.hpp"
 #include "hssbem/core/lapack.hpp"
 #include "hssbem/core/phase.hpp"
 #include "hssbem/core/timer.hpp"
@@ -19,6 +20,11 @@ namespace hssbem {
 namespace {
 
 constexpr double k_inf = std::numeric_limits<double>::infinity();
+/// Below this many matrix entries a frame's products run on one thread, and below k_serial_k
+/// switched unknowns its BLAS calls too: on the cardioid (1 272 unknowns) OpenMP and OpenBLAS
+/// threads spinning against each other made a frame 20x slower (5.6 ms against 0.27 ms).
+constexpr double k_parallel_entries = 4e6;
+constexpr long long k_serial_k = 768;
 
 std::size_t sq(int n) { return static_cast<std::size_t>(n) * n; }
 
@@ -29,7 +35,7 @@ void gather_axpy(const double *M, int n, const std::vector<int> &cols, const std
   if (cols.empty()) return;
   constexpr int block = 512;
   const int nb = (n + block - 1) / block;
-#pragma omp parallel for schedule(static) if (static_cast<double>(n) * cols.size() > 2e5)
+#pragma omp parallel for schedule(static) if (static_cast<double>(n) * cols.size() > k_parallel_entries)
   for (int b = 0; b < nb; ++b) {
     const int r0 = b * block, r1 = std::min(n, r0 + block);
     for (std::size_t i = 0; i < cols.size(); ++i) {
@@ -432,6 +438,7 @@ const SceneFrameReport &DenseScene::solve(const SystemSelection &sel, std::vecto
     m_report.changed += pattern[j] != before[j];
     m_report.values += sel.known[j / 3][j % 3] != 0.0;
   }
+  const SerialBlas serial((s == SceneStrategy::Solve || s == SceneStrategy::Update) && m_report.switched < k_serial_k && m_cap.size() < k_serial_k);
   switch (s) {
   case SceneStrategy::Solve: {
     const PhaseScope phase(Phase::SceneApply);
@@ -495,6 +502,7 @@ void DenseScene::solve_switched(const SystemSelection &sel, std::vector<double> 
       for (int p = 0; p < k; ++p) yJ[p] -= w[J[p]] * sel.pressure[node];
     }
   out.resize(k);
+  const SerialBlas serial(k < k_serial_k);
   m_cap.apply(yJ.data(), out.data());
 }
 
