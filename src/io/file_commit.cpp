@@ -11,6 +11,7 @@
 #include <cstring>
 #include <system_error>
 
+#include <fcntl.h>
 #include <unistd.h>
 
 namespace hssbem::detail {
@@ -154,6 +155,62 @@ void FileSetCommit::commit()
     if (e.had_predecessor) ::unlink(e.backup_path.c_str());
   m_committed = true;
   g_ntemp     = 0;
+}
+
+// --- writing the temporary files ------------------------------------------------------------
+
+namespace {
+
+/// write(2) may write less than asked; loops until all is out.
+void write_all(int fd, const std::string &text, const std::string &file, const std::string &label)
+{
+  std::size_t done = 0;
+  while (done < text.size()) {
+    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
+    if (n < 0 && errno == EINTR)
+      continue;
+    if (n < 0) {
+      const int err = errno;
+      ::close(fd);
+      fail_sys(label, err, "cannot write '" + file + "'");
+    }
+    done += static_cast<std::size_t>(n);
+  }
+}
+
+} // namespace
+
+void sync_file(const std::string &file, const std::string &label)
+{
+  const int fd = ::open(file.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) {
+    const int err = errno;
+    fail_sys(label, err, "cannot open '" + file + "' to sync it");
+  }
+  const int status = ::fsync(fd);
+  const int err = errno;
+  ::close(fd);
+  if (status != 0)
+    fail_sys(label, err, "cannot sync '" + file + "'");
+}
+
+void write_text_file(const std::string &file, const std::string &text, const std::string &label)
+{
+  const int fd = ::open(file.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+  if (fd < 0) {
+    const int err = errno;
+    fail_sys(label, err, "cannot create '" + file + "'");
+  }
+  write_all(fd, text, file, label);
+  if (::fsync(fd) != 0) {
+    const int err = errno;
+    ::close(fd);
+    fail_sys(label, err, "cannot sync '" + file + "'");
+  }
+  if (::close(fd) != 0) {
+    const int err = errno;
+    fail_sys(label, err, "cannot close '" + file + "'");
+  }
 }
 
 } // namespace hssbem::detail

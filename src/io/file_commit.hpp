@@ -44,4 +44,11 @@ private:
   bool               m_committed = false;
 };
 
+/// Flushes `file` to disk (fsync), so that the rename that follows never exposes a file whose
+/// data is still only in the page cache. Errors name `label`; throws OutputError.
+void sync_file(const std::string &file, const std::string &label);
+
+/// Writes `text` to `file` and fsyncs it, for the same reason as sync_file.
+void write_text_file(const std::string &file, const std::string &text, const std::string &label);
+
 } // namespace hssbem::detail

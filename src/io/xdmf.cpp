@@ -3,6 +3,7 @@
 /// ParaView's readers (Xdmf2 and Xdmf3) silently ignore anything they do not know.
 #include "xdmf.hpp"
 
+#include <iomanip>
 #include <sstream>
 
 namespace hssbem::detail {
@@ -29,20 +30,48 @@ std::string dimensions(const std::vector<std::size_t> &dims)
 }
 
 void put_data_item(std::ostream &out, const std::string &h5_name, const XdmfDataset &d,
-                   const char *indent)
+                   const std::string &pad)
 {
-  out << indent << R"(<DataItem Format="HDF" Dimensions=")" << dimensions(d.dims) << "\" "
+  out << pad << R"(<DataItem Format="HDF" Dimensions=")" << dimensions(d.dims) << "\" "
       << number_type(d.number) << ">" << xml_escape(h5_name) << ":" << xml_escape(d.path)
       << "</DataItem>\n";
 }
 
-void put_attribute(std::ostream &out, const std::string &h5_name, const XdmfAttribute &a)
+void put_attribute(std::ostream &out, const std::string &h5_name, const XdmfAttribute &a,
+                   const std::string &pad)
 {
-  out << R"(      <Attribute Name=")" << xml_escape(a.name) << R"(" AttributeType=")"
+  out << pad << R"(<Attribute Name=")" << xml_escape(a.name) << R"(" AttributeType=")"
       << a.attribute_type << R"(" Center=")" << a.center << "\">\n";
-  put_data_item(out, h5_name, a.data, "        ");
-  out << "      </Attribute>\n";
+  put_data_item(out, h5_name, a.data, pad + "  ");
+  out << pad << "</Attribute>\n";
 }
+
+/// A Uniform grid whose <Grid> line is indented by `pad`.
+void put_grid(std::ostream &out, const XdmfGrid &grid, const std::string &pad)
+{
+  const XdmfDataset triangles{"/mesh/triangles", {grid.num_triangles, 3}, XdmfNumber::int32};
+  const XdmfDataset vertices{"/mesh/vertices", {grid.num_vertices, 3}, XdmfNumber::float64};
+  const std::string in = pad + "  ";
+  out << pad << "<Grid Name=\"" << xml_escape(grid.name) << "\" GridType=\"Uniform\">\n";
+  if (grid.time) // 17 digits: a frame index past 10^6 stays exact
+    out << in << "<Time Value=\"" << std::setprecision(17) << *grid.time << "\"/>\n";
+  out << in << R"(<Topology TopologyType="Triangle" NumberOfElements=")" << grid.num_triangles
+      << "\">\n";
+  put_data_item(out, grid.h5_name, triangles, in + "  ");
+  out << in << "</Topology>\n" << in << "<Geometry GeometryType=\"XYZ\">\n";
+  put_data_item(out, grid.h5_name, vertices, in + "  ");
+  out << in << "</Geometry>\n";
+  for (const XdmfAttribute &a : grid.attributes)
+    put_attribute(out, grid.h5_name, a, in);
+  out << pad << "</Grid>\n";
+}
+
+const char *k_head = "<?xml version=\"1.0\" ?>\n"
+                     "<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n"
+                     "<Xdmf Version=\"3.0\" xmlns:xi=\"http://www.w3.org/2001/XInclude\">\n"
+                     "  <Domain>\n";
+const char *k_tail = "  </Domain>\n"
+                     "</Xdmf>\n";
 
 } // namespace
 
@@ -65,26 +94,21 @@ std::string xml_escape(const std::string &text)
 
 std::string xdmf_document(const XdmfGrid &grid)
 {
-  const XdmfDataset triangles{"/mesh/triangles", {grid.num_triangles, 3}, XdmfNumber::int32};
-  const XdmfDataset vertices{"/mesh/vertices", {grid.num_vertices, 3}, XdmfNumber::float64};
   std::ostringstream out;
-  out << "<?xml version=\"1.0\" ?>\n"
-      << "<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n"
-      << "<Xdmf Version=\"3.0\" xmlns:xi=\"http://www.w3.org/2001/XInclude\">\n"
-      << "  <Domain>\n"
-      << "    <Grid Name=\"hssbem\" GridType=\"Uniform\">\n"
-      << R"(      <Topology TopologyType="Triangle" NumberOfElements=")" << grid.num_triangles
-      << "\">\n";
-  put_data_item(out, grid.h5_name, triangles, "        ");
-  out << "      </Topology>\n"
-      << "      <Geometry GeometryType=\"XYZ\">\n";
-  put_data_item(out, grid.h5_name, vertices, "        ");
-  out << "      </Geometry>\n";
-  for (const XdmfAttribute &a : grid.attributes)
-    put_attribute(out, grid.h5_name, a);
-  out << "    </Grid>\n"
-      << "  </Domain>\n"
-      << "</Xdmf>\n";
+  out << k_head;
+  put_grid(out, grid, "    ");
+  out << k_tail;
+  return out.str();
+}
+
+std::string xdmf_temporal_document(const std::vector<XdmfGrid> &steps)
+{
+  std::ostringstream out;
+  out << k_head
+      << R"(    <Grid Name="frames" GridType="Collection" CollectionType="Temporal">)" << "\n";
+  for (const XdmfGrid &grid : steps)
+    put_grid(out, grid, "      ");
+  out << "    </Grid>\n" << k_tail;
   return out.str();
 }
 

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstddef>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -32,10 +33,17 @@ struct XdmfGrid {
   std::size_t num_vertices = 0;
   std::size_t num_triangles = 0;
   std::vector<XdmfAttribute> attributes;
+  std::string name = "hssbem";  ///< the Grid's Name
+  std::optional<double> time;   ///< its Time Value, for a grid in a temporal collection
 };
 
 /// The XDMF 3 document for `grid`: one Uniform grid, Triangle topology, XYZ geometry.
 std::string xdmf_document(const XdmfGrid &grid);
+
+/// The XDMF 3 document of a sequence: one Collection grid of CollectionType "Temporal" holding
+/// `steps` (each a Uniform grid as in xdmf_document, with its Time), which ParaView plays as
+/// time steps.
+std::string xdmf_temporal_document(const std::vector<XdmfGrid> &steps);
 
 /// `text` with the five XML special characters replaced by entities.
 std::string xml_escape(const std::string &text);

@@ -7,20 +7,23 @@
 #include <limits>
 #include <numeric>
 #include <set>
+#include <stdexcept>
 
 namespace hssbem {
 namespace {
 
 constexpr double k_nan = std::numeric_limits<double>::quiet_NaN();
 
-/// Names the file and the rule in messages.
+/// Names the file and the rule in messages: `list` is the JSON path of the rule list
+/// ("boundary", "frames[3].boundary"), `index` the rule's place in it.
 struct RuleContext {
   const std::string &origin;
+  const std::string &list;
   std::size_t index;
 
   [[noreturn]] void fail(const std::string &what) const
   {
-    throw ProblemError((origin.empty() ? std::string() : origin + ": ") + "boundary[" +
+    throw ProblemError((origin.empty() ? std::string() : origin + ": ") + list + "[" +
                        std::to_string(index) + "]: " + what);
   }
 };
@@ -246,12 +249,12 @@ void apply_pressure(const BoundaryRule &rule, const std::vector<int> &sel, Verte
 } // namespace
 
 VertexConditions apply_rules(const std::vector<BoundaryRule> &rules, const SurfaceMesh &mesh,
-                             const std::string &origin)
+                             const std::string &origin, const std::string &list)
 {
   const MeshView view = make_view(mesh);
   VertexConditions vc = traction_free(mesh.num_vertices());
   for (std::size_t i = 0; i < rules.size(); ++i) {
-    const RuleContext ctx{origin, i};
+    const RuleContext ctx{origin, list, i};
     const std::vector<int> sel = select(rules[i], view, ctx);
     if (sel.empty())
       ctx.fail("selects no vertex");
@@ -317,26 +320,51 @@ void apply_to_node(const BoundaryRule &rule, std::size_t k, const DofNode &node,
     }
 }
 
-} // namespace
-
-NodeConditions apply_rules(const std::vector<BoundaryRule> &rules, const Discretization &disc, const std::string &origin)
+NodeConditions traction_free_nodes(const Discretization &disc)
 {
-  const SurfaceMesh &mesh = disc.mesh();
-  const MeshView view = make_view(mesh);
   NodeConditions nc;
   nc.displacement_prescribed.assign(disc.num_nodes(), {false, false, false});
   nc.value.assign(disc.num_nodes(), {0, 0, 0});
   nc.pressure.assign(disc.num_nodes(), k_nan);
+  return nc;
+}
+
+/// Applies `rules` on top of what `nc` holds, so that a frame's rules follow the base rules.
+void apply_to_nodes(const std::vector<BoundaryRule> &rules, const MeshView &view, const Discretization &disc,
+                    const std::string &origin, const std::string &list, NodeConditions &nc)
+{
   for (std::size_t r = 0; r < rules.size(); ++r) {
-    const RuleContext ctx{origin, r};
+    const RuleContext ctx{origin, list, r};
     const std::vector<int> sel = select(rules[r], view, ctx);
     if (sel.empty()) ctx.fail("selects no vertex");
     check_value_count(rules[r], sel.size(), ctx);
-    const int region = rules[r].where.kind == Selector::Kind::Region ? region_tag(rules[r].where, mesh, ctx) : -1;
+    const int region = rules[r].where.kind == Selector::Kind::Region ? region_tag(rules[r].where, view.mesh, ctx) : -1;
     for (std::size_t k = 0; k < sel.size(); ++k)
       for (int i = disc.first_node(sel[k]); i < disc.first_node(sel[k]) + disc.node_count(sel[k]); ++i)
         if (reaches(rules[r], region, disc, i)) apply_to_node(rules[r], k, disc.node(i), nc, i);
   }
+}
+
+} // namespace
+
+NodeConditions apply_rules(const std::vector<BoundaryRule> &rules, const Discretization &disc, const std::string &origin,
+                           const std::string &list)
+{
+  NodeConditions nc = traction_free_nodes(disc);
+  apply_to_nodes(rules, make_view(disc.mesh()), disc, origin, list, nc);
+  return nc;
+}
+
+NodeConditions frame_conditions(const ProblemSpec &spec, std::size_t frame, const Discretization &disc)
+{
+  if (frame >= spec.frames.size())
+    throw std::out_of_range("frame_conditions: frame " + std::to_string(frame) + " of " +
+                            std::to_string(spec.frames.size()));
+  const MeshView view = make_view(disc.mesh());
+  NodeConditions nc = traction_free_nodes(disc);
+  apply_to_nodes(spec.rules, view, disc, spec.file, "boundary", nc);
+  const std::string list = "frames[" + std::to_string(frame) + "].boundary";
+  apply_to_nodes(spec.frames[frame].rules, view, disc, spec.file, list, nc);
   return nc;
 }
 

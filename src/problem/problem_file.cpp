@@ -345,7 +345,7 @@ json parse_json(const std::string &text, const Where &w)
 
 void read_top_level(const json &j, const Where &w, ProblemSpec &spec)
 {
-  check_keys(j, w, {"mesh", "material", "boundary", "interior_points", "output"});
+  check_keys(j, w, {"mesh", "material", "boundary", "frames", "interior_points", "output"});
   if (!j.contains("mesh"))
     w.fail("missing 'mesh' (path of the surface mesh, relative to the problem file)");
   if (!j.contains("material"))
@@ -358,13 +358,37 @@ void read_top_level(const json &j, const Where &w, ProblemSpec &spec)
     spec.interior_points = read_vec3_list(j["interior_points"], w.at("interior_points"), false);
 }
 
-void read_boundary(const json &j, const Where &w, ProblemSpec &spec)
+/// A "boundary" list, the base one or a frame's: the same grammar for both.
+std::vector<BoundaryRule> read_rule_list(const json &j, const Where &w)
 {
   if (!j.is_array())
     w.fail(std::string("expected a list of rules, got ") + j.type_name());
-  spec.rules.reserve(j.size());
+  std::vector<BoundaryRule> rules;
+  rules.reserve(j.size());
   for (std::size_t i = 0; i < j.size(); ++i)
-    spec.rules.push_back(read_rule(j[i], w.at(i)));
+    rules.push_back(read_rule(j[i], w.at(i)));
+  return rules;
+}
+
+FrameSpec read_frame(const json &j, const Where &w)
+{
+  check_keys(j, w, {"boundary"});
+  if (!j.contains("boundary"))
+    w.fail("missing 'boundary' (the frame's rules, applied after the base rules; may be [])");
+  return {read_rule_list(j["boundary"], w.at("boundary"))};
+}
+
+/// A scene: each frame is solved with the base rules followed by its own.
+std::vector<FrameSpec> read_frames(const json &j, const Where &w)
+{
+  if (!j.is_array() || j.empty())
+    w.fail(std::string("expected a non-empty list of frames [{\"boundary\": [...]}, ...], got ") +
+           (j.is_array() ? "[]" : j.type_name()));
+  std::vector<FrameSpec> frames;
+  frames.reserve(j.size());
+  for (std::size_t i = 0; i < j.size(); ++i)
+    frames.push_back(read_frame(j[i], w.at(i)));
+  return frames;
 }
 
 } // namespace
@@ -377,7 +401,9 @@ ProblemSpec parse_problem(const std::string &json_text, const std::string &origi
   const json j = parse_json(json_text, top);
   read_top_level(j, top, spec);
   if (j.contains("boundary"))
-    read_boundary(j["boundary"], top.at("boundary"), spec);
+    spec.rules = read_rule_list(j["boundary"], top.at("boundary"));
+  if (j.contains("frames"))
+    spec.frames = read_frames(j["frames"], top.at("frames"));
   return spec;
 }
 

@@ -1,6 +1,6 @@
 /// \file test_output.cpp
 /// Result writer: every dataset and attribute read back through the HDF5 C API, the XDMF
-/// sidecar, atomic replacement and the clean-up after errors.
+/// sidecar, atomic replacement and the clean-up after errors; the same for FrameWriter's frames.
 #include "hssbem/core/fault.hpp"
 #include "hssbem/io/hdf5_output.hpp"
 
@@ -12,6 +12,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <sstream>
 
 #include <sys/stat.h>
@@ -553,3 +554,232 @@ TEST_F(OutputTest, RestoresHdf5ErrorPrinting)
 }
 
 } // namespace
+
+// ---- FrameWriter: a result written frame by frame ----------------------------------------------
+
+namespace {
+
+/// Frame k of a scene on the tetrahedron: values distinct per frame, field, row and component.
+FrameData frame(int k, bool with_mask)
+{
+  FrameData f;
+  f.displacement = vectors(10 + k, 4);
+  f.traction = vectors(20 + k, 4);
+  if (with_mask)
+    f.displacement_prescribed = {{{k % 2 == 0, true, false}}, {{false, false, false}},
+                                 {{true, true, true}}, {{false, true, k % 2 == 1}}};
+  f.attributes_real = {{"seconds", 0.5 * k + 0.125}};
+  f.attributes_int = {{"iterations", 10 + k}, {"switched_unknowns", 3 * k}};
+  f.attributes_str = {{"strategy", k == 0 ? "cold" : "warm"}};
+  return f;
+}
+
+/// A scene of three frames, frame 1 without a displacement_prescribed mask, committed.
+void write_scene(const std::string &path)
+{
+  FrameWriter w(path, tetrahedron());
+  for (int k = 0; k < 3; ++k)
+    w.append(static_cast<std::size_t>(k), frame(k, k != 1));
+  EXPECT_EQ(w.num_frames(), 3u);
+  w.commit({{"solve", 2.0}, {"assembly", 9.0}}, {{"num_frames", 3}}, {{"scene_seconds", 4.5}});
+}
+
+/// Every start tag has its end tag, in order ("XML-ish": no entities or CDATA are checked).
+bool tags_balance(const std::string &x)
+{
+  std::vector<std::string> open;
+  for (std::size_t at = x.find('<'); at != std::string::npos; at = x.find('<', at + 1)) {
+    const std::size_t end = x.find('>', at);
+    if (end == std::string::npos)
+      return false;
+    const std::string tag = x.substr(at + 1, end - at - 1);
+    if (tag.empty() || tag[0] == '?' || tag[0] == '!' || tag.back() == '/')
+      continue;
+    const std::string name = tag.substr(tag[0] == '/', tag.find_first_of(" \t\n") - (tag[0] == '/'));
+    if (tag[0] != '/')
+      open.push_back(name);
+    else if (open.empty() || open.back() != name)
+      return false;
+    else
+      open.pop_back();
+  }
+  return open.empty();
+}
+
+} // namespace
+
+TEST_F(OutputTest, FramesAreReadBackWithShapesValuesAndAttributes)
+{
+  write_scene(h5_);
+  EXPECT_EQ(listing(), (Strings{"out.h5", "out.xdmf"}));
+  Id file{H5Fopen(h5_.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose};
+  ASSERT_GE(file.id, 0);
+  for (int k = 0; k < 3; ++k) {
+    const std::string g = "/frames/" + std::to_string(k);
+    const FrameData expected = frame(k, k != 1);
+    const auto u = read_dataset<double>(file.id, g + "/displacement", H5T_NATIVE_DOUBLE);
+    EXPECT_EQ(u.dims, (std::vector<hsize_t>{4, 3})) << g;
+    EXPECT_EQ(u.type_class, H5T_FLOAT);
+    EXPECT_EQ(u.values, flat(expected.displacement)) << g;
+    const auto t = read_dataset<double>(file.id, g + "/traction", H5T_NATIVE_DOUBLE);
+    EXPECT_EQ(t.dims, (std::vector<hsize_t>{4, 3})) << g;
+    EXPECT_EQ(t.values, flat(expected.traction)) << g;
+    ASSERT_EQ(exists(file.id, g + "/displacement_prescribed"), k != 1) << g;
+    if (k != 1) {
+      const auto m = read_dataset<std::int8_t>(file.id, g + "/displacement_prescribed", H5T_NATIVE_INT8);
+      EXPECT_EQ(m.dims, (std::vector<hsize_t>{4, 3}));
+      EXPECT_EQ(m.type_size, 1u);
+      for (std::size_t r = 0; r < 4; ++r)
+        for (std::size_t c = 0; c < 3; ++c)
+          EXPECT_EQ(m.values[r * 3 + c], expected.displacement_prescribed[r][c] ? 1 : 0) << g;
+    }
+    Id group{H5Gopen2(file.id, g.c_str(), H5P_DEFAULT), H5Gclose};
+    ASSERT_GE(group.id, 0);
+    EXPECT_EQ(read_attribute<double>(group.id, "seconds", H5T_NATIVE_DOUBLE), 0.5 * k + 0.125);
+    EXPECT_EQ(read_attribute<long long>(group.id, "iterations", H5T_NATIVE_LLONG), 10 + k);
+    EXPECT_EQ(read_attribute<long long>(group.id, "switched_unknowns", H5T_NATIVE_LLONG), 3 * k);
+    EXPECT_EQ(read_string_attribute(group.id, "strategy"), k == 0 ? "cold" : "warm");
+  }
+  EXPECT_FALSE(exists(file.id, "/frames/3"));
+  // the base as write_result writes it, and what commit() added
+  EXPECT_EQ(read_dataset<double>(file.id, "/fields/displacement", H5T_NATIVE_DOUBLE).values,
+            flat(vectors(1, 4)));
+  EXPECT_EQ(read_attribute<double>(file.id, "E", H5T_NATIVE_DOUBLE), 210e9);
+  EXPECT_EQ(read_attribute<long long>(file.id, "num_frames", H5T_NATIVE_LLONG), 3);
+  EXPECT_EQ(read_attribute<double>(file.id, "scene_seconds", H5T_NATIVE_DOUBLE), 4.5);
+  Id timings{H5Gopen2(file.id, "/timings", H5P_DEFAULT), H5Gclose};
+  ASSERT_GE(timings.id, 0);
+  EXPECT_EQ(read_attribute<double>(timings.id, "assembly", H5T_NATIVE_DOUBLE), 9.0); // commit's wins
+  EXPECT_EQ(read_attribute<double>(timings.id, "solve", H5T_NATIVE_DOUBLE), 2.0);
+}
+
+TEST_F(OutputTest, FramesAreOnlyInTheTemporaryFileBeforeCommit)
+{
+  FrameWriter w(h5_, tetrahedron());
+  const Strings only_temp{"out.h5.tmp." + std::to_string(::getpid())};
+  EXPECT_EQ(listing(), only_temp);
+  const auto before = fs::file_size(temp_of(h5_));
+  w.append(0, frame(0, true));
+  w.append(1, frame(1, true));
+  EXPECT_EQ(listing(), only_temp);
+  EXPECT_GT(fs::file_size(temp_of(h5_)), before + 2 * 2 * 4 * 3 * sizeof(double)) << "not flushed";
+  w.commit({});
+  EXPECT_EQ(listing(), (Strings{"out.h5", "out.xdmf"}));
+}
+
+TEST_F(OutputTest, FrameWriterWithoutCommitLeavesNothing)
+{
+  {
+    FrameWriter w(h5_, tetrahedron());
+    w.append(0, frame(0, true));
+  }
+  EXPECT_TRUE(listing().empty());
+}
+
+TEST_F(OutputTest, FrameWriterWithoutCommitKeepsThePreviousResult)
+{
+  write_result(h5_, tetrahedron());
+  const std::string h5_before = slurp(h5_), xdmf_before = slurp(xdmf_);
+  try {
+    FrameWriter w(h5_, tetrahedron());
+    w.append(0, frame(0, false));
+    throw std::runtime_error("the solve of frame 1 failed");
+  } catch (const std::runtime_error &) {
+  }
+  EXPECT_EQ(listing(), (Strings{"out.h5", "out.xdmf"}));
+  EXPECT_EQ(slurp(h5_), h5_before);
+  EXPECT_EQ(slurp(xdmf_), xdmf_before);
+}
+
+TEST_F(OutputTest, FrameSidecarIsATemporalCollection)
+{
+  write_scene(h5_);
+  const std::string x = slurp(xdmf_);
+  EXPECT_TRUE(tags_balance(x)) << x;
+  EXPECT_EQ(x.rfind("<?xml", 0), 0u);
+  EXPECT_EQ(occurrences(x, R"(GridType="Collection" CollectionType="Temporal")"), 1u) << x;
+  EXPECT_EQ(occurrences(x, R"(GridType="Uniform")"), 3u);
+  for (int k = 0; k < 3; ++k) {
+    const std::string g = "/frames/" + std::to_string(k);
+    EXPECT_NE(x.find("<Time Value=\"" + std::to_string(k) + "\"/>"), std::string::npos) << k;
+    EXPECT_NE(x.find(">out.h5:" + g + "/displacement</DataItem>"), std::string::npos) << g;
+    EXPECT_NE(x.find(">out.h5:" + g + "/traction</DataItem>"), std::string::npos) << g;
+    EXPECT_EQ(x.find(">out.h5:" + g + "/displacement_prescribed</DataItem>") != std::string::npos, k != 1) << g;
+  }
+  EXPECT_EQ(occurrences(x, ">out.h5:/mesh/vertices</DataItem>"), 3u);
+  EXPECT_EQ(occurrences(x, ">out.h5:/mesh/triangles</DataItem>"), 3u);
+  EXPECT_EQ(x.find("/fields/"), std::string::npos) << "the base grid is left out of the sidecar";
+  EXPECT_EQ(x.find(dir_.string()), std::string::npos) << "reference must be relative";
+}
+
+TEST_F(OutputTest, FrameWriterWithoutFramesWritesTheBaseSidecar)
+{
+  FrameWriter w(h5_, tetrahedron());
+  w.commit({{"solve", 1.0}});
+  const std::string x = slurp(xdmf_);
+  EXPECT_TRUE(tags_balance(x)) << x;
+  EXPECT_EQ(x.find("Temporal"), std::string::npos);
+  EXPECT_NE(x.find(">out.h5:/fields/displacement</DataItem>"), std::string::npos) << x;
+}
+
+TEST_F(OutputTest, AppendRefusesAWrongIndexOrSize)
+{
+  const auto expect_refused = [](const std::function<void()> &f, const std::string &words) {
+    try {
+      f();
+      ADD_FAILURE() << "no OutputError; expected one mentioning " << words;
+    } catch (const OutputError &e) {
+      EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
+    }
+  };
+  FrameWriter w(h5_, tetrahedron());
+  expect_refused([&] { w.append(1, frame(1, true)); }, "frame 1 appended after 0 frames");
+  FrameData short_u = frame(0, true);
+  short_u.displacement.pop_back();
+  expect_refused([&] { w.append(0, short_u); }, "/frames/0/displacement has 3 entries, expected 4");
+  FrameData no_t = frame(0, true);
+  no_t.traction.clear();
+  expect_refused([&] { w.append(0, no_t); }, "/frames/0/traction has 0 entries");
+  FrameData long_mask = frame(0, true);
+  long_mask.displacement_prescribed.push_back({{true, true, true}});
+  expect_refused([&] { w.append(0, long_mask); }, "/frames/0/displacement_prescribed has 5 entries");
+  w.append(0, frame(0, true)); // the refusals wrote nothing
+  expect_refused([&] { w.append(0, frame(0, true)); }, "frame 0 appended after 1 frames");
+  expect_refused([&] { w.append(2, frame(2, true)); }, "frame 2 appended after 1 frames");
+  w.append(1, frame(1, true));
+  w.commit({});
+  expect_refused([&] { w.append(2, frame(2, true)); }, "after commit()");
+  Id file{H5Fopen(h5_.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose};
+  ASSERT_GE(file.id, 0);
+  EXPECT_TRUE(exists(file.id, "/frames/1/traction"));
+  EXPECT_FALSE(exists(file.id, "/frames/2"));
+}
+
+TEST_F(OutputTest, FailedFrameCommitRemovesTheTemporariesAndKeepsThePreviousResult)
+{
+  write_result(h5_, tetrahedron());
+  const std::string before = slurp(h5_);
+  {
+    FrameWriter w(h5_, tetrahedron());
+    w.append(0, frame(0, true));
+    try {
+      w.commit({}, {{"iterations", 3}}); // the base has a root attribute "iterations"
+      ADD_FAILURE() << "no exception";
+    } catch (const OutputError &e) {
+      EXPECT_NE(std::string(e.what()).find("'" + h5_ + "'"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("attribute 'iterations'"), std::string::npos) << e.what();
+    }
+    EXPECT_THROW(w.append(1, frame(1, true)), OutputError);
+  }
+  EXPECT_EQ(listing(), (Strings{"out.h5", "out.xdmf"}));
+  EXPECT_EQ(slurp(h5_), before);
+}
+
+TEST_F(OutputTest, FrameWriterRefusesInconsistentBaseBeforeAnyFileIsCreated)
+{
+  ResultData short_field = tetrahedron();
+  short_field.traction.pop_back();
+  EXPECT_THROW(FrameWriter(h5_, short_field), OutputError);
+  EXPECT_THROW(FrameWriter((dir_ / "missing" / "out.h5").string(), tetrahedron()), OutputError);
+  EXPECT_TRUE(listing().empty());
+}

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <functional>
 #include <initializer_list>
+#include <stdexcept>
 #include <string>
 
 using namespace hssbem;
@@ -453,6 +454,144 @@ TEST(ProblemErrors, MalformedJsonAndNonFinite)
   expect_parse_error(with_rules(R"([{"where": "all", "pressure": 1e999}])"),
                      {"problem.json", "malformed JSON", "1e999", "finite"});
   expect_parse_error(with_rules(R"([{"where": "all", "pressure": NaN}])"), {"malformed JSON"});
+}
+
+// ---- frames of a scene -----------------------------------------------------------------------
+
+namespace {
+
+/// Base rules: the base (z = 0) clamped, the top (z = 1) loaded with traction [0, 0, -1].
+const std::string k_base_rules = R"([
+  {"where": {"region": "base"}, "displacement": [0, 0, 0]},
+  {"where": {"box": [[0, 0, 1], [1, 1, 1]]}, "traction": [0, 0, -1]}
+])";
+
+/// A problem with the base rules above and the given "frames" value.
+ProblemSpec with_frames(const std::string &frames)
+{
+  return parse_problem(k_head + "\"boundary\": " + k_base_rules + ", \"frames\": " + frames + "}", "problem.json");
+}
+
+void expect_frame_error(const std::string &frames, std::initializer_list<const char *> words)
+{
+  expect_error([&] { with_frames(frames); }, words);
+}
+
+/// Runs f on every dof node of vertex v.
+template <class F> void for_nodes_of(const Discretization &disc, int v, F f)
+{
+  for (int i = disc.first_node(v); i < disc.first_node(v) + disc.node_count(v); ++i)
+    f(i);
+}
+
+} // namespace
+
+TEST(Frames, AbsentKeyIsASingleSolve)
+{
+  EXPECT_TRUE(parse_problem(with_rules(k_base_rules), "problem.json").frames.empty());
+}
+
+TEST(Frames, ParseRulesWithTheBoundaryGrammar)
+{
+  const ProblemSpec spec = with_frames(R"([
+    {"boundary": []},
+    {"boundary": [{"where": {"vertices": [4, 5]}, "displacement": [[null, null, -0.01], [null, null, -0.02]]},
+                  {"where": "all", "pressure": 3}]},
+    {"boundary": [{"where": {"sphere": {"center": [1, 1, 1], "radius": 0.1}}, "traction": [1, null, null]}]}
+  ])");
+  ASSERT_EQ(spec.rules.size(), 2u);
+  ASSERT_EQ(spec.frames.size(), 3u);
+  EXPECT_TRUE(spec.frames[0].rules.empty());
+  ASSERT_EQ(spec.frames[1].rules.size(), 2u);
+  const BoundaryRule &bulk = spec.frames[1].rules[0];
+  EXPECT_EQ(bulk.kind, BoundaryRule::Kind::Displacement);
+  EXPECT_EQ(bulk.where.kind, Selector::Kind::Vertices);
+  ASSERT_EQ(bulk.rows.size(), 2u);
+  EXPECT_TRUE(std::isnan(bulk.rows[1][0]));
+  EXPECT_EQ(bulk.rows[1][2], -0.02);
+  EXPECT_EQ(spec.frames[1].rules[1].kind, BoundaryRule::Kind::Pressure);
+  EXPECT_EQ(spec.frames[2].rules.at(0).where.kind, Selector::Kind::Sphere);
+  EXPECT_EQ(spec.frames[2].rules.at(0).kind, BoundaryRule::Kind::Traction);
+}
+
+TEST(Frames, ParseErrorsNameTheFrame)
+{
+  expect_frame_error(R"({"boundary": []})", {"problem.json: frames: expected a non-empty list of frames", "got object"});
+  expect_frame_error("[]", {"problem.json: frames: expected a non-empty list of frames", "got []"});
+  expect_frame_error(R"([{"boundary": []}, [1]])", {"frames[1]: expected an object, got array"});
+  expect_frame_error(R"([{"boundary": [], "time": 0.5}])", {"frames[0]: unknown key 'time' (known: boundary)"});
+  expect_frame_error(R"([{}])", {"frames[0]: missing 'boundary'"});
+  expect_frame_error(R"([{"boundary": {}}])", {"frames[0].boundary: expected a list of rules, got object"});
+  expect_frame_error(R"([{"boundary": []}, {"boundary": []}, {"boundary": []},
+    {"boundary": [{"where": "all", "traction": [0, 0, 0]}, {"where": "everywhere", "traction": [0, 0, 0]}]}])",
+                     {"problem.json: frames[3].boundary[1].where: unknown selector 'everywhere'"});
+  expect_frame_error(R"([{"boundary": [{"where": "all", "displacment": [0, 0, 0]}]}])",
+                     {"frames[0].boundary[0]: unknown key 'displacment'"});
+  expect_frame_error(R"([{"boundary": [{"where": "all", "traction": [[0, 0, 0], [0, "1", 0]]}]}])",
+                     {"frames[0].boundary[0].traction[1][1]: expected a number or null, got string"});
+  expect_frame_error(R"([{"boundary": []}, {"boundary": []}], "frames": [])", {"duplicate key 'frames'"});
+}
+
+TEST(Frames, EmptyFrameIsTheBaseProblem)
+{
+  const SurfaceMesh mesh = unit_cube();
+  const Discretization disc(mesh, 30.0);
+  const ProblemSpec spec = with_frames(R"([{"boundary": []}])");
+  const NodeConditions base = apply_rules(spec.rules, disc, spec.file);
+  const NodeConditions frame = frame_conditions(spec, 0, disc);
+  EXPECT_EQ(frame.displacement_prescribed, base.displacement_prescribed);
+  EXPECT_EQ(frame.value, base.value);
+  EXPECT_EQ(frame.num_displacement_prescribed(), 4 * 3 * 3); // 4 base corners x 3 nodes x 3
+}
+
+TEST(Frames, FrameRulesFollowTheBaseRules)
+{
+  const SurfaceMesh mesh = unit_cube();
+  const Discretization disc(mesh, 30.0);
+  // frame 0 switches the top's z from traction to displacement, per vertex; frame 1 gives
+  // vertex 7 an x traction and leaves y and z (nulls) as the base has them
+  const ProblemSpec spec = with_frames(R"([
+    {"boundary": [{"where": {"vertices": [4, 5, 6, 7]},
+                   "displacement": [[null, null, -0.04], [null, null, -0.05], [null, null, -0.06], [null, null, -0.07]]}]},
+    {"boundary": [{"where": {"vertices": [7]}, "traction": [2, null, null]}]}
+  ])");
+  const NodeConditions switched = frame_conditions(spec, 0, disc);
+  const NodeConditions nulls = frame_conditions(spec, 1, disc);
+  for (int v = 0; v < 8; ++v)
+    for_nodes_of(disc, v, [&](int i) {
+      const bool base = v < 4;
+      EXPECT_EQ(switched.displacement_prescribed[i], (std::array<bool, 3>{base, base, true})) << v;
+      EXPECT_DOUBLE_EQ(switched.value[i][2], base ? 0.0 : -0.01 * v) << v;
+      EXPECT_EQ(switched.value[i][0], 0.0) << v; // the base's traction-free x
+      EXPECT_EQ(nulls.displacement_prescribed[i], (std::array<bool, 3>{base, base, base})) << v;
+      EXPECT_EQ(nulls.value[i], base ? (Vec3{0, 0, 0}) : (Vec3{v == 7 ? 2.0 : 0.0, 0, -1})) << v;
+    });
+  EXPECT_EQ(switched.num_displacement_prescribed(), 4 * 3 * 3 + 4 * 3);
+}
+
+TEST(Frames, FrameRuleSelectingNothingNamesTheFrame)
+{
+  const SurfaceMesh mesh = unit_cube();
+  const Discretization disc(mesh, 30.0);
+  const ProblemSpec spec = with_frames(R"([
+    {"boundary": []},
+    {"boundary": [{"where": "all", "traction": [0, 0, 0]},
+                  {"where": {"box": [[5, 5, 5], [6, 6, 6]]}, "displacement": [0, 0, 0]}]}
+  ])");
+  EXPECT_NO_THROW(frame_conditions(spec, 0, disc));
+  expect_error([&] { frame_conditions(spec, 1, disc); }, {"problem.json: frames[1].boundary[1]: selects no vertex"});
+  EXPECT_THROW(frame_conditions(spec, 2, disc), std::out_of_range);
+}
+
+TEST(Frames, BaseRuleErrorsKeepTheirName)
+{
+  const SurfaceMesh mesh = unit_cube();
+  const Discretization disc(mesh, 30.0);
+  const ProblemSpec spec = parse_problem(k_head + R"("boundary": [{"where": {"region": "lid"}, "traction": [0, 0, 0]}],
+    "frames": [{"boundary": [{"where": {"region": "lid"}, "traction": [0, 0, 0]}]}]})", "problem.json");
+  expect_error([&] { frame_conditions(spec, 0, disc); }, {"problem.json: boundary[0]: unknown region 'lid'"});
+  expect_error([&] { apply_rules(spec.frames[0].rules, disc, spec.file, "frames[0].boundary"); },
+               {"problem.json: frames[0].boundary[0]: unknown region 'lid'"});
 }
 
 // ---- material --------------------------------------------------------------------------------

@@ -1,11 +1,14 @@
 /// \file hdf5_output.hpp
-/// Result files: HDF5 with a ParaView-readable XDMF sidecar, written atomically.
+/// Result files: HDF5 with a ParaView-readable XDMF sidecar, written atomically: at once
+/// (write_result) or frame by frame for a scene (FrameWriter).
 #pragma once
 
 #include "hssbem/core/geometry.hpp"
 
 #include <array>
+#include <cstddef>
 #include <map>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -53,5 +56,68 @@ void check_output_path(const std::string &path);
 /// arrays are skipped. Arrays that are not empty must have one entry per vertex (triangle).
 /// Throws OutputError; on error no temporary file is left and an existing result is untouched.
 void write_result(const std::string &path, const ResultData &data);
+
+/// One frame of a scene, all arrays in mesh vertex order.
+struct FrameData {
+  std::vector<Vec3> displacement;                           ///< nv x 3, required
+  std::vector<Vec3> traction;                               ///< nv x 3, required
+  std::vector<std::array<bool, 3>> displacement_prescribed; ///< nv x 3 or empty (not written)
+  std::map<std::string, double> attributes_real;            ///< e.g. "seconds"
+  std::map<std::string, long long> attributes_int;          ///< e.g. "iterations"
+  std::map<std::string, std::string> attributes_str;        ///< e.g. "strategy"
+};
+
+/// A result file written frame by frame: the frames of a scene are streamed into the temporary
+/// file as they are solved, so memory does not grow with their number, and the file appears at
+/// `path` (with its sidecar) only when commit() renames both into place, exactly as write_result
+/// does; until then an earlier result at `path` stays as it was.
+///
+/// Layout: that of write_result (the base), plus for frame i = 0, 1, 2, ... (i in decimal):
+///   /frames/<i>/displacement            nv x 3 float64
+///   /frames/<i>/traction                nv x 3 float64
+///   /frames/<i>/displacement_prescribed nv x 3 int8 (0/1), as /bc; only when given
+///   attributes of /frames/<i>           FrameData::attributes_* (float64, int64, UTF-8)
+/// /frames exists (maybe empty) from the start; /timings and the root attributes given to
+/// commit() are written at the end.
+///
+/// Sidecar: the frames as one temporal collection (Grid CollectionType="Temporal"), one grid
+/// per frame with Time = its index, the mesh from /mesh and the attributes displacement,
+/// traction (and displacement_prescribed) from /frames/<i>, plus sharp_vertex and
+/// triangle_region. The base /fields are left out of it: ParaView draws every top-level grid of
+/// the domain at every time step, so a static base grid would hide the frames it overlaps; they
+/// stay in the HDF5 file. Committed without any frame, the sidecar is write_result's.
+///
+/// The temporary files are those of write_result (`<name>.tmp.<pid>`), removed on an error, by
+/// the destructor when commit() was not reached, and on SIGINT/SIGTERM/SIGHUP meanwhile (the
+/// handlers are installed for the writer's whole life). One writer (or write_result) at a time
+/// per process. Errors throw OutputError naming `path`; after one that struck inside the file,
+/// the writer refuses further appends and the commit.
+class FrameWriter {
+public:
+  /// Checks `path` and `base` (as write_result does), creates the temporary HDF5 file and writes
+  /// `base` into it, except base.timings, which commit() writes.
+  FrameWriter(const std::string &path, const ResultData &base);
+  /// Removes the temporary files unless commit() succeeded; an existing result stays untouched.
+  ~FrameWriter();
+  FrameWriter(const FrameWriter &) = delete;
+  FrameWriter &operator=(const FrameWriter &) = delete;
+
+  /// Appends frame `i`, which must be the number of frames appended so far, and flushes the file
+  /// (H5Fflush). Throws OutputError for another index, arrays that are not one row per vertex
+  /// (nothing is written then), or a failed write.
+  void append(std::size_t i, const FrameData &frame);
+  /// Number of frames appended so far.
+  std::size_t num_frames() const;
+  /// Writes /timings (base.timings, with `timings` winning on a shared phase) and the root
+  /// attributes given here (e.g. "num_frames"; a name the base already used is an error), then
+  /// the sidecar, and renames both files into place together. Throws OutputError.
+  void commit(const std::map<std::string, double> &timings,
+              const std::map<std::string, long long> &attributes_int = {},
+              const std::map<std::string, double> &attributes_real = {});
+
+private:
+  struct Impl;
+  std::unique_ptr<Impl> m_impl;
+};
 
 } // namespace hssbem

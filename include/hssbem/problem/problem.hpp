@@ -1,5 +1,6 @@
 /// \file problem.hpp
-/// The problem file (JSON): mesh, material, boundary rules, interior points, output.
+/// The problem file (JSON): mesh, material, boundary rules, interior points, output, and the
+/// frames of a scene (each frame's rules on top of the base rules).
 #pragma once
 
 #include "hssbem/bem/discretization.hpp"
@@ -41,12 +42,20 @@ struct BoundaryRule {
   std::vector<double> pressure; ///< pressure values (size 1 or number selected)
 };
 
+/// One frame of a scene: its "boundary" rules, applied after the base rules (ProblemSpec::rules),
+/// so that later rules win per node and component as within one list. No rules: the frame is the
+/// base problem.
+struct FrameSpec {
+  std::vector<BoundaryRule> rules;
+};
+
 /// Parsed problem file, before it meets a mesh. Paths are resolved relative to the file.
 struct ProblemSpec {
   std::string file;            ///< problem file path (for messages)
   std::string mesh_path;
   std::optional<double> E, nu, lambda, mu;
-  std::vector<BoundaryRule> rules;
+  std::vector<BoundaryRule> rules; ///< base rules ("boundary")
+  std::vector<FrameSpec> frames;   ///< "frames" in file order; empty: an ordinary single solve
   std::vector<Vec3> interior_points;
   std::string output;          ///< may be empty
 };
@@ -66,9 +75,10 @@ struct VertexConditions {
 
 /// Apply the rules in order (later rules win per vertex and component). Throws ProblemError for a
 /// rule that selects no vertex, an out-of-range vertex index, a row count that does not match, or
-/// an unknown region.
+/// an unknown region; the message names `origin` and the rule as `<list>[k]`, where `list` is the
+/// JSON path of the rule list ("boundary", or "frames[3].boundary" for a frame's own rules).
 VertexConditions apply_rules(const std::vector<BoundaryRule> &rules, const SurfaceMesh &mesh,
-                             const std::string &origin);
+                             const std::string &origin, const std::string &list = "boundary");
 
 /// Boundary condition per dof node and component (what the solver sees). Pressure becomes
 /// traction -p n with the normal of each node's smooth group.
@@ -86,6 +96,14 @@ NodeConditions node_conditions(const VertexConditions &vc, const Discretization 
 /// traction or pressure rule on a region reaches only the nodes of a sharp vertex whose smooth
 /// group has a triangle in the region, so a load on one face of a cube leaves the neighbouring
 /// faces' copies of the edge vertices as they were. Same errors as apply_rules.
-NodeConditions apply_rules(const std::vector<BoundaryRule> &rules, const Discretization &disc, const std::string &origin);
+NodeConditions apply_rules(const std::vector<BoundaryRule> &rules, const Discretization &disc, const std::string &origin,
+                           const std::string &list = "boundary");
+
+/// Node conditions of frame `frame` of a scene: the base rules (spec.rules), then the frame's own
+/// rules, in one pass (later rules win per node and component; a null component of a frame rule
+/// keeps the base's value). Errors are those of apply_rules, naming `spec.file` and the rule as
+/// "boundary[k]" (a base rule) or "frames[<frame>].boundary[k]" (a rule of the frame). Throws
+/// std::out_of_range when `frame` >= spec.frames.size().
+NodeConditions frame_conditions(const ProblemSpec &spec, std::size_t frame, const Discretization &disc);
 
 } // namespace hssbem

@@ -1,0 +1,47 @@
+/// \file result_layout.hpp
+/// Private to the result writers: the parts of write_result's layout that FrameWriter shares
+/// (validation, the groups of a ResultData, /timings, the sidecar's grid), defined in
+/// hdf5_output.cpp.
+#pragma once
+
+#include "h5_writer.hpp"
+#include "xdmf.hpp"
+
+#include "hssbem/io/hdf5_output.hpp"
+
+#include <map>
+#include <string>
+
+namespace hssbem::detail {
+
+/// out.h5 -> out.xdmf; a dot in a directory name is not taken for an extension.
+std::string xdmf_path(const std::string &path);
+
+/// An array that is `required` (or not empty) must have `expected` entries, one per `per`
+/// ("vertex"); throws OutputError naming `path` and `dataset` otherwise.
+void check_size(const std::string &path, const std::string &dataset, std::size_t size,
+                std::size_t expected, const char *per, bool required);
+
+/// Refuses inconsistent data (empty mesh, bad indices, incomplete arrays, unusable region
+/// names) before any file is created. Throws OutputError naming `path`.
+void validate_result(const std::string &path, const ResultData &d);
+
+/// /mesh, /fields, /bc, /reactions, /interior and the root attributes of `d`; not /timings.
+void write_result_groups(H5Writer &w, const ResultData &d);
+
+/// /timings: one float64 attribute per phase (seconds).
+void write_timings(H5Writer &w, const std::map<std::string, double> &timings);
+
+/// A per-vertex 3-vector field of the sidecar, read from `dataset`.
+XdmfAttribute node_vectors(const std::string &name, const std::string &dataset, std::size_t nv,
+                           XdmfNumber number);
+
+/// The sidecar's grid for the mesh of `d` with its per-mesh fields (sharp_vertex,
+/// triangle_region) and no solution: each frame's grid starts from it.
+XdmfGrid mesh_grid(const std::string &path, const ResultData &d);
+
+/// The sidecar's grid of write_result: mesh_grid plus exactly the /fields and /bc datasets
+/// written, so the sidecar never points at a missing one.
+XdmfGrid result_grid(const std::string &path, const ResultData &d);
+
+} // namespace hssbem::detail
