@@ -212,7 +212,7 @@ class Renderer:
         self.surface = None
         self.set_up_axes(limits, view)
         mappable = matplotlib.cm.ScalarMappable(norm=self.norm, cmap=self.cmap)
-        self.figure.colorbar(mappable, ax=self.axes, shrink=0.7, pad=0.08, label="|u|")
+        self.figure.colorbar(mappable, ax=self.axes, shrink=0.7, pad=0.1, label="|u|")
 
     def set_up_axes(self, limits, view):
         """Fixed limits, equal scale along x, y, z, and the camera direction."""
