@@ -163,6 +163,8 @@ def triangles_22(body):
 
 def read_msh(path):
     """A Mesh from a Gmsh ASCII file (2.2 or 4.1); vertex i is the i-th node by tag."""
+    if not os.path.isfile(path):
+        raise SceneError("%s: no such file" % path)
     try:
         with open(path) as f:
             parts = sections(line.strip() for line in f)
