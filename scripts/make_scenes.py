@@ -421,15 +421,21 @@ def make_presets(outdir):
                  preset["what"], "scripts/make_scenes.py (no arguments)")
 
 
-def in_range(low, high, convert=float):
-    """An argparse type: a number in (low, high]."""
+# Options of a scene on another mesh (--mesh), with their defaults.
+SCENE_DEFAULTS = {"frames": 40, "fraction": 0.20, "depth": 0.04, "clamp": None, "height": None,
+                  "turn": 1.0, "E": 3000.0, "nu": 0.49}
+
+
+def in_range(low, high, convert=float, open_high=False):
+    """An argparse type: a number in (low, high], or (low, high) when open_high."""
     def parse(text):
         try:
             value = convert(text)
         except ValueError:
             raise argparse.ArgumentTypeError("expected a number, got '%s'" % text)
-        if not low < value <= high:
-            raise argparse.ArgumentTypeError("must be in (%g, %g], got '%s'" % (low, high, text))
+        if not (low < value < high if open_high else low < value <= high):
+            raise argparse.ArgumentTypeError("must be in (%g, %g%s, got '%s'"
+                                             % (low, high, ")" if open_high else "]", text))
         return value
     return parse
 
@@ -441,21 +447,21 @@ def make_parser():
     parser.add_argument("--out", help="problem file to write (with --mesh)")
     parser.add_argument("--outdir", default=os.path.join(REPO, "meshes", "examples"),
                         help="directory of the two preset scenes (default meshes/examples)")
-    parser.add_argument("--frames", type=in_range(0, 100000, int), default=40,
+    parser.add_argument("--frames", type=in_range(0, 100000, int),
                         help="number of frames (default 40)")
-    parser.add_argument("--fraction", type=in_range(0, 1), default=0.20,
+    parser.add_argument("--fraction", type=in_range(0, 1),
                         help="fraction of the vertices in contact (default 0.20)")
-    parser.add_argument("--depth", type=in_range(0, 1), default=0.04,
+    parser.add_argument("--depth", type=in_range(0, 1),
                         help="indentation at the patch centre, as a fraction of the body's "
                         "largest extent (default 0.04)")
     parser.add_argument("--clamp", help="clamped region (default: 'base' or 'bottom')")
     parser.add_argument("--height", type=float, help="z of the centre's path (default: the "
                         "middle of the bounding box)")
-    parser.add_argument("--turn", type=in_range(0, 100), default=1.0,
+    parser.add_argument("--turn", type=in_range(0, 100),
                         help="revolutions of the patch centre over the frames (default 1)")
-    parser.add_argument("--E", type=in_range(0, math.inf), default=3000.0,
+    parser.add_argument("--E", type=in_range(0, math.inf),
                         help="Young's modulus (default 3000 Pa, soft tissue)")
-    parser.add_argument("--nu", type=in_range(-1, 0.4999), default=0.49,
+    parser.add_argument("--nu", type=in_range(-1, 0.5, open_high=True),
                         help="Poisson's ratio (default 0.49)")
     return parser
 
@@ -465,6 +471,12 @@ def main(argv=None):
     args = parser.parse_args(argv)
     if (args.mesh is None) != (args.out is None):
         parser.error("--mesh and --out go together")
+    given = [key for key in SCENE_DEFAULTS if getattr(args, key) is not None]
+    if args.mesh is None and given:
+        parser.error("--%s: only with --mesh (the preset scenes have their own)" % given[0])
+    for key, value in SCENE_DEFAULTS.items():
+        if getattr(args, key) is None:
+            setattr(args, key, value)
     try:
         if args.mesh is None:
             make_presets(args.outdir)

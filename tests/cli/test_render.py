@@ -324,9 +324,15 @@ class SceneTests(TempDirTest):
             self.assertEqual(r.returncode, 1, describe(r))
             self.assertRegex(r.stderr, r"^make_scenes\.py: error: .*" + pattern)
             self.assertFalse(os.path.exists(out))
-        r = run_script("make_scenes.py", "--mesh", mesh, "--fraction", "1.5", "--out", out)
-        self.assertEqual(r.returncode, 2, describe(r))
-        self.assertRegex(r.stderr, r"--fraction: must be in")
+        for args, pattern in ((["--mesh", mesh, "--fraction", "1.5", "--out", out],
+                               r"--fraction: must be in"),
+                              (["--mesh", mesh, "--nu", "0.5", "--out", out], r"--nu: must be in"),
+                              (["--frames", "3"], r"--frames: only with --mesh"),
+                              (["--mesh", mesh], r"--mesh and --out go together")):
+            r = run_script("make_scenes.py", *args)
+            self.assertEqual(r.returncode, 2, describe(r))
+            self.assertRegex(r.stderr, pattern)
+            self.assertFalse(os.path.exists(out))
 
 
 def main():
