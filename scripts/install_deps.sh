@@ -14,6 +14,7 @@ packages=(
   libgtest-dev nlohmann-json3-dev           # unit tests, problem-file parser
   python3 python3-numpy python3-h5py        # CLI tests, benchmark scripts
   gmsh python3-gmsh                         # mesh generation (scripts/gen_meshes.py)
+  python3-matplotlib                        # scripts/render.py (Agg PNGs; brings python3-pil for GIFs)
 )
 
 echo "install_deps: apt-get install ${#packages[@]} packages"

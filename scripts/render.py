@@ -1,0 +1,371 @@
+#!/usr/bin/python3
+"""Draw the deformed surface of an hssbem result file, one picture per frame, off-screen.
+
+Usage:
+    /usr/bin/python3 scripts/render.py result.h5 [-o outdir] [--frames 0,5,10|all] [--gif anim.gif]
+                                       [--scale s] [--view elev,azim] [--fps n] [--size WxH]
+
+The surface is /mesh/vertices + scale * displacement over /mesh/triangles, each triangle coloured
+by the mean |u| of its corners. The colour scale and the axes are the same for every frame (taken
+over all frames of the file), so pictures of one file can be compared and put in sequence.
+
+A result with frames (/frames/<i>/displacement, i = 0, 1, ...) gives outdir/frame_0000.png, ...
+(the number is the frame index), titled with the frame index and the frame's `strategy` and
+`seconds` attributes when present; --gif also writes them as an animated GIF. A result without
+/frames gives one picture of /fields/displacement, outdir/displacement.png.
+
+Needs numpy, h5py and matplotlib (Debian: python3-numpy, python3-h5py, python3-matplotlib, whose
+dependency python3-pil writes the GIFs); hence /usr/bin/python3 where a pyenv python3 lacks them.
+Errors (missing file, no displacement, a frame that does not exist) print one line
+`render.py: error: ...` and exit with status 1; bad arguments exit with status 2.
+"""
+
+import argparse
+import os
+import sys
+
+import numpy as np
+
+try:
+    import h5py
+    import matplotlib
+    matplotlib.use("Agg")  # off-screen: no display needed
+    import matplotlib.pyplot as plt
+    from matplotlib.animation import PillowWriter
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+except ImportError as exc:  # report it like any other error, naming the package to install
+    sys.exit("render.py: error: %s (install python3-h5py and python3-matplotlib, "
+             "and run with /usr/bin/python3)" % exc)
+
+PROG = "render.py"
+# The default scale makes the largest displacement this fraction of the body's size.
+DEFAULT_SCALE_FRACTION = 0.10
+DPI = 100
+COLORMAP = "viridis"
+
+
+class RenderError(Exception):
+    """A fault in the input (file, dataset, frame index) reported as one line."""
+
+
+class Frame:
+    """One picture: a displacement field (nv x 3) and what its title shows."""
+
+    def __init__(self, index, displacement, strategy=None, seconds=None):
+        self.index = index  # frame number, or None for /fields/displacement
+        self.displacement = displacement
+        self.strategy = strategy
+        self.seconds = seconds
+
+    def file_name(self):
+        """The PNG name of this frame in the output directory."""
+        if self.index is None:
+            return "displacement.png"
+        return "frame_%04d.png" % self.index
+
+    def title(self):
+        """Frame index, strategy and solve time, as far as the file tells them."""
+        if self.index is None:
+            return "displacement (/fields/displacement)"
+        parts = ["frame %d" % self.index]
+        if self.strategy:
+            parts.append(self.strategy)
+        if self.seconds is not None:
+            parts.append("%.3g s" % self.seconds)
+        return ", ".join(parts)
+
+
+# ---------------------------------------------------------------------------------------------
+# Reading the result file
+
+
+def read_attribute(group, name):
+    """An attribute as a Python value (strings decoded), or None when absent."""
+    if name not in group.attrs:
+        return None
+    value = group.attrs[name]
+    if isinstance(value, bytes):
+        return value.decode("utf-8", "replace")
+    if isinstance(value, np.ndarray) and value.size == 1:
+        value = value.reshape(()).item()
+    if isinstance(value, np.generic):
+        value = value.item()
+    return value
+
+
+def read_vectors(h5, path, nv):
+    """Dataset `path` as an nv x 3 float array, or a RenderError saying what is wrong."""
+    if path not in h5:
+        raise RenderError("%s: no dataset %s" % (h5.filename, path))
+    data = np.asarray(h5[path], dtype=float)
+    if data.shape != (nv, 3):
+        raise RenderError("%s: %s has shape %s, expected (%d, 3)"
+                          % (h5.filename, path, data.shape, nv))
+    return data
+
+
+def read_mesh(h5):
+    """(vertices nv x 3, triangles nt x 3) from /mesh."""
+    for path in ("/mesh/vertices", "/mesh/triangles"):
+        if path not in h5:
+            raise RenderError("%s: no dataset %s (not an hssbem result?)" % (h5.filename, path))
+    vertices = np.asarray(h5["/mesh/vertices"], dtype=float)
+    triangles = np.asarray(h5["/mesh/triangles"], dtype=np.int64)
+    if vertices.ndim != 2 or vertices.shape[1] != 3 or triangles.ndim != 2 \
+            or triangles.shape[1] != 3:
+        raise RenderError("%s: /mesh/vertices and /mesh/triangles must be n x 3" % h5.filename)
+    if triangles.size and (triangles.min() < 0 or triangles.max() >= len(vertices)):
+        raise RenderError("%s: /mesh/triangles has a vertex index out of range" % h5.filename)
+    return vertices, triangles
+
+
+def frame_indices(h5):
+    """The frame numbers under /frames, ascending (group names in decimal)."""
+    return sorted(int(name) for name in h5["/frames"] if name.isdigit())
+
+
+def read_frames(h5, nv, wanted):
+    """The frames to draw: those listed in `wanted` (None: all), or /fields/displacement."""
+    if "/frames" not in h5:
+        if wanted is not None:
+            raise RenderError("%s: no /frames group, so --frames does not apply "
+                              "(the file holds one displacement field)" % h5.filename)
+        return [Frame(None, read_vectors(h5, "/fields/displacement", nv))]
+    available = frame_indices(h5)
+    if not available:
+        raise RenderError("%s: /frames holds no frame" % h5.filename)
+    for index in wanted or []:
+        if index not in available:
+            raise RenderError("%s: frame %d does not exist (the file has frames %d..%d)"
+                              % (h5.filename, index, available[0], available[-1]))
+    return [read_frame(h5, index, nv) for index in (wanted or available)]
+
+
+def read_frame(h5, index, nv):
+    """Frame `index`: /frames/<index>/displacement and the group's attributes."""
+    group = h5["/frames/%d" % index]
+    displacement = read_vectors(h5, "/frames/%d/displacement" % index, nv)
+    seconds = read_attribute(group, "seconds")
+    return Frame(index, displacement, read_attribute(group, "strategy"),
+                 float(seconds) if seconds is not None else None)
+
+
+def load_result(path, wanted):
+    """(vertices, triangles, frames) of result file `path`."""
+    if not os.path.isfile(path):
+        raise RenderError("%s: no such file" % path)
+    try:
+        h5 = h5py.File(path, "r")
+    except OSError as exc:
+        raise RenderError("%s: not a readable HDF5 file (%s)" % (path, exc))
+    with h5:
+        vertices, triangles = read_mesh(h5)
+        return vertices, triangles, read_frames(h5, len(vertices), wanted)
+
+
+# ---------------------------------------------------------------------------------------------
+# Drawing
+
+
+def body_size(vertices):
+    """The largest extent of the undeformed body's bounding box."""
+    finite = vertices[np.all(np.isfinite(vertices), axis=1)]
+    return float(np.max(finite.max(axis=0) - finite.min(axis=0)))
+
+
+def magnitudes(frame):
+    """|u| per vertex; vertices without a value (NaN) count as 0."""
+    return np.nan_to_num(np.linalg.norm(frame.displacement, axis=1))
+
+
+def default_scale(vertices, frames):
+    """The scale that makes the largest |u| of all frames 10 % of the body's size."""
+    largest = max(float(magnitudes(f).max()) for f in frames)
+    if largest == 0.0:
+        return 1.0, largest
+    return DEFAULT_SCALE_FRACTION * body_size(vertices) / largest, largest
+
+
+def deformed(vertices, frame, scale):
+    """Vertices moved by scale times the frame's displacement (NaN displacement: not moved)."""
+    return vertices + scale * np.nan_to_num(frame.displacement)
+
+
+def axis_limits(vertices, frames, scale):
+    """(lo, hi) over the deformed surfaces of all frames, so the camera never moves."""
+    points = np.vstack([deformed(vertices, f, scale) for f in frames])
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    pad = 0.02 * float(np.max(hi - lo))
+    return lo - pad, hi + pad
+
+
+class Renderer:
+    """One figure reused for every frame: the surface is replaced, axes and colour bar stay."""
+
+    def __init__(self, vertices, triangles, limits, vmax, view, size):
+        self.vertices = vertices
+        self.triangles = triangles
+        self.norm = matplotlib.colors.Normalize(vmin=0.0, vmax=vmax if vmax > 0 else 1.0)
+        self.cmap = plt.get_cmap(COLORMAP)
+        self.figure = plt.figure(figsize=(size[0] / DPI, size[1] / DPI), dpi=DPI)
+        self.axes = self.figure.add_subplot(projection="3d")
+        self.surface = None
+        self.set_up_axes(limits, view)
+        mappable = matplotlib.cm.ScalarMappable(norm=self.norm, cmap=self.cmap)
+        self.figure.colorbar(mappable, ax=self.axes, shrink=0.7, pad=0.1, label="|u|")
+
+    def set_up_axes(self, limits, view):
+        """Fixed limits, equal scale along x, y, z, and the camera direction."""
+        lo, hi = limits
+        self.axes.set_xlim(lo[0], hi[0])
+        self.axes.set_ylim(lo[1], hi[1])
+        self.axes.set_zlim(lo[2], hi[2])
+        self.axes.set_box_aspect(tuple(np.maximum(hi - lo, 1e-12 * np.max(hi - lo))))
+        self.axes.set_xlabel("x")
+        self.axes.set_ylabel("y")
+        self.axes.set_zlabel("z")
+        self.axes.view_init(elev=view[0], azim=view[1])
+
+    def draw(self, frame, scale):
+        """Put this frame's deformed surface in the figure."""
+        points = deformed(self.vertices, frame, scale)
+        colour = magnitudes(frame)[self.triangles].mean(axis=1)
+        if self.surface is not None:
+            self.surface.remove()
+        self.surface = Poly3DCollection(points[self.triangles],
+                                        facecolors=self.cmap(self.norm(colour)),
+                                        edgecolors=(0, 0, 0, 0.25), linewidths=0.2)
+        self.axes.add_collection3d(self.surface)
+        self.axes.set_title("%s (displacement x %.3g)" % (frame.title(), scale))
+
+    def close(self):
+        plt.close(self.figure)
+
+
+def render(vertices, triangles, frames, args):
+    """Write the PNGs (and the GIF) of `frames`; returns the list of PNG paths."""
+    scale = args.scale
+    if scale is None:
+        scale, largest = default_scale(vertices, frames)
+        print("%s: scale %.4g (largest |u| %.4g drawn as %d %% of the body's size %.4g)"
+              % (PROG, scale, largest, round(100 * DEFAULT_SCALE_FRACTION), body_size(vertices)))
+    vmax = max(float(magnitudes(f).max()) for f in frames)
+    renderer = Renderer(vertices, triangles, axis_limits(vertices, frames, scale), vmax,
+                        args.view, args.size)
+    try:
+        return write_pictures(renderer, frames, scale, args)
+    finally:
+        renderer.close()
+
+
+def write_pictures(renderer, frames, scale, args):
+    """One PNG per frame into args.outdir, each also a GIF frame when args.gif is set."""
+    os.makedirs(args.outdir, exist_ok=True)
+    writer = None
+    if args.gif:
+        writer = PillowWriter(fps=args.fps)
+        writer.setup(renderer.figure, args.gif, dpi=DPI)
+    paths = []
+    for frame in frames:
+        renderer.draw(frame, scale)
+        path = os.path.join(args.outdir, frame.file_name())
+        renderer.figure.savefig(path, dpi=DPI)
+        paths.append(path)
+        if writer is not None:
+            writer.grab_frame()
+    if writer is not None:
+        writer.finish()
+    return paths
+
+
+# ---------------------------------------------------------------------------------------------
+# Command line
+
+
+def parse_frames(text):
+    """'all' -> None; '0,5,10' -> [0, 5, 10] (ascending, without repeats)."""
+    if text.strip() == "all":
+        return None
+    try:
+        indices = sorted({int(item) for item in text.split(",")})
+    except ValueError:
+        raise argparse.ArgumentTypeError("expected 'all' or comma-separated frame numbers, "
+                                         "got '%s'" % text)
+    if indices[0] < 0:
+        raise argparse.ArgumentTypeError("frame numbers are >= 0, got '%s'" % text)
+    return indices
+
+
+def parse_pair(text, kind, convert):
+    """'a,b' -> (a, b) converted; `kind` names the expected form in the message."""
+    separator = "x" if kind == "WxH" else ","
+    parts = text.lower().split(separator)
+    try:
+        if len(parts) != 2:
+            raise ValueError
+        return convert(parts[0]), convert(parts[1])
+    except ValueError:
+        raise argparse.ArgumentTypeError("expected %s, got '%s'" % (kind, text))
+
+
+def parse_size(text):
+    """'WxH' in pixels, each at least 100."""
+    size = parse_pair(text, "WxH", int)
+    if min(size) < 100:
+        raise argparse.ArgumentTypeError("width and height must be at least 100 pixels")
+    return size
+
+
+def positive(convert):
+    """An argparse type: a number > 0."""
+    def parse(text):
+        try:
+            value = convert(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError("expected a number, got '%s'" % text)
+        if not value > 0:
+            raise argparse.ArgumentTypeError("must be > 0, got '%s'" % text)
+        return value
+    return parse
+
+
+def make_parser():
+    parser = argparse.ArgumentParser(
+        prog=PROG, description=__doc__.split("\n")[0],
+        epilog="Example: render.py scene.h5 -o scene_png --gif scene.gif --fps 10")
+    parser.add_argument("result", help="hssbem result file (.h5)")
+    parser.add_argument("-o", "--outdir", help="directory for the PNGs "
+                        "(default: <result name>_render beside the result file)")
+    parser.add_argument("--frames", type=parse_frames, default=None,
+                        help="frames to draw: 'all' (default) or a list such as 0,5,10")
+    parser.add_argument("--gif", help="also write the frames drawn as this animated GIF")
+    parser.add_argument("--scale", type=positive(float), help="displacement magnification "
+                        "(default: largest |u| drawn as 10%% of the body's size)")
+    parser.add_argument("--view", type=lambda t: parse_pair(t, "elev,azim", float),
+                        default=(25.0, -60.0), help="camera elevation and azimuth in degrees "
+                        "(default 25,-60)")
+    parser.add_argument("--fps", type=positive(float), default=8.0,
+                        help="GIF frames per second (default 8)")
+    parser.add_argument("--size", type=parse_size, default=(800, 600),
+                        help="picture size in pixels, WxH (default 800x600)")
+    return parser
+
+
+def main(argv=None):
+    args = make_parser().parse_args(argv)
+    if args.outdir is None:
+        args.outdir = os.path.splitext(args.result)[0] + "_render"
+    try:
+        vertices, triangles, frames = load_result(args.result, args.frames)
+        paths = render(vertices, triangles, frames, args)
+    except (RenderError, OSError) as exc:
+        print("%s: error: %s" % (PROG, exc), file=sys.stderr)
+        return 1
+    print("%s: wrote %d picture(s) to %s" % (PROG, len(paths), args.outdir))
+    if args.gif:
+        print("%s: wrote %s (%d frames, %g per second)" % (PROG, args.gif, len(paths), args.fps))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

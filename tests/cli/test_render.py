@@ -1,0 +1,349 @@
+#!/usr/bin/python3
+"""Tests of scripts/render.py and scripts/make_scenes.py (no hssbem driver needed).
+
+Usage:
+    /usr/bin/python3 test_render.py [--scripts REPO/scripts] [--meshes REPO/meshes]
+                                    [unittest arguments, e.g. RenderTests or SceneTests]
+
+RenderTests write small synthetic result files with h5py (an octahedron, with and without three
+frames) into a temporary directory, run render.py on them and check the PNGs and the GIF (count,
+size, frames counted with Pillow), and that every error case exits non-zero with a message
+naming the fault and writes no picture. SceneTests run make_scenes.py on meshes/cardioid_832.msh
+and check the problem file it writes (and the shipped scenes): frame count, well-formed per-vertex
+rules, the contact fraction, and a patch centre that moves from frame to frame.
+
+Needs numpy, h5py and matplotlib (Debian: python3-numpy, python3-h5py, python3-matplotlib).
+"""
+
+import argparse
+import glob
+import json
+import math
+import os
+import subprocess
+import sys
+import tempfile
+import unittest
+
+import h5py
+import numpy as np
+from PIL import Image
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+SCRIPTS = os.path.normpath(os.path.join(HERE, "..", "..", "scripts"))
+MESHES = os.path.normpath(os.path.join(HERE, "..", "..", "meshes"))
+TIMEOUT = 300
+
+# Regular octahedron, outward triangles.
+OCTA_VERTICES = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]],
+                         dtype=float)
+OCTA_TRIANGLES = np.array([[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4],
+                           [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]], dtype=np.int32)
+
+
+def write_result(path, frames=3, fields=True, frame_displacement=True):
+    """A result file shaped like the driver's: /mesh, /fields and, if frames > 0, /frames/<i>."""
+    with h5py.File(path, "w") as f:
+        f["/mesh/vertices"] = OCTA_VERTICES
+        f["/mesh/triangles"] = OCTA_TRIANGLES
+        if fields:
+            f["/fields/displacement"] = 0.01 * OCTA_VERTICES
+            f["/fields/traction"] = OCTA_VERTICES
+        for i in range(frames):
+            group = f.create_group("/frames/%d" % i)
+            u = np.zeros_like(OCTA_VERTICES)
+            u[i] = -0.02 * (i + 1) * OCTA_VERTICES[i]  # frame i pushes vertex i in
+            if frame_displacement:
+                group["displacement"] = u
+            group["traction"] = np.ones_like(u)
+            group.attrs["seconds"] = 0.01 * (i + 1)
+            group.attrs["strategy"] = "refactor" if i == 0 else "update"
+            group.attrs["iterations"] = np.int32(3)
+        f.create_group("/timings").attrs["solve"] = 0.1
+
+
+def run_script(name, *args):
+    """Run scripts/<name> with this interpreter; the CompletedProcess (text output)."""
+    return subprocess.run([sys.executable, os.path.join(SCRIPTS, name)] + list(args),
+                          capture_output=True, text=True, timeout=TIMEOUT)
+
+
+def describe(r):
+    return "exit %d\nstdout:\n%s\nstderr:\n%s" % (r.returncode, r.stdout, r.stderr)
+
+
+class TempDirTest(unittest.TestCase):
+    def setUp(self):
+        self._tmp = tempfile.TemporaryDirectory(prefix="hssbem_render_")
+        self.tmp = self._tmp.name
+
+    def tearDown(self):
+        self._tmp.cleanup()
+
+    def path(self, *parts):
+        return os.path.join(self.tmp, *parts)
+
+
+class RenderTests(TempDirTest):
+    def render(self, result, *args):
+        return run_script("render.py", self.path(result), "-o", self.path("png"), *args)
+
+    def pictures(self):
+        return sorted(os.listdir(self.path("png"))) if os.path.isdir(self.path("png")) else []
+
+    def assertPng(self, name, size=(800, 600)):
+        path = self.path("png", name)
+        self.assertGreater(os.path.getsize(path), 1000, path)
+        with Image.open(path) as image:
+            self.assertEqual(image.format, "PNG")
+            self.assertEqual(image.size, size)
+
+    def assertGif(self, path, frames):
+        self.assertGreater(os.path.getsize(path), 1000, path)
+        with Image.open(path) as image:
+            self.assertEqual(image.format, "GIF")
+            self.assertEqual(image.n_frames, frames)
+
+    def test_frames_png_and_gif(self):
+        write_result(self.path("r.h5"))
+        r = self.render("r.h5", "--gif", self.path("anim.gif"))
+        self.assertEqual(r.returncode, 0, describe(r))
+        self.assertRegex(r.stdout, r"scale \S+ \(largest \|u\| 0\.06")
+        self.assertEqual(self.pictures(), ["frame_0000.png", "frame_0001.png", "frame_0002.png"])
+        for name in self.pictures():
+            self.assertPng(name)
+        self.assertGif(self.path("anim.gif"), 3)
+
+    def test_selected_frames_size_view_scale(self):
+        write_result(self.path("r.h5"))
+        r = self.render("r.h5", "--frames", "2,0", "--gif", self.path("a.gif"), "--size",
+                        "400x300", "--view", "10,30", "--scale", "5", "--fps", "2")
+        self.assertEqual(r.returncode, 0, describe(r))
+        self.assertNotIn("scale", r.stdout.split("wrote")[0])  # no default scale printed
+        self.assertEqual(self.pictures(), ["frame_0000.png", "frame_0002.png"])
+        for name in self.pictures():
+            self.assertPng(name, (400, 300))
+        self.assertGif(self.path("a.gif"), 2)
+
+    def test_result_without_frames(self):
+        write_result(self.path("one.h5"), frames=0)
+        r = self.render("one.h5")
+        self.assertEqual(r.returncode, 0, describe(r))
+        self.assertEqual(self.pictures(), ["displacement.png"])
+        self.assertPng("displacement.png")
+
+    def test_default_outdir(self):
+        write_result(self.path("scene.h5"), frames=2)
+        r = run_script("render.py", self.path("scene.h5"))
+        self.assertEqual(r.returncode, 0, describe(r))
+        self.assertEqual(sorted(os.listdir(self.path("scene_render"))),
+                         ["frame_0000.png", "frame_0001.png"])
+
+    def test_titles_and_shared_colour_scale(self):
+        sys.path.insert(0, SCRIPTS)
+        import render
+        write_result(self.path("r.h5"))
+        vertices, triangles, frames = render.load_result(self.path("r.h5"), None)
+        self.assertEqual([f.index for f in frames], [0, 1, 2])
+        self.assertEqual(frames[1].title(), "frame 1, update, 0.02 s")
+        scale, largest = render.default_scale(vertices, frames)
+        self.assertAlmostEqual(largest, 0.06)
+        self.assertAlmostEqual(scale * largest, 0.1 * 2.0)  # 10 % of the size 2
+
+    def assertFails(self, r, pattern, status=1):
+        self.assertEqual(r.returncode, status, describe(r))
+        self.assertRegex(r.stderr, pattern)
+        self.assertEqual(self.pictures(), [], "no picture expected on error")
+
+    def test_missing_file(self):
+        self.assertFails(self.render("absent.h5"), r"render\.py: error: .*absent\.h5: no such file")
+
+    def test_not_hdf5(self):
+        with open(self.path("text.h5"), "w") as f:
+            f.write("not an HDF5 file\n")
+        self.assertFails(self.render("text.h5"), r"text\.h5: not a readable HDF5 file")
+
+    def test_no_displacement(self):
+        write_result(self.path("r.h5"), frames=0, fields=False)
+        self.assertFails(self.render("r.h5"), r"r\.h5: no dataset /fields/displacement")
+
+    def test_frame_without_displacement(self):
+        write_result(self.path("r.h5"), frame_displacement=False)
+        self.assertFails(self.render("r.h5"), r"no dataset /frames/0/displacement")
+
+    def test_frame_that_does_not_exist(self):
+        write_result(self.path("r.h5"))
+        self.assertFails(self.render("r.h5", "--frames", "1,7"),
+                         r"frame 7 does not exist \(the file has frames 0\.\.2\)")
+
+    def test_frames_on_a_file_without_frames(self):
+        write_result(self.path("r.h5"), frames=0)
+        self.assertFails(self.render("r.h5", "--frames", "0"), r"no /frames group")
+
+    def test_bad_arguments(self):
+        write_result(self.path("r.h5"))
+        for args, pattern in ((["--frames", "x"], r"--frames: expected 'all'"),
+                              (["--size", "800"], r"--size: expected WxH"),
+                              (["--view", "1"], r"--view: expected elev,azim"),
+                              (["--scale", "-1"], r"--scale: must be > 0")):
+            self.assertFails(self.render("r.h5", *args), pattern, status=2)
+
+
+# ---------------------------------------------------------------------------------------------
+
+
+def load_problem(path):
+    """A problem file whose comments are whole `//` lines (as make_scenes.py writes them)."""
+    with open(path) as f:
+        text = f.read()
+    return text, json.loads("".join(l for l in text.splitlines(True)
+                                    if not l.lstrip().startswith("//")))
+
+
+def msh_vertex_count(path):
+    """The node count in a Gmsh 4.1 file's $Nodes header, read independently of the script."""
+    with open(path) as f:
+        lines = f.read().split("\n")
+    return int(lines[lines.index("$Nodes") + 1].split()[1])
+
+
+class SceneTests(TempDirTest):
+    MESH = "cardioid_832.msh"
+
+    def setUp(self):
+        super().setUp()
+        sys.path.insert(0, SCRIPTS)
+        import make_scenes
+        self.mesh = make_scenes.read_msh(os.path.join(MESHES, self.MESH))
+        self.base = set(self.mesh.region_vertices("base").tolist())
+
+    def make(self, frames, fraction, *extra):
+        out = self.path("scene.json")
+        r = run_script("make_scenes.py", "--mesh", os.path.join(MESHES, self.MESH), "--frames",
+                       str(frames), "--fraction", str(fraction), "--out", out, *extra)
+        self.assertEqual(r.returncode, 0, describe(r))
+        self.assertRegex(r.stdout, r"%d frames, patch \d+ of %d vertices = [\d.]+ %%"
+                         % (frames, len(self.mesh.vertices)))
+        return out
+
+    def check_scene(self, path, mesh_file, frames, fraction):
+        """Every property of a scene file; returns the patch centres (|u|-weighted)."""
+        text, problem = load_problem(path)
+        self.assertTrue(text.startswith("//"), "the file opens with a comment")
+        self.assertEqual(set(problem), {"mesh", "material", "boundary", "frames", "output"})
+        mesh_path = os.path.normpath(os.path.join(os.path.dirname(path), problem["mesh"]))
+        self.assertTrue(os.path.samefile(mesh_path, os.path.join(MESHES, mesh_file)))
+        self.assertTrue(problem["output"].endswith(".h5"))
+        self.assertEqual(problem["boundary"],
+                         [{"where": {"region": "base" if "cardioid" in mesh_file else "bottom"},
+                           "displacement": [0, 0, 0]}])
+        self.assertEqual(len(problem["frames"]), frames)
+        nv = msh_vertex_count(mesh_path)
+        return [self.check_frame(frame, nv, fraction) for frame in problem["frames"]]
+
+    def check_frame(self, frame, nv, fraction):
+        """One frame: one well-formed per-vertex rule; returns its |u|-weighted centre."""
+        self.assertEqual(list(frame), ["boundary"])
+        self.assertEqual(len(frame["boundary"]), 1)
+        rule = frame["boundary"][0]
+        self.assertEqual(set(rule), {"where", "displacement"})
+        vertices = rule["where"]["vertices"]
+        self.assertTrue(all(isinstance(v, int) and 0 <= v < nv for v in vertices))
+        self.assertEqual(vertices, sorted(set(vertices)), "ascending, no repeats")
+        rows = np.array(rule["displacement"], dtype=float)
+        self.assertEqual(rows.shape, (len(vertices), 3))
+        self.assertTrue(np.all(np.isfinite(rows)))
+        self.assertAlmostEqual(len(vertices) / nv, fraction, delta=0.02)
+        weight = np.linalg.norm(rows, axis=1)
+        self.assertGreater(weight.max(), 0.0)
+        return (weight[:, None] * self.mesh.vertices[vertices]).sum(axis=0) / weight.sum()
+
+    def assertMovesWestward(self, centres):
+        steps = [np.linalg.norm(b - a) for a, b in zip(centres, centres[1:])]
+        self.assertGreater(min(steps), 0.02, "the patch centre moves every frame")
+        azimuth = np.unwrap([math.atan2(c[1], c[0]) for c in centres])
+        self.assertTrue(np.all(np.diff(azimuth) < 0), "westward: decreasing azimuth")
+
+    def test_cardioid_scene(self):
+        out = self.make(12, 0.2)
+        centres = self.check_scene(out, self.MESH, 12, 0.2)
+        self.assertMovesWestward(centres)
+        _, problem = load_problem(out)
+        for frame in problem["frames"]:
+            self.assertFalse(self.base & set(frame["boundary"][0]["where"]["vertices"]),
+                             "the patch leaves the clamped base alone")
+
+    def test_small_fraction_and_depth(self):
+        out = self.make(5, 0.05, "--depth", "0.03", "--turn", "0.25")
+        self.check_scene(out, self.MESH, 5, 0.05)
+        _, problem = load_problem(out)
+        largest = max(np.linalg.norm(np.array(f["boundary"][0]["displacement"]), axis=1).max()
+                      for f in problem["frames"])
+        size = np.max(np.ptp(self.mesh.vertices, axis=0))
+        self.assertAlmostEqual(largest, 0.03 * size, delta=0.1 * 0.03 * size)
+
+    def test_shipped_scenes(self):
+        for name, mesh in (("cardioid_moving_contact", "cardioid_832.msh"),
+                           ("disk_organ_equator_wave", "disk_organ_4k.msh")):
+            path = os.path.join(MESHES, "examples", name + ".json")
+            if mesh != self.MESH:
+                sys.path.insert(0, SCRIPTS)
+                import make_scenes
+                self.mesh = make_scenes.read_msh(os.path.join(MESHES, mesh))
+            with self.subTest(scene=name):
+                self.assertLess(os.path.getsize(path), 600 * 1024)
+                self.assertMovesWestward(self.check_scene(path, mesh, 40, 0.2))
+
+    def test_msh22_reader(self):
+        # The octahedron in Gmsh 2.2 with node tags 10..15 in reverse order: vertex i is the
+        # i-th node by ascending tag; the lower half is "base" (tag 1), the upper "body" (2).
+        import make_scenes
+        lines = ["$MeshFormat", "2.2 0 8", "$EndMeshFormat", "$PhysicalNames", "2",
+                 '2 1 "base"', '2 2 "body"', "$EndPhysicalNames", "$Nodes", "6"]
+        lines += ["%d %g %g %g" % ((10 + i,) + tuple(OCTA_VERTICES[i])) for i in range(5, -1, -1)]
+        lines += ["$EndNodes", "$Elements", "9", "1 15 2 0 1 10"]  # a point element: ignored
+        lines += ["%d 2 2 %d 1 %d %d %d" % ((k + 2, 1 if k >= 4 else 2) + tuple(10 + t))
+                  for k, t in enumerate(OCTA_TRIANGLES)]
+        lines += ["$EndElements"]
+        with open(self.path("octa.msh"), "w") as f:
+            f.write("\n".join(lines) + "\n")
+        mesh = make_scenes.read_msh(self.path("octa.msh"))
+        np.testing.assert_array_equal(mesh.vertices, OCTA_VERTICES)
+        np.testing.assert_array_equal(mesh.triangles, OCTA_TRIANGLES)
+        self.assertEqual(mesh.region_vertices("base").tolist(), [0, 1, 2, 3, 5])
+
+    def test_errors(self):
+        mesh = os.path.join(MESHES, self.MESH)
+        out = self.path("x.json")
+        for args, pattern in (
+                (["--mesh", self.path("absent.msh"), "--out", out], r"\S*absent\.msh: no such file"),
+                (["--mesh", mesh, "--out", out, "--clamp", "bsae"],
+                 r"no region 'bsae' in the mesh \(known: base, body\)"),
+                (["--mesh", mesh, "--out", out, "--height", "5"], r"misses the surface")):
+            r = run_script("make_scenes.py", *args)
+            self.assertEqual(r.returncode, 1, describe(r))
+            self.assertRegex(r.stderr, r"^make_scenes\.py: error: .*" + pattern)
+            self.assertFalse(os.path.exists(out))
+        for args, pattern in ((["--mesh", mesh, "--fraction", "1.5", "--out", out],
+                               r"--fraction: must be in"),
+                              (["--mesh", mesh, "--nu", "0.5", "--out", out], r"--nu: must be in"),
+                              (["--frames", "3"], r"--frames: only with --mesh"),
+                              (["--mesh", mesh], r"--mesh and --out go together")):
+            r = run_script("make_scenes.py", *args)
+            self.assertEqual(r.returncode, 2, describe(r))
+            self.assertRegex(r.stderr, pattern)
+            self.assertFalse(os.path.exists(out))
+
+
+def main():
+    global SCRIPTS, MESHES
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--scripts", default=SCRIPTS, help="the repository's scripts/ directory")
+    parser.add_argument("--meshes", default=MESHES, help="the repository's meshes/ directory")
+    args, rest = parser.parse_known_args()
+    SCRIPTS, MESHES = os.path.abspath(args.scripts), os.path.abspath(args.meshes)
+    unittest.main(argv=[sys.argv[0]] + rest, verbosity=1)
+
+
+if __name__ == "__main__":
+    main()
