@@ -41,7 +41,11 @@ PetscErrorCode OptionString_Private(const char *key, const char *text, std::stri
 . -mat_bem_quad_order <n>     - Gauss points per direction on singular triangles
 . -mat_bem_near_ratio <r>     - subdivide triangles closer than r diameters
 . -mat_bem_far_ratio <r>      - 3-point rule beyond r diameters (0: never, the default)
-- -mat_bem_max_depth <n>      - subdivision levels for nearly singular triangles
+. -mat_bem_max_depth <n>      - subdivision levels for nearly singular triangles
+. -scene_strategy <auto|solve|update|refactor|krylov> - per-frame strategy of a scene (auto: the cost model's cheapest)
+. -scene_refresh <n>          - incremental capacitance updates before a rebuild
+. -scene_krylov_rtol <r>      - GMRES tolerance of the krylov strategy
+- -scene_monitor              - print one line per frame
 */
 PetscErrorCode ProcessOptions_Private(MPI_Comm comm, AppOptions *opts)
 {
@@ -50,6 +54,9 @@ PetscErrorCode ProcessOptions_Private(MPI_Comm comm, AppOptions *opts)
   PetscReal   E = 0, nu = 0, feature_angle = opts->overrides.feature_angle_deg;
   std::string mesh = opts->overrides.mesh.value_or(""), output = opts->overrides.output.value_or(""), mat_type = opts->operator_type ? operator_type_name(*opts->operator_type) : "auto";
   QuadratureOptions &quad = opts->quad;
+  std::string strategy = scene_strategy_name(opts->scene.strategy);
+  PetscInt    refresh  = opts->scene.refresh_every;
+  PetscBool   monitor  = opts->scene.monitor ? PETSC_TRUE : PETSC_FALSE;
 
   PetscFunctionBegin;
   PetscCall(PetscOptionsHasHelp(NULL, &help));
@@ -68,7 +75,20 @@ PetscErrorCode ProcessOptions_Private(MPI_Comm comm, AppOptions *opts)
   PetscCall(PetscOptionsReal("-mat_bem_near_ratio", "Subdivide triangles closer than this many diameters", "", quad.near_ratio, &quad.near_ratio, NULL));
   PetscCall(PetscOptionsReal("-mat_bem_far_ratio", "Use the 3-point rule beyond this many diameters (0: never)", "", quad.far_ratio, &quad.far_ratio, NULL));
   PetscCall(PetscOptionsInt("-mat_bem_max_depth", "Subdivision levels for nearly singular triangles", "", quad.max_depth, &quad.max_depth, NULL));
+  PetscCall(OptionString_Private("-scene_strategy", "Scenes (frames): per-frame strategy: auto (cheapest by the cost model), solve, update, refactor or krylov", &strategy, PetscOptionsObject));
+  PetscCall(PetscOptionsInt("-scene_refresh", "Scenes: incremental capacitance updates before a rebuild from scratch", "", opts->scene.refresh_every, &refresh, NULL));
+  PetscCall(PetscOptionsReal("-scene_krylov_rtol", "Scenes: GMRES relative tolerance (true residual) of the krylov strategy", "", opts->scene.krylov_rtol, &opts->scene.krylov_rtol, NULL));
+  PetscCall(PetscOptionsBool("-scene_monitor", "Scenes: print one line per frame (strategy, switched unknowns, time)", "", monitor, &monitor, NULL));
   PetscOptionsEnd();
+  opts->scene.monitor = monitor == PETSC_TRUE;
+  {
+    const std::optional<SceneStrategy> st = parse_scene_strategy(strategy);
+    PetscCheck(st, comm, PETSC_ERR_ARG_UNKNOWN_TYPE, "-scene_strategy %s is not available; use auto, solve, update, refactor or krylov", strategy.c_str());
+    opts->scene.strategy = *st;
+  }
+  PetscCheck(refresh >= 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-scene_refresh must be at least 1");
+  opts->scene.refresh_every = (int)refresh;
+  PetscCheck(opts->scene.krylov_rtol > 0 && opts->scene.krylov_rtol < 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-scene_krylov_rtol must lie in (0, 1)");
   if (!mesh.empty()) opts->overrides.mesh = mesh;
   if (!output.empty()) opts->overrides.output = output;
   if (has_E) opts->overrides.E = E;
@@ -98,13 +118,14 @@ PetscErrorCode ProcessOptions_Private(MPI_Comm comm, AppOptions *opts)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/// Options that PETSc reads only at PetscFinalize() or that steer the run itself.
+/// Options that PETSc reads only at PetscFinalize() or that steer the run itself, and those of
+/// a scene's GMRES (-scene_ksp_*).
 bool is_late_option(const char *name)
 {
   static const char *late[] = {"log_view", "options_left", "help", "malloc_dump", "malloc_debug", "memory_view", "log_view_memory", "log_trace", "info", "malloc", "checkstack", "objects_dump", "fp_trap", "options_view", "history"};
   for (const char *k : late)
     if (!std::strcmp(name, k)) return true;
-  return false;
+  return !std::strncmp(name, "scene_ksp_", 10); /* a scene's GMRES reads them only if a frame takes the krylov strategy */
 }
 
 /// Options that PETSc reads only when the preconditioner is set up, inside KSPSolve(): those of

@@ -79,8 +79,18 @@ ProblemSetup setup_problem(ProblemSpec spec, const ProblemOverrides &o)
   s.vertex_displacement_prescribed.assign(s.mesh->vertices.size(), {false, false, false});
   for (int v = 0; v < s.mesh->num_vertices(); ++v)
     if (s.disc->node_count(v) > 0) s.vertex_displacement_prescribed[v] = nc.displacement_prescribed[s.disc->first_node(v)];
-  handle_rigid_modes(s);
+  if (s.spec.frames.empty()) handle_rigid_modes(s); // a scene checks each frame (check_frame_constraints)
   return s;
+}
+
+bool check_frame_constraints(const ProblemSetup &s, const std::vector<std::array<bool, 3>> &displacement_known, const std::string &what)
+{
+  const ConstraintReport rep = analyse_constraints(*s.disc, displacement_known);
+  if (rep.rank == 6) return true;
+  std::string free;
+  for (const auto &m : rep.free_modes) free += (free.empty() ? "" : "; ") + m;
+  throw ConstraintError(s.spec.file + ": " + what + ": the prescribed displacements leave the body free to move (" + (free.empty() ? "all rigid motions" : free) +
+                        "); every frame of a scene must fix all six rigid motions (pure-traction frames are not supported in scenes)");
 }
 
 ProblemSetup setup_problem(const std::string &problem_file, const ProblemOverrides &o)

@@ -8,6 +8,7 @@
 #include "hssbem/core/operator_type.hpp"
 #include "hssbem/core/size_limits.hpp"
 #include "hssbem/problem/setup.hpp"
+#include "hssbem/scene/dense_scene.hpp"
 
 #include <mpi.h>
 
@@ -16,12 +17,21 @@
 
 namespace hssbem {
 
+/// The options of a scene (a problem file with "frames"), -scene_*.
+struct SceneRunOptions {
+  SceneStrategy strategy = SceneStrategy::Auto; ///< -scene_strategy
+  int refresh_every = 32;                       ///< -scene_refresh: capacitance updates between rebuilds
+  double krylov_rtol = 1e-10;                   ///< -scene_krylov_rtol
+  bool monitor = false;                         ///< -scene_monitor: one line per frame
+};
+
 /// Everything the command line can set besides the solver's options.
 struct AppOptions {
   std::string problem;                            ///< -problem: the problem file (required unless -help)
   ProblemOverrides overrides;                     ///< -mesh, -o, -E, -nu, -bem_feature_angle: they win over the problem file
   std::optional<OperatorType> operator_type;      ///< -bem_mat_type: hss, h2 or dense; none: auto (the default, see choose_operator())
   QuadratureOptions quad;                         ///< -mat_bem_*
+  SceneRunOptions scene;                          ///< -scene_*
   bool help = false;                              ///< -help: list the options (PETSc prints each as it is read)
 };
 

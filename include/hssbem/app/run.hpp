@@ -8,6 +8,7 @@
 #include "hssbem/bem/bem_operator.hpp"
 #include "hssbem/bem/quadrature.hpp"
 #include "hssbem/core/operator_type.hpp"
+#include "hssbem/app/options.hpp"
 #include "hssbem/petsc/system.h"
 #include "hssbem/problem/setup.hpp"
 
@@ -31,7 +32,17 @@ void run_driver(MPI_Comm comm);
 /// reads the same files.
 /// With no type (-bem_mat_type auto), the operator is chosen by choose_operator() (app/options.hpp)
 /// once the problem's size is known, and the log line says so.
-void run_problem(MPI_Comm comm, const std::string &problem_file, const ProblemOverrides &overrides, const QuadratureOptions &quad, std::optional<OperatorType> type);
+/// A problem file with "frames" is a scene: see run_scene().
+void run_problem(MPI_Comm comm, const std::string &problem_file, const ProblemOverrides &overrides, const QuadratureOptions &quad, std::optional<OperatorType> type,
+                 const SceneRunOptions &scene = {});
+
+/// Solve a scene (s.spec.frames not empty) on rank 0 with the dense scene engine: the reference
+/// pattern (the base rules, or frame 0's when they do not hold the body) factored once, then
+/// every frame by the strategy of o (auto: the cost model's cheapest), each frame checked to hold
+/// the body, streamed into the result file (/frames/<i>, FrameWriter) that appears complete at
+/// the end. `seconds` holds the set-up's times so far. Throws for -bem_mat_type hss or h2 and
+/// for a scene that does not fit the node's memory.
+void run_scene(MPI_Comm comm, const ProblemSetup &s, const BemOperator &op, std::optional<OperatorType> asked, const SceneRunOptions &o, std::map<std::string, double> seconds);
 
 /// Build the system of a prepared problem with the operator of `type` and solve it: the unknowns
 /// (3 per dof node, node order) on rank 0 (empty elsewhere), or on every rank with to_all.

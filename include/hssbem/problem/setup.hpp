@@ -41,6 +41,11 @@ ProblemSetup setup_problem(const std::string &problem_file, const ProblemOverrid
 /// Same, from a parsed specification (tests build one in code).
 ProblemSetup setup_problem(ProblemSpec spec, const ProblemOverrides &overrides);
 
+/// A scene (spec.frames not empty) skips the base problem's constraint check in setup_problem;
+/// each frame's pattern goes through this one instead: true when the prescribed displacements
+/// fix all six rigid motions, else ConstraintError naming `what` (e.g. "frames[3]").
+bool check_frame_constraints(const ProblemSetup &s, const std::vector<std::array<bool, 3>> &displacement_known, const std::string &what);
+
 /// Relative load imbalance above which a pure-traction problem is refused.
 constexpr double max_load_imbalance = 1e-2;
 
