@@ -19,6 +19,7 @@ h5py and numpy are needed: on Debian use /usr/bin/python3 (python3-h5py, python3
 import argparse
 import glob
 import json
+import math
 import os
 import random
 import re
@@ -1199,6 +1200,139 @@ class DefaultExampleTests(CliTestCase):
 
 
 # ---------------------------------------------------------------------------------------------
+# Scenes: problem files with "frames", solved frame by frame
+
+
+class SceneTests(CliTestCase):
+    """A contact patch moving over the cardioid: every frame against a single solve of the same
+    boundary conditions (base rules + the frame's rules as one problem, dense LU), the forced
+    strategies against auto, and the errors of a scene."""
+
+    BASE = [{"where": {"region": "base"}, "displacement": [0, 0, 0]}]
+
+    @staticmethod
+    def patch(phi, depth, full=False, pressure=None):
+        c = [0.45 * math.cos(phi), 0.45 * math.sin(phi), 0.5]
+        u = [-depth * math.cos(phi), -depth * math.sin(phi), 0.0] if full else [-depth * math.cos(phi), None, None]
+        rules = [{"where": {"sphere": {"center": c, "radius": 0.3}}, "displacement": u}]
+        if pressure is not None:
+            rules.append({"where": {"sphere": {"center": [0, 0, 1], "radius": 0.2}}, "pressure": pressure})
+        return rules
+
+    def scene(self, frames, base=None, name="scene.json"):
+        mesh = self.copy_mesh("cardioid_832.msh")
+        return self.problem(mesh=mesh, material={"lambda": 1000.0, "mu": 500.0}, boundary=base if base is not None else self.BASE,
+                            frames=[{"boundary": f} for f in frames], name=name)
+
+    FRAMES = [patch.__func__(0.0, 0.04), patch.__func__(0.2, 0.045), patch.__func__(0.4, 0.05, full=True),
+              patch.__func__(0.4, 0.03, full=True), patch.__func__(0.6, 0.04, pressure=20.0)]
+
+    def frames_of(self, h5):
+        import h5py
+        with h5py.File(h5, "r") as f:
+            n = int(f.attrs["num_frames"])
+            return [(f["/frames/%d/displacement" % i][()], dict(f["/frames/%d" % i].attrs)) for i in range(n)]
+
+    def single(self, rules, name):
+        self.problem(mesh="cardioid_832.msh", material={"lambda": 1000.0, "mu": 500.0}, boundary=self.BASE + rules, name=name + ".json")
+        out = self.path(name + ".h5")
+        r = self.run_driver("-problem", name + ".json", "-o", out, "-bem_mat_type", "dense", timeout=TIMEOUT_RUN)
+        self.assertSucceeds(r, out)
+        import h5py
+        with h5py.File(out, "r") as f:
+            return f["/fields/displacement"][()]
+
+    def assertClose(self, a, b, tol, what):
+        import numpy as np
+        err = np.linalg.norm(a - b) / np.linalg.norm(b)
+        self.assertLess(err, tol, "%s: relative difference %.2e" % (what, err))
+
+    def test_every_frame_matches_a_single_solve_of_its_conditions(self):
+        import h5py
+        import numpy as np
+        self.scene(self.FRAMES)
+        r = self.run_driver("-problem", "scene.json", "-o", self.out, "-scene_monitor", timeout=TIMEOUT_RUN)
+        self.assertSucceeds(r, self.out, self.path("out.xdmf"))
+        self.assertRegex(r.stdout, r"scene: 5 frames in")
+        frames = self.frames_of(self.out)
+        self.assertEqual(len(frames), 5)
+        for i, (u, attrs) in enumerate(frames):
+            ref = self.single(self.FRAMES[i], "single%d" % i)
+            self.assertClose(u, ref, 1e-8, "frame %d" % i)
+            self.assertGreater(np.linalg.norm(u), 1e-3)
+            strategy = attrs["strategy"].decode() if isinstance(attrs["strategy"], bytes) else attrs["strategy"]
+            self.assertIn(strategy, ("update", "solve", "refactor", "krylov"))
+            self.assertGreater(attrs["seconds"], 0)
+            self.assertGreater(attrs["switched_unknowns"], 0)
+        self.assertGreater(np.linalg.norm(frames[0][0] - frames[1][0]), 1e-3)  # the contact moved
+        with h5py.File(self.out, "r") as f:
+            self.assertIn("frames", f["/timings"].attrs)
+            self.assertIn("scene_setup", f["/timings"].attrs)
+        with open(self.path("out.xdmf")) as f:
+            xdmf = f.read()
+        self.assertIn('CollectionType="Temporal"', xdmf)
+        self.assertIn("/frames/4/displacement", xdmf)
+
+    def test_forced_strategies_agree_with_auto(self):
+        self.scene(self.FRAMES[:4])
+        results = {}
+        for strategy in ("auto", "update", "refactor", "krylov"):
+            out = self.path(strategy + ".h5")
+            r = self.run_driver("-problem", "scene.json", "-o", out, "-scene_strategy", strategy, timeout=TIMEOUT_RUN)
+            self.assertSucceeds(r, out)
+            results[strategy] = self.frames_of(out)
+        for strategy in ("update", "refactor", "krylov"):
+            for i in range(4):
+                self.assertClose(results[strategy][i][0], results["auto"][i][0], 1e-8, "%s frame %d" % (strategy, i))
+                got = results[strategy][i][1]["strategy"]
+                got = got.decode() if isinstance(got, bytes) else got
+                if i > 0 or strategy != "krylov":
+                    self.assertEqual(got, strategy)
+
+    def test_values_only_frames_reuse_the_factorization(self):
+        frames = [self.patch(0.3, d) for d in (0.02, 0.03, 0.04)]
+        self.scene(frames)
+        r = self.run_problem("scene.json", "-scene_monitor", timeout=TIMEOUT_RUN)
+        self.assertSucceeds(r, self.out)
+        strategies = [a["strategy"].decode() if isinstance(a["strategy"], bytes) else a["strategy"] for _, a in self.frames_of(self.out)]
+        self.assertEqual(strategies, ["update", "solve", "solve"])
+        os.remove(self.out)
+        os.remove(self.path("out.xdmf"))
+        r = self.run_problem("scene.json", "-scene_strategy", "solve", timeout=TIMEOUT_RUN)
+        self.assertFailsCleanly(r, "strategy 'solve'", "pattern changed")
+
+    def test_two_ranks_give_the_same_frames(self):
+        self.scene(self.FRAMES[:2])
+        r1 = self.run_problem("scene.json", timeout=TIMEOUT_RUN)
+        self.assertSucceeds(r1, self.out)
+        one = self.frames_of(self.out)
+        out2 = self.path("two.h5")
+        r2 = self.run_driver("-problem", "scene.json", "-o", out2, np=2, timeout=TIMEOUT_RUN)
+        self.assertSucceeds(r2, out2)
+        for (a, _), (b, _) in zip(one, self.frames_of(out2)):
+            self.assertClose(b, a, 1e-12, "2 ranks")
+
+    def test_a_frame_that_frees_the_body_is_an_error(self):
+        # base: traction-free; frame 0 clamps the base, frame 1 only pushes the patch
+        clamp = self.BASE
+        self.scene([clamp + self.patch(0.0, 0.04), self.patch(0.2, 0.04)], base=[])
+        self.assertFailsCleanly(self.run_problem("scene.json", timeout=TIMEOUT_RUN), r"frames\[1\]", "free to move")
+
+    def test_bad_scene_options_and_operators(self):
+        self.scene(self.FRAMES[:2])
+        self.assertFailsCleanly(self.run_problem("scene.json", "-scene_strategy", "woodbury"), "-scene_strategy woodbury")
+        self.assertFailsCleanly(self.run_problem("scene.json", "-scene_refresh", "0"), "-scene_refresh")
+        self.assertFailsCleanly(self.run_problem("scene.json", "-bem_mat_type", "h2"), "scenes", "dense")
+        self.assertFailsCleanly(self.run_problem("scene.json", "-ksp_type", "gmres"), "unused option", "ksp_type")
+
+    def test_malformed_frames_are_refused(self):
+        self.scene([[{"where": {"sphere": {"center": [9, 9, 9], "radius": 0.1}}, "displacement": [0, 0, 0]}]])
+        self.assertFailsCleanly(self.run_problem("scene.json"), r"frames\[0\]\.boundary\[0\]", "selects no")
+        self.write("bad.json", json.dumps({"mesh": self.copy_mesh("cardioid_832.msh"), "material": {"E": 1, "nu": 0.3}, "boundary": [], "frames": {}}))
+        self.assertFailsCleanly(self.run_problem("bad.json"), "frames")
+
+
+# ---------------------------------------------------------------------------------------------
 # Every shipped example runs (methods added in main(), one per meshes/examples/*.json)
 
 
@@ -1235,6 +1369,28 @@ class ExampleTests(CliTestCase):
             self.assertLess(balance, self.BALANCE[stem], "reaction balance %.2e" % balance)
 
 
+def check_scene_example(self, problem):
+    """A shipped scene: every frame written, finite and moving, the file and its sidecar."""
+    import h5py
+    import numpy as np
+    with open(problem) as f:
+        frames = json.loads("\n".join(l for l in f.read().splitlines() if not l.lstrip().startswith("//")))["frames"]
+    r = self.run_driver("-problem", problem, timeout=TIMEOUT_RUN)
+    self.assertEqual(r.returncode, 0, "expected exit status 0\n" + r.describe())
+    results = [f for f in self.leftovers() if f.endswith(".h5")]
+    self.assertEqual(len(results), 1, r.describe())
+    with h5py.File(self.path(results[0]), "r") as f:
+        self.assertEqual(int(f.attrs["num_frames"]), len(frames))
+        us = [f["/frames/%d/displacement" % i][()] for i in range(len(frames))]
+    for u in us:
+        self.assertTrue(np.all(np.isfinite(u)) and np.linalg.norm(u) > 0)
+    self.assertGreater(np.linalg.norm(us[0] - us[len(us) // 2]), 1e-3 * np.linalg.norm(us[0]))
+    self.assertTrue(os.path.isfile(self.path(os.path.splitext(results[0])[0] + ".xdmf")))
+
+
+ExampleTests.check_scene_example = check_scene_example
+
+
 def is_scene(problem):
     """Whether a shipped problem file is a real-time scene (scripts/make_scenes.py writes them
     with a "frames" key): dozens of solves, without the one-solve examples' accuracy checks."""
@@ -1248,7 +1404,7 @@ def add_example_tests():
 
         def test(self, problem=problem, stem=stem):
             if is_scene(problem):
-                self.skipTest("a multi-frame scene (\"frames\"): not a one-solve example")
+                return self.check_scene_example(problem)
             # Run from the temp dir without -o: the example's own output lands there.
             r = self.run_driver("-problem", problem, timeout=TIMEOUT_RUN)
             self.assertEqual(r.returncode, 0, "expected exit status 0\n" + r.describe())
