@@ -202,10 +202,12 @@ int run(const Args &a)
   const int check_every = a.check > 0 ? std::max(1, a.frames / a.check) : a.frames + 1;
 
   std::printf("\n  %-34s %6s %10s %10s %10s %10s  %s\n", "per frame", "frames", "mean ms", "p95 ms", "Hz", "max err", "strategies");
-  Rate moving, values, haptic, refactor, krylov, scratch;
+  Rate moving, changes, values, haptic, refactor, krylov, scratch;
   std::vector<std::vector<double>> solutions(a.frames);
   for (int f = 0; f < a.frames; ++f) { // the moving contact, auto
-    moving.add(scene.solve(frames[f], x));
+    const SceneFrameReport &rep = scene.solve(frames[f], x);
+    moving.add(rep);
+    if (rep.changed > 0) changes.add(rep);
     if (f % check_every == 0) {
       const bench::DenseReference ref = bench::dense_reference(op, frames[f]);
       moving.max_err = std::max(moving.max_err, bench::rel_diff(x, ref.x));
@@ -216,6 +218,8 @@ int run(const Args &a)
   std::snprintf(note, sizeof(note), "; switched %.0f, changed %.1f per frame, capacitance rebuilt %d times", double(moving.switched) / a.frames,
                 double(moving.changed) / std::max(1, a.frames - 1), moving.rebuilt);
   print("moving contact (auto)", moving, note);
+  changes.max_err = moving.max_err;
+  print("  of which pattern changes", changes);
 
   // values only: the last pattern, the indentation deepening and easing (a haptic instrument)
   const int last = a.frames - 1;

@@ -1,6 +1,7 @@
 // The capacitance inverse of capacitance.hpp: rebuilt by LU, updated by Schur complements.
 #include "hssbem/scene/capacitance.hpp"
 
+#include "hssbem/core/blas_threads.hpp"
 #include "hssbem/core/lapack.hpp"
 
 #include <algorithm>
@@ -58,7 +59,7 @@ void CapacitanceInverse::apply(const double *r, double *s) const
 {
   const int k = size();
   if (k == 0) return;
-  lapack::gemv('N', k, k, 1.0, m_inv.data(), k, r, 0.0, s);
+  gemv_over_threads(k, k, m_inv.data(), k, r, s);
 }
 
 /// With P the kept positions and R the dropped ones, the inverse of C(P, P) is
@@ -76,6 +77,7 @@ void CapacitanceInverse::drop_indices(const std::vector<int> &drop)
   auto inv = [&](int i, int j) { return m_inv[i + static_cast<std::size_t>(j) * k]; };
   std::vector<double> A(static_cast<std::size_t>(kp) * kp), B(static_cast<std::size_t>(kp) * m), S(static_cast<std::size_t>(m) * m),
       T(static_cast<std::size_t>(m) * kp);
+#pragma omp parallel for schedule(static) if (kp > 512)
   for (int q = 0; q < kp; ++q)
     for (int p = 0; p < kp; ++p) A[p + static_cast<std::size_t>(q) * kp] = inv(P[p], P[q]);
   for (int q = 0; q < m; ++q)
@@ -89,7 +91,7 @@ void CapacitanceInverse::drop_indices(const std::vector<int> &drop)
     const int info = lapack::getrf(m, S.data(), m, piv.data());
     if (info != 0) throw std::runtime_error("capacitance matrix: the block of the dropped indices is singular");
     lapack::getrs('N', m, kp, S.data(), m, piv.data(), T.data(), m);
-    lapack::gemm('N', 'N', kp, kp, m, -1.0, B.data(), kp, T.data(), m, 1.0, A.data(), kp);
+    gemm_over_threads('N', 'N', kp, kp, m, -1.0, B.data(), kp, T.data(), m, 1.0, A.data(), kp);
   }
   std::vector<int> J(kp);
   for (int p = 0; p < kp; ++p) J[p] = m_J[P[p]];
@@ -117,8 +119,8 @@ void CapacitanceInverse::add_indices(const std::vector<int> &add)
   for (int q = 0; q < m; ++q)
     for (int p = 0; p < m; ++p) S[p + static_cast<std::size_t>(q) * m] = w(add[p], add[q]);
   std::vector<double> X(static_cast<std::size_t>(k) * m), Y(static_cast<std::size_t>(m) * k);
-  lapack::gemm('N', 'N', k, m, k, 1.0, m_inv.data(), std::max(k, 1), B.data(), std::max(k, 1), 0.0, X.data(), std::max(k, 1));
-  lapack::gemm('N', 'N', m, k, k, 1.0, D.data(), m, m_inv.data(), std::max(k, 1), 0.0, Y.data(), m);
+  gemm_over_threads('N', 'N', k, m, k, 1.0, m_inv.data(), std::max(k, 1), B.data(), std::max(k, 1), 0.0, X.data(), std::max(k, 1));
+  gemm_over_threads('N', 'N', m, k, k, 1.0, D.data(), m, m_inv.data(), std::max(k, 1), 0.0, Y.data(), m);
   lapack::gemm('N', 'N', m, m, k, -1.0, D.data(), m, X.data(), std::max(k, 1), 1.0, S.data(), m);
   std::vector<double> Sinv;
   try {
@@ -130,9 +132,10 @@ void CapacitanceInverse::add_indices(const std::vector<int> &add)
   std::vector<double> Z(static_cast<std::size_t>(m) * k); // S⁻¹ Y
   lapack::gemm('N', 'N', m, k, m, 1.0, Sinv.data(), m, Y.data(), m, 0.0, Z.data(), m);
   std::vector<double> inv(static_cast<std::size_t>(kn) * kn);
+#pragma omp parallel for schedule(static) if (k > 512)
   for (int q = 0; q < k; ++q)
     std::copy_n(&m_inv[static_cast<std::size_t>(q) * k], k, &inv[static_cast<std::size_t>(q) * kn]);
-  lapack::gemm('N', 'N', k, k, m, 1.0, X.data(), std::max(k, 1), Z.data(), m, 1.0, inv.data(), kn); // C⁻¹ + X S⁻¹ Y
+  gemm_over_threads('N', 'N', k, k, m, 1.0, X.data(), std::max(k, 1), Z.data(), m, 1.0, inv.data(), kn); // C⁻¹ + X S⁻¹ Y
   lapack::gemm('N', 'N', k, m, m, -1.0, X.data(), std::max(k, 1), Sinv.data(), m, 0.0, &inv[static_cast<std::size_t>(k) * kn], kn);
   for (int q = 0; q < k; ++q)
     for (int p = 0; p < m; ++p) inv[k + p + static_cast<std::size_t>(q) * kn] = -Z[p + static_cast<std::size_t>(q) * m];

@@ -20,11 +20,11 @@ namespace hssbem {
 namespace {
 
 constexpr double k_inf = std::numeric_limits<double>::infinity();
-/// Below this many matrix entries a frame's products run on one thread, and below k_serial_k
-/// switched unknowns its BLAS calls too: on the cardioid (1 272 unknowns) OpenMP and OpenBLAS
-/// threads spinning against each other made a frame 20x slower (5.6 ms against 0.27 ms).
-constexpr double k_parallel_entries = 4e6;
-constexpr long long k_serial_k = 768;
+/// A frame's work (Woodbury solve, incremental capacitance update) runs on OpenMP threads with
+/// OpenBLAS kept on one thread (SerialBlas, gemm_over_threads): on the cardioid (1 272 unknowns)
+/// OpenMP and OpenBLAS threads spinning against each other made a frame 20x slower (5.6 ms
+/// against 0.27 ms). Products over fewer matrix entries than this run on one thread.
+constexpr double k_parallel_entries = 1e6;
 
 std::size_t sq(int n) { return static_cast<std::size_t>(n) * n; }
 
@@ -33,12 +33,20 @@ std::size_t sq(int n) { return static_cast<std::size_t>(n) * n; }
 void gather_axpy(const double *M, int n, const std::vector<int> &cols, const std::vector<double> &coef, double *y)
 {
   if (cols.empty()) return;
-  constexpr int block = 512;
+  constexpr int block = 4096; // 32 kB of y per thread stays in cache while the columns stream by
   const int nb = (n + block - 1) / block;
-#pragma omp parallel for schedule(static) if (static_cast<double>(n) * cols.size() > k_parallel_entries)
+  const std::size_t nc = cols.size();
+#pragma omp parallel for schedule(static) if (static_cast<double>(n) * nc > k_parallel_entries)
   for (int b = 0; b < nb; ++b) {
     const int r0 = b * block, r1 = std::min(n, r0 + block);
-    for (std::size_t i = 0; i < cols.size(); ++i) {
+    std::size_t i = 0;
+    for (; i + 4 <= nc; i += 4) { // four columns per pass over the block: a quarter of the y traffic
+      const double *m0 = M + static_cast<std::size_t>(cols[i]) * n, *m1 = M + static_cast<std::size_t>(cols[i + 1]) * n,
+                   *m2 = M + static_cast<std::size_t>(cols[i + 2]) * n, *m3 = M + static_cast<std::size_t>(cols[i + 3]) * n;
+      const double c0 = coef[i], c1 = coef[i + 1], c2 = coef[i + 2], c3 = coef[i + 3];
+      for (int r = r0; r < r1; ++r) y[r] += c0 * m0[r] + c1 * m1[r] + c2 * m2[r] + c3 * m3[r];
+    }
+    for (; i < nc; ++i) {
       const double *m = M + static_cast<std::size_t>(cols[i]) * n;
       const double c = coef[i];
       for (int r = r0; r < r1; ++r) y[r] += c * m[r];
@@ -271,6 +279,7 @@ void DenseScene::update_capacitance(const std::vector<char> &pattern)
   m_report.rebuilt = rebuild;
   if (!rebuild) {
     try {
+      const SerialBlas serial; // the update's products run on OpenMP threads (gemm_over_threads)
       m_cap.update(drop, add);
       ++m_updates_since_rebuild;
     } catch (const std::runtime_error &) { // a singular Schur complement on the way: start afresh
@@ -438,10 +447,10 @@ const SceneFrameReport &DenseScene::solve(const SystemSelection &sel, std::vecto
     m_report.changed += pattern[j] != before[j];
     m_report.values += sel.known[j / 3][j % 3] != 0.0;
   }
-  const SerialBlas serial((s == SceneStrategy::Solve || s == SceneStrategy::Update) && m_report.switched < k_serial_k && m_cap.size() < k_serial_k);
   switch (s) {
   case SceneStrategy::Solve: {
     const PhaseScope phase(Phase::SceneApply);
+    const SerialBlas serial;
     if (pattern == m_cap_pattern) woodbury_solve(sel, pattern, x);
     else lu_solve(sel, pattern, x);
     break;
@@ -449,6 +458,7 @@ const SceneFrameReport &DenseScene::solve(const SystemSelection &sel, std::vecto
   case SceneStrategy::Update: {
     if (pattern != m_cap_pattern) update_capacitance(pattern);
     const PhaseScope phase(Phase::SceneApply);
+    const SerialBlas serial;
     woodbury_solve(sel, pattern, x);
     m_last_factor = Last::Woodbury;
     break;
@@ -502,7 +512,7 @@ void DenseScene::solve_switched(const SystemSelection &sel, std::vector<double> 
       for (int p = 0; p < k; ++p) yJ[p] -= w[J[p]] * sel.pressure[node];
     }
   out.resize(k);
-  const SerialBlas serial(k < k_serial_k);
+  const SerialBlas serial;
   m_cap.apply(yJ.data(), out.data());
 }
 

@@ -6,6 +6,8 @@
 #include "hssbem/problem/problem.hpp"
 #include "hssbem/scene/capacitance.hpp"
 #include "hssbem/scene/dense_scene.hpp"
+#include "hssbem/scene/scene.hpp"
+#include "hssbem/bem/post.hpp"
 
 #include <gtest/gtest.h>
 
@@ -246,6 +248,56 @@ TEST(DenseScene, PressureLoadsAndLongMovesKeepTheAccuracy)
   SceneOptions no_pressure;
   DenseScene plain(*c.op, c.reference(), no_pressure);
   EXPECT_THROW(plain.solve(c.frame(0, 0.03, false, 50.0), x), std::invalid_argument);
+}
+
+TEST(Scene, PerVertexFramesMatchTheEngineAndTheHapticForcesMatchTheTractions)
+{
+  const Cardioid &c = cardioid();
+  const int nv = c.mesh.num_vertices();
+  Scene::Pattern reference(nv, {false, false, false});
+  for (int v = 0; v < nv; ++v)
+    if (c.mesh.vertices[v][2] < 0.044) reference[v] = {true, true, true};
+  Scene scene(c.mesh, Material::from_lame(1000.0, 500.0), reference);
+  for (int f = 0; f < 3; ++f) {
+    Scene::Pattern pattern = reference;
+    std::vector<Vec3> values(nv, Vec3{0, 0, 0});
+    const Vec3 centre{0.45 * std::cos(0.3 * f), 0.45 * std::sin(0.3 * f), 0.5};
+    int contact = 0;
+    for (int v = 0; v < nv; ++v)
+      if (!reference[v][0] && norm(c.mesh.vertices[v] - centre) < 0.3) pattern[v] = {true, true, true}, values[v] = {0, 0, -0.02}, ++contact;
+    ASSERT_GT(contact, 10);
+    scene.set_pattern(pattern);
+    scene.set_values(values);
+    const SceneFrameReport &rep = scene.solve();
+    EXPECT_EQ(rep.switched, 3 * contact);
+    // the same frame through the node-level selection and a dense solve
+    SystemSelection sel;
+    for (int n = 0; n < scene.discretization().num_nodes(); ++n) {
+      const int v = scene.discretization().node(n).vertex;
+      sel.displacement_known.push_back(pattern[v]);
+      sel.known.push_back(values[v]);
+    }
+    const NodalSolution ref = split_unknowns(sel, c.dense(sel));
+    const std::vector<Vec3> u = vertex_average(scene.discretization(), ref.u), t = vertex_average(scene.discretization(), ref.t);
+    double du = 0, nu = 0;
+    for (int v = 0; v < nv; ++v) du += dot(scene.displacement()[v] - u[v], scene.displacement()[v] - u[v]), nu += dot(u[v], u[v]);
+    EXPECT_LT(std::sqrt(du / nu), 1e-9);
+    // haptic: force = traction x lumped area on the contact vertices
+    const std::vector<double> area = node_areas(scene.discretization());
+    const std::vector<Scene::VertexForce> forces = scene.contact_forces();
+    EXPECT_EQ(static_cast<int>(forces.size()), contact);
+    double df = 0, nf = 0;
+    for (const auto &vf : forces) {
+      const int n = scene.discretization().first_node(vf.vertex);
+      ASSERT_EQ(scene.discretization().node_count(vf.vertex), 1);
+      const Vec3 expect = area[n] * ref.t[n];
+      df = std::max(df, norm(vf.force - expect)), nf = std::max(nf, norm(expect));
+    }
+    EXPECT_GT(nf, 0.0);
+    EXPECT_LT(df, 1e-9 * nf);
+  }
+  EXPECT_THROW(scene.set_pattern(Scene::Pattern(3)), std::invalid_argument);
+  EXPECT_THROW(scene.set_values(std::vector<Vec3>(3)), std::invalid_argument);
 }
 
 TEST(SceneStrategy, NamesRoundTrip)

@@ -24,6 +24,13 @@ private:
   int m_saved = 0;
 };
 
+/// C ← alpha op(A) op(B) + beta C (as lapack::gemm) split over the OpenMP threads by column blocks
+/// of C, each block a serial BLAS call: for code that keeps OpenBLAS on one thread (SerialBlas)
+/// so that its own OpenMP loops and BLAS never spin against each other. Serial when small.
+void gemm_over_threads(char transa, char transb, int m, int n, int k, double alpha, const double *a, int lda, const double *b, int ldb, double beta, double *c, int ldc);
+/// y ← op(A) x (A m×n, column-major) split over the OpenMP threads by row blocks (transa 'N').
+void gemv_over_threads(int m, int n, const double *a, int lda, const double *x, double *y);
+
 /// Whether a level with `clusters` independent clusters should run them on parallel threads.
 bool parallel_over_clusters(std::size_t clusters);
 

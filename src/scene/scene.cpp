@@ -1,0 +1,86 @@
+// The simulator API of scene.hpp over the dense scene engine.
+#include "hssbem/scene/scene.hpp"
+
+#include "hssbem/bem/post.hpp"
+
+#include <stdexcept>
+
+namespace hssbem {
+
+namespace {
+
+SystemSelection node_selection(const Discretization &disc, const Scene::Pattern &pattern, const std::vector<Vec3> &values)
+{
+  SystemSelection sel;
+  sel.displacement_known.resize(disc.num_nodes());
+  sel.known.assign(disc.num_nodes(), Vec3{0, 0, 0});
+  for (int n = 0; n < disc.num_nodes(); ++n) {
+    const int v = disc.node(n).vertex;
+    sel.displacement_known[n] = pattern[v];
+    if (!values.empty()) sel.known[n] = values[v];
+  }
+  return sel;
+}
+
+} // namespace
+
+Scene::Scene(const SurfaceMesh &mesh, const Material &material, const Pattern &reference, const SceneOptions &options, std::unique_ptr<KrylovSolver> krylov,
+             double feature_angle_deg)
+    : m_mesh(mesh)
+{
+  if (reference.size() != mesh.vertices.size()) throw std::invalid_argument("Scene: the reference pattern needs one entry per vertex");
+  if (options.with_pressure) throw std::invalid_argument("Scene: pressure loads are not part of the Scene API (give tractions)");
+  m_disc = std::make_unique<Discretization>(m_mesh, feature_angle_deg);
+  m_op = std::make_unique<BemOperator>(*m_disc, material);
+  m_scene = std::make_unique<DenseScene>(*m_op, node_selection(*m_disc, reference, {}), options, std::move(krylov));
+  m_pattern = reference;
+  m_values.assign(mesh.vertices.size(), Vec3{0, 0, 0});
+  m_area = node_areas(*m_disc);
+}
+
+Scene::~Scene() = default;
+
+void Scene::set_pattern(const Pattern &displacement_prescribed)
+{
+  if (displacement_prescribed.size() != m_mesh.vertices.size()) throw std::invalid_argument("Scene::set_pattern: one entry per vertex expected");
+  m_pattern = displacement_prescribed;
+}
+
+void Scene::set_values(const std::vector<Vec3> &values)
+{
+  if (values.size() != m_mesh.vertices.size()) throw std::invalid_argument("Scene::set_values: one value per vertex expected");
+  m_values = values;
+}
+
+SystemSelection Scene::selection() const { return node_selection(*m_disc, m_pattern, m_values); }
+
+const SceneFrameReport &Scene::solve()
+{
+  const SystemSelection sel = selection();
+  std::vector<double> x;
+  const SceneFrameReport &rep = m_scene->solve(sel, x);
+  const NodalSolution sol = split_unknowns(sel, x);
+  m_u = vertex_average(*m_disc, sol.u);
+  m_t = vertex_average(*m_disc, sol.t);
+  return rep;
+}
+
+std::vector<Scene::VertexForce> Scene::contact_forces()
+{
+  const SystemSelection sel = selection();
+  std::vector<double> s;
+  m_scene->solve_switched(sel, s);
+  const std::vector<int> &J = m_scene->switched();
+  std::vector<int> slot(m_mesh.vertices.size(), -1);
+  std::vector<VertexForce> out;
+  for (std::size_t p = 0; p < J.size(); ++p) {
+    const int node = J[p] / 3, comp = J[p] % 3;
+    if (!sel.displacement_known[node][comp]) continue; // a released component: its unknown is a displacement
+    const int v = m_disc->node(node).vertex;
+    if (slot[v] < 0) slot[v] = static_cast<int>(out.size()), out.push_back({v, Vec3{0, 0, 0}});
+    out[slot[v]].force[comp] += s[p] * m_area[node];
+  }
+  return out;
+}
+
+} // namespace hssbem
