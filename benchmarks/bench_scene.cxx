@@ -76,8 +76,8 @@ Args parse(int argc, char **argv)
   return a;
 }
 
-/// The contact of frame f: the patch of the `fraction` vertices nearest to the surface point
-/// at angle phi around the body's middle, pushed in along -(cos phi, sin phi, 0) with a smooth
+/// The contact of frame f: the patch of the `fraction` (of all vertices) free vertices nearest to
+/// the free surface point at angle phi around the body's middle (clamped vertices never touch), pushed in along -(cos phi, sin phi, 0) with a smooth
 /// profile (deepest at the centre); all three components prescribed, or only the one along the
 /// dominant axis of the push (the others traction-free).
 struct Scenario {
@@ -87,8 +87,13 @@ struct Scenario {
   Vec3 centre{};
   double size = 0;
 
+  std::vector<char> clamped; ///< vertices of the base region: never in the contact
+
   Scenario(const SurfaceMesh &m, const Discretization &d, const Args &a) : mesh(m), disc(d), args(a)
   {
+    const VertexConditions vc = apply_rules(base(), m, "bench_scene");
+    clamped.resize(m.vertices.size());
+    for (std::size_t v = 0; v < clamped.size(); ++v) clamped[v] = vc.displacement_prescribed[v][0] && vc.displacement_prescribed[v][1] && vc.displacement_prescribed[v][2];
     Vec3 lo = m.vertices[0], hi = m.vertices[0];
     for (const Vec3 &v : m.vertices)
       for (int c = 0; c < 3; ++c) lo[c] = std::min(lo[c], v[c]), hi[c] = std::max(hi[c], v[c]);
@@ -112,12 +117,13 @@ struct Scenario {
     const Vec3 dir{std::cos(phi), std::sin(phi), 0.0};
     const Vec3 far{centre[0] + 10 * size * dir[0], centre[1] + 10 * size * dir[1], centre[2]};
     const int nv = mesh.num_vertices();
-    int c = 0;
-    for (int v = 1; v < nv; ++v)
-      if (norm(mesh.vertices[v] - far) < norm(mesh.vertices[c] - far)) c = v;
-    std::vector<std::pair<double, int>> d(nv);
-    for (int v = 0; v < nv; ++v) d[v] = {norm(mesh.vertices[v] - mesh.vertices[c]), v};
-    const int np = std::max(1, static_cast<int>(std::lround(fraction * nv)));
+    int c = -1;
+    for (int v = 0; v < nv; ++v)
+      if (!clamped[v] && (c < 0 || norm(mesh.vertices[v] - far) < norm(mesh.vertices[c] - far))) c = v;
+    std::vector<std::pair<double, int>> d; // the free vertices by distance to the contact point
+    for (int v = 0; v < nv; ++v)
+      if (!clamped[v]) d.push_back({norm(mesh.vertices[v] - mesh.vertices[c]), v});
+    const int np = std::min(static_cast<int>(d.size()), std::max(1, static_cast<int>(std::lround(fraction * nv))));
     std::partial_sort(d.begin(), d.begin() + np, d.end());
     const double R = std::max(d[np - 1].first, 1e-12) * 1.05;
     std::vector<std::pair<int, double>> patch;

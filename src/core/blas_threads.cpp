@@ -4,6 +4,7 @@
 #include "hssbem/core/lapack.hpp"
 
 #include <algorithm>
+#include <vector>
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -47,13 +48,28 @@ void gemm_over_threads(char transa, char transb, int m, int n, int k, double alp
 void gemv_over_threads(int m, int n, const double *a, int lda, const double *x, double *y)
 {
   if (m == 0) return;
-  const bool par = static_cast<double>(m) * n > 1e6;
-  const SerialBlas serial(par);
-  const int block = 256, nb = (m + block - 1) / block;
-#pragma omp parallel for schedule(static) if (par)
-  for (int b = 0; b < nb; ++b) {
-    const int r0 = b * block, rows = std::min(m, r0 + block) - r0;
-    lapack::gemv('N', rows, n, 1.0, a + r0, lda, x, 0.0, y + r0);
+  int threads = 1;
+#ifdef _OPENMP
+  if (static_cast<double>(m) * n > 1e6) threads = omp_get_max_threads();
+#endif
+  if (threads == 1 || n < 2 * threads) {
+    const SerialBlas serial;
+    lapack::gemv('N', m, n, 1.0, a, lda, x, 0.0, y);
+    return;
+  }
+  // Column blocks: each thread streams a contiguous slab of A into its own partial sum.
+  const SerialBlas serial;
+  std::vector<double> part(static_cast<std::size_t>(threads) * m, 0.0);
+  const int width = (n + threads - 1) / threads;
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (int t = 0; t < threads; ++t) {
+    const int j0 = t * width, w = std::min(n, j0 + width) - j0;
+    if (w > 0) lapack::gemv('N', m, w, 1.0, a + static_cast<std::size_t>(j0) * lda, lda, x + j0, 0.0, &part[static_cast<std::size_t>(t) * m]);
+  }
+  for (int i = 0; i < m; ++i) {
+    double s = 0;
+    for (int t = 0; t < threads; ++t) s += part[static_cast<std::size_t>(t) * m + i];
+    y[i] = s;
   }
 }
 
