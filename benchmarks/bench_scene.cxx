@@ -21,6 +21,7 @@
 #include <petscsys.h>
 
 #include <algorithm>
+#include <climits>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -39,6 +40,7 @@ struct Args {
   double fraction = 0.2, step_deg = 3, depth = 0.04;
   int frames = 60, components = 3, refactor_frames = 5, krylov_frames = 3, scratch_frames = 2, check = 6;
   bool crossover = false;
+  int single_from = 1024;
 };
 
 Args parse(int argc, char **argv)
@@ -67,6 +69,7 @@ Args parse(int argc, char **argv)
     else if (k == "--scratch-frames") a.scratch_frames = std::stoi(next());
     else if (k == "--check") a.check = std::stoi(next());
     else if (k == "--crossover") a.crossover = true;
+    else if (k == "--single-from") a.single_from = std::stoi(next());
     else if (k.rfind("-", 0) == 0 && k.rfind("--", 0) != 0) { // a PETSc option and its value
       if (i + 1 < argc && argv[i + 1][0] != '-') ++i;
     } else throw std::invalid_argument("unknown argument " + k);
@@ -198,7 +201,9 @@ int run(const Args &a)
               a.components, a.step_deg, std::getenv("OMP_NUM_THREADS") ? std::getenv("OMP_NUM_THREADS") : "(unset)");
 
   const SystemSelection reference = sc.selection(sc.base());
-  DenseScene scene(op, reference, SceneOptions{}, HssbemSceneKrylovCreate());
+  SceneOptions so;
+  so.single_from = a.single_from < 0 ? INT_MAX : a.single_from;
+  DenseScene scene(op, reference, so, HssbemSceneKrylovCreate());
   std::printf("set-up (assembly of H and G, LU of the reference, W = A0^-1 K0'): %.2f s; scene memory %.0f MB; peak RSS %.0f MB; measured %.1f GB/s, %.1f GF/s\n",
               scene.setup_seconds(), scene.memory_bytes() / 1e6, bench::peak_rss_mb(), scene.bandwidth() / 1e9, scene.flop_rate() / 1e9);
 

@@ -26,6 +26,12 @@ static const char help[] = "moving_contact: a contact patch sliding around a bod
 #include <utility>
 #include <vector>
 
+/* hssbem::Vec3 is a std::array: its arithmetic lives in namespace hssbem, where argument-dependent
+   lookup does not look, so name it. */
+using hssbem::operator+;
+using hssbem::operator-;
+using hssbem::operator*;
+
 using Clock = std::chrono::steady_clock;
 static double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 

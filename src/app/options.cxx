@@ -7,6 +7,7 @@
 #include "hssbem/app/petsc_call.hpp"
 #include "hssbem/petsc/system.h"
 
+#include <climits>
 #include <cstring>
 #include <optional>
 #include <string>
@@ -44,6 +45,7 @@ PetscErrorCode OptionString_Private(const char *key, const char *text, std::stri
 . -mat_bem_max_depth <n>      - subdivision levels for nearly singular triangles
 . -scene_strategy <auto|solve|update|refactor|krylov> - per-frame strategy of a scene (auto: the cost model's cheapest)
 . -scene_refresh <n>          - incremental capacitance updates before a rebuild
+. -scene_single_from <n>      - single-precision capacitance inverse from this many switched unknowns (-1: never)
 . -scene_krylov_rtol <r>      - GMRES tolerance of the krylov strategy
 - -scene_monitor              - print one line per frame
 */
@@ -55,7 +57,7 @@ PetscErrorCode ProcessOptions_Private(MPI_Comm comm, AppOptions *opts)
   std::string mesh = opts->overrides.mesh.value_or(""), output = opts->overrides.output.value_or(""), mat_type = opts->operator_type ? operator_type_name(*opts->operator_type) : "auto";
   QuadratureOptions &quad = opts->quad;
   std::string strategy = scene_strategy_name(opts->scene.strategy);
-  PetscInt    refresh  = opts->scene.refresh_every;
+  PetscInt    refresh  = opts->scene.refresh_every, single_from = opts->scene.single_from;
   PetscBool   monitor  = opts->scene.monitor ? PETSC_TRUE : PETSC_FALSE;
 
   PetscFunctionBegin;
@@ -77,6 +79,7 @@ PetscErrorCode ProcessOptions_Private(MPI_Comm comm, AppOptions *opts)
   PetscCall(PetscOptionsInt("-mat_bem_max_depth", "Subdivision levels for nearly singular triangles", "", quad.max_depth, &quad.max_depth, NULL));
   PetscCall(OptionString_Private("-scene_strategy", "Scenes (frames): per-frame strategy: auto (cheapest by the cost model), solve, update, refactor or krylov", &strategy, PetscOptionsObject));
   PetscCall(PetscOptionsInt("-scene_refresh", "Scenes: incremental capacitance updates before a rebuild from scratch", "", opts->scene.refresh_every, &refresh, NULL));
+  PetscCall(PetscOptionsInt("-scene_single_from", "Scenes: switched sets of at least this size keep the capacitance inverse in single precision, refined in double (-1: never)", "", single_from, &single_from, NULL));
   PetscCall(PetscOptionsReal("-scene_krylov_rtol", "Scenes: GMRES relative tolerance (true residual) of the krylov strategy", "", opts->scene.krylov_rtol, &opts->scene.krylov_rtol, NULL));
   PetscCall(PetscOptionsBool("-scene_monitor", "Scenes: print one line per frame (strategy, switched unknowns, time)", "", monitor, &monitor, NULL));
   PetscOptionsEnd();
@@ -88,6 +91,8 @@ PetscErrorCode ProcessOptions_Private(MPI_Comm comm, AppOptions *opts)
   }
   PetscCheck(refresh >= 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-scene_refresh must be at least 1");
   opts->scene.refresh_every = (int)refresh;
+  PetscCheck(single_from >= -1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-scene_single_from must be -1 (never) or a number of switched unknowns");
+  opts->scene.single_from = single_from < 0 ? INT_MAX : (int)single_from;
   PetscCheck(opts->scene.krylov_rtol > 0 && opts->scene.krylov_rtol < 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-scene_krylov_rtol must lie in (0, 1)");
   if (!mesh.empty()) opts->overrides.mesh = mesh;
   if (!output.empty()) opts->overrides.output = output;

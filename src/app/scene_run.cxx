@@ -97,6 +97,7 @@ void run_scene(MPI_Comm comm, const ProblemSetup &s, const BemOperator &op, std:
     so.strategy      = o.strategy;
     so.with_pressure = uses_pressure(s.spec);
     so.refresh_every = o.refresh_every;
+    so.single_from   = o.single_from;
     so.krylov_rtol   = o.krylov_rtol;
     const Timer      timer;
     DenseScene       scene(op, selection_of(ref_nc), so, HssbemSceneKrylovCreate());

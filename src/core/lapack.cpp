@@ -156,4 +156,42 @@ int pstrf_upper(int n, double *a, int lda, int *piv, double tol)
   return rank;
 }
 
+void gemm(char transa, char transb, int m, int n, int k, float alpha, const float *a, int lda, const float *b, int ldb, float beta, float *c, int ldc)
+{
+  if (m == 0 || n == 0) return;
+  if (k == 0) {
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < m; ++i) c[i + static_cast<long>(j) * ldc] = beta == 0.0f ? 0.0f : beta * c[i + static_cast<long>(j) * ldc];
+    return;
+  }
+  sgemm_(&transa, &transb, &m, &n, &k, &alpha, a, &lda, b, &ldb, &beta, c, &ldc);
+}
+
+void gemv(char trans, int m, int n, float alpha, const float *a, int lda, const float *x, float beta, float *y)
+{
+  const int one = 1, ny = trans == 'N' ? m : n;
+  if (ny == 0) return;
+  if (m == 0 || n == 0) {
+    for (int i = 0; i < ny; ++i) y[i] = beta == 0.0f ? 0.0f : beta * y[i];
+    return;
+  }
+  sgemv_(&trans, &m, &n, &alpha, a, &lda, x, &one, &beta, y, &one);
+}
+
+int getrf(int n, float *a, int lda, int *ipiv)
+{
+  if (n == 0) return 0;
+  int info = 0;
+  sgetrf_(&n, &n, a, &lda, ipiv, &info);
+  return info;
+}
+
+int getrs(char trans, int n, int nrhs, const float *a, int lda, const int *ipiv, float *b, int ldb)
+{
+  if (n == 0 || nrhs == 0) return 0;
+  int info = 0;
+  sgetrs_(&trans, &n, &nrhs, a, &lda, ipiv, b, &ldb, &info);
+  return info;
+}
+
 } // namespace hssbem::lapack

@@ -78,7 +78,7 @@ std::optional<SceneStrategy> parse_scene_strategy(const std::string &s)
 }
 
 DenseScene::DenseScene(const BemOperator &op, const SystemSelection &reference, const SceneOptions &options, std::unique_ptr<KrylovSolver> krylov)
-    : m_n(3 * op.num_nodes()), m_nodes(op.num_nodes()), m_opt(options), m_krylov(std::move(krylov)), m_cap(nullptr, 3 * op.num_nodes())
+    : m_n(3 * op.num_nodes()), m_nodes(op.num_nodes()), m_opt(options), m_krylov(std::move(krylov)), m_cap(nullptr, 3 * op.num_nodes(), options.single_from)
 {
   const Timer timer;
   if (static_cast<int>(reference.displacement_known.size()) != m_nodes) throw std::invalid_argument("DenseScene: the reference pattern does not match the operator's nodes");
@@ -89,7 +89,7 @@ DenseScene::DenseScene(const BemOperator &op, const SystemSelection &reference, 
     factor_reference(reference);
     measure_rates();
   }
-  m_cap = CapacitanceInverse(m_W.data(), m_n);
+  m_cap = CapacitanceInverse(m_W.data(), m_n, m_opt.single_from);
   m_cap.rebuild({});
   m_cap_pattern = m_ref;
   m_setup_seconds = timer.seconds();
@@ -240,11 +240,19 @@ void DenseScene::woodbury_solve(const SystemSelection &sel, const std::vector<ch
   const int k = m_cap.size();
   std::vector<double> yJ(k), s(k);
   for (int p = 0; p < k; ++p) yJ[p] = x[J[p]];
-  m_cap.apply(yJ.data(), s.data());
+  capacitance_solve(yJ.data(), s.data());
   std::vector<double> minus_s(k);
   for (int p = 0; p < k; ++p) minus_s[p] = -s[p];
   gather_axpy(m_W.data(), m_n, J, minus_s, x.data());
   for (int p = 0; p < k; ++p) x[J[p]] += s[p];
+}
+
+void DenseScene::capacitance_solve(const double *r, double *s) const
+{
+  if (m_cap.solve(r, s)) return;
+  const std::vector<int> J = m_cap.indices(); // single precision no longer enough: rebuild in double
+  m_cap.rebuild(J, true);
+  m_cap.solve(r, s);
 }
 
 double DenseScene::predict_update(const std::vector<char> &pattern, bool *rebuild) const
@@ -257,11 +265,14 @@ double DenseScene::predict_update(const std::vector<char> &pattern, bool *rebuil
     add += now && !before;
   }
   const double inc = CapacitanceInverse::update_flops(m_cap.size(), drop, add), full = CapacitanceInverse::rebuild_flops(k_new);
-  const bool must = m_updates_since_rebuild >= m_opt.refresh_every;
+  // A single-precision inverse is refined against the exact C at every solve, which also notices
+  // when rounding has built up (capacitance_solve then rebuilds): it can go 4x longer.
+  const bool must = m_updates_since_rebuild >= m_opt.refresh_every * (m_cap.single() ? 4 : 1);
   *rebuild = must || full <= inc;
   if (drop == 0 && add == 0) *rebuild = false;
   const double flops = (drop == 0 && add == 0) ? 0.0 : (*rebuild ? full : inc);
-  return flops / m_flops;
+  const bool single = *rebuild ? k_new >= m_opt.single_from : m_cap.single();
+  return flops / (single ? 2 * m_flops : m_flops) + (single ? 3 * 8.0 * static_cast<double>(k_new) * k_new / m_bandwidth : 0.0);
 }
 
 void DenseScene::update_capacitance(const std::vector<char> &pattern)
@@ -363,7 +374,7 @@ void DenseScene::apply_previous(const std::vector<char> &, const double *r, doub
   const int k = m_cap.size();
   std::vector<double> yJ(k), s(k), minus_s(k);
   for (int p = 0; p < k; ++p) yJ[p] = z[J[p]];
-  m_cap.apply(yJ.data(), s.data());
+  capacitance_solve(yJ.data(), s.data());
   for (int p = 0; p < k; ++p) minus_s[p] = -s[p];
   gather_axpy(m_W.data(), m_n, J, minus_s, z);
   for (int p = 0; p < k; ++p) z[J[p]] += s[p];
@@ -513,7 +524,7 @@ void DenseScene::solve_switched(const SystemSelection &sel, std::vector<double> 
     }
   out.resize(k);
   const SerialBlas serial;
-  m_cap.apply(yJ.data(), out.data());
+  capacitance_solve(yJ.data(), out.data());
 }
 
 double DenseScene::residual(const SystemSelection &sel, const std::vector<double> &x) const

@@ -39,7 +39,7 @@ double max_diff(const CapacitanceInverse &a, const CapacitanceInverse &b)
   for (int p = 0; p < k; ++p)
     for (int q = 0; q < k; ++q) {
       const int i = b.position(a.indices()[p]), j = b.position(a.indices()[q]);
-      d = std::max(d, std::abs(a.inverse()[p + q * k] - b.inverse()[i + j * k]));
+      d = std::max(d, std::abs(a.inverse_entry(p, q) - b.inverse_entry(i, j)));
     }
   return d;
 }
@@ -75,10 +75,68 @@ TEST(Capacitance, UpdatesMatchTheRebuildAndInvertTheSubmatrix)
   for (int p = 0; p < k; ++p)
     for (int q = 0; q < k; ++q) {
       double s = 0;
-      for (int r = 0; r < k; ++r) s += inc.inverse()[p + r * k] * W[inc.indices()[r] + static_cast<std::size_t>(inc.indices()[q]) * n];
+      for (int r = 0; r < k; ++r) s += inc.inverse_entry(p, r) * W[inc.indices()[r] + static_cast<std::size_t>(inc.indices()[q]) * n];
       err = std::max(err, std::abs(s - (p == q)));
     }
   EXPECT_LT(err, 1e-12);
+}
+
+TEST(Capacitance, SinglePrecisionInverseRefinesToDoubleAccuracy)
+{
+  const int n = 300;
+  const std::vector<double> W = random_matrix(n, 11);
+  CapacitanceInverse single(W.data(), n, 0), exact(W.data(), n);
+  std::vector<int> set;
+  for (int j = 0; j < 120; ++j) set.push_back(2 * j);
+  single.rebuild(set);
+  ASSERT_TRUE(single.single());
+  std::mt19937 gen(5);
+  for (int step = 0; step < 20; ++step) {
+    std::vector<int> drop, add;
+    for (int j : set)
+      if (gen() % 10 == 0) drop.push_back(j);
+    for (int j = 1; j < n; j += 2)
+      if (std::find(set.begin(), set.end(), j) == set.end() && gen() % 30 == 0) add.push_back(j);
+    single.update(drop, add);
+    std::vector<int> next;
+    for (int j : set)
+      if (std::find(drop.begin(), drop.end(), j) == drop.end()) next.push_back(j);
+    next.insert(next.end(), add.begin(), add.end());
+    set = next;
+  }
+  exact.rebuild(single.indices());
+  ASSERT_FALSE(exact.single());
+  const int k = single.size();
+  std::vector<double> r(k), s1(k), s2(k);
+  for (int i = 0; i < k; ++i) r[i] = std::sin(0.3 * i) + 0.1;
+  ASSERT_TRUE(single.solve(r.data(), s1.data()));
+  exact.solve(r.data(), s2.data());
+  double d = 0, nrm = 0;
+  for (int i = 0; i < k; ++i) d += (s1[i] - s2[i]) * (s1[i] - s2[i]), nrm += s2[i] * s2[i];
+  EXPECT_LT(std::sqrt(d / nrm), 1e-12);
+  // single-precision entries really are single: they differ from the double inverse's
+  double e = 0;
+  for (int p = 0; p < k; ++p) e = std::max(e, std::abs(single.inverse_entry(p, p) - exact.inverse_entry(p, p)));
+  EXPECT_GT(e, 1e-12);
+}
+
+TEST(Capacitance, IllConditionedSinglePrecisionAsksForARebuild)
+{
+  const int n = 60;
+  std::vector<double> W(static_cast<std::size_t>(n) * n, 0.0);
+  std::mt19937 gen(9);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (int i = 0; i < n; ++i) // lower triangular with a huge spread on the diagonal: cond ~ 1e10
+    for (int j = 0; j <= i; ++j) W[i + static_cast<std::size_t>(j) * n] = i == j ? std::pow(10.0, -10.0 * i / (n - 1)) : 0.5 * u(gen);
+  std::vector<int> all(n);
+  std::iota(all.begin(), all.end(), 0);
+  CapacitanceInverse c(W.data(), n, 0);
+  c.rebuild(all);
+  std::vector<double> r(n, 1.0), s(n);
+  EXPECT_FALSE(c.solve(r.data(), s.data()));
+  c.rebuild(all, true);
+  EXPECT_FALSE(c.single());
+  EXPECT_TRUE(c.solve(r.data(), s.data()));
 }
 
 TEST(Capacitance, RejectsIndicesNotInOrAlreadyInTheSet)
@@ -248,6 +306,25 @@ TEST(DenseScene, PressureLoadsAndLongMovesKeepTheAccuracy)
   SceneOptions no_pressure;
   DenseScene plain(*c.op, c.reference(), no_pressure);
   EXPECT_THROW(plain.solve(c.frame(0, 0.03, false, 50.0), x), std::invalid_argument);
+}
+
+TEST(DenseScene, SinglePrecisionCapacitanceMatchesTheDenseSolves)
+{
+  const Cardioid &c = cardioid();
+  SceneOptions opt;
+  opt.single_from = 0; // every switched set in single precision, refined in double
+  DenseScene scene(*c.op, c.reference(), opt);
+  std::vector<double> x, sw;
+  for (int f = 0; f < 12; ++f) {
+    const SystemSelection sel = c.frame(0.08 * f, 0.04, f % 2 == 0);
+    const SceneFrameReport &rep = scene.solve(sel, x, SceneStrategy::Update);
+    if (f % 4 == 3) EXPECT_LT(rel_diff(x, c.dense(sel)), 1e-9) << "frame " << f << (rep.rebuilt ? " (rebuilt)" : "");
+  }
+  scene.solve_switched(c.frame(0.88, 0.05, false), sw); // the last pattern (f = 11), new values
+  const SystemSelection last = c.frame(0.88, 0.05, false);
+  scene.solve(last, x);
+  ASSERT_EQ(sw.size(), scene.switched().size());
+  for (std::size_t p = 0; p < sw.size(); ++p) EXPECT_NEAR(sw[p], x[scene.switched()[p]], 1e-9 * (1 + std::abs(x[scene.switched()[p]])));
 }
 
 TEST(Scene, PerVertexFramesMatchTheEngineAndTheHapticForcesMatchTheTractions)

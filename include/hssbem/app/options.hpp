@@ -22,6 +22,7 @@ struct SceneRunOptions {
   SceneStrategy strategy = SceneStrategy::Auto; ///< -scene_strategy
   int refresh_every = 32;                       ///< -scene_refresh: capacitance updates between rebuilds
   double krylov_rtol = 1e-10;                   ///< -scene_krylov_rtol
+  int single_from = 1024;                       ///< -scene_single_from: single-precision capacitance from this many switched unknowns
   bool monitor = false;                         ///< -scene_monitor: one line per frame
 };
 

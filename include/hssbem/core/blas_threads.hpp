@@ -7,6 +7,9 @@
 /// their clusters one after another with BLAS threaded instead. With another BLAS this does nothing.
 #pragma once
 
+#include "hssbem/core/lapack.hpp"
+
+#include <algorithm>
 #include <cstddef>
 #include <exception>
 #include <vector>
@@ -24,12 +27,53 @@ private:
   int m_saved = 0;
 };
 
-/// C ← alpha op(A) op(B) + beta C (as lapack::gemm) split over the OpenMP threads by column blocks
-/// of C, each block a serial BLAS call: for code that keeps OpenBLAS on one thread (SerialBlas)
-/// so that its own OpenMP loops and BLAS never spin against each other. Serial when small.
-void gemm_over_threads(char transa, char transb, int m, int n, int k, double alpha, const double *a, int lda, const double *b, int ldb, double beta, double *c, int ldc);
-/// y ← op(A) x (A m×n, column-major) split over the OpenMP threads by row blocks (transa 'N').
-void gemv_over_threads(int m, int n, const double *a, int lda, const double *x, double *y);
+/// C ← alpha op(A) op(B) + beta C (as lapack::gemm; T = double or float) split over the OpenMP
+/// threads by column blocks of C, each block a serial BLAS call: for code that keeps OpenBLAS on
+/// one thread (SerialBlas) so that its own OpenMP loops and BLAS never spin against each other.
+/// Serial when small.
+template <class T>
+void gemm_over_threads(char transa, char transb, int m, int n, int k, T alpha, const T *a, int lda, const T *b, int ldb, T beta, T *c, int ldc)
+{
+  const bool par = static_cast<double>(m) * n * k > 2e6 && n >= 16;
+  const SerialBlas serial(par);
+  const int nb = par ? std::min(n / 8, 64) : 1, width = (n + nb - 1) / nb;
+#pragma omp parallel for schedule(dynamic, 1) if (par)
+  for (int j = 0; j < nb; ++j) {
+    const int j0 = j * width, w = std::min(n, j0 + width) - j0;
+    if (w <= 0) continue;
+    const T *bj = transb == 'N' ? b + static_cast<std::size_t>(j0) * ldb : b + j0;
+    lapack::gemm(transa, transb, m, w, k, alpha, a, lda, bj, ldb, beta, c + static_cast<std::size_t>(j0) * ldc, ldc);
+  }
+}
+
+/// Threads available to the *_over_threads products (1 without OpenMP).
+int blas_loop_threads();
+
+/// y ← A x (A m×n, column-major; T = double or float) split over the OpenMP threads by column
+/// blocks, each thread streaming a contiguous slab of A into its own partial sum.
+template <class T>
+void gemv_over_threads(int m, int n, const T *a, int lda, const T *x, T *y)
+{
+  if (m == 0) return;
+  const int threads = static_cast<double>(m) * n > 1e6 ? blas_loop_threads() : 1;
+  const SerialBlas serial;
+  if (threads == 1 || n < 2 * threads) {
+    lapack::gemv('N', m, n, T(1), a, lda, x, T(0), y);
+    return;
+  }
+  std::vector<T> part(static_cast<std::size_t>(threads) * m, T(0));
+  const int width = (n + threads - 1) / threads;
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (int t = 0; t < threads; ++t) {
+    const int j0 = t * width, w = std::min(n, j0 + width) - j0;
+    if (w > 0) lapack::gemv('N', m, w, T(1), a + static_cast<std::size_t>(j0) * lda, lda, x + j0, T(0), &part[static_cast<std::size_t>(t) * m]);
+  }
+  for (int i = 0; i < m; ++i) {
+    T s = 0;
+    for (int t = 0; t < threads; ++t) s += part[static_cast<std::size_t>(t) * m + i];
+    y[i] = s;
+  }
+}
 
 /// Whether a level with `clusters` independent clusters should run them on parallel threads.
 bool parallel_over_clusters(std::size_t clusters);

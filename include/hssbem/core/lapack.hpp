@@ -24,6 +24,10 @@ void dgeqrt3_(const int *m, const int *n, double *a, const int *lda, double *t, 
 void dlarfb_(const char *side, const char *trans, const char *direct, const char *storev, const int *m, const int *n, const int *k, const double *v, const int *ldv, const double *t, const int *ldt, double *c, const int *ldc, double *work, const int *ldwork);
 void dsyrk_(const char *uplo, const char *trans, const int *n, const int *k, const double *alpha, const double *a, const int *lda, const double *beta, double *c, const int *ldc);
 void dpstrf_(const char *uplo, const int *n, double *a, const int *lda, int *piv, int *rank, const double *tol, double *work, int *info);
+void sgemm_(const char *transa, const char *transb, const int *m, const int *n, const int *k, const float *alpha, const float *a, const int *lda, const float *b, const int *ldb, const float *beta, float *c, const int *ldc);
+void sgemv_(const char *trans, const int *m, const int *n, const float *alpha, const float *a, const int *lda, const float *x, const int *incx, const float *beta, float *y, const int *incy);
+void sgetrf_(const int *m, const int *n, float *a, const int *lda, int *ipiv, int *info);
+void sgetrs_(const char *trans, const int *n, const int *nrhs, const float *a, const int *lda, const int *ipiv, float *b, const int *ldb, int *info);
 void dgemm_(const char *transa, const char *transb, const int *m, const int *n, const int *k, const double *alpha, const double *a, const int *lda, const double *b, const int *ldb, const double *beta, double *c, const int *ldc);
 }
 
@@ -71,4 +75,11 @@ int getrf(int n, double *a, int lda, int *ipiv);
 int getrs(char trans, int n, int nrhs, const double *a, int lda, const int *ipiv, double *b, int ldb);
 /// y ← alpha op(A) x + beta y with A m×n (dgemv); unit strides.
 void gemv(char trans, int m, int n, double alpha, const double *a, int lda, const double *x, double beta, double *y);
+
+/// Single-precision twins of gemm, gemv, getrf and getrs (sgemm, sgemv, sgetrf, sgetrs), for
+/// mixed-precision code that refines in double (the scene's capacitance inverse).
+void gemm(char transa, char transb, int m, int n, int k, float alpha, const float *a, int lda, const float *b, int ldb, float beta, float *c, int ldc);
+void gemv(char trans, int m, int n, float alpha, const float *a, int lda, const float *x, float beta, float *y);
+int getrf(int n, float *a, int lda, int *ipiv);
+int getrs(char trans, int n, int nrhs, const float *a, int lda, const int *ipiv, float *b, int ldb);
 } // namespace hssbem::lapack

@@ -55,6 +55,9 @@ struct SceneOptions {
   bool with_pressure = false;  ///< some frame has pressure loads: compute W_p = A₀⁻¹ Gn at set-up
   bool keep_operator = true;   ///< keep H and G (needed by refactor, krylov and residual())
   int refresh_every = 32;      ///< incremental capacitance updates before a rebuild from scratch
+  /// Switched sets of at least this size keep the capacitance inverse in single precision,
+  /// refined in double per solve (capacitance.hpp); INT_MAX: always double.
+  int single_from = 1024;
   double krylov_rtol = 1e-10;  ///< GMRES relative tolerance (true residual) of the krylov strategy
   int krylov_max_it = 200;     ///< and its iteration limit (reaching it is an error)
 };
@@ -146,7 +149,11 @@ private:
   std::vector<char> m_ref;           ///< reference pattern: 1 where u is known (t unknown)
   std::vector<double> m_W, m_Wp;     ///< A₀⁻¹ K₀' and A₀⁻¹ Gn, column-major
   std::vector<double> m_H, m_G, m_Gn;///< the operator, column-major (keep_operator)
-  CapacitanceInverse m_cap;          ///< W(J, J)⁻¹ for the current switched set
+  /// W(J, J)⁻¹ for the current switched set; mutable: a solve whose single-precision refinement
+  /// stops contracting rebuilds it (in double) on the spot.
+  mutable CapacitanceInverse m_cap;
+  /// s = W(J, J)⁻¹ r with the current capacitance, rebuilding it when its refinement fails.
+  void capacitance_solve(const double *r, double *s) const;
   std::vector<char> m_cap_pattern;   ///< the pattern m_cap serves
   int m_updates_since_rebuild = 0;
   std::vector<double> m_lu0;         ///< LU of the reference A₀ (column-major) and its pivots
