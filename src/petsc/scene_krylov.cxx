@@ -12,35 +12,38 @@ struct Callbacks {
   const std::function<void(const double *, double *)> *A, *M;
 };
 
-PetscErrorCode MatMult_SceneKrylov(Mat A, Vec x, Vec y)
+/* y = fn(x) on the arrays of x and y. */
+PetscErrorCode ApplyCallback_Private(const std::function<void(const double *, double *)> &fn, Vec x, Vec y)
 {
-  Callbacks         *cb;
   const PetscScalar *in;
   PetscScalar       *out;
 
   PetscFunctionBegin;
-  PetscCall(MatShellGetContext(A, &cb));
   PetscCall(VecGetArrayRead(x, &in));
   PetscCall(VecGetArrayWrite(y, &out));
-  PetscCallCXX((*cb->A)(in, out));
+  PetscCallCXX(fn(in, out));
   PetscCall(VecRestoreArrayWrite(y, &out));
   PetscCall(VecRestoreArrayRead(x, &in));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+PetscErrorCode MatMult_SceneKrylov(Mat A, Vec x, Vec y)
+{
+  Callbacks *cb;
+
+  PetscFunctionBegin;
+  PetscCall(MatShellGetContext(A, &cb));
+  PetscCall(ApplyCallback_Private(*cb->A, x, y));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 PetscErrorCode PCApply_SceneKrylov(PC pc, Vec x, Vec y)
 {
-  Callbacks         *cb;
-  const PetscScalar *in;
-  PetscScalar       *out;
+  Callbacks *cb;
 
   PetscFunctionBegin;
   PetscCall(PCShellGetContext(pc, &cb));
-  PetscCall(VecGetArrayRead(x, &in));
-  PetscCall(VecGetArrayWrite(y, &out));
-  PetscCallCXX((*cb->M)(in, out));
-  PetscCall(VecRestoreArrayWrite(y, &out));
-  PetscCall(VecRestoreArrayRead(x, &in));
+  PetscCall(ApplyCallback_Private(*cb->M, x, y));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
