@@ -179,7 +179,8 @@ bool Skeletonizer::col_forced(int c, int node) const
   return false;
 }
 
-void Skeletonizer::skeletonize_level(int l, const Sources &sources, const std::vector<char> *need_rows, const std::vector<char> *need_cols)
+void Skeletonizer::skeletonize_level(int l, const Sources &sources, const std::vector<char> *need_rows, const std::vector<char> *need_cols, const std::vector<char> *skip,
+                                     const LevelSync &sync)
 {
   // The frontier: the clusters of level l and the leaves above it.
   std::vector<int> front = m_tree.clusters_at_level(l);
@@ -194,24 +195,37 @@ void Skeletonizer::skeletonize_level(int l, const Sources &sources, const std::v
     m_active_rows[c] = basis_candidates(m_tree, m_bases, c, 3, true);
     m_active_cols[c] = basis_candidates(m_tree, m_bases, c, m_w, false);
   }
-  const std::vector<int> &level = m_tree.clusters_at_level(l);
+  // The level's clusters skeletonized here.
+  std::vector<int> level;
+  for (int c : m_tree.clusters_at_level(l))
+    if (!skip || !(*skip)[c]) level.push_back(c);
   std::vector<std::vector<int>> src(level.size());
   std::vector<int> index(level.size());
   std::iota(index.begin(), index.end(), 0);
   for_each_cluster(index, [&](int k) { sources(level[k], front, src[k]); });
   const auto rows = [&](int k) { skeletonize_rows(level[k], src[k], !need_rows || (*need_rows)[level[k]]); };
   const auto cols = [&](int k) { skeletonize_cols(level[k], src[k], !need_cols || (*need_cols)[level[k]]); };
+  const auto synced_columns = [&] {
+    if (!sync) return;
+    sync(l, true);
+    if (!m_opt.columns_first) return;
+    for (int c : m_tree.clusters_at_level(l)) // as skeletonize_cols marks its own
+      if (skip && (*skip)[c]) m_col_done[c] = !need_cols || (*need_cols)[c];
+  };
   if (m_opt.columns_first) {
     // All of the level's column skeletons first: the row skeletons are then compressed against
     // the sources' column skeletons instead of their candidates (fewer explicit samples).
     for_each_cluster(index, cols);
+    synced_columns();
     for_each_cluster(index, rows);
   } else {
     for_each_cluster(index, [&](int k) {
       cols(k);
       rows(k);
     });
+    synced_columns();
   }
+  if (sync) sync(l, false);
 }
 
 Skeletonizer::Spheres Skeletonizer::spheres(int c) const

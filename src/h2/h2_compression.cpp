@@ -3,16 +3,17 @@
 
 #include "hssbem/compress/compression.hpp"
 #include "hssbem/compress/kernel_blocks.hpp"
-#include "hssbem/compress/rigid_body_blocks.hpp"
 #include "hssbem/compress/skeletonizer.hpp"
 #include "hssbem/core/blas_threads.hpp"
 #include "hssbem/core/phase.hpp"
 #include "hssbem/core/timer.hpp"
+#include "hssbem/h2/h2_distributed.hpp"
 
 #include <algorithm>
 #include <numeric>
 #include <optional>
 #include <stdexcept>
+#include <string>
 
 namespace hssbem {
 
@@ -73,26 +74,62 @@ std::vector<std::vector<int>> rigid_term_leaves(const BemOperator &op, const Clu
   return out;
 }
 
-/// Add the rigid-body terms (rigid_body_blocks.hpp) to the near blocks that hold them.
-void add_rigid_body_terms(const BemOperator &op, H2Matrix &K)
+/// Add the rigid-body terms (DESIGN §2) to this rank's near blocks that hold them:
+/// D_i = −Σ_j H⁰(i, j), from one product of the compressed H⁰ (slots 0–2, scale 1) with the
+/// three translations.
+void add_rigid_body_terms(const BemOperator &op, H2Matrix &K, const RankComm &comm)
 {
   const ClusterTree &tree = K.tree();
   const int w = K.col_block();
-  const std::vector<double> rigid = rigid_body_blocks(K);
-  const std::vector<int> leaf_of = tree.leaf_of_positions();
-  for (int i = 0; i < op.num_nodes(); ++i) {
-    const int pi = tree.iperm()[i], a = leaf_of[pi];
-    int cols[3];
-    double wts[3];
-    const int nc = op.rigid_body_columns(i, cols, wts);
-    for (int t = 0; t < nc; ++t) {
-      const int pj = tree.iperm()[cols[t]], b = leaf_of[pj];
-      H2Block *D = K.near_block(a, b);
-      if (!D) throw std::logic_error("H2 compression: a rigid-body term falls outside the near blocks");
-      const int r0 = 3 * (pi - tree.cluster(a).begin), c0 = w * (pj - tree.cluster(b).begin);
-      for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) D->add(r0 + r, c0 + c, wts[t] * rigid[9 * static_cast<std::size_t>(pi) + 3 * r + c]);
+  const H2DistributedProduct product(K, comm);
+  const int n = product.num_points(), first = product.first_point();
+  std::vector<double> X(static_cast<std::size_t>(w) * n * 3, 0.0), Y(static_cast<std::size_t>(3) * n * 3);
+  for (int k = 0; k < n; ++k)
+    for (int c = 0; c < 3; ++c) X[static_cast<std::size_t>(w) * k + c + static_cast<std::size_t>(c) * w * n] = 1.0;
+  product.apply(X.data(), w * n, Y.data(), 3 * n, 3);
+  collectively(comm, [&] {
+    const std::vector<int> leaf_of = tree.leaf_of_positions();
+    for (int k = 0; k < n; ++k) {
+      const int pi = first + k, i = tree.perm()[pi], a = leaf_of[pi];
+      int cols[3];
+      double wts[3];
+      const int nc = op.rigid_body_columns(i, cols, wts);
+      for (int t = 0; t < nc; ++t) {
+        const int pj = tree.iperm()[cols[t]], b = leaf_of[pj];
+        H2Block *D = K.near_block(a, b);
+        if (!D) throw std::logic_error("H2 compression: a rigid-body term falls outside the near blocks");
+        const int r0 = 3 * (pi - tree.cluster(a).begin), c0 = w * (pj - tree.cluster(b).begin);
+        for (int r = 0; r < 3; ++r)
+          for (int c = 0; c < 3; ++c) D->add(r0 + r, c0 + c, -wts[t] * Y[3 * static_cast<std::size_t>(k) + r + static_cast<std::size_t>(c) * 3 * n]);
+      }
     }
+  });
+}
+
+/// The skeletons of the other ranks' clusters of level l (columns or rows), from all ranks.
+void share_skeletons(H2Matrix &K, const RankComm &comm, int l, bool columns)
+{
+  const ClusterTree &tree = K.tree();
+  std::vector<int> mine;
+  for (int c : tree.clusters_at_level(l)) {
+    if (!K.holds(c)) continue;
+    const NestedBasis &b = K.bases()[c];
+    const std::vector<int> &skel = columns ? b.col_skel : b.row_skel;
+    mine.push_back(c);
+    mine.push_back(columns ? b.col_forced : b.row_forced);
+    mine.push_back(static_cast<int>(skel.size()));
+    mine.insert(mine.end(), skel.begin(), skel.end());
+  }
+  std::vector<int> counts;
+  const std::vector<int> all = comm.allgather(mine, counts);
+  for (std::size_t at = 0; at < all.size();) {
+    const int c = all[at], forced = all[at + 1], k = all[at + 2];
+    if (!K.holds(c)) {
+      NestedBasis &b = K.bases()[c];
+      (columns ? b.col_skel : b.row_skel).assign(all.begin() + static_cast<long>(at) + 3, all.begin() + static_cast<long>(at) + 3 + k);
+      (columns ? b.col_forced : b.row_forced) = forced;
+    }
+    at += 3 + static_cast<std::size_t>(k);
   }
 }
 
@@ -100,84 +137,127 @@ void add_rigid_body_terms(const BemOperator &op, H2Matrix &K)
 
 H2Matrix compress_bem_operator_h2(const BemOperator &op, const H2Options &options)
 {
+  return compress_bem_operator_h2(op, options, {}, SerialComm());
+}
+
+H2Matrix compress_bem_operator_h2(const BemOperator &op, const H2Options &options, const std::vector<int> &node_part, const RankComm &comm)
+{
   check_compression_inputs(op, options, "H2");
   if (!(options.eta >= 0)) throw std::invalid_argument("H2: eta must be >= 0");
+  const int ranks = comm.size();
+  const int nparts = node_part.empty() ? 1 : 1 + *std::max_element(node_part.begin(), node_part.end());
+  if (!node_part.empty() && static_cast<int>(node_part.size()) != op.num_nodes()) throw std::invalid_argument("H2: one part per dof node expected");
+  if (ranks > 1 && nparts != ranks) throw std::invalid_argument("H2: the node partition has " + std::to_string(nparts) + " parts for " + std::to_string(ranks) + " ranks");
   Timer timer;
   std::optional<PhaseScope> phase(Phase::Tree);
   const int w = k_columns_per_node(options.pressure_columns);
-  H2Matrix K(ClusterTree(collocation_points(op.discretization()), ClusterTreeOptions{options.leaf_size}), 3, w);
+  const ClusterTreeOptions topts{options.leaf_size};
+  // Until the tree levels are skeletonized, a rank that fails says so at the others' next
+  // agreement (the level's skeleton exchange), then throws.
+  std::optional<H2Matrix> built;
+  std::optional<Skeletonizer> skel;
+  try {
+    const std::vector<Vec3> points = collocation_points(op.discretization());
+    built.emplace(nparts > 1 ? ClusterTree(points, node_part, nparts, topts) : ClusterTree(points, topts), 3, w);
+    H2Matrix &K = *built;
+    const ClusterTree &tree = K.tree();
+    K.set_owners(cluster_owners(tree, ranks), comm.rank());
+    phase.reset();
+    phase.emplace(Phase::Compression);
+    K.set_col_scales(kernel_column_scales(op, w));
+    std::vector<double> scales(w);
+    for (int q = 0; q < w; ++q) scales[q] = K.col_scale(q);
+    std::vector<NestedBasis *> bases(tree.num_clusters());
+    for (int c = 0; c < tree.num_clusters(); ++c) bases[c] = &K.bases()[c];
+    const int np = options.proxy_points > 0 ? options.proxy_points : default_proxy_points(options.rel_tol);
+    skel.emplace(op, SkeletonizerOptions{options.rel_tol, options.max_rank, options.proxy_ratio, np, false, true, true}, tree, w, scales, bases);
+    const QuadratureReach &reach = skel->reach();
+    std::vector<double> radius(tree.num_clusters());
+    for (int c = 0; c < tree.num_clusters(); ++c) radius[c] = std::max(reach.row_r[c], reach.src_r[c]);
+    K.partition() = strong_block_partition(tree, radius, options.eta);
+    const BlockPartition &part = K.partition();
+    K.stats().time_tree = timer.seconds();
+    K.stats().proxy_points = np;
+    K.stats().eta = options.eta;
+
+    // Bases, bottom-up; only clusters with a far block at or above them need one. With several
+    // ranks each skeletonizes its own clusters and the skeletons are shared level by level.
+    const auto sources = [&](int c, const std::vector<int> &front, std::vector<int> &out) { strong_sources(tree, part, c, front, out); };
+    std::vector<char> skip(tree.num_clusters(), 0);
+    for (int c = 0; c < tree.num_clusters(); ++c) skip[c] = !K.holds(c);
+    Skeletonizer::LevelSync sync;
+    if (ranks > 1)
+      sync = [&](int l, bool columns) {
+        if (comm.any(false)) throw PeerFault();
+        share_skeletons(K, comm, l, columns);
+      };
+    for (int l = tree.levels() - 1; l >= 1; --l) skel->skeletonize_level(l, sources, &part.has_far, &part.has_far, ranks > 1 ? &skip : nullptr, sync);
+  } catch (const PeerFault &) {
+    throw;
+  } catch (...) {
+    if (ranks > 1) comm.any(true);
+    throw;
+  }
+  H2Matrix &K = *built;
   const ClusterTree &tree = K.tree();
-  phase.reset();
-  phase.emplace(Phase::Compression);
-  K.set_col_scales(kernel_column_scales(op, w));
-  std::vector<double> scales(w);
-  for (int q = 0; q < w; ++q) scales[q] = K.col_scale(q);
-  std::vector<NestedBasis *> bases(tree.num_clusters());
-  for (int c = 0; c < tree.num_clusters(); ++c) bases[c] = &K.bases()[c];
-  const int np = options.proxy_points > 0 ? options.proxy_points : default_proxy_points(options.rel_tol);
-  Skeletonizer skel(op, SkeletonizerOptions{options.rel_tol, options.max_rank, options.proxy_ratio, np, false, true, true}, tree, w, scales, bases);
-  const QuadratureReach &reach = skel.reach();
-  std::vector<double> radius(tree.num_clusters());
-  for (int c = 0; c < tree.num_clusters(); ++c) radius[c] = std::max(reach.row_r[c], reach.src_r[c]);
-  K.partition() = strong_block_partition(tree, radius, options.eta);
   const BlockPartition &part = K.partition();
-  K.stats().time_tree = timer.seconds();
-  K.stats().proxy_points = np;
-  K.stats().eta = options.eta;
+  std::vector<int> held, held_leaves;
 
-  // Bases, bottom-up; only clusters with a far block at or above them need one.
-  const auto sources = [&](int c, const std::vector<int> &front, std::vector<int> &out) { strong_sources(tree, part, c, front, out); };
-  for (int l = tree.levels() - 1; l >= 1; --l) skel.skeletonize_level(l, sources, &part.has_far, &part.has_far);
-  K.store_bases(options.single_precision);
-
-  // Far blocks between skeletons.
-  std::vector<int> all(tree.num_clusters());
-  std::iota(all.begin(), all.end(), 0);
+  // Far blocks between skeletons, for this rank's clusters.
   timer.restart();
-  for_each_cluster(all, [&](int a) {
-    for (int b : part.far[a]) {
-      H2Block B;
-      B.col_cluster = b;
-      B.M = DenseMatrix(static_cast<int>(K.row_skeleton(a).size()), static_cast<int>(K.col_skeleton(b).size()));
-      skel.block(K.row_skeleton(a), K.col_skeleton(b), B.M.data(), 1, B.M.ld());
-      if (options.single_precision && options.low_rank_far) B.compress(options.rel_tol / 10);
-      else if (options.single_precision) B.demote();
-      K.far_blocks(a).push_back(std::move(B));
-    }
+  collectively(comm, [&] {
+    K.store_bases(options.single_precision);
+    for (int c = 0; c < tree.num_clusters(); ++c)
+      if (K.holds(c)) held.push_back(c);
+    for (int c : tree.leaves())
+      if (K.holds(c)) held_leaves.push_back(c);
+    for_each_cluster(held, [&](int a) {
+      for (int b : part.far[a]) {
+        H2Block B;
+        B.col_cluster = b;
+        B.M = DenseMatrix(static_cast<int>(K.row_skeleton(a).size()), static_cast<int>(K.col_skeleton(b).size()));
+        skel->block(K.row_skeleton(a), K.col_skeleton(b), B.M.data(), 1, B.M.ld());
+        if (options.single_precision && options.low_rank_far) B.compress(options.rel_tol / 10);
+        else if (options.single_precision) B.demote();
+        K.far_blocks(a).push_back(std::move(B));
+      }
+    });
   });
   K.stats().time_far = timer.seconds();
   phase.reset();
 
-  // Near blocks (true entries) and the rigid-body terms.
+  // Near blocks (true entries) of this rank's leaves and the rigid-body terms.
   phase.emplace(Phase::NearField);
   timer.restart();
-  const std::vector<std::vector<int>> rigid = rigid_term_leaves(op, tree);
-  for_each_cluster(tree.leaves(), [&](int a) {
-    const std::vector<int> rows = leaf_indices(tree, a, 3);
-    for (int b : part.near[a]) {
-      const std::vector<int> cols = leaf_indices(tree, b, w);
-      H2Block B;
-      B.col_cluster = b;
-      B.M = DenseMatrix(static_cast<int>(rows.size()), static_cast<int>(cols.size()));
-      skel.block(rows, cols, B.M.data(), 1, B.M.ld());
-      // Blocks that will receive rigid-body terms stay dense (the diagonal ones, and those of
-      // moved collocation points whose triangle reaches into another leaf).
-      const bool gets_rigid = std::binary_search(rigid[a].begin(), rigid[a].end(), b);
-      if (options.single_precision && options.low_rank_near && !gets_rigid) B.compress(options.rel_tol / 30);
-      else if (options.single_precision) B.demote();
-      K.near_blocks(a).push_back(std::move(B));
-    }
+  collectively(comm, [&] {
+    const std::vector<std::vector<int>> rigid = rigid_term_leaves(op, tree);
+    for_each_cluster(held_leaves, [&](int a) {
+      const std::vector<int> rows = leaf_indices(tree, a, 3);
+      for (int b : part.near[a]) {
+        const std::vector<int> cols = leaf_indices(tree, b, w);
+        H2Block B;
+        B.col_cluster = b;
+        B.M = DenseMatrix(static_cast<int>(rows.size()), static_cast<int>(cols.size()));
+        skel->block(rows, cols, B.M.data(), 1, B.M.ld());
+        // Blocks that will receive rigid-body terms stay dense (the diagonal ones, and those of
+        // moved collocation points whose triangle reaches into another leaf).
+        const bool gets_rigid = std::binary_search(rigid[a].begin(), rigid[a].end(), b);
+        if (options.single_precision && options.low_rank_near && !gets_rigid) B.compress(options.rel_tol / 30);
+        else if (options.single_precision) B.demote();
+        K.near_blocks(a).push_back(std::move(B));
+      }
+    });
   });
   K.stats().time_near = timer.seconds();
   timer.restart();
-  add_rigid_body_terms(op, K);
+  add_rigid_body_terms(op, K, comm);
   K.stats().time_rigid = timer.seconds();
   phase.reset();
-  K.stats().entries_evaluated = skel.entries();
-  K.stats().time_near_field = skel.time_near_field();
-  K.stats().time_ids = skel.time_ids();
+  K.stats().entries_evaluated = skel->entries();
+  K.stats().time_near_field = skel->time_near_field();
+  K.stats().time_ids = skel->time_ids();
   K.update_stats();
-  return K;
+  return std::move(*built);
 }
 
 } // namespace hssbem

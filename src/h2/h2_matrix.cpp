@@ -5,7 +5,7 @@
 #include "hssbem/core/blas_threads.hpp"
 #include "hssbem/core/lapack.hpp"
 #include "hssbem/core/phase.hpp"
-#include "mixed_blas.hpp"
+#include "h2_transfer.hpp"
 
 #include <algorithm>
 #include <numeric>
@@ -35,60 +35,9 @@ H2Block *H2Matrix::near_block(int a, int b) { return const_cast<H2Block *>(stati
 namespace {
 
 using Size = std::size_t;
-
-/// Rows of the candidates of a cluster: a leaf's rows of X (or Y), else its children's
-/// skeleton coefficients (left, then right). Row p is at ptr(p) with column stride ld(p).
-template <class T>
-struct CandidateRows {
-  T *base = nullptr; ///< a leaf's first row, stride `ld`
-  long ld = 0;
-  DenseMatrix *a = nullptr, *b = nullptr; ///< an inner cluster's children
-  T *ptr(int p) const
-  {
-    if (base) return base + p;
-    return p < a->m ? a->data() + p : b->data() + (p - a->m);
-  }
-  long stride(int p) const { return base ? ld : p < a->m ? a->ld() : b->ld(); }
-};
-
-/// out (k × nrhs, leading dimension ldo) = Uᵀ x, x the candidates' rows.
-template <class Elem>
-void interp_t(const StoredInterpolation &U, const CandidateRows<Elem> &x, int nrhs, double *out, int ldo, std::vector<double> &buf)
-{
-  const int k = U.rank(), nred = static_cast<int>(U.red_pos.size());
-  for (int r = 0; r < nrhs; ++r)
-    for (int t = 0; t < k; ++t) out[t + Size(r) * ldo] = x.ptr(U.skel_pos[t])[r * x.stride(U.skel_pos[t])];
-  if (k == 0 || nred == 0) return;
-  buf.resize(Size(nred) * nrhs);
-  for (int r = 0; r < nrhs; ++r)
-    for (int j = 0; j < nred; ++j) buf[j + Size(r) * nred] = x.ptr(U.red_pos[j])[r * x.stride(U.red_pos[j])];
-  if (!U.Tf.empty() && nrhs == 1) return mixed::gemv(k, nred, U.Tf.data(), buf.data(), out);
-  std::vector<double> wide;
-  const double *T = U.Td.data();
-  if (!U.Tf.empty()) wide.assign(U.Tf.begin(), U.Tf.end()), T = wide.data();
-  lapack::gemm('N', 'N', k, nrhs, nred, 1.0, T, k, buf.data(), nred, 1.0, out, ldo);
-}
-
-/// y += U yh (yh: k × nrhs, leading dimension ldh), y the candidates' rows.
-void interp_n(const StoredInterpolation &U, const double *yh, int ldh, int nrhs, const CandidateRows<double> &y, std::vector<double> &buf)
-{
-  const int k = U.rank(), nred = static_cast<int>(U.red_pos.size());
-  if (k == 0) return;
-  for (int r = 0; r < nrhs; ++r)
-    for (int t = 0; t < k; ++t) y.ptr(U.skel_pos[t])[r * y.stride(U.skel_pos[t])] += yh[t + Size(r) * ldh];
-  if (nred == 0) return;
-  buf.resize(Size(nred) * nrhs);
-  if (!U.Tf.empty() && nrhs == 1) {
-    mixed::gemv_t(k, nred, U.Tf.data(), yh, buf.data());
-  } else {
-    std::vector<double> wide;
-    const double *T = U.Td.data();
-    if (!U.Tf.empty()) wide.assign(U.Tf.begin(), U.Tf.end()), T = wide.data();
-    lapack::gemm('T', 'N', nred, nrhs, k, 1.0, T, k, yh, ldh, 0.0, buf.data(), nred);
-  }
-  for (int r = 0; r < nrhs; ++r)
-    for (int j = 0; j < nred; ++j) y.ptr(U.red_pos[j])[r * y.stride(U.red_pos[j])] += buf[j + Size(r) * nred];
-}
+using transfer::CandidateRows;
+using transfer::interp_n;
+using transfer::interp_t;
 
 /// Upward pass over stored bases (m_V for the columns, m_U for the rows): moments[c] = B_cᵀ
 /// (c's candidate part of X), deepest level first; `block` rows of X per point.
@@ -184,6 +133,7 @@ void H2Matrix::store_bases(bool single)
   std::vector<int> all(nc);
   std::iota(all.begin(), all.end(), 0);
   for_each_cluster(all, [&](int c) {
+    if (!holds(c)) return; // another rank's: its skeletons only
     const NestedBasis &b = m_bases[c];
     m_U[c] = StoredInterpolation::from(b.U, basis_candidates(m_tree, m_bases, c, m_row_block, true), b.row_skel, single);
     m_V[c] = StoredInterpolation::from(b.V, basis_candidates(m_tree, m_bases, c, m_col_block, false), b.col_skel, single);
@@ -257,6 +207,27 @@ void H2Matrix::apply(const double *X, int ldx, double *Y, int ldy, int nrhs) con
   });
 }
 
+void H2Matrix::set_owners(std::vector<int> owner, int rank)
+{
+  if (!owner.empty() && static_cast<int>(owner.size()) != m_tree.num_clusters()) throw std::invalid_argument("H2Matrix: one owner per cluster expected");
+  m_owner = std::move(owner);
+  m_rank = rank;
+}
+
+void H2Matrix::adopt(int c, StoredInterpolation U, StoredInterpolation V, std::vector<H2Block> far, std::vector<H2Block> near)
+{
+  if (!m_bases.empty()) throw std::logic_error("H2Matrix: the bases are not stored yet (store_bases)");
+  m_U[c] = std::move(U);
+  m_V[c] = std::move(V);
+  m_far[c] = std::move(far);
+  m_near[c] = std::move(near);
+}
+
+bool H2Matrix::holds_all() const
+{
+  return std::all_of(m_owner.begin(), m_owner.end(), [this](int o) { return o == m_rank; });
+}
+
 void H2Matrix::update_stats()
 {
   const double eta = m_stats.eta;
@@ -265,7 +236,9 @@ void H2Matrix::update_stats()
   m_stats.basis_bytes = m_stats.far_bytes = m_stats.near_bytes = 0;
   m_stats.far_blocks = m_stats.near_blocks = 0;
   for (int c = 0; c < m_tree.num_clusters(); ++c) {
-    const int kr = m_bases.empty() ? m_U[c].rank() : m_bases[c].U.n, kc = m_bases.empty() ? m_V[c].rank() : m_bases[c].V.n;
+    // skeleton sizes, known for every cluster on every rank
+    const int kr = static_cast<int>(m_bases.empty() ? m_row_skel[c].size() : m_bases[c].row_skel.size()),
+              kc = static_cast<int>(m_bases.empty() ? m_col_skel[c].size() : m_bases[c].col_skel.size());
     if (m_bases.empty())
       m_stats.basis_bytes += m_U[c].bytes() + m_V[c].bytes() + (m_row_skel[c].size() + m_col_skel[c].size()) * sizeof(int);
     else

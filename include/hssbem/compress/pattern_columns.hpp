@@ -15,6 +15,12 @@ namespace hssbem {
 /// per node, mesh order. Throws std::logic_error for a pressure load when w < 7.
 std::vector<double> pattern_rhs_input(const SystemSelection &sel, int nodes, int w);
 
+/// The w values of node j in pattern_rhs_input, into out[0, w).
+void pattern_rhs_node(const SystemSelection &sel, int j, int w, double *out);
+
+/// The w values of node j in pattern_product_input from its 3 unknowns x3, into out[0, w).
+void pattern_product_node(const SystemSelection &sel, int j, const double *x3, int w, double *out);
+
 /// K's input for A x (x: 3 per node, mesh order): w values per node, mesh order.
 std::vector<double> pattern_product_input(const SystemSelection &sel, const double *x, int nodes, int w);
 

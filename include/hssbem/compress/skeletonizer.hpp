@@ -66,7 +66,14 @@ public:
   /// Skeletons and interpolation matrices of the clusters of level l (their children done).
   /// A cluster with need_rows[c] == 0 (need_cols) gets an empty row (column) skeleton; null
   /// vectors mean every cluster needs both.
-  void skeletonize_level(int l, const Sources &sources, const std::vector<char> *need_rows = nullptr, const std::vector<char> *need_cols = nullptr);
+  ///
+  /// Distributed construction: clusters with skip[c] != 0 are skeletonized on another rank;
+  /// sync(l, true) is called once the level's column skeletons are chosen here and must fill in
+  /// the skipped clusters' col_skel (and col_forced), sync(l, false) likewise for the rows
+  /// (row_skel, row_forced). Their U and V stay with their rank.
+  using LevelSync = std::function<void(int l, bool columns)>;
+  void skeletonize_level(int l, const Sources &sources, const std::vector<char> *need_rows = nullptr, const std::vector<char> *need_cols = nullptr,
+                         const std::vector<char> *skip = nullptr, const LevelSync &sync = {});
 
   /// out(r, q) = K(rows[r], cols[q]) (scaled, no rigid-body terms) at out[r·rs + q·cs]; counted
   /// in entries(). Thread-safe.

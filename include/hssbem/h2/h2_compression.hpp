@@ -18,6 +18,7 @@
 #pragma once
 
 #include "hssbem/bem/bem_operator.hpp"
+#include "hssbem/core/rank_comm.hpp"
 #include "hssbem/h2/h2_matrix.hpp"
 
 namespace hssbem {
@@ -46,5 +47,15 @@ struct H2Options {
 /// Compress K = [H, G] (and Gn if asked) of `op`, rigid-body terms included. The operator's
 /// quadrature must have far_ratio = 0. Throws std::invalid_argument for bad options.
 H2Matrix compress_bem_operator_h2(const BemOperator &op, const H2Options &options);
+
+/// The same, distributed over the ranks of `comm` (h2_distributed.hpp): node_part[i] (dof node i)
+/// in [0, P) with P = comm.size() or, on one rank, any P (the tree then has the partition's top
+/// but one rank holds everything); empty: one part. The tree's top levels are the parts
+/// (ClusterTree's partition constructor); rank p owns part p's clusters and the levels above the
+/// parts belong to rank 0. Each rank skeletonizes its own clusters (skeleton indices cross ranks
+/// level by level), forms its clusters' far blocks and its leaves' near blocks; the rigid-body
+/// terms come from one distributed product. Collective; a fault on one rank throws on every rank
+/// (PeerFault on the others).
+H2Matrix compress_bem_operator_h2(const BemOperator &op, const H2Options &options, const std::vector<int> &node_part, const RankComm &comm);
 
 } // namespace hssbem

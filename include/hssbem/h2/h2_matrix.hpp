@@ -127,7 +127,8 @@ public:
   const StoredInterpolation &row_interpolation(int c) const { return m_U[c]; }
   const StoredInterpolation &col_interpolation(int c) const { return m_V[c]; }
   /// The bases while the compression builds them; store_bases() moves them into the stored form
-  /// (weights in single precision when `single`) and empties this.
+  /// (weights in single precision when `single`; of the clusters held here, the skeletons of all)
+  /// and empties this.
   std::vector<NestedBasis> &bases() { return m_bases; }
   void store_bases(bool single);
   /// Far blocks of row cluster a: K(S_a, C_b), one per b in partition().far[a], same order.
@@ -150,6 +151,17 @@ public:
   /// contribute to (Kᵀ Y)(C_b, :), for Y with row_block() rows per point.
   std::vector<DenseMatrix> skeleton_far_field_transposed(const double *Y, int ldy, int nrhs) const;
 
+  /// Distributed over ranks (h2_distributed.hpp): owner(c) is the rank holding cluster c's bases
+  /// (U, V), its far blocks (its block row) and, for a leaf, its near blocks; every rank knows
+  /// every skeleton. Without owners (the default) this rank holds everything.
+  void set_owners(std::vector<int> owner, int rank);
+  int owner(int c) const { return m_owner.empty() ? m_rank : m_owner[c]; }
+  bool holds(int c) const { return m_owner.empty() || m_owner[c] == m_rank; }
+  bool holds_all() const;
+  int rank() const { return m_rank; }
+  /// Take over cluster c's stored bases and blocks (gathering a distributed matrix on one rank).
+  void adopt(int c, StoredInterpolation U, StoredInterpolation V, std::vector<H2Block> far, std::vector<H2Block> near);
+
   /// Recompute rank, block and memory figures.
   void update_stats();
   H2Stats &stats() { return m_stats; }
@@ -165,6 +177,8 @@ private:
   std::vector<int> m_row_forced, m_col_forced;
   std::vector<StoredInterpolation> m_U, m_V;
   std::vector<std::vector<H2Block>> m_far, m_near;
+  std::vector<int> m_owner;
+  int m_rank = 0;
   H2Stats m_stats;
 };
 

@@ -1,0 +1,87 @@
+/// \file h2_distributed.hpp
+/// The H² matrix distributed over ranks, and its product.
+///
+/// Layout: the cluster tree's top levels are a partition of the dof nodes (one part per rank,
+/// METIS in bem/node_partition.hpp); rank p owns the clusters of part p's subtree (their bases,
+/// far blocks and, for leaves, near blocks) and the rows and columns of part p's points, which
+/// are consecutive in cluster order; rank 0 also owns the few clusters above the parts. Every
+/// rank knows the tree, the block partition and every skeleton (index lists), not the bases or
+/// blocks of other ranks.
+///
+/// The product y = K x on rank p, from x's values at p's points:
+///  1. upward pass over p's part subtree: the column moments x̂_c = V_cᵀ x(c);
+///  2. exchange: the moments of p's clusters that are far partners of other ranks' clusters, and
+///     the values of p's leaves that are near other ranks' leaves (the partition's boundary);
+///  3. rank 0: upward over the top clusters (from the parts' moments); then the top moments that
+///     other ranks' far blocks need;
+///  4. far blocks of p's clusters: ŷ_a = Σ_b K(S_a, C_b) x̂_b;
+///  5. downward: rank 0 through the top clusters, sending each part its share; then each rank
+///     through its subtree, and its leaves: y(a) = U_a ŷ_a + Σ_b D_ab x(b).
+/// Only skeleton-level data (moments, potentials) and boundary leaves cross ranks; with a
+/// power-of-two number of parts and strong admissibility the top has no far blocks, so steps 3's
+/// second half and 5's exchange carry nothing.
+#pragma once
+
+#include "hssbem/core/rank_comm.hpp"
+#include "hssbem/h2/h2_matrix.hpp"
+
+#include <optional>
+#include <vector>
+
+namespace hssbem {
+
+/// Per cluster, its owner: the rank of its part, rank 0 above the parts. On one rank every
+/// cluster is rank 0's. Throws std::invalid_argument when ranks > 1 differs from the tree's parts.
+std::vector<int> cluster_owners(const ClusterTree &tree, int ranks);
+
+class H2DistributedProduct {
+public:
+  /// Plans the exchanges (collective).
+  H2DistributedProduct(const H2Matrix &K, const RankComm &comm);
+
+  const H2Matrix &matrix() const { return m_K; }
+  /// This rank's points: positions [first_point(), first_point() + num_points()) of cluster order.
+  int first_point() const { return m_first; }
+  int num_points() const { return m_count; }
+
+  /// Y = this rank's rows of K X (collective): X holds col_block() values per point of this rank
+  /// (cluster order, leading dimension ldx), Y receives row_block() per point (ldy).
+  void apply(const double *X, int ldx, double *Y, int ldy, int nrhs = 1) const;
+
+  /// Per product with one column: values and messages this rank sends.
+  long long values_sent() const { return m_values_sent; }
+  long long messages_sent() const { return m_messages_sent; }
+
+private:
+  /// One exchange: per rank, the clusters whose blocks go there (send) or come from there (recv).
+  struct Round {
+    std::vector<std::vector<int>> send, recv;
+  };
+  Round plan(const std::vector<std::vector<int>> &need) const;
+  /// Send and receive blocks[c] (rows(c) × nrhs each) along r (collective); received blocks
+  /// replace the local ones, or are added to them.
+  template <class Rows>
+  void run(const Round &r, std::vector<DenseMatrix> &blocks, int nrhs, bool add, const Rows &rows) const;
+
+  const H2Matrix &m_K;
+  const RankComm &m_comm;
+  int m_first = 0, m_count = 0;
+  /// This rank's clusters per pass, a list per level in pass order: upward below and above the
+  /// parts, downward above and below.
+  std::vector<std::vector<int>> m_up, m_top_up, m_top_down, m_down;
+  std::vector<int> m_held, m_leaves, m_boundary; ///< this rank's clusters, leaves, and leaves other ranks read
+  Round m_low, m_vals, m_top, m_pot;                   ///< moments; leaf values; top moments; potentials down
+  std::vector<char> m_above;                           ///< per cluster: above the parts
+  long long m_values_sent = 0, m_messages_sent = 0;
+};
+
+} // namespace hssbem
+
+namespace hssbem {
+
+/// The whole matrix on rank `root` (every cluster's bases and blocks, owners cleared), from the
+/// parts of a distributed one (collective; the other ranks return an empty optional). For
+/// algorithms that still run on one rank (the H² factorization).
+std::optional<H2Matrix> gather_h2_matrix(const H2Matrix &K, const RankComm &comm, int root = 0);
+
+} // namespace hssbem

@@ -1,0 +1,27 @@
+/* hssbem::RankComm on an MPI communicator: the collectives of the distributed engines
+   (core/rank_comm.hpp). MPI errors throw std::runtime_error. */
+#pragma once
+
+#include "hssbem/core/rank_comm.hpp"
+
+#include <mpi.h>
+
+class HssbemMpiComm : public hssbem::RankComm {
+public:
+  /* Uses comm (not duplicated: the caller keeps it alive and in step). */
+  explicit HssbemMpiComm(MPI_Comm comm);
+
+  MPI_Comm comm() const { return m_comm; }
+  int rank() const override { return m_rank; }
+  int size() const override { return m_size; }
+  std::vector<int> allgather(const std::vector<int> &mine, std::vector<int> &counts) const override;
+  std::vector<std::vector<int>> exchange(const std::vector<std::vector<int>> &send) const override;
+  void exchange(const std::vector<std::vector<double>> &send, std::vector<std::vector<double>> &recv) const override;
+  bool any(bool mine) const override;
+  void sum(double *v, int n) const override;
+  double max(double v) const override;
+
+private:
+  MPI_Comm m_comm;
+  int      m_rank = 0, m_size = 1;
+};

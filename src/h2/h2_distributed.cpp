@@ -1,0 +1,371 @@
+// The H² matrix distributed over ranks: cluster owners and the product (see h2_distributed.hpp).
+#include "hssbem/h2/h2_distributed.hpp"
+
+#include "hssbem/core/blas_threads.hpp"
+#include "hssbem/core/phase.hpp"
+#include "h2_transfer.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+
+namespace hssbem {
+
+using transfer::CandidateRows;
+using transfer::interp_n;
+using transfer::interp_t;
+
+namespace {
+
+/// Per cluster: its part, or -1 above the parts.
+std::vector<int> cluster_parts(const ClusterTree &tree)
+{
+  std::vector<int> part(tree.num_clusters(), -1);
+  std::vector<int> root_of(tree.num_clusters(), -1);
+  for (int p = 0; p < tree.num_parts(); ++p) root_of[tree.part_cluster(p)] = p;
+  for (int c = 0; c < tree.num_clusters(); ++c) { // breadth first: a parent before its children
+    const int parent = tree.cluster(c).parent;
+    part[c] = root_of[c] >= 0 ? root_of[c] : parent >= 0 ? part[parent] : -1;
+  }
+  return part;
+}
+
+/// Lists of clusters by level: deepest first (up) or top first (down).
+std::vector<std::vector<int>> by_level(const ClusterTree &tree, const std::vector<int> &clusters, bool up)
+{
+  std::vector<std::vector<int>> out(tree.levels());
+  for (int c : clusters) out[tree.cluster(c).level].push_back(c);
+  if (up) std::reverse(out.begin(), out.end());
+  out.erase(std::remove_if(out.begin(), out.end(), [](const std::vector<int> &v) { return v.empty(); }), out.end());
+  return out;
+}
+
+} // namespace
+
+std::vector<int> cluster_owners(const ClusterTree &tree, int ranks)
+{
+  std::vector<int> owner(tree.num_clusters(), 0);
+  if (ranks == 1) return owner;
+  if (tree.num_parts() != ranks)
+    throw std::invalid_argument("H2: the tree has " + std::to_string(tree.num_parts()) + " parts for " + std::to_string(ranks) + " ranks");
+  owner = cluster_parts(tree);
+  for (int &o : owner) o = std::max(o, 0);
+  return owner;
+}
+
+H2DistributedProduct::H2DistributedProduct(const H2Matrix &K, const RankComm &comm) : m_K(K), m_comm(comm)
+{
+  const ClusterTree &tree = K.tree();
+  const int nc = tree.num_clusters(), me = comm.rank(), P = comm.size();
+  const BlockPartition &bp = K.partition();
+  std::vector<std::vector<int>> need_low(P), need_vals(P), need_top(P), need_pot(P);
+  collectively(comm, [&] {
+    if (K.rank() != me) throw std::logic_error("H2: the matrix belongs to rank " + std::to_string(K.rank()));
+    m_above.assign(nc, 0);
+    if (P > 1) {
+      const std::vector<int> part = cluster_parts(tree);
+      for (int c = 0; c < nc; ++c) m_above[c] = part[c] < 0;
+      m_first = tree.cluster(tree.part_cluster(me)).begin;
+      m_count = tree.cluster(tree.part_cluster(me)).size();
+    } else {
+      m_first = 0;
+      m_count = tree.num_points();
+    }
+    std::vector<int> up, top_up, top_down, down;
+    for (int c = 0; c < nc; ++c) {
+      if (!K.holds(c)) continue;
+      m_held.push_back(c);
+      const bool leaf = tree.is_leaf(c);
+      if (leaf) m_leaves.push_back(c);
+      (m_above[c] ? top_up : up).push_back(c);
+      if (!leaf) (m_above[c] ? top_down : down).push_back(c);
+    }
+    m_up = by_level(tree, up, true);
+    m_top_up = by_level(tree, top_up, true);
+    m_top_down = by_level(tree, top_down, false);
+    m_down = by_level(tree, down, false);
+    // What this rank needs from the others.
+    for (int a : m_held) {
+      for (int b : bp.far[a])
+        if (!K.holds(b)) (m_above[b] ? need_top : need_low)[K.owner(b)].push_back(b);
+      const Cluster &ca = tree.cluster(a);
+      if (m_above[a] && ca.left >= 0)
+        for (int ch : {ca.left, ca.right})
+          if (!K.holds(ch)) need_low[K.owner(ch)].push_back(ch);
+      if (ca.left < 0)
+        for (int b : bp.near[a])
+          if (!K.holds(b)) need_vals[K.owner(b)].push_back(b);
+      const int parent = ca.parent;
+      if (parent >= 0 && !K.holds(parent)) need_pot[K.owner(parent)].push_back(a);
+    }
+  });
+  m_low = plan(need_low);
+  m_vals = plan(need_vals);
+  m_top = plan(need_top);
+  m_pot = plan(need_pot);
+  for (const auto &list : m_vals.send) m_boundary.insert(m_boundary.end(), list.begin(), list.end());
+  std::sort(m_boundary.begin(), m_boundary.end());
+  m_boundary.erase(std::unique(m_boundary.begin(), m_boundary.end()), m_boundary.end());
+  // Traffic of one product with one column.
+  for (int q = 0; q < P; ++q) {
+    long long values = 0;
+    for (int c : m_low.send[q]) values += static_cast<long long>(K.col_skeleton(c).size());
+    for (int c : m_top.send[q]) values += static_cast<long long>(K.col_skeleton(c).size());
+    for (int c : m_vals.send[q]) values += static_cast<long long>(K.col_block()) * tree.cluster(c).size();
+    for (int c : m_pot.send[q]) values += static_cast<long long>(K.row_skeleton(c).size());
+    m_values_sent += values;
+    m_messages_sent += !m_low.send[q].empty() + !m_top.send[q].empty() + !m_vals.send[q].empty() + !m_pot.send[q].empty();
+  }
+}
+
+H2DistributedProduct::Round H2DistributedProduct::plan(const std::vector<std::vector<int>> &need) const
+{
+  Round r;
+  r.recv = need;
+  for (std::vector<int> &v : r.recv) {
+    std::sort(v.begin(), v.end());
+    v.erase(std::unique(v.begin(), v.end()), v.end());
+  }
+  r.send = m_comm.exchange(r.recv);
+  return r;
+}
+
+template <class Rows>
+void H2DistributedProduct::run(const Round &r, std::vector<DenseMatrix> &blocks, int nrhs, bool add, const Rows &rows) const
+{
+  const int P = m_comm.size();
+  std::vector<std::vector<double>> send(P), recv(P);
+  for (int q = 0; q < P; ++q) {
+    for (int c : r.send[q]) {
+      if (blocks[c].m != rows(c) || blocks[c].n != nrhs) throw std::logic_error("H2 product: a block to send is missing");
+      send[q].insert(send[q].end(), blocks[c].a.begin(), blocks[c].a.end());
+    }
+    std::size_t n = 0;
+    for (int c : r.recv[q]) n += static_cast<std::size_t>(rows(c)) * nrhs;
+    recv[q].resize(n);
+  }
+  m_comm.exchange(send, recv);
+  for (int q = 0; q < P; ++q) {
+    std::size_t at = 0;
+    for (int c : r.recv[q]) {
+      const std::size_t n = static_cast<std::size_t>(rows(c)) * nrhs;
+      if (add && blocks[c].m == rows(c) && blocks[c].n == nrhs) {
+        for (std::size_t k = 0; k < n; ++k) blocks[c].a[k] += recv[q][at + k];
+      } else {
+        blocks[c] = DenseMatrix(rows(c), nrhs);
+        std::copy(recv[q].begin() + at, recv[q].begin() + at + n, blocks[c].a.begin());
+      }
+      at += n;
+    }
+  }
+}
+
+void H2DistributedProduct::apply(const double *X, int ldx, double *Y, int ldy, int nrhs) const
+{
+  PhaseScope phase(Phase::Matvec);
+  const H2Matrix &K = m_K;
+  const ClusterTree &tree = K.tree();
+  const int nc = tree.num_clusters(), w = K.col_block(), rb = K.row_block();
+  std::vector<DenseMatrix> xh(nc), yh(nc), xv(nc);
+  const auto moments = [&](int c) { return static_cast<int>(K.col_skeleton(c).size()); };
+  const auto potentials = [&](int c) { return static_cast<int>(K.row_skeleton(c).size()); };
+  const auto values = [&](int c) { return w * tree.cluster(c).size(); };
+  const auto upward = [&](const std::vector<std::vector<int>> &levels) {
+    for (const std::vector<int> &level : levels)
+      for_each_cluster(level, [&](int c) {
+        const Cluster &cl = tree.cluster(c);
+        const StoredInterpolation &V = K.col_interpolation(c);
+        xh[c] = DenseMatrix(V.rank(), nrhs);
+        if (V.rank() == 0) return;
+        CandidateRows<const double> x;
+        if (cl.left < 0) x.base = X + static_cast<long>(w) * (cl.begin - m_first), x.ld = ldx;
+        else x.a = &xh[cl.left], x.b = &xh[cl.right];
+        std::vector<double> buf;
+        interp_t(V, x, nrhs, xh[c].data(), xh[c].ld(), buf);
+      });
+  };
+  const auto downward = [&](const std::vector<std::vector<int>> &levels) {
+    for (const std::vector<int> &level : levels)
+      for_each_cluster(level, [&](int c) {
+        const Cluster &cl = tree.cluster(c);
+        for (int ch : {cl.left, cl.right})
+          if (yh[ch].m != potentials(ch) || yh[ch].n != nrhs) yh[ch] = DenseMatrix(potentials(ch), nrhs); // another rank's child
+        CandidateRows<double> y;
+        y.a = &yh[cl.left], y.b = &yh[cl.right];
+        std::vector<double> buf;
+        interp_n(K.row_interpolation(c), yh[c].data(), yh[c].ld(), nrhs, y, buf);
+      });
+  };
+
+  // 1–2. Moments below the parts; moments and boundary values to the ranks that read them.
+  collectively(m_comm, [&] {
+    upward(m_up);
+    for (int c : m_boundary) {
+      const Cluster &cl = tree.cluster(c);
+      xv[c] = DenseMatrix(values(c), nrhs);
+      for (int k = 0; k < nrhs; ++k)
+        std::copy_n(X + static_cast<long>(w) * (cl.begin - m_first) + static_cast<long>(k) * ldx, values(c), xv[c].data() + static_cast<long>(k) * values(c));
+    }
+  });
+  run(m_low, xh, nrhs, false, moments);
+  run(m_vals, xv, nrhs, false, values);
+  // 3. Above the parts (rank 0), and the top moments other ranks' far blocks read.
+  collectively(m_comm, [&] { upward(m_top_up); });
+  run(m_top, xh, nrhs, false, moments);
+  // 4–5. Far blocks; downward through the top, the parts' shares to their ranks.
+  collectively(m_comm, [&] {
+    for (int a : m_held) yh[a] = DenseMatrix(potentials(a), nrhs);
+    for_each_cluster(m_held, [&](int a) {
+      std::vector<double> buf;
+      for (const H2Block &B : K.far_blocks(a)) B.multiply_add(xh[B.col_cluster].data(), xh[B.col_cluster].ld(), yh[a].data(), yh[a].ld(), nrhs, buf);
+    });
+    downward(m_top_down);
+  });
+  run(m_pot, yh, nrhs, true, potentials);
+  // 5. Downward through the parts, then the leaves.
+  collectively(m_comm, [&] {
+    downward(m_down);
+    for_each_cluster(m_leaves, [&](int c) {
+      const Cluster &cl = tree.cluster(c);
+      double *y = Y + static_cast<long>(rb) * (cl.begin - m_first);
+      const int m = rb * cl.size();
+      for (int k = 0; k < nrhs; ++k) std::fill(y + static_cast<long>(k) * ldy, y + static_cast<long>(k) * ldy + m, 0.0);
+      std::vector<double> buf;
+      for (const H2Block &B : K.near_blocks(c)) {
+        const int b = B.col_cluster;
+        if (K.holds(b)) B.multiply_add(X + static_cast<long>(w) * (tree.cluster(b).begin - m_first), ldx, y, ldy, nrhs, buf);
+        else B.multiply_add(xv[b].data(), xv[b].ld(), y, ldy, nrhs, buf);
+      }
+      CandidateRows<double> rows;
+      rows.base = y, rows.ld = ldy;
+      interp_n(K.row_interpolation(c), yh[c].data(), yh[c].ld(), nrhs, rows, buf);
+    });
+  });
+}
+
+} // namespace hssbem
+
+namespace hssbem {
+
+namespace {
+
+/// A flat record of doubles (indices and sizes are exact in a double).
+struct Record {
+  std::vector<double> v;
+  void put(double x) { v.push_back(x); }
+  template <class T>
+  void put_all(const std::vector<T> &a)
+  {
+    put(static_cast<double>(a.size()));
+    v.insert(v.end(), a.begin(), a.end());
+  }
+  void put_interpolation(const StoredInterpolation &s)
+  {
+    put(s.candidates);
+    put_all(s.skel_pos);
+    put_all(s.red_pos);
+    put_all(s.Tf);
+    put_all(s.Td);
+  }
+  void put_block(const H2Block &B)
+  {
+    put(B.col_cluster);
+    put(B.M.m);
+    put(B.M.n);
+    put_all(B.M.a);
+    put_all(B.single);
+    put(B.rank);
+    put_all(B.lr_a);
+    put_all(B.lr_w);
+  }
+};
+
+struct Reader {
+  const std::vector<double> &v;
+  std::size_t at = 0;
+  double get() { return v.at(at++); }
+  int get_int() { return static_cast<int>(get()); }
+  template <class T>
+  std::vector<T> get_all()
+  {
+    const std::size_t n = static_cast<std::size_t>(get());
+    if (at + n > v.size()) throw std::logic_error("H2 gather: a truncated record");
+    std::vector<T> a(n);
+    for (std::size_t k = 0; k < n; ++k) a[k] = static_cast<T>(v[at + k]);
+    at += n;
+    return a;
+  }
+  StoredInterpolation get_interpolation()
+  {
+    StoredInterpolation s;
+    s.candidates = get_int();
+    s.skel_pos = get_all<int>();
+    s.red_pos = get_all<int>();
+    s.Tf = get_all<float>();
+    s.Td = get_all<double>();
+    return s;
+  }
+  H2Block get_block()
+  {
+    H2Block B;
+    B.col_cluster = get_int();
+    const int m = get_int(), n = get_int();
+    B.M.m = m, B.M.n = n;
+    B.M.a = get_all<double>();
+    B.single = get_all<float>();
+    B.rank = get_int();
+    B.lr_a = get_all<float>();
+    B.lr_w = get_all<float>();
+    return B;
+  }
+};
+
+} // namespace
+
+std::optional<H2Matrix> gather_h2_matrix(const H2Matrix &K, const RankComm &comm, int root)
+{
+  const int P = comm.size(), me = comm.rank(), nc = K.tree().num_clusters();
+  Record rec;
+  collectively(comm, [&] {
+    for (int c = 0; c < nc; ++c) {
+      if (!K.holds(c) || me == root) continue;
+      rec.put(c);
+      rec.put_interpolation(K.row_interpolation(c));
+      rec.put_interpolation(K.col_interpolation(c));
+      rec.put(static_cast<double>(K.far_blocks(c).size()));
+      for (const H2Block &B : K.far_blocks(c)) rec.put_block(B);
+      rec.put(static_cast<double>(K.near_blocks(c).size()));
+      for (const H2Block &B : K.near_blocks(c)) rec.put_block(B);
+    }
+  });
+  std::vector<std::vector<int>> sizes(P);
+  if (me != root) sizes[root] = {static_cast<int>(rec.v.size())};
+  const std::vector<std::vector<int>> from = comm.exchange(sizes);
+  std::vector<std::vector<double>> send(P), recv(P);
+  if (me != root) send[root] = std::move(rec.v);
+  for (int q = 0; q < P; ++q)
+    if (!from[q].empty()) recv[q].resize(static_cast<std::size_t>(from[q][0]));
+  comm.exchange(send, recv);
+  std::optional<H2Matrix> whole;
+  collectively(comm, [&] {
+    if (me != root) return;
+    whole.emplace(K);
+    for (int q = 0; q < P; ++q) {
+      Reader r{recv[q]};
+      while (r.at < recv[q].size()) {
+        const int c = r.get_int();
+        StoredInterpolation U = r.get_interpolation(), V = r.get_interpolation();
+        std::vector<H2Block> far(static_cast<std::size_t>(r.get_int())), near;
+        for (H2Block &B : far) B = r.get_block();
+        near.resize(static_cast<std::size_t>(r.get_int()));
+        for (H2Block &B : near) B = r.get_block();
+        whole->adopt(c, std::move(U), std::move(V), std::move(far), std::move(near));
+      }
+    }
+    whole->set_owners({}, 0);
+    whole->update_stats();
+  });
+  return whole;
+}
+
+} // namespace hssbem

@@ -1,0 +1,96 @@
+/* hssbem::RankComm on MPI (see mpi_comm.h). */
+#include "hssbem/petsc/mpi_comm.h"
+
+#include <numeric>
+#include <stdexcept>
+#include <string>
+
+namespace {
+
+void Check(int err, const char *what)
+{
+  if (err == MPI_SUCCESS) return;
+  char msg[MPI_MAX_ERROR_STRING];
+  int  len = 0;
+  MPI_Error_string(err, msg, &len);
+  throw std::runtime_error(std::string(what) + ": " + std::string(msg, (size_t)len));
+}
+
+const int tag_ints = 7101, tag_doubles = 7102;
+
+} // namespace
+
+HssbemMpiComm::HssbemMpiComm(MPI_Comm comm) : m_comm(comm)
+{
+  Check(MPI_Comm_rank(comm, &m_rank), "MPI_Comm_rank");
+  Check(MPI_Comm_size(comm, &m_size), "MPI_Comm_size");
+}
+
+std::vector<int> HssbemMpiComm::allgather(const std::vector<int> &mine, std::vector<int> &counts) const
+{
+  int n = (int)mine.size();
+  counts.assign(m_size, 0);
+  Check(MPI_Allgather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, m_comm), "MPI_Allgather");
+  std::vector<int> displs(m_size, 0);
+  std::partial_sum(counts.begin(), counts.end() - 1, displs.begin() + 1);
+  std::vector<int> all((size_t)(displs.back() + counts.back()));
+  Check(MPI_Allgatherv(mine.data(), n, MPI_INT, all.data(), counts.data(), displs.data(), MPI_INT, m_comm), "MPI_Allgatherv");
+  return all;
+}
+
+std::vector<std::vector<int>> HssbemMpiComm::exchange(const std::vector<std::vector<int>> &send) const
+{
+  std::vector<int> out(m_size), in(m_size);
+  for (int q = 0; q < m_size; ++q) out[q] = (int)send[q].size();
+  Check(MPI_Alltoall(out.data(), 1, MPI_INT, in.data(), 1, MPI_INT, m_comm), "MPI_Alltoall");
+  std::vector<std::vector<int>> recv(m_size);
+  std::vector<MPI_Request>      req;
+  for (int q = 0; q < m_size; ++q) {
+    recv[q].resize((size_t)in[q]);
+    if (in[q] > 0) {
+      req.emplace_back();
+      Check(MPI_Irecv(recv[q].data(), in[q], MPI_INT, q, tag_ints, m_comm, &req.back()), "MPI_Irecv");
+    }
+  }
+  for (int q = 0; q < m_size; ++q)
+    if (out[q] > 0) {
+      req.emplace_back();
+      Check(MPI_Isend(send[q].data(), out[q], MPI_INT, q, tag_ints, m_comm, &req.back()), "MPI_Isend");
+    }
+  Check(MPI_Waitall((int)req.size(), req.data(), MPI_STATUSES_IGNORE), "MPI_Waitall");
+  return recv;
+}
+
+void HssbemMpiComm::exchange(const std::vector<std::vector<double>> &send, std::vector<std::vector<double>> &recv) const
+{
+  std::vector<MPI_Request> req;
+  for (int q = 0; q < m_size; ++q)
+    if (!recv[q].empty()) {
+      req.emplace_back();
+      Check(MPI_Irecv(recv[q].data(), (int)recv[q].size(), MPI_DOUBLE, q, tag_doubles, m_comm, &req.back()), "MPI_Irecv");
+    }
+  for (int q = 0; q < m_size; ++q)
+    if (!send[q].empty()) {
+      req.emplace_back();
+      Check(MPI_Isend(send[q].data(), (int)send[q].size(), MPI_DOUBLE, q, tag_doubles, m_comm, &req.back()), "MPI_Isend");
+      m_traffic.bytes += (long long)(send[q].size() * sizeof(double));
+      m_traffic.messages += 1;
+    }
+  Check(MPI_Waitall((int)req.size(), req.data(), MPI_STATUSES_IGNORE), "MPI_Waitall");
+}
+
+bool HssbemMpiComm::any(bool mine) const
+{
+  int in = mine ? 1 : 0, out = 0;
+  Check(MPI_Allreduce(&in, &out, 1, MPI_INT, MPI_MAX, m_comm), "MPI_Allreduce");
+  return out != 0;
+}
+
+void HssbemMpiComm::sum(double *v, int n) const { Check(MPI_Allreduce(MPI_IN_PLACE, v, n, MPI_DOUBLE, MPI_SUM, m_comm), "MPI_Allreduce"); }
+
+double HssbemMpiComm::max(double v) const
+{
+  double out = v;
+  Check(MPI_Allreduce(&v, &out, 1, MPI_DOUBLE, MPI_MAX, m_comm), "MPI_Allreduce");
+  return out;
+}

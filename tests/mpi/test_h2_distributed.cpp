@@ -1,0 +1,142 @@
+// The H² matrix distributed over 1, 2 and 4 ranks (h2/h2_distributed.hpp) on a METIS partition
+// (bem/node_partition.hpp): each rank's rows of the distributed product against the same rows of
+// the whole matrix compressed on one rank with the same tree, the gathered matrix against it too,
+// the distributed system's right-hand side and diagonal, the partition's quality, and the refusal
+// of more ranks than the surface can feed.
+#include "solve_helpers.hpp"
+#include "test_shapes.hpp"
+
+#include "hssbem/bem/node_partition.hpp"
+#include "hssbem/compress/pattern_columns.hpp"
+#include "hssbem/h2/h2_system.hpp"
+#include "hssbem/petsc/mpi_comm.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+using namespace hssbem;
+using namespace hssbem::test;
+
+namespace {
+
+struct Fixture {
+  ProblemSetup setup;
+  std::unique_ptr<BemOperator> op;
+  HssbemMpiComm comm{PETSC_COMM_WORLD};
+  std::vector<int> part;
+  NodePartitionStats stats;
+  H2Options opts;
+
+  Fixture() : setup(setup_problem(kelvin_mixed_spec("sphere_l1.msh", KelvinField{Material{1000.0, 0.3}, {1.2, 0.9, 1.0}, {1.0, -2.0, 0.5}}), ProblemOverrides{}))
+  {
+    op = std::make_unique<BemOperator>(*setup.disc, setup.material);
+    part = partition_nodes(*setup.disc, comm.size(), &stats);
+    MPI_Bcast(part.data(), static_cast<int>(part.size()), MPI_INT, 0, PETSC_COMM_WORLD); // one partition, whatever METIS does per rank
+    opts.rel_tol = 1e-7;
+    opts.leaf_size = 16;
+  }
+};
+
+double rel(const std::vector<double> &a, const std::vector<double> &b, MPI_Comm comm)
+{
+  double s[2] = {0, 0};
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    s[0] += (a[i] - b[i]) * (a[i] - b[i]);
+    s[1] += b[i] * b[i];
+  }
+  MPI_Allreduce(MPI_IN_PLACE, s, 2, MPI_DOUBLE, MPI_SUM, comm);
+  EXPECT_GT(s[1], 0.0); // the reference is not zero: a product that did nothing fails
+  return std::sqrt(s[0] / s[1]);
+}
+
+TEST(H2Distributed, PartitionIsBalancedAndConnected)
+{
+  Fixture f;
+  EXPECT_EQ(f.stats.parts, f.comm.size());
+  EXPECT_LE(f.stats.imbalance, 1.05);
+  EXPECT_EQ(f.stats.disconnected_parts, 0);
+  if (f.comm.size() > 1) {
+    EXPECT_GT(f.stats.edge_cut, 0);
+    EXPECT_LT(f.stats.edge_cut, f.stats.edges / 4); // a patch per part, not a scatter
+  }
+  EXPECT_THROW(partition_nodes(*f.setup.disc, f.setup.disc->num_nodes() / 8, nullptr), std::invalid_argument);
+}
+
+TEST(H2Distributed, ProductMatchesTheWholeMatrix)
+{
+  Fixture f;
+  const H2DistributedSystem dist(*f.op, f.opts, f.part, f.comm);
+  const H2Matrix whole = compress_bem_operator_h2(*f.op, f.opts, f.part, SerialComm()); // same tree, one rank
+  const int n = whole.tree().num_points(), w = whole.col_block(), nrhs = 2;
+  std::mt19937 gen(7);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::vector<double> X(static_cast<std::size_t>(w) * n * nrhs), Y(3L * n * nrhs);
+  for (double &v : X) v = u(gen);
+  whole.apply(X.data(), w * n, Y.data(), 3 * n, nrhs);
+
+  const H2DistributedProduct &P = dist.product();
+  const int m = P.num_points(), first = P.first_point();
+  std::vector<double> Xl(static_cast<std::size_t>(w) * m * nrhs), Yl(3L * m * nrhs), Yref(Yl.size());
+  for (int r = 0; r < nrhs; ++r) {
+    std::copy_n(&X[static_cast<std::size_t>(w) * (first + static_cast<std::size_t>(r) * n)], w * m, &Xl[static_cast<std::size_t>(w) * m * r]);
+    std::copy_n(&Y[3 * (first + static_cast<std::size_t>(r) * n)], 3 * m, &Yref[3L * m * r]);
+  }
+  P.apply(Xl.data(), w * m, Yl.data(), 3 * m, nrhs);
+  EXPECT_LT(rel(Yl, Yref, PETSC_COMM_WORLD), 1e-12);
+  long long points = m;
+  MPI_Allreduce(MPI_IN_PLACE, &points, 1, MPI_LONG_LONG, MPI_SUM, PETSC_COMM_WORLD);
+  EXPECT_EQ(points, n); // the ranks' rows cover K once
+  if (f.comm.size() > 1) { // moments and boundary leaves cross (their growth with N: benchmarks/bench_h2_mpi)
+    EXPECT_GT(P.values_sent(), 0);
+    EXPECT_GT(P.messages_sent(), 0);
+  }
+
+  // The same matrix gathered on rank 0.
+  const std::optional<H2Matrix> gathered = gather_h2_matrix(dist.matrix(), f.comm);
+  ASSERT_EQ(gathered.has_value(), f.comm.rank() == 0);
+  if (gathered) {
+    std::vector<double> Yg(Y.size());
+    gathered->apply(X.data(), w * n, Yg.data(), 3 * n, nrhs);
+    double d = 0, s = 0;
+    for (std::size_t i = 0; i < Y.size(); ++i) d += (Yg[i] - Y[i]) * (Yg[i] - Y[i]), s += Y[i] * Y[i];
+    EXPECT_GT(s, 0.0);
+    EXPECT_LT(std::sqrt(d / s), 1e-12);
+    EXPECT_EQ(gathered->stats().near_blocks, whole.stats().near_blocks);
+    EXPECT_EQ(gathered->stats().far_blocks, whole.stats().far_blocks);
+  }
+}
+
+TEST(H2Distributed, SystemRowsMatchTheMeshOrderSystem)
+{
+  Fixture f;
+  const H2DistributedSystem dist(*f.op, f.opts, f.part, f.comm);
+  const H2BemSystem whole(compress_bem_operator_h2(*f.op, f.opts, f.part, SerialComm()));
+  const SystemSelection &sel = f.setup.selection;
+  const int nn = f.op->num_nodes();
+  std::mt19937 gen(11);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::vector<double> x(3L * nn), y(3L * nn);
+  for (double &v : x) v = u(gen);
+  whole.apply(sel, x.data(), y.data());
+  const std::vector<double> b = whole.rhs(sel), d = whole.diagonal(sel);
+
+  const ClusterTree &tree = dist.matrix().tree();
+  const int m = dist.num_points(), first = dist.first_point();
+  std::vector<double> xl(3L * m), yref(3L * m), bref(3L * m), dref(3L * m), yl(3L * m);
+  for (int k = 0; k < m; ++k)
+    for (int c = 0; c < 3; ++c) {
+      const int j = tree.perm()[first + k];
+      xl[3 * k + c] = x[3L * j + c];
+      yref[3 * k + c] = y[3L * j + c];
+      bref[3 * k + c] = b[3L * j + c];
+      dref[3 * k + c] = d[3L * j + c];
+    }
+  dist.apply(sel, xl.data(), yl.data());
+  EXPECT_LT(rel(yl, yref, PETSC_COMM_WORLD), 1e-12);
+  EXPECT_LT(rel(dist.rhs(sel), bref, PETSC_COMM_WORLD), 1e-12);
+  EXPECT_LT(rel(dist.diagonal(sel), dref, PETSC_COMM_WORLD), 1e-14);
+}
+
+} // namespace
