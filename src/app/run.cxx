@@ -170,7 +170,11 @@ std::vector<double> solve_problem(MPI_Comm comm, const ProblemSetup &s, const Be
   HssbemCallThrow(VecDuplicate(b, &x));
   HssbemCallThrow(HssbemSolveSystem(ksp, &A, b, x, info));
   const double              t_solve = timer.seconds();
-  const std::vector<double> xall    = gather(x, to_all);
+  Vec xmesh; // the solution in mesh order (the distributed H² system's rows are in cluster order)
+  HssbemCallThrow(HssbemMatCreateMeshOrderVec(A, &xmesh));
+  HssbemCallThrow(HssbemVecToMeshOrder(A, x, xmesh));
+  const std::vector<double> xall = gather(xmesh, to_all);
+  HssbemCallThrow(VecDestroy(&xmesh));
   HssbemCallThrow(KSPDestroy(&ksp));
   HssbemCallThrow(MatDestroy(&A));
   HssbemCallThrow(VecDestroy(&b));

@@ -7,6 +7,8 @@
 #include "hssbem/petsc/log.h"
 #include "hssbem/bem/rigid_modes.hpp"
 
+#include <algorithm>
+
 #include <exception>
 #include <string>
 
@@ -24,6 +26,30 @@ PetscErrorCode MatCompressedGetContext(Mat A, Mat_Compressed **ctx)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* Mesh-order dof of local row i of the distributed system. */
+inline std::size_t MeshDof_Private(const HssbemSystemContext &p, int i)
+{
+  const hssbem::H2DistributedSystem &s = *p.h2dist;
+  return 3 * (std::size_t)s.matrix().tree().perm()[s.first_point() + i / 3] + (std::size_t)(i % 3);
+}
+
+/* y += c Q (Qᵀ x) on this rank's rows of the distributed system (Qᵀ x summed over the ranks). */
+void AddDistributedRegularization_Private(const HssbemSystemContext &p, const PetscScalar *x, PetscScalar *y)
+{
+  const int n = 3 * p.h2dist->num_points();
+  double    qx[6] = {0, 0, 0, 0, 0, 0};
+  for (int i = 0; i < n; ++i) {
+    const double *q = &p.modes[6 * MeshDof_Private(p, i)];
+    for (int m = 0; m < 6; ++m) qx[m] += q[m] * x[i];
+  }
+  p.comm->sum(qx, 6);
+  for (int m = 0; m < 6; ++m) qx[m] *= hssbem::rigid_regularization_weight;
+  for (int i = 0; i < n; ++i) {
+    const double *q = &p.modes[6 * MeshDof_Private(p, i)];
+    for (int m = 0; m < 6; ++m) y[i] += q[m] * qx[m];
+  }
+}
+
 PetscErrorCode MatMult_Compressed(Mat A, Vec x, Vec y)
 {
   Mat_Compressed    *ctx;
@@ -34,6 +60,18 @@ PetscErrorCode MatMult_Compressed(Mat A, Vec x, Vec y)
   PetscFunctionBegin;
   PetscCall(MatCompressedGetContext(A, &ctx));
   const HssbemSystemContext &p = *ctx->sys;
+  if (p.h2dist) {
+    PetscCall(VecGetArrayRead(x, &xa));
+    PetscCall(VecGetArrayWrite(y, &ya));
+    guard.Run("MatMult", [&] {
+      p.h2dist->apply(p.sel, xa, ya);
+      if (!p.modes.empty()) AddDistributedRegularization_Private(p, xa, ya);
+    });
+    PetscCall(VecRestoreArrayRead(x, &xa));
+    PetscCall(VecRestoreArrayWrite(y, &ya));
+    PetscCall(guard.Check(PetscObjectComm((PetscObject)A), "MatMult"));
+    PetscFunctionReturn(PETSC_SUCCESS);
+  }
   PetscCall(ctx->ex.SetUp(x));
   PetscCall(ctx->ex.Gather(x, &xa));
   PetscCall(ctx->ex.GetOut(&ya));
@@ -57,6 +95,21 @@ PetscErrorCode MatGetDiagonal_Compressed(Mat A, Vec d)
   PetscFunctionBegin;
   PetscCall(MatCompressedGetContext(A, &ctx));
   const HssbemSystemContext &p = *ctx->sys;
+  if (p.h2dist) {
+    PetscCall(VecGetArrayWrite(d, &da));
+    guard.Run("MatGetDiagonal", [&] {
+      const std::vector<double> diag = p.h2dist->diagonal(p.sel);
+      for (std::size_t i = 0; i < diag.size(); ++i) {
+        da[i] = diag[i];
+        if (p.modes.empty()) continue;
+        const double *q = &p.modes[6 * MeshDof_Private(p, (int)i)];
+        da[i] += hssbem::rigid_regularization_weight * (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3] + q[4] * q[4] + q[5] * q[5]);
+      }
+    });
+    PetscCall(VecRestoreArrayWrite(d, &da));
+    PetscCall(guard.Check(PetscObjectComm((PetscObject)A), "MatGetDiagonal"));
+    PetscFunctionReturn(PETSC_SUCCESS);
+  }
   PetscCall(ctx->ex.SetUp(d));
   PetscCall(ctx->ex.GetOut(&da));
   guard.Run("MatGetDiagonal", [&] {
@@ -95,6 +148,27 @@ PetscErrorCode MatView_Compressed(Mat A, PetscViewer viewer)
                                      o.max_rank > 0 ? std::to_string(o.max_rank).c_str() : "none", o.proxy_ratio));
   }
   const bool pressure = p.type == hssbem::OperatorType::H2 ? p.h2_options.pressure_columns : p.hss_options.pressure_columns;
+  if (p.h2dist) {
+    const hssbem::NodePartitionStats &ps = p.partition;
+    const hssbem::H2DistributedProduct &prod = p.h2dist->product();
+    double mem[2] = {(double)p.h2dist->matrix().stats().memory_bytes, (double)p.h2dist->matrix().stats().memory_bytes}, traffic[2] = {(double)prod.values_sent(), (double)prod.messages_sent()};
+    p.comm->sum(&mem[0], 1);
+    mem[1] = p.comm->max(mem[1]);
+    traffic[0] = p.comm->max(traffic[0]);
+    traffic[1] = p.comm->max(traffic[1]);
+    PetscCall(PetscViewerASCIIPrintf(viewer, "  pattern: %s; rigid-mode regularisation: %s\n", pressure ? "K = [H, G, Gn] (pressure loads)" : "K = [H, G]", p.modes.empty() ? "no" : "yes"));
+    PetscCall(PetscViewerASCIIPrintf(viewer, "  distributed over %d ranks by METIS: %d to %d nodes per rank (imbalance %.3f), edge cut %ld of %ld node-graph edges%s\n", ps.parts, ps.min_nodes, ps.max_nodes, ps.imbalance,
+                                     ps.edge_cut, ps.edges, ps.disconnected_parts ? " (some parts not connected)" : ""));
+    PetscCall(PetscViewerASCIIPrintf(viewer, "  memory %.1f MB in all, %.1f MB on the largest rank; per product a rank sends at most %.0f values in %.0f messages\n", mem[0] / 1048576.0, mem[1] / 1048576.0,
+                                     traffic[0], traffic[1]));
+    PetscCall(PetscViewerASCIIPrintf(viewer, "  rank 0's part (ranks per level: all parts):\n"));
+    PetscCall(PetscViewerASCIIPushTab(viewer));
+    PetscCall(PetscViewerASCIIPushTab(viewer));
+    PetscCall(HssbemViewH2Matrix_Private(viewer, p.h2dist->matrix()));
+    PetscCall(PetscViewerASCIIPopTab(viewer));
+    PetscCall(PetscViewerASCIIPopTab(viewer));
+    PetscFunctionReturn(PETSC_SUCCESS);
+  }
   PetscCall(PetscViewerASCIIPrintf(viewer, "  pattern: %s; rigid-mode regularisation: %s; the compression lives on rank 0\n", pressure ? "K = [H, G, Gn] (pressure loads)" : "K = [H, G]",
                                    p.modes.empty() ? "no" : "yes"));
   if (p.compressed()) { /* rank 0 */
@@ -158,6 +232,72 @@ PetscErrorCode HssbemViewH2Matrix_Private(PetscViewer viewer, const hssbem::H2Ma
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* The MatShell's operations and layout (3 * nlocal rows of N here). */
+static PetscErrorCode CreateShell_Private(MPI_Comm comm, HssbemSystemContext *sys, PetscInt nlocal, PetscInt N, Mat *A, Vec *b)
+{
+  Mat_Compressed *ctx;
+
+  PetscFunctionBegin;
+  PetscCallCXX(ctx = new Mat_Compressed);
+  ctx->sys = sys;
+  PetscCall(MatCreateShell(comm, 3 * nlocal, 3 * nlocal, N, N, ctx, A));
+  PetscCall(MatShellSetContextDestroy(*A, MatDestroyContext_Compressed));
+  PetscCall(MatSetBlockSize(*A, 3));
+  PetscCall(MatShellSetOperation(*A, MATOP_MULT, (void (*)(void))MatMult_Compressed));
+  PetscCall(MatShellSetOperation(*A, MATOP_GET_DIAGONAL, (void (*)(void))MatGetDiagonal_Compressed));
+  PetscCall(MatShellSetOperation(*A, MATOP_VIEW, (void (*)(void))MatView_Compressed));
+  PetscCall(MatSetOption(*A, MAT_SYMMETRIC, PETSC_FALSE));
+  PetscCall(MatCreateVecs(*A, NULL, b));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* The H² system on several ranks: the surface partitioned by METIS (rank 0, broadcast), each rank
+   compressing its part; rows in cluster order (sys->system_of_dof). */
+static PetscErrorCode CreateDistributedH2_Private(MPI_Comm comm, HssbemSystemContext *sys, Mat *A, Vec *b)
+{
+  const hssbem::BemOperator &op = *sys->op;
+  const PetscInt             nn = op.num_nodes();
+  PetscMPIInt                rank, size;
+  HssbemGuard                guard;
+  std::vector<int>           part;
+  std::vector<double>        b0;
+  PetscScalar               *ba;
+  double                     figures[7] = {0, 0, 0, 0, 0, 0, 0};
+
+  PetscFunctionBegin;
+  PetscCallMPI(MPI_Comm_rank(comm, &rank));
+  PetscCallMPI(MPI_Comm_size(comm, &size));
+  PetscCall(PetscLogEventBegin(BEM_Partition, 0, 0, 0, 0));
+  guard.Run("Partition", [&] {
+    sys->comm = std::make_unique<HssbemMpiComm>(comm, true);
+    part.resize((std::size_t)nn);
+    if (rank != 0) return;
+    part                               = hssbem::partition_nodes(op.discretization(), size, &sys->partition);
+    const hssbem::NodePartitionStats &s = sys->partition;
+    const double f[7] = {(double)s.parts, (double)s.edge_cut, (double)s.edges, s.imbalance, (double)s.min_nodes, (double)s.max_nodes, (double)s.disconnected_parts};
+    std::copy(f, f + 7, figures);
+  });
+  PetscCall(guard.Check(comm, "the partition of the surface failed"));
+  PetscCallMPI(MPI_Bcast(part.data(), (PetscMPIInt)nn, MPI_INT, 0, comm));
+  PetscCallMPI(MPI_Bcast(figures, 7, MPI_DOUBLE, 0, comm));
+  sys->partition = hssbem::NodePartitionStats{(int)figures[0], (long)figures[1], (long)figures[2], figures[3], (int)figures[4], (int)figures[5], (int)figures[6]};
+  PetscCall(PetscLogEventEnd(BEM_Partition, 0, 0, 0, 0));
+  guard.Run("Compression", [&] {
+    auto K       = std::make_shared<hssbem::H2DistributedSystem>(op, sys->h2_options, part, *sys->comm);
+    sys->h2dist  = K;
+    b0           = K->rhs(sys->sel);
+    const hssbem::ClusterTree &tree = K->matrix().tree();
+    sys->system_of_dof.resize(3 * (std::size_t)nn);
+    for (PetscInt d = 0; d < 3 * nn; ++d) sys->system_of_dof[d] = 3 * (PetscInt)tree.iperm()[d / 3] + d % 3;
+  });
+  PetscCall(guard.Check(comm, "H2 compression failed"));
+  PetscCall(CreateShell_Private(comm, sys, sys->h2dist->num_points(), 3 * nn, A, b));
+  PetscCall(VecGetArrayWrite(*b, &ba));
+  std::copy(b0.begin(), b0.end(), ba);
+  PetscCall(VecRestoreArrayWrite(*b, &ba));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 PetscErrorCode HssbemMatCreateCompressed_Private(MPI_Comm comm, HssbemSystemContext *sys, Mat *A, Vec *b)
 {
   const hssbem::BemOperator &op = *sys->op;
@@ -173,6 +313,15 @@ PetscErrorCode HssbemMatCreateCompressed_Private(MPI_Comm comm, HssbemSystemCont
   PetscFunctionBegin;
   PetscCall(PetscLogEventBegin(BEM_Assembly, 0, 0, 0, 0));
   PetscCallMPI(MPI_Comm_rank(comm, &rank));
+  {
+    PetscMPIInt size;
+    PetscCallMPI(MPI_Comm_size(comm, &size));
+    if (h2 && size > 1) {
+      PetscCall(CreateDistributedH2_Private(comm, sys, A, b));
+      PetscCall(PetscLogEventEnd(BEM_Assembly, 0, 0, 0, 0));
+      PetscFunctionReturn(PETSC_SUCCESS);
+    }
+  }
   guard.Run("Compression", [&] {
       if (rank != 0) return; /* the compression lives on rank 0 */
       if (h2) {
@@ -187,16 +336,8 @@ PetscErrorCode HssbemMatCreateCompressed_Private(MPI_Comm comm, HssbemSystemCont
     });
   PetscCall(guard.Check(comm, h2 ? "H2 compression failed" : "HSS compression failed"));
   PetscCall(HssbemOwnedNodes(comm, nn, &nstart, &nlocal));
-  PetscCallCXX(ctx = new Mat_Compressed);
-  ctx->sys = sys;
-  PetscCall(MatCreateShell(comm, 3 * nlocal, 3 * nlocal, N, N, ctx, A));
-  PetscCall(MatShellSetContextDestroy(*A, MatDestroyContext_Compressed));
-  PetscCall(MatSetBlockSize(*A, 3));
-  PetscCall(MatShellSetOperation(*A, MATOP_MULT, (void (*)(void))MatMult_Compressed));
-  PetscCall(MatShellSetOperation(*A, MATOP_GET_DIAGONAL, (void (*)(void))MatGetDiagonal_Compressed));
-  PetscCall(MatShellSetOperation(*A, MATOP_VIEW, (void (*)(void))MatView_Compressed));
-  PetscCall(MatSetOption(*A, MAT_SYMMETRIC, PETSC_FALSE));
-  PetscCall(MatCreateVecs(*A, NULL, b));
+  PetscCall(CreateShell_Private(comm, sys, nlocal, N, A, b));
+  PetscCall(MatShellGetContext(*A, &ctx));
   PetscCall(ctx->ex.SetUp(*b));
   PetscCall(ctx->ex.GetOut(&ba));
   for (std::size_t i = 0; i < b0.size(); ++i) ba[i] = b0[i];

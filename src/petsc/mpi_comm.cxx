@@ -20,10 +20,19 @@ const int tag_ints = 7101, tag_doubles = 7102;
 
 } // namespace
 
-HssbemMpiComm::HssbemMpiComm(MPI_Comm comm) : m_comm(comm)
+HssbemMpiComm::HssbemMpiComm(MPI_Comm comm, bool duplicate) : m_comm(comm)
 {
+  if (duplicate) {
+    Check(MPI_Comm_dup(comm, &m_comm), "MPI_Comm_dup");
+    m_owned = true;
+  }
   Check(MPI_Comm_rank(comm, &m_rank), "MPI_Comm_rank");
   Check(MPI_Comm_size(comm, &m_size), "MPI_Comm_size");
+}
+
+HssbemMpiComm::~HssbemMpiComm()
+{
+  if (m_owned) MPI_Comm_free(&m_comm);
 }
 
 std::vector<int> HssbemMpiComm::allgather(const std::vector<int> &mine, std::vector<int> &counts) const

@@ -9,6 +9,7 @@
 #include <petsc/private/pcimpl.h>
 
 #include <memory>
+#include <optional>
 #include <string>
 
 namespace {
@@ -103,8 +104,16 @@ PetscErrorCode PCSetUp_H2(PC pc)
   h2->factors.reset();
   h2->failure.clear();
   h2->inverse_error = -1;
+  if (p->h2dist && !p->h2 && h2->rel_tol >= p->h2_options.rel_tol) {
+    /* The factorization runs on rank 0 (not distributed yet): the matrix's parts gathered there. */
+    guard.Run("PCSetUp", [&] {
+      std::optional<hssbem::H2Matrix> whole = hssbem::gather_h2_matrix(p->h2dist->matrix(), *p->comm);
+      if (whole) p->h2 = std::make_shared<const hssbem::H2BemSystem>(std::move(*whole));
+    });
+    PetscCall(guard.Check(comm, "PC h2 set-up (gathering the H2 matrix)"));
+  }
   guard.Run("PCSetUp", [&] {
-    if (rank == 0) FactorOnRoot(h2, *p); /* the H² matrix lives on rank 0 */
+    if (rank == 0) FactorOnRoot(h2, *p); /* the factorization runs on rank 0 */
   });
   PetscCall(guard.Check(comm, "PC h2 set-up"));
   breakdown = rank == 0 && !h2->failure.empty();
@@ -113,7 +122,7 @@ PetscErrorCode PCSetUp_H2(PC pc)
     PetscCall(PetscInfo(pc, "H2 factorization broke down: %s\n", rank == 0 ? h2->failure.c_str() : "on rank 0"));
     PetscCall(PCSetFailedReason(pc, PC_FACTOR_NUMERIC_ZEROPIVOT));
   }
-  if (!h2->ex) PetscCallCXX(h2->ex = std::make_unique<HssbemRootExchange>());
+  PetscCallCXX(h2->ex = std::make_unique<HssbemRootExchange>(p->system_of_dof));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

@@ -103,7 +103,7 @@ PetscErrorCode PCSetUp_HSS(PC pc)
     PetscCall(PetscInfo(pc, "HSS factorization broke down: %s\n", rank == 0 ? hss->failure.c_str() : "on rank 0"));
     PetscCall(PCSetFailedReason(pc, PC_FACTOR_NUMERIC_ZEROPIVOT));
   }
-  PetscCallCXX(hss->ex = std::make_unique<HssbemRootExchange>());
+  PetscCallCXX(hss->ex = std::make_unique<HssbemRootExchange>(p->system_of_dof));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

@@ -351,8 +351,98 @@ PetscErrorCode HssbemRootExchange::SetUp(Vec x)
 {
   PetscFunctionBegin;
   if (m_scatter) PetscFunctionReturn(PETSC_SUCCESS);
-  PetscCall(VecScatterCreateToZero(x, &m_scatter, &m_in));
+  if (m_order.empty()) {
+    PetscCall(VecScatterCreateToZero(x, &m_scatter, &m_in));
+  } else {
+    PetscMPIInt rank;
+    PetscInt    N;
+    IS          from;
+    PetscCallMPI(MPI_Comm_rank(PetscObjectComm((PetscObject)x), &rank));
+    PetscCall(VecGetSize(x, &N));
+    PetscCall(ISCreateGeneral(PETSC_COMM_SELF, rank == 0 ? N : 0, m_order.data(), PETSC_USE_POINTER, &from));
+    PetscCall(VecCreateSeq(PETSC_COMM_SELF, rank == 0 ? N : 0, &m_in));
+    PetscCall(VecScatterCreate(x, from, m_in, NULL, &m_scatter));
+    PetscCall(ISDestroy(&from));
+  }
   PetscCall(VecDuplicate(m_in, &m_out));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/*@C
+  HssbemVecToMeshOrder - Copies x, a vector of A's layout (HssbemCreateSystem()), into y, laid out
+  like the dense system's vectors: mesh order (3 rows per dof node), nodes split in contiguous
+  blocks across the ranks. The H² system on several ranks orders its rows by the METIS partition
+  (cluster order); the other systems are in mesh order already (then this is a copy).
+
+  Collective
+
+  Level: intermediate
+@*/
+PetscErrorCode HssbemVecToMeshOrder(Mat A, Vec x, Vec y)
+{
+  HssbemSystemContext *p;
+  PetscInt             lo, hi;
+  IS                   from;
+  VecScatter           sc;
+
+  PetscFunctionBegin;
+  PetscCall(HssbemMatGetSystemContext(A, &p));
+  PetscCall(VecGetOwnershipRange(y, &lo, &hi));
+  if (!p || p->system_of_dof.empty()) PetscCall(ISCreateStride(PetscObjectComm((PetscObject)y), hi - lo, lo, 1, &from));
+  else PetscCall(ISCreateGeneral(PetscObjectComm((PetscObject)y), hi - lo, p->system_of_dof.data() + lo, PETSC_COPY_VALUES, &from));
+  PetscCall(VecScatterCreate(x, from, y, NULL, &sc));
+  PetscCall(VecScatterBegin(sc, x, y, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecScatterEnd(sc, x, y, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecScatterDestroy(&sc));
+  PetscCall(ISDestroy(&from));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/*@C
+  HssbemVecFromMeshOrder - The inverse of HssbemVecToMeshOrder(): x (A's layout) from y (mesh
+  order).
+
+  Collective
+
+  Level: intermediate
+@*/
+PetscErrorCode HssbemVecFromMeshOrder(Mat A, Vec y, Vec x)
+{
+  HssbemSystemContext *p;
+  PetscInt             lo, hi;
+  IS                   from;
+  VecScatter           sc;
+
+  PetscFunctionBegin;
+  PetscCall(HssbemMatGetSystemContext(A, &p));
+  PetscCall(VecGetOwnershipRange(y, &lo, &hi));
+  if (!p || p->system_of_dof.empty()) PetscCall(ISCreateStride(PetscObjectComm((PetscObject)y), hi - lo, lo, 1, &from));
+  else PetscCall(ISCreateGeneral(PetscObjectComm((PetscObject)y), hi - lo, p->system_of_dof.data() + lo, PETSC_COPY_VALUES, &from));
+  PetscCall(VecScatterCreate(x, from, y, NULL, &sc));
+  PetscCall(VecScatterBegin(sc, y, x, INSERT_VALUES, SCATTER_REVERSE));
+  PetscCall(VecScatterEnd(sc, y, x, INSERT_VALUES, SCATTER_REVERSE));
+  PetscCall(VecScatterDestroy(&sc));
+  PetscCall(ISDestroy(&from));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/*@C
+  HssbemMatCreateMeshOrderVec - A vector laid out like the dense system's (mesh order, nodes split
+  in contiguous blocks), for HssbemVecToMeshOrder() and HssbemVecFromMeshOrder().
+
+  Collective
+
+  Level: intermediate
+@*/
+PetscErrorCode HssbemMatCreateMeshOrderVec(Mat A, Vec *y)
+{
+  PetscInt N, nstart, nlocal;
+
+  PetscFunctionBegin;
+  PetscCall(MatGetSize(A, &N, NULL));
+  PetscCall(HssbemOwnedNodes(PetscObjectComm((PetscObject)A), N / 3, &nstart, &nlocal));
+  PetscCall(VecCreateMPI(PetscObjectComm((PetscObject)A), 3 * nlocal, N, y));
+  PetscCall(VecSetBlockSize(*y, 3));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

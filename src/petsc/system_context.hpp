@@ -11,6 +11,8 @@
 #include "hssbem/core/operator_type.hpp"
 #include "hssbem/h2/h2_system.hpp"
 #include "hssbem/hss/hss_system.hpp"
+#include "hssbem/bem/node_partition.hpp"
+#include "hssbem/petsc/mpi_comm.h"
 
 #include <petscmat.h>
 
@@ -28,7 +30,17 @@ struct HssbemSystemContext {
   hssbem::HssOptions         hss_options;                 /* of the compression below */
   std::shared_ptr<const hssbem::HssBemSystem> hss;        /* rank 0 only, HSS matrices only */
   hssbem::H2Options          h2_options;                  /* of the compression below */
-  std::shared_ptr<const hssbem::H2BemSystem> h2;          /* rank 0 only, H² matrices only */
+  std::shared_ptr<const hssbem::H2BemSystem> h2;          /* rank 0 only, H² matrices only: the
+                                                             whole matrix (gathered on demand when
+                                                             it is distributed) */
+  /* H² on several ranks: the matrix distributed over them (every rank its part), the ranks'
+     communicator (a duplicate, declared first so that it outlives the system), the METIS
+     partition's figures, and the global row of each mesh-order dof (3 per node): the system's
+     rows are in cluster order, rank p's block holding part p's nodes. */
+  std::unique_ptr<HssbemMpiComm>                     comm;
+  std::shared_ptr<const hssbem::H2DistributedSystem> h2dist;
+  hssbem::NodePartitionStats                         partition;
+  std::vector<PetscInt>                              system_of_dof; /* empty: mesh order */
 
   /* The compressed operator behind a MatShell (rank 0), or NULL. */
   const hssbem::CompressedBemSystem *compressed() const
@@ -51,6 +63,8 @@ PetscErrorCode HssbemOwnedNodes(MPI_Comm comm, PetscInt nnodes, PetscInt *nstart
 class HssbemRootExchange {
 public:
   HssbemRootExchange() = default;
+  /* The root's arrays in mesh order: entry d is row order[d] of the distributed vectors. */
+  explicit HssbemRootExchange(std::vector<PetscInt> order) : m_order(std::move(order)) {}
   HssbemRootExchange(const HssbemRootExchange &) = delete;
   HssbemRootExchange &operator=(const HssbemRootExchange &) = delete;
   ~HssbemRootExchange();
@@ -64,8 +78,9 @@ public:
   PetscErrorCode ScatterOut(PetscScalar **a, Vec y);
 
 private:
-  VecScatter m_scatter = nullptr;
-  Vec        m_in = nullptr, m_out = nullptr;
+  std::vector<PetscInt> m_order; /* empty: the identity */
+  VecScatter            m_scatter = nullptr;
+  Vec                   m_in = nullptr, m_out = nullptr;
 };
 
 /* The one guard of C++ work inside a PETSc function or callback (MatMult, MatGetDiagonal, PCSetUp,
@@ -84,6 +99,8 @@ public:
     try {
       if (site) hssbem::fault_point(site);
       fn();
+    } catch (const hssbem::PeerFault &) {
+      /* another rank failed inside a collective step: Check() reports that rank's error */
     } catch (const std::bad_alloc &) {
       Fail(PETSC_ERR_MEM, nullptr);
     } catch (const std::exception &e) {

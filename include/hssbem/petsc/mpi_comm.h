@@ -8,8 +8,12 @@
 
 class HssbemMpiComm : public hssbem::RankComm {
 public:
-  /* Uses comm (not duplicated: the caller keeps it alive and in step). */
-  explicit HssbemMpiComm(MPI_Comm comm);
+  /* On comm; with duplicate, on a duplicate of it (freed with this object), so that its messages
+     never meet the caller's. */
+  explicit HssbemMpiComm(MPI_Comm comm, bool duplicate = false);
+  ~HssbemMpiComm() override;
+  HssbemMpiComm(const HssbemMpiComm &)            = delete;
+  HssbemMpiComm &operator=(const HssbemMpiComm &) = delete;
 
   MPI_Comm comm() const { return m_comm; }
   int rank() const override { return m_rank; }
@@ -23,5 +27,6 @@ public:
 
 private:
   MPI_Comm m_comm;
+  bool     m_owned = false;
   int      m_rank = 0, m_size = 1;
 };

@@ -37,6 +37,15 @@
 PetscErrorCode HssbemCreateSystem(MPI_Comm comm, const hssbem::BemOperator &op, const hssbem::SystemSelection &sel, const std::vector<double> *rigid_modes, const char *mat_type, Mat *A,
                                   Vec *b);
 
+/* The rows of HssbemCreateSystem()'s A, b and solution: mesh order (3 per dof node, nodes split in
+   contiguous blocks) for the dense and HSS systems and the H² system on one rank; on several
+   ranks the H² system is distributed by a METIS partition of the surface and its rows are in
+   cluster order, rank p holding part p's nodes. These convert either way between A's layout and
+   a mesh-order vector from HssbemMatCreateMeshOrderVec() (a copy when A is in mesh order). */
+PetscErrorCode HssbemMatCreateMeshOrderVec(Mat A, Vec *y);
+PetscErrorCode HssbemVecToMeshOrder(Mat A, Vec x, Vec y);
+PetscErrorCode HssbemVecFromMeshOrder(Mat A, Vec y, Vec x);
+
 /* The machine as the size check sees it (collective): the smallest node memory over the ranks
    (MemTotal, or the cgroup's memory.max when lower, or -hssbem_memory_limit <bytes> when given),
    the most ranks on one node, and PETSC_MAX_INT. HssbemCreateSystem() refuses a system that
