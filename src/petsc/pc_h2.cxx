@@ -104,13 +104,14 @@ PetscErrorCode PCSetUp_H2(PC pc)
   h2->factors.reset();
   h2->failure.clear();
   h2->inverse_error = -1;
-  if (p->h2dist && !p->h2 && h2->rel_tol >= p->h2_options.rel_tol) {
+  if (p->h2dist && !p->h2_gathered && h2->rel_tol >= p->h2_options.rel_tol) {
     /* The factorization runs on rank 0 (not distributed yet): the matrix's parts gathered there. */
     guard.Run("PCSetUp", [&] {
       std::optional<hssbem::H2Matrix> whole = hssbem::gather_h2_matrix(p->h2dist->matrix(), *p->comm);
       if (whole) p->h2 = std::make_shared<const hssbem::H2BemSystem>(std::move(*whole));
     });
     PetscCall(guard.Check(comm, "PC h2 set-up (gathering the H2 matrix)"));
+    p->h2_gathered = true; /* on every rank (the matrix itself is rank 0's) */
   }
   guard.Run("PCSetUp", [&] {
     if (rank == 0) FactorOnRoot(h2, *p); /* the factorization runs on rank 0 */

@@ -41,6 +41,7 @@ struct HssbemSystemContext {
   std::shared_ptr<const hssbem::H2DistributedSystem> h2dist;
   hssbem::NodePartitionStats                         partition;
   std::vector<PetscInt>                              system_of_dof; /* empty: mesh order */
+  bool                                               h2_gathered = false; /* h2 holds the gathered matrix (rank 0) */
 
   /* The compressed operator behind a MatShell (rank 0), or NULL. */
   const hssbem::CompressedBemSystem *compressed() const
