@@ -30,16 +30,6 @@ bool uses_pressure(const ProblemSpec &spec)
   return std::any_of(spec.frames.begin(), spec.frames.end(), [&](const FrameSpec &f) { return any(f.rules); });
 }
 
-SystemSelection selection_of(const NodeConditions &nc) { return SystemSelection{nc.displacement_prescribed, nc.value, nc.pressure}; }
-
-std::vector<std::array<bool, 3>> vertex_pattern(const ProblemSetup &s, const NodeConditions &nc)
-{
-  std::vector<std::array<bool, 3>> out(s.mesh->vertices.size(), {false, false, false});
-  for (int v = 0; v < s.mesh->num_vertices(); ++v)
-    if (s.disc->node_count(v) > 0) out[v] = nc.displacement_prescribed[s.disc->first_node(v)];
-  return out;
-}
-
 /// The static part of a scene's result file: the mesh, the material and the run's description.
 ResultData scene_base(const ProblemSetup &s, PetscMPIInt size, const SceneRunOptions &o)
 {
@@ -130,7 +120,7 @@ void run_scene(MPI_Comm comm, const ProblemSetup &s, const BemOperator &op, std:
       FrameData     f;
       f.displacement            = vertex_average(*s.disc, sol.u);
       f.traction                = vertex_average(*s.disc, sol.t);
-      f.displacement_prescribed = vertex_pattern(s, nc);
+      f.displacement_prescribed = vertex_displacement_prescribed(*s.disc, nc);
       f.attributes_real         = {{"seconds", rep.seconds}, {"predicted_seconds", rep.predicted}};
       f.attributes_int          = {{"switched_unknowns", rep.switched}, {"changed_unknowns", rep.changed}, {"iterations", rep.iterations}, {"capacitance_rebuilt", rep.rebuilt}};
       f.attributes_str          = {{"strategy", scene_strategy_name(rep.strategy)}};

@@ -28,11 +28,6 @@ Material material_of(const ProblemSpec &spec, const ProblemOverrides &o)
   }
 }
 
-SystemSelection selection_of(const NodeConditions &nc)
-{
-  return SystemSelection{nc.displacement_prescribed, nc.value, nc.pressure};
-}
-
 std::string format(const char *fmt, double a, double b)
 {
   char buf[256];
@@ -64,6 +59,20 @@ void handle_rigid_modes(ProblemSetup &s)
 
 } // namespace
 
+SystemSelection selection_of(const NodeConditions &nc)
+{
+  return SystemSelection{nc.displacement_prescribed, nc.value, nc.pressure};
+}
+
+std::vector<std::array<bool, 3>> vertex_displacement_prescribed(const Discretization &disc, const NodeConditions &nc)
+{
+  const int                        nv = disc.mesh().num_vertices();
+  std::vector<std::array<bool, 3>> out(nv, {false, false, false});
+  for (int v = 0; v < nv; ++v)
+    if (disc.node_count(v) > 0) out[v] = nc.displacement_prescribed[disc.first_node(v)];
+  return out;
+}
+
 ProblemSetup setup_problem(ProblemSpec spec, const ProblemOverrides &o)
 {
   ProblemSetup s;
@@ -76,9 +85,7 @@ ProblemSetup setup_problem(ProblemSpec spec, const ProblemOverrides &o)
   s.disc = std::make_unique<Discretization>(*s.mesh, o.feature_angle_deg);
   const NodeConditions nc = apply_rules(s.spec.rules, *s.disc, s.spec.file);
   s.selection = selection_of(nc);
-  s.vertex_displacement_prescribed.assign(s.mesh->vertices.size(), {false, false, false});
-  for (int v = 0; v < s.mesh->num_vertices(); ++v)
-    if (s.disc->node_count(v) > 0) s.vertex_displacement_prescribed[v] = nc.displacement_prescribed[s.disc->first_node(v)];
+  s.vertex_displacement_prescribed = vertex_displacement_prescribed(*s.disc, nc);
   if (s.spec.frames.empty()) handle_rigid_modes(s); // a scene checks each frame (check_frame_constraints)
   return s;
 }
