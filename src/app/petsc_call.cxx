@@ -42,6 +42,10 @@ void run_collectively(MPI_Comm comm, const std::function<void()> &fn)
   if (lowest >= 0) throw std::runtime_error(message);
 }
 
+EventScope::EventScope(PetscLogEvent event) : m_event(event) { HssbemCallThrow(PetscLogEventBegin(event, 0, 0, 0, 0)); }
+
+EventScope::~EventScope() { PetscCallAbort(PETSC_COMM_SELF, PetscLogEventEnd(m_event, 0, 0, 0, 0)); }
+
 PetscErrorCode mpi_error(int code, int line, const char *func, const char *file)
 {
   char msg[MPI_MAX_ERROR_STRING];

@@ -1,6 +1,7 @@
 // Scenes in the driver: a problem file with "frames" solved frame by frame with the scene engine
 // (scene/dense_scene.hpp) and streamed into one result file (io/ FrameWriter). See run.hpp.
 #include "hssbem/app/run.hpp"
+#include "result_base.hpp"
 
 #include "hssbem/app/petsc_call.hpp"
 #include "hssbem/bem/post.hpp"
@@ -33,29 +34,12 @@ bool uses_pressure(const ProblemSpec &spec)
 /// The static part of a scene's result file: the mesh, the material and the run's description.
 ResultData scene_base(const ProblemSetup &s, PetscMPIInt size, const SceneRunOptions &o)
 {
-  ResultData r;
-  r.vertices        = s.mesh->vertices;
-  r.triangles       = s.mesh->triangles;
-  r.triangle_region = s.mesh->triangle_region;
-  r.sharp_vertex.resize(s.mesh->vertices.size());
-  for (int v = 0; v < s.mesh->num_vertices(); ++v) r.sharp_vertex[v] = s.disc->node_count(v) > 1;
-  r.attributes_real = {{"E", s.material.E}, {"nu", s.material.nu}, {"lambda", s.material.lambda()}, {"mu", s.material.mu()}, {"feature_angle_deg", s.disc->feature_angle_deg()}};
-  r.attributes_int  = {{"ranks", size}, {"num_dofs", 3 * s.disc->num_nodes()}, {"num_nodes", s.disc->num_nodes()}, {"num_sharp_vertices", s.disc->num_sharp_vertices()}};
-  char petsc_version[128];
-  HssbemCallThrow(PetscGetVersion(petsc_version, sizeof(petsc_version)));
-  r.attributes_str = {{"solver", "scene"}, {"mat_type", "dense"}, {"scene_strategy", scene_strategy_name(o.strategy)}, {"version", HSSBEM_VERSION},
-                      {"petsc_version", petsc_version}, {"problem_file", s.spec.file}, {"mesh_file", s.spec.mesh_path}};
+  ResultData r                      = result_base(s, size);
+  r.attributes_str["solver"]         = "scene";
+  r.attributes_str["mat_type"]       = "dense";
+  r.attributes_str["scene_strategy"] = scene_strategy_name(o.strategy);
   return r;
 }
-
-/// A whole frame as a log event, closed on the way out of an exception too.
-class FrameEvent {
-public:
-  FrameEvent() { HssbemCallThrow(PetscLogEventBegin(SCN_Frame, 0, 0, 0, 0)); }
-  ~FrameEvent() { PetscCallAbort(PETSC_COMM_SELF, PetscLogEventEnd(SCN_Frame, 0, 0, 0, 0)); }
-  FrameEvent(const FrameEvent &) = delete;
-  FrameEvent &operator=(const FrameEvent &) = delete;
-};
 
 } // namespace
 
@@ -105,7 +89,7 @@ void run_scene(MPI_Comm comm, const ProblemSetup &s, const BemOperator &op, std:
       const SystemSelection  sel = selection_of(nc);
       SceneFrameReport       rep;
       {
-        const FrameEvent event;
+        const EventScope event(SCN_Frame);
         rep = scene.solve(sel, x);
       }
       frame_seconds += rep.seconds;
@@ -125,10 +109,8 @@ void run_scene(MPI_Comm comm, const ProblemSetup &s, const BemOperator &op, std:
       f.attributes_int          = {{"switched_unknowns", rep.switched}, {"changed_unknowns", rep.changed}, {"iterations", rep.iterations}, {"capacitance_rebuilt", rep.rebuilt}};
       f.attributes_str          = {{"strategy", scene_strategy_name(rep.strategy)}};
       {
-        const PetscLogEvent e = BEM_Output;
-        HssbemCallThrow(PetscLogEventBegin(e, 0, 0, 0, 0));
+        const EventScope event(BEM_Output);
         writer->append(i, f);
-        HssbemCallThrow(PetscLogEventEnd(e, 0, 0, 0, 0));
       }
       seconds["output"] += post.seconds();
     }
