@@ -59,13 +59,17 @@ std::vector<double> gather(Vec x, bool to_all)
   PetscInt           n;
   const PetscScalar *a;
 
+  std::vector<double> out;
   if (to_all) HssbemCallThrow(VecScatterCreateToAll(x, &sc, &x0));
   else HssbemCallThrow(VecScatterCreateToZero(x, &sc, &x0));
   HssbemCallThrow(VecScatterBegin(sc, x, x0, INSERT_VALUES, SCATTER_FORWARD));
   HssbemCallThrow(VecScatterEnd(sc, x, x0, INSERT_VALUES, SCATTER_FORWARD));
   HssbemCallThrow(VecGetLocalSize(x0, &n));
   HssbemCallThrow(VecGetArrayRead(x0, &a));
-  std::vector<double> out(a, a + n);
+  run_collectively(PetscObjectComm((PetscObject)x), [&] { // the copy may not fit on rank 0 alone
+    fault_point("Gather");
+    out.assign(a, a + n);
+  });
   HssbemCallThrow(VecRestoreArrayRead(x0, &a));
   HssbemCallThrow(VecScatterDestroy(&sc));
   HssbemCallThrow(VecDestroy(&x0));
@@ -75,6 +79,7 @@ std::vector<double> gather(Vec x, bool to_all)
 void fill_result(const ProblemSetup &s, const BemOperator &op, const std::vector<double> &x, ResultData &r)
 {
   const Discretization &disc = *s.disc;
+  fault_point("Post");
   NodalSolution         sol  = split_unknowns(s.selection, x);
   if (s.pure_traction) remove_rigid_motion(disc, sol.u);
   r.displacement            = vertex_average(disc, sol.u);
@@ -162,7 +167,10 @@ std::vector<double> solve_problem(MPI_Comm comm, const ProblemSetup &s, const Be
   check_unused_options(comm, true);
   Timer               timer;
   std::vector<double> modes;
-  if (s.pure_traction) modes = orthonormal_rigid_modes(*s.disc);
+  run_collectively(comm, [&] {
+    fault_point("RigidModes");
+    if (s.pure_traction) modes = orthonormal_rigid_modes(*s.disc);
+  });
   HssbemCallThrow(HssbemCreateSystem(comm, op, s.selection, s.pure_traction ? &modes : nullptr, mat_type, &A, &b));
   HssbemCallThrow(MatViewFromOptions(A, NULL, "-bem_mat_view"));
   const double t_assembly = timer.seconds();
@@ -207,8 +215,13 @@ void run_problem(MPI_Comm comm, const std::string &problem_file, const ProblemOv
   HssbemCallMPIThrow(MPI_Comm_size(comm, &size));
   const ProblemSetup s = set_up(comm, problem_file, overrides);
   for (const auto &n : s.notices) HssbemCallThrow(PetscPrintf(comm, "hssbem: notice: %s\n", n.c_str()));
-  const BemOperator op(*s.disc, s.material, quad);
-  run_collectively(comm, [&] { check_interior_points(op, s.spec); });
+  std::optional<BemOperator> built; // every rank builds it: a failure on one must stop them all
+  run_collectively(comm, [&] {
+    fault_point("Operator");
+    built.emplace(*s.disc, s.material, quad);
+    check_interior_points(*built, s.spec);
+  });
+  const BemOperator &op = *built;
   seconds["setup"] += timer.seconds();
   if (!s.spec.frames.empty()) {
     HssbemCallThrow(PetscPrintf(comm, "hssbem: %s: %d vertices, %d triangles, %d dof nodes (%d sharp vertices), %d unknowns, %d ranks\n", s.spec.mesh_path.c_str(), s.mesh->num_vertices(),

@@ -6,6 +6,7 @@
 #include "hssbem/app/petsc_call.hpp"
 #include "hssbem/bem/post.hpp"
 #include "hssbem/bem/rigid_modes.hpp"
+#include "hssbem/core/fault.hpp"
 #include "hssbem/core/timer.hpp"
 #include "hssbem/io/hdf5_output.hpp"
 #include "hssbem/petsc/log.h"
@@ -74,6 +75,7 @@ void run_scene(MPI_Comm comm, const ProblemSetup &s, const BemOperator &op, std:
     so.single_from   = o.single_from;
     so.krylov_rtol   = o.krylov_rtol;
     const Timer      timer;
+    fault_point("SceneSetup");
     DenseScene       scene(op, selection_of(ref_nc), so, HssbemSceneKrylovCreate());
     seconds["scene_setup"] += timer.seconds();
     HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF, "hssbem: scene: set up in %.2f s (reference pattern: %s; %.0f MB)\n", scene.setup_seconds(), ref_name.c_str(), scene.memory_bytes() / 1e6));
@@ -86,6 +88,7 @@ void run_scene(MPI_Comm comm, const ProblemSetup &s, const BemOperator &op, std:
       const std::string    what = "frames[" + std::to_string(i) + "]";
       const NodeConditions nc   = frame_conditions(s.spec, i, *s.disc);
       check_frame_constraints(s, nc.displacement_prescribed, what);
+      fault_point("Frame");
       const SystemSelection  sel = selection_of(nc);
       SceneFrameReport       rep;
       {

@@ -1,6 +1,7 @@
 #include "hssbem/problem/setup.hpp"
 #include "hssbem/bem/post.hpp"
 #include "hssbem/bem/rigid_modes.hpp"
+#include "hssbem/core/fault.hpp"
 
 #include <cstdio>
 #include <stdexcept>
@@ -80,12 +81,14 @@ ProblemSetup setup_problem(ProblemSpec spec, const ProblemOverrides &o)
   if (o.mesh) s.spec.mesh_path = *o.mesh;
   s.output = o.output ? *o.output : s.spec.output;
   s.material = material_of(s.spec, o);
-  s.mesh = std::make_unique<SurfaceMesh>(read_mesh(s.spec.mesh_path));
+  fault_point("MeshRead"); // tests: a mesh seen by some ranks only (kind unreadable: fault_path)
+  s.mesh = std::make_unique<SurfaceMesh>(read_mesh(fault_path("MeshRead", s.spec.mesh_path)));
   validate_and_orient(*s.mesh, s.notices);
   s.disc = std::make_unique<Discretization>(*s.mesh, o.feature_angle_deg);
   const NodeConditions nc = apply_rules(s.spec.rules, *s.disc, s.spec.file);
   s.selection = selection_of(nc);
   s.vertex_displacement_prescribed = vertex_displacement_prescribed(*s.disc, nc);
+  fault_point("Setup");
   if (s.spec.frames.empty()) handle_rigid_modes(s); // a scene checks each frame (check_frame_constraints)
   return s;
 }
