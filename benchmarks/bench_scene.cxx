@@ -16,6 +16,7 @@
 #include "hssbem/petsc/log.h"
 #include "hssbem/petsc/scene_krylov.h"
 #include "hssbem/problem/problem.hpp"
+#include "hssbem/problem/setup.hpp"
 #include "hssbem/scene/dense_scene.hpp"
 
 #include <petscsys.h>
@@ -151,8 +152,7 @@ struct Scenario {
 
   SystemSelection selection(const std::vector<BoundaryRule> &rules) const
   {
-    const NodeConditions nc = apply_rules(rules, disc, "bench_scene");
-    return SystemSelection{nc.displacement_prescribed, nc.value, nc.pressure};
+    return selection_of(apply_rules(rules, disc, "bench_scene"));
   }
 };
 

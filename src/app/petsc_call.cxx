@@ -39,8 +39,16 @@ void run_collectively(MPI_Comm comm, const std::function<void()> &fn)
     message = e.what();
   }
   HssbemCallThrow(HssbemAgreeOnError(comm, &code, &message, &lowest, &nfailed));
-  if (lowest >= 0) throw std::runtime_error(message);
+  if (lowest < 0) return;
+  PetscMPIInt size;
+  HssbemCallMPIThrow(MPI_Comm_size(comm, &size));
+  if (nfailed < size) message += " (on rank " + std::to_string(lowest) + ")"; // as HssbemGuard::Check says it
+  throw std::runtime_error(message);
 }
+
+EventScope::EventScope(PetscLogEvent event) : m_event(event) { HssbemCallThrow(PetscLogEventBegin(event, 0, 0, 0, 0)); }
+
+EventScope::~EventScope() { PetscCallAbort(PETSC_COMM_SELF, PetscLogEventEnd(m_event, 0, 0, 0, 0)); }
 
 PetscErrorCode mpi_error(int code, int line, const char *func, const char *file)
 {

@@ -1,5 +1,6 @@
 // The hssbem application: problem file → operator → solve → post-processing → result file (see run.hpp).
 #include "hssbem/app/run.hpp"
+#include "result_base.hpp"
 
 #include "hssbem/app/options.hpp"
 #include "hssbem/app/petsc_call.hpp"
@@ -20,18 +21,6 @@
 namespace hssbem {
 
 namespace {
-
-/// A log event open for the lifetime of the object, closed on the way out of an exception too.
-class EventScope {
-public:
-  explicit EventScope(PetscLogEvent event) : m_event(event) { HssbemCallThrow(PetscLogEventBegin(event, 0, 0, 0, 0)); }
-  ~EventScope() { PetscCallAbort(PETSC_COMM_SELF, PetscLogEventEnd(m_event, 0, 0, 0, 0)); }
-  EventScope(const EventScope &) = delete;
-  EventScope &operator=(const EventScope &) = delete;
-
-private:
-  PetscLogEvent m_event;
-};
 
 /// Every rank reads the problem and the mesh (they need the geometry); rank 0 alone checks the
 /// output path, since rank 0 alone writes it. A failure on any rank (files that differ between
@@ -70,13 +59,17 @@ std::vector<double> gather(Vec x, bool to_all)
   PetscInt           n;
   const PetscScalar *a;
 
+  std::vector<double> out;
   if (to_all) HssbemCallThrow(VecScatterCreateToAll(x, &sc, &x0));
   else HssbemCallThrow(VecScatterCreateToZero(x, &sc, &x0));
   HssbemCallThrow(VecScatterBegin(sc, x, x0, INSERT_VALUES, SCATTER_FORWARD));
   HssbemCallThrow(VecScatterEnd(sc, x, x0, INSERT_VALUES, SCATTER_FORWARD));
   HssbemCallThrow(VecGetLocalSize(x0, &n));
   HssbemCallThrow(VecGetArrayRead(x0, &a));
-  std::vector<double> out(a, a + n);
+  run_collectively(PetscObjectComm((PetscObject)x), [&] { // the copy may not fit on rank 0 alone
+    fault_point("Gather");
+    out.assign(a, a + n);
+  });
   HssbemCallThrow(VecRestoreArrayRead(x0, &a));
   HssbemCallThrow(VecScatterDestroy(&sc));
   HssbemCallThrow(VecDestroy(&x0));
@@ -86,36 +79,32 @@ std::vector<double> gather(Vec x, bool to_all)
 void fill_result(const ProblemSetup &s, const BemOperator &op, const std::vector<double> &x, ResultData &r)
 {
   const Discretization &disc = *s.disc;
+  fault_point("Post");
   NodalSolution         sol  = split_unknowns(s.selection, x);
   if (s.pure_traction) remove_rigid_motion(disc, sol.u);
-  r.vertices                = s.mesh->vertices;
-  r.triangles               = s.mesh->triangles;
-  r.triangle_region         = s.mesh->triangle_region;
   r.displacement            = vertex_average(disc, sol.u);
   r.traction                = vertex_average(disc, sol.t);
   r.traction_corner         = corner_values(disc, sol.t);
   r.displacement_prescribed = s.vertex_displacement_prescribed;
-  r.sharp_vertex.resize(s.mesh->vertices.size());
-  for (int v = 0; v < s.mesh->num_vertices(); ++v) r.sharp_vertex[v] = disc.node_count(v) > 1;
   r.reactions       = reactions(disc, sol.t);
   r.interior_points = s.spec.interior_points;
   const EventScope event(BEM_Interior);
   r.interior_displacement = interior_displacement(op, sol, s.spec.interior_points);
 }
 
-void describe(const ProblemSetup &s, const HssbemSolveInfo &info, OperatorType type, PetscMPIInt size, ResultData &r)
+/// The solve's part of the root attributes, added to result_base()'s.
+void describe(const ProblemSetup &s, const HssbemSolveInfo &info, OperatorType type, ResultData &r)
 {
   const char *mat_type = operator_type_name(type);
-  r.attributes_real    = {{"E", s.material.E}, {"nu", s.material.nu}, {"lambda", s.material.lambda()}, {"mu", s.material.mu()},
-                          {"residual", info.residual}, {"feature_angle_deg", s.disc->feature_angle_deg()}};
-  r.attributes_int     = {{"iterations", info.iterations}, {"ranks", size}, {"num_dofs", 3 * s.disc->num_nodes()},
-                          {"num_nodes", s.disc->num_nodes()}, {"num_sharp_vertices", s.disc->num_sharp_vertices()},
-                          {"pure_traction", (long long)s.pure_traction}};
-  char petsc_version[128];
-  HssbemCallThrow(PetscGetVersion(petsc_version, sizeof(petsc_version)));
-  r.attributes_str = {{"solver", mat_type}, {"mat_type", mat_type}, {"ksp_type", info.ksp_type}, {"pc_type", info.pc_type}, {"mat_solver_type", info.solver_type},
-                      {"converged_reason", KSPConvergedReasons[info.reason]}, {"version", HSSBEM_VERSION}, {"petsc_version", petsc_version},
-                      {"problem_file", s.spec.file}, {"mesh_file", s.spec.mesh_path}};
+  r.attributes_real["residual"]      = info.residual;
+  r.attributes_int["iterations"]     = info.iterations;
+  r.attributes_int["pure_traction"]  = s.pure_traction;
+  r.attributes_str["solver"]          = mat_type;
+  r.attributes_str["mat_type"]        = mat_type;
+  r.attributes_str["ksp_type"]        = info.ksp_type;
+  r.attributes_str["pc_type"]         = info.pc_type;
+  r.attributes_str["mat_solver_type"] = info.solver_type;
+  r.attributes_str["converged_reason"] = KSPConvergedReasons[info.reason];
 }
 
 /// Rank 0 post-processes and writes the result file; a failure there is raised on every rank.
@@ -128,14 +117,14 @@ void write_on_root(MPI_Comm comm, const ProblemSetup &s, const BemOperator &op, 
   HssbemCallMPIThrow(MPI_Comm_size(comm, &size));
   run_collectively(comm, [&] {
     if (rank != 0) return;
-    ResultData  r;
+    ResultData  r = result_base(s, size);
     const Timer timer;
     {
       const EventScope event(BEM_Post);
       fill_result(s, op, xall, r);
     }
     seconds["post"] += timer.seconds();
-    describe(s, info, type, size, r);
+    describe(s, info, type, r);
     r.timings = seconds;
     if (s.output.empty()) return;
     {
@@ -147,6 +136,22 @@ void write_on_root(MPI_Comm comm, const ProblemSetup &s, const BemOperator &op, 
 }
 
 } // namespace
+
+ResultData result_base(const ProblemSetup &s, PetscMPIInt size)
+{
+  ResultData r;
+  r.vertices        = s.mesh->vertices;
+  r.triangles       = s.mesh->triangles;
+  r.triangle_region = s.mesh->triangle_region;
+  r.sharp_vertex.resize(s.mesh->vertices.size());
+  for (int v = 0; v < s.mesh->num_vertices(); ++v) r.sharp_vertex[v] = s.disc->node_count(v) > 1;
+  r.attributes_real = {{"E", s.material.E}, {"nu", s.material.nu}, {"lambda", s.material.lambda()}, {"mu", s.material.mu()}, {"feature_angle_deg", s.disc->feature_angle_deg()}};
+  r.attributes_int  = {{"ranks", size}, {"num_dofs", 3 * s.disc->num_nodes()}, {"num_nodes", s.disc->num_nodes()}, {"num_sharp_vertices", s.disc->num_sharp_vertices()}};
+  char petsc_version[128];
+  HssbemCallThrow(PetscGetVersion(petsc_version, sizeof(petsc_version)));
+  r.attributes_str = {{"version", HSSBEM_VERSION}, {"petsc_version", petsc_version}, {"problem_file", s.spec.file}, {"mesh_file", s.spec.mesh_path}};
+  return r;
+}
 
 std::vector<double> solve_problem(MPI_Comm comm, const ProblemSetup &s, const BemOperator &op, OperatorType type, bool to_all, HssbemSolveInfo *info,
                                   std::map<std::string, double> *seconds)
@@ -162,7 +167,10 @@ std::vector<double> solve_problem(MPI_Comm comm, const ProblemSetup &s, const Be
   check_unused_options(comm, true);
   Timer               timer;
   std::vector<double> modes;
-  if (s.pure_traction) modes = orthonormal_rigid_modes(*s.disc);
+  run_collectively(comm, [&] {
+    fault_point("RigidModes");
+    if (s.pure_traction) modes = orthonormal_rigid_modes(*s.disc);
+  });
   HssbemCallThrow(HssbemCreateSystem(comm, op, s.selection, s.pure_traction ? &modes : nullptr, mat_type, &A, &b));
   HssbemCallThrow(MatViewFromOptions(A, NULL, "-bem_mat_view"));
   const double t_assembly = timer.seconds();
@@ -211,8 +219,13 @@ void run_problem(MPI_Comm comm, const std::string &problem_file, const ProblemOv
   HssbemCallMPIThrow(MPI_Comm_size(comm, &size));
   const ProblemSetup s = set_up(comm, problem_file, overrides);
   for (const auto &n : s.notices) HssbemCallThrow(PetscPrintf(comm, "hssbem: notice: %s\n", n.c_str()));
-  const BemOperator op(*s.disc, s.material, quad);
-  run_collectively(comm, [&] { check_interior_points(op, s.spec); });
+  std::optional<BemOperator> built; // every rank builds it: a failure on one must stop them all
+  run_collectively(comm, [&] {
+    fault_point("Operator");
+    built.emplace(*s.disc, s.material, quad);
+    check_interior_points(*built, s.spec);
+  });
+  const BemOperator &op = *built;
   seconds["setup"] += timer.seconds();
   if (!s.spec.frames.empty()) {
     HssbemCallThrow(PetscPrintf(comm, "hssbem: %s: %d vertices, %d triangles, %d dof nodes (%d sharp vertices), %d unknowns, %d ranks\n", s.spec.mesh_path.c_str(), s.mesh->num_vertices(),

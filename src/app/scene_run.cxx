@@ -1,10 +1,12 @@
 // Scenes in the driver: a problem file with "frames" solved frame by frame with the scene engine
 // (scene/dense_scene.hpp) and streamed into one result file (io/ FrameWriter). See run.hpp.
 #include "hssbem/app/run.hpp"
+#include "result_base.hpp"
 
 #include "hssbem/app/petsc_call.hpp"
 #include "hssbem/bem/post.hpp"
 #include "hssbem/bem/rigid_modes.hpp"
+#include "hssbem/core/fault.hpp"
 #include "hssbem/core/timer.hpp"
 #include "hssbem/io/hdf5_output.hpp"
 #include "hssbem/petsc/log.h"
@@ -30,42 +32,15 @@ bool uses_pressure(const ProblemSpec &spec)
   return std::any_of(spec.frames.begin(), spec.frames.end(), [&](const FrameSpec &f) { return any(f.rules); });
 }
 
-SystemSelection selection_of(const NodeConditions &nc) { return SystemSelection{nc.displacement_prescribed, nc.value, nc.pressure}; }
-
-std::vector<std::array<bool, 3>> vertex_pattern(const ProblemSetup &s, const NodeConditions &nc)
-{
-  std::vector<std::array<bool, 3>> out(s.mesh->vertices.size(), {false, false, false});
-  for (int v = 0; v < s.mesh->num_vertices(); ++v)
-    if (s.disc->node_count(v) > 0) out[v] = nc.displacement_prescribed[s.disc->first_node(v)];
-  return out;
-}
-
 /// The static part of a scene's result file: the mesh, the material and the run's description.
 ResultData scene_base(const ProblemSetup &s, PetscMPIInt size, const SceneRunOptions &o)
 {
-  ResultData r;
-  r.vertices        = s.mesh->vertices;
-  r.triangles       = s.mesh->triangles;
-  r.triangle_region = s.mesh->triangle_region;
-  r.sharp_vertex.resize(s.mesh->vertices.size());
-  for (int v = 0; v < s.mesh->num_vertices(); ++v) r.sharp_vertex[v] = s.disc->node_count(v) > 1;
-  r.attributes_real = {{"E", s.material.E}, {"nu", s.material.nu}, {"lambda", s.material.lambda()}, {"mu", s.material.mu()}, {"feature_angle_deg", s.disc->feature_angle_deg()}};
-  r.attributes_int  = {{"ranks", size}, {"num_dofs", 3 * s.disc->num_nodes()}, {"num_nodes", s.disc->num_nodes()}, {"num_sharp_vertices", s.disc->num_sharp_vertices()}};
-  char petsc_version[128];
-  HssbemCallThrow(PetscGetVersion(petsc_version, sizeof(petsc_version)));
-  r.attributes_str = {{"solver", "scene"}, {"mat_type", "dense"}, {"scene_strategy", scene_strategy_name(o.strategy)}, {"version", HSSBEM_VERSION},
-                      {"petsc_version", petsc_version}, {"problem_file", s.spec.file}, {"mesh_file", s.spec.mesh_path}};
+  ResultData r                      = result_base(s, size);
+  r.attributes_str["solver"]         = "scene";
+  r.attributes_str["mat_type"]       = "dense";
+  r.attributes_str["scene_strategy"] = scene_strategy_name(o.strategy);
   return r;
 }
-
-/// A whole frame as a log event, closed on the way out of an exception too.
-class FrameEvent {
-public:
-  FrameEvent() { HssbemCallThrow(PetscLogEventBegin(SCN_Frame, 0, 0, 0, 0)); }
-  ~FrameEvent() { PetscCallAbort(PETSC_COMM_SELF, PetscLogEventEnd(SCN_Frame, 0, 0, 0, 0)); }
-  FrameEvent(const FrameEvent &) = delete;
-  FrameEvent &operator=(const FrameEvent &) = delete;
-};
 
 } // namespace
 
@@ -100,6 +75,7 @@ void run_scene(MPI_Comm comm, const ProblemSetup &s, const BemOperator &op, std:
     so.single_from   = o.single_from;
     so.krylov_rtol   = o.krylov_rtol;
     const Timer      timer;
+    fault_point("SceneSetup");
     DenseScene       scene(op, selection_of(ref_nc), so, HssbemSceneKrylovCreate());
     seconds["scene_setup"] += timer.seconds();
     HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF, "hssbem: scene: set up in %.2f s (reference pattern: %s; %.0f MB)\n", scene.setup_seconds(), ref_name.c_str(), scene.memory_bytes() / 1e6));
@@ -112,10 +88,11 @@ void run_scene(MPI_Comm comm, const ProblemSetup &s, const BemOperator &op, std:
       const std::string    what = "frames[" + std::to_string(i) + "]";
       const NodeConditions nc   = frame_conditions(s.spec, i, *s.disc);
       check_frame_constraints(s, nc.displacement_prescribed, what);
+      fault_point("Frame");
       const SystemSelection  sel = selection_of(nc);
       SceneFrameReport       rep;
       {
-        const FrameEvent event;
+        const EventScope event(SCN_Frame);
         rep = scene.solve(sel, x);
       }
       frame_seconds += rep.seconds;
@@ -130,15 +107,13 @@ void run_scene(MPI_Comm comm, const ProblemSetup &s, const BemOperator &op, std:
       FrameData     f;
       f.displacement            = vertex_average(*s.disc, sol.u);
       f.traction                = vertex_average(*s.disc, sol.t);
-      f.displacement_prescribed = vertex_pattern(s, nc);
+      f.displacement_prescribed = vertex_displacement_prescribed(*s.disc, nc);
       f.attributes_real         = {{"seconds", rep.seconds}, {"predicted_seconds", rep.predicted}};
       f.attributes_int          = {{"switched_unknowns", rep.switched}, {"changed_unknowns", rep.changed}, {"iterations", rep.iterations}, {"capacitance_rebuilt", rep.rebuilt}};
       f.attributes_str          = {{"strategy", scene_strategy_name(rep.strategy)}};
       {
-        const PetscLogEvent e = BEM_Output;
-        HssbemCallThrow(PetscLogEventBegin(e, 0, 0, 0, 0));
+        const EventScope event(BEM_Output);
         writer->append(i, f);
-        HssbemCallThrow(PetscLogEventEnd(e, 0, 0, 0, 0));
       }
       seconds["output"] += post.seconds();
     }

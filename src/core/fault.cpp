@@ -25,6 +25,7 @@ bool parse_fault_kind(const std::string &name, FaultKind *kind)
   if (name == "error") *kind = FaultKind::Error;
   else if (name == "oom") *kind = FaultKind::OutOfMemory;
   else if (name == "pause") *kind = FaultKind::Pause;
+  else if (name == "unreadable") *kind = FaultKind::Unreadable;
   else return false;
   return true;
 }
@@ -38,7 +39,16 @@ void fault_point(const char *site)
   case FaultKind::Error: throw std::runtime_error("injected fault at " + g_plan.site);
   case FaultKind::OutOfMemory: throw std::bad_alloc();
   case FaultKind::Pause: std::this_thread::sleep_for(std::chrono::duration<double>(g_plan.seconds)); break;
+  case FaultKind::Unreadable: break; // acts through fault_path()
   }
+}
+
+std::string fault_path(const char *site, const std::string &path)
+{
+  if (!fault_armed(site) || g_plan.kind != FaultKind::Unreadable) return path;
+  const std::size_t slash = path.find_last_of('/');
+  const std::size_t name  = slash == std::string::npos ? 0 : slash + 1;
+  return path.substr(0, name) + "injected-unreadable/" + path.substr(name); // a folder that does not exist
 }
 
 } // namespace hssbem

@@ -27,9 +27,13 @@ static void PhaseHook_Private(hssbem::Phase phase, bool begin)
 static PetscBool HssbemPackageInitialized = PETSC_FALSE;
 
 /* Test-only fault injection (core/fault.hpp), from options that -help does not list:
-   -hssbem_fault <site>           a fault point: MatMult, MatGetDiagonal, PCSetUp, PCApply,
-                                  Compression, DenseAssembly, Write, Commit (the result file)
-   -hssbem_fault_kind <kind>      error (default), oom (std::bad_alloc) or pause
+   -hssbem_fault <site>           a fault point: MeshRead, Setup, Operator, RigidModes (the set-up,
+                                  every rank), MatMult, MatGetDiagonal, PCSetUp, PCApply,
+                                  Compression, DenseAssembly, Breakdown, Gather (the solve),
+                                  Post, Write, Commit, SceneSetup, Frame (rank 0's work), Driver
+                                  (unguarded: the last resort of app/main.hpp)
+   -hssbem_fault_kind <kind>      error (default), oom (std::bad_alloc), pause, or unreadable
+                                  (MeshRead: the mesh file cannot be opened)
    -hssbem_fault_rank <r>         only on rank r of PETSC_COMM_WORLD (default: every rank)
    -hssbem_fault_seconds <s>      how long a pause lasts (default 60) */
 static PetscErrorCode ArmFaultFromOptions_Private(void)
@@ -47,7 +51,7 @@ static PetscErrorCode ArmFaultFromOptions_Private(void)
   PetscCall(PetscOptionsGetString(NULL, NULL, "-hssbem_fault_kind", kind, sizeof(kind), NULL));
   PetscCall(PetscOptionsGetInt(NULL, NULL, "-hssbem_fault_rank", &rank, NULL));
   PetscCall(PetscOptionsGetReal(NULL, NULL, "-hssbem_fault_seconds", &seconds, NULL));
-  PetscCheck(hssbem::parse_fault_kind(kind, &plan.kind), PETSC_COMM_WORLD, PETSC_ERR_ARG_UNKNOWN_TYPE, "-hssbem_fault_kind %s: use error, oom or pause", kind);
+  PetscCheck(hssbem::parse_fault_kind(kind, &plan.kind), PETSC_COMM_WORLD, PETSC_ERR_ARG_UNKNOWN_TYPE, "-hssbem_fault_kind %s: use error, oom, pause or unreadable", kind);
   PetscCallMPI(MPI_Comm_rank(PETSC_COMM_WORLD, &me));
   PetscCallCXX(plan.site = site);
   plan.rank    = (int)rank;

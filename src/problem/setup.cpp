@@ -1,6 +1,7 @@
 #include "hssbem/problem/setup.hpp"
 #include "hssbem/bem/post.hpp"
 #include "hssbem/bem/rigid_modes.hpp"
+#include "hssbem/core/fault.hpp"
 
 #include <cstdio>
 #include <stdexcept>
@@ -26,11 +27,6 @@ Material material_of(const ProblemSpec &spec, const ProblemOverrides &o)
     const std::string from = std::string(" (E from ") + (o.E ? "-E" : spec.file) + ", nu from " + (o.nu ? "-nu" : spec.file) + ")";
     throw std::invalid_argument(e.what() + from);
   }
-}
-
-SystemSelection selection_of(const NodeConditions &nc)
-{
-  return SystemSelection{nc.displacement_prescribed, nc.value, nc.pressure};
 }
 
 std::string format(const char *fmt, double a, double b)
@@ -64,6 +60,20 @@ void handle_rigid_modes(ProblemSetup &s)
 
 } // namespace
 
+SystemSelection selection_of(const NodeConditions &nc)
+{
+  return SystemSelection{nc.displacement_prescribed, nc.value, nc.pressure};
+}
+
+std::vector<std::array<bool, 3>> vertex_displacement_prescribed(const Discretization &disc, const NodeConditions &nc)
+{
+  const int                        nv = disc.mesh().num_vertices();
+  std::vector<std::array<bool, 3>> out(nv, {false, false, false});
+  for (int v = 0; v < nv; ++v)
+    if (disc.node_count(v) > 0) out[v] = nc.displacement_prescribed[disc.first_node(v)];
+  return out;
+}
+
 ProblemSetup setup_problem(ProblemSpec spec, const ProblemOverrides &o)
 {
   ProblemSetup s;
@@ -71,14 +81,14 @@ ProblemSetup setup_problem(ProblemSpec spec, const ProblemOverrides &o)
   if (o.mesh) s.spec.mesh_path = *o.mesh;
   s.output = o.output ? *o.output : s.spec.output;
   s.material = material_of(s.spec, o);
-  s.mesh = std::make_unique<SurfaceMesh>(read_mesh(s.spec.mesh_path));
+  fault_point("MeshRead"); // tests: a mesh seen by some ranks only (kind unreadable: fault_path)
+  s.mesh = std::make_unique<SurfaceMesh>(read_mesh(fault_path("MeshRead", s.spec.mesh_path)));
   validate_and_orient(*s.mesh, s.notices);
   s.disc = std::make_unique<Discretization>(*s.mesh, o.feature_angle_deg);
   const NodeConditions nc = apply_rules(s.spec.rules, *s.disc, s.spec.file);
   s.selection = selection_of(nc);
-  s.vertex_displacement_prescribed.assign(s.mesh->vertices.size(), {false, false, false});
-  for (int v = 0; v < s.mesh->num_vertices(); ++v)
-    if (s.disc->node_count(v) > 0) s.vertex_displacement_prescribed[v] = nc.displacement_prescribed[s.disc->first_node(v)];
+  s.vertex_displacement_prescribed = vertex_displacement_prescribed(*s.disc, nc);
+  fault_point("Setup");
   if (s.spec.frames.empty()) handle_rigid_modes(s); // a scene checks each frame (check_frame_constraints)
   return s;
 }

@@ -236,15 +236,19 @@ void DenseScene::reference_solve(const SystemSelection &sel, const std::vector<c
 void DenseScene::woodbury_solve(const SystemSelection &sel, const std::vector<char> &pattern, std::vector<double> &x) const
 {
   reference_solve(sel, pattern, x);
+  capacitance_correct(x.data());
+}
+
+void DenseScene::capacitance_correct(double *y) const
+{
   const std::vector<int> &J = m_cap.indices();
   const int k = m_cap.size();
-  std::vector<double> yJ(k), s(k);
-  for (int p = 0; p < k; ++p) yJ[p] = x[J[p]];
+  std::vector<double> yJ(k), s(k), minus_s(k);
+  for (int p = 0; p < k; ++p) yJ[p] = y[J[p]];
   capacitance_solve(yJ.data(), s.data());
-  std::vector<double> minus_s(k);
   for (int p = 0; p < k; ++p) minus_s[p] = -s[p];
-  gather_axpy(m_W.data(), m_n, J, minus_s, x.data());
-  for (int p = 0; p < k; ++p) x[J[p]] += s[p];
+  gather_axpy(m_W.data(), m_n, J, minus_s, y);
+  for (int p = 0; p < k; ++p) y[J[p]] += s[p];
 }
 
 void DenseScene::capacitance_solve(const double *r, double *s) const
@@ -361,7 +365,7 @@ void DenseScene::lu_solve(const SystemSelection &sel, const std::vector<char> &p
   lapack::getrs('N', m_n, 1, m_lu.data(), m_n, m_piv.data(), x.data(), m_n);
 }
 
-void DenseScene::apply_previous(const std::vector<char> &, const double *r, double *z) const
+void DenseScene::apply_previous(const double *r, double *z) const
 {
   if (m_last_factor == Last::Lu) {
     std::copy_n(r, m_n, z);
@@ -370,14 +374,7 @@ void DenseScene::apply_previous(const std::vector<char> &, const double *r, doub
   }
   std::copy_n(r, m_n, z); // Woodbury form of the capacitance's pattern: (I + Z E_Jᵀ)⁻¹ A₀⁻¹ r
   lapack::getrs('N', m_n, 1, m_lu0.data(), m_n, m_piv0.data(), z, m_n);
-  const std::vector<int> &J = m_cap.indices();
-  const int k = m_cap.size();
-  std::vector<double> yJ(k), s(k), minus_s(k);
-  for (int p = 0; p < k; ++p) yJ[p] = z[J[p]];
-  capacitance_solve(yJ.data(), s.data());
-  for (int p = 0; p < k; ++p) minus_s[p] = -s[p];
-  gather_axpy(m_W.data(), m_n, J, minus_s, z);
-  for (int p = 0; p < k; ++p) z[J[p]] += s[p];
+  capacitance_correct(z);
 }
 
 /// A Krylov solve preconditioned by another pattern's inverse converges only when the columns
@@ -398,7 +395,7 @@ void DenseScene::krylov(const SystemSelection &sel, const std::vector<char> &pat
   m_report.iterations = m_krylov->solve(
       m_n, [&](const double *in, double *out) { apply_system(pattern, in, out); },
       [&](const double *in, double *out) {
-        apply_previous(prev, in, out);
+        apply_previous(in, out);
         for (int j = 0; j < m_n; ++j) // see m_scale_t
           if (pattern[j] != prev[j]) out[j] *= pattern[j] ? m_scale_t : 1.0 / m_scale_t;
       },
@@ -406,9 +403,10 @@ void DenseScene::krylov(const SystemSelection &sel, const std::vector<char> &pat
       x.data(), m_opt.krylov_rtol, m_opt.krylov_max_it);
 }
 
-std::array<double, 5> DenseScene::predict(const SystemSelection &sel) const
+std::array<double, 5> DenseScene::predict(const SystemSelection &sel) const { return predict(sel, pattern_of(sel)); }
+
+std::array<double, 5> DenseScene::predict(const SystemSelection &sel, const std::vector<char> &pattern) const
 {
-  const std::vector<char> pattern = pattern_of(sel);
   const double N = m_n, bw = m_bandwidth;
   long long k = 0, nv = 0, changed_cap = 0, changed_prev = 0;
   const std::vector<char> &prev = m_last_factor == Last::Lu && !m_lu_pattern.empty() ? m_lu_pattern : m_cap_pattern;
@@ -437,7 +435,7 @@ const SceneFrameReport &DenseScene::solve(const SystemSelection &sel, std::vecto
 {
   const Timer timer;
   const std::vector<char> pattern = pattern_of(sel);
-  const std::array<double, 5> predicted = predict(sel);
+  const std::array<double, 5> predicted = predict(sel, pattern);
   SceneStrategy s = force != SceneStrategy::Auto ? force : m_opt.strategy;
   const bool same = pattern == m_cap_pattern || (!m_lu_pattern.empty() && pattern == m_lu_pattern);
   if (s == SceneStrategy::Auto) {

@@ -789,11 +789,8 @@ class ParallelTests(CliTestCase):
 # any number of ranks, with no rank left waiting. Faults are injected with -hssbem_fault.
 
 
-class ErrorPathTests(CliTestCase):
-    def setUp(self):
-        super().setUp()
-        self.write_cube()
-        self.problem()
+class OneCleanError:
+    """The assertion of the one error path, for CliTestCase classes."""
 
     def assertOneCleanError(self, r, *patterns):
         self.assertFailsCleanly(r, *patterns)
@@ -804,6 +801,14 @@ class ErrorPathTests(CliTestCase):
         # PetscFinalize ran: it is where PETSc acts on -options_left.
         self.assertRegex(r.output, r"There are no unused options|There are options you set",
                          "PetscFinalize did not run\n" + r.describe())
+
+
+
+class ErrorPathTests(OneCleanError, CliTestCase):
+    def setUp(self):
+        super().setUp()
+        self.write_cube()
+        self.problem()
 
     def run_failing(self, *args, np=None):
         return self.run_problem("problem.json", "-options_left", *args, np=np,
@@ -897,6 +902,62 @@ class ErrorPathTests(CliTestCase):
         r = self.run_problem("problem.json", "-mat_hss_leaf_size", "0", "-hssbem_traceback")
         self.assertFailsCleanly(r, r"-mat_hss_leaf_size")
         self.assertRegex(r.output, r"PETSC ERROR", r.describe())
+
+
+# ---------------------------------------------------------------------------------------------
+# A fault on one rank of 2 and of 4 (oversubscribed) in every phase of the driver: every rank
+# stops at once with one error line naming the fault and its rank, exit status 1, PetscFinalize,
+# and no result or temporary file. A hang fails the case (FAULT_TIMEOUT), and a fault that only
+# the last resort of app/main.hpp catches fails it too (it aborts the job: "MPI_ABORT").
+
+FAULT_TIMEOUT = 30
+
+
+class RankFaultTests(OneCleanError, CliTestCase):
+    # site, kind, extra options, expected message; ranks: "any" (every rank does the work: the
+    # fault goes on the last rank) or 0 (rank-0 work: post-processing, output, scenes)
+    CASES = [
+        ("MeshRead", "unreadable", [], r"cannot open mesh file 'injected-unreadable/cube\.off'", "any"),
+        ("Setup", "oom", [], r"out of memory", "any"),
+        ("Operator", "error", [], r"injected fault at Operator", "any"),
+        ("RigidModes", "oom", [], r"out of memory", "any"),
+        ("Compression", "error", ["-bem_mat_type", "hss"], r"HSS compression failed: injected fault", "any"),
+        ("MatMult", "oom", ["-bem_mat_type", "h2"], r"MatMult: out of memory", "any"),
+        ("PCSetUp", "error", ["-bem_mat_type", "hss"], r"PC hss set-up: injected fault", "any"),
+        ("Gather", "error", [], r"injected fault at Gather", 0),
+        ("Post", "oom", [], r"out of memory", 0),
+        ("Write", "error", [], r"injected fault at Write", 0),
+    ]
+
+    def setUp(self):
+        super().setUp()
+        if not MPIEXEC:
+            self.skipTest("no mpiexec given (--mpiexec)")
+
+    def run_fault(self, problem, site, kind, rank, np, *args):
+        return self.run_problem(problem, "-options_left", "-hssbem_error_timeout", "5",
+                                "-hssbem_fault", site, "-hssbem_fault_kind", kind,
+                                "-hssbem_fault_rank", rank, *args, np=np, timeout=FAULT_TIMEOUT)
+
+    def test_fault_on_one_rank_in_every_phase(self):
+        self.write_cube()
+        self.problem()
+        for np in (2, 4):
+            for site, kind, args, pattern, where in self.CASES:
+                rank = np - 1 if where == "any" else where
+                with self.subTest(np=np, site=site, kind=kind):
+                    r = self.run_fault("problem.json", site, kind, rank, np, *args)
+                    self.assertOneCleanError(r, pattern + r".* \(on rank %d\)" % rank)
+
+    def test_fault_in_a_scene(self):
+        self.problem(mesh=self.copy_mesh("cube_l0.msh"), name="scene.json",
+                     boundary=[{"where": {"region": "z0"}, "displacement": [0, 0, 0]}],
+                     frames=[{"boundary": [{"where": {"region": "z1"}, "traction": [0, 0, 50.0 * k]}]}
+                             for k in (1, 2, 3)])
+        for np, site, kind in ((2, "SceneSetup", "oom"), (4, "Frame", "error")):
+            with self.subTest(np=np, site=site):
+                r = self.run_fault("scene.json", site, kind, 0, np)
+                self.assertOneCleanError(r, r"(injected fault at %s|out of memory) \(on rank 0\)" % site)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -4,6 +4,7 @@
 #include "hssbem/core/lapack.hpp"
 #include "hssbem/petsc/scene_krylov.h"
 #include "hssbem/problem/problem.hpp"
+#include "hssbem/problem/setup.hpp"
 #include "hssbem/scene/capacitance.hpp"
 #include "hssbem/scene/dense_scene.hpp"
 #include "hssbem/scene/scene.hpp"
@@ -199,14 +200,12 @@ struct Cardioid {
       p.pressure = {tip_pressure};
       rules.push_back(p);
     }
-    const NodeConditions nc = apply_rules(rules, *disc, "test");
-    return SystemSelection{nc.displacement_prescribed, nc.value, nc.pressure};
+    return selection_of(apply_rules(rules, *disc, "test"));
   }
 
   SystemSelection reference() const
   {
-    const NodeConditions nc = apply_rules(base, *disc, "test");
-    return SystemSelection{nc.displacement_prescribed, nc.value, nc.pressure};
+    return selection_of(apply_rules(base, *disc, "test"));
   }
 
   /// From-scratch dense solve of the same boundary conditions.

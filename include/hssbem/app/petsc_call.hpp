@@ -26,10 +26,24 @@ private:
 };
 
 /// Run fn on this rank of comm and agree with the other ranks (collective): if fn threw on any
-/// rank, every rank throws std::runtime_error with the message of the lowest failing rank, so
+/// rank, every rank throws std::runtime_error with the message of the lowest failing rank ("out
+/// of memory" for std::bad_alloc), followed by " (on rank r)" when some ranks did not fail, so
 /// that a failure met by some ranks only (a file system that differs between nodes, rank-0 work
 /// such as the output) ends every rank the same way instead of leaving some waiting.
 void run_collectively(MPI_Comm comm, const std::function<void()> &fn);
+
+/// A log event open for the lifetime of the object: begun on construction (throws PetscFailure
+/// when PETSc refuses), ended on destruction, on the way out of an exception too.
+class EventScope {
+public:
+  explicit EventScope(PetscLogEvent event);
+  ~EventScope();
+  EventScope(const EventScope &)            = delete;
+  EventScope &operator=(const EventScope &) = delete;
+
+private:
+  PetscLogEvent m_event;
+};
 
 /// PETSC_ERR_MPI, with the message PetscCallMPI() gives, for a failed MPI call (code != MPI_SUCCESS).
 PetscErrorCode mpi_error(int code, int line, const char *func, const char *file);

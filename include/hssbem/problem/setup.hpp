@@ -46,6 +46,13 @@ ProblemSetup setup_problem(ProblemSpec spec, const ProblemOverrides &overrides);
 /// fix all six rigid motions, else ConstraintError naming `what` (e.g. "frames[3]").
 bool check_frame_constraints(const ProblemSetup &s, const std::vector<std::array<bool, 3>> &displacement_known, const std::string &what);
 
+/// The system's selection (what the BEM system builder takes) of a set of node conditions.
+SystemSelection selection_of(const NodeConditions &nc);
+
+/// Per mesh vertex, the components whose displacement `nc` prescribes (those of the vertex's
+/// first dof node; none for a vertex without nodes): the result file's displacement_prescribed.
+std::vector<std::array<bool, 3>> vertex_displacement_prescribed(const Discretization &disc, const NodeConditions &nc);
+
 /// Relative load imbalance above which a pure-traction problem is refused.
 constexpr double max_load_imbalance = 1e-2;
 

@@ -132,6 +132,9 @@ private:
   /// y = A₀⁻¹ b_S for the pattern of the switched set J (m_cap) and sel's values.
   void reference_solve(const SystemSelection &sel, const std::vector<char> &pattern, std::vector<double> &y) const;
   void woodbury_solve(const SystemSelection &sel, const std::vector<char> &pattern, std::vector<double> &x) const;
+  /// y ← (I + Z E_Jᵀ)⁻¹ y for the capacitance's switched set J: the Woodbury correction of a
+  /// vector already multiplied by A₀⁻¹.
+  void capacitance_correct(double *y) const;
   void update_capacitance(const std::vector<char> &pattern);
   void refactor(const SystemSelection &sel, const std::vector<char> &pattern, std::vector<double> &x);
   void lu_solve(const SystemSelection &sel, const std::vector<char> &pattern, std::vector<double> &x) const;
@@ -139,8 +142,10 @@ private:
   /// b_S (needs H and G).
   void rhs(const SystemSelection &sel, const std::vector<char> &pattern, std::vector<double> &b) const;
   void apply_system(const std::vector<char> &pattern, const double *x, double *y) const;
-  /// The last factorization as a preconditioner for pattern `pattern` (krylov).
-  void apply_previous(const std::vector<char> &pattern_prev, const double *r, double *z) const;
+  /// z = the last factorization's inverse applied to r: a preconditioner for krylov.
+  void apply_previous(const double *r, double *z) const;
+  /// predict() for the pattern of sel, already built.
+  std::array<double, 5> predict(const SystemSelection &sel, const std::vector<char> &pattern) const;
   double predict_update(const std::vector<char> &pattern, bool *rebuild) const;
 
   int m_n = 0, m_nodes = 0;
