@@ -23,7 +23,7 @@ namespace hssbem {
 namespace {
 
 /// Every rank reads the problem and the mesh (they need the geometry); rank 0 alone checks the
-/// output path, since rank 0 alone writes it. A failure on any rank (files that differ between
+/// output path, since rank 0 alone creates and renames it. A failure on any rank (files that differ between
 /// nodes, say) ends every rank with the same message.
 ProblemSetup set_up(MPI_Comm comm, const std::string &file, const ProblemOverrides &ov)
 {
@@ -107,32 +107,30 @@ void describe(const ProblemSetup &s, const HssbemSolveInfo &info, OperatorType t
   r.attributes_str["converged_reason"] = KSPConvergedReasons[info.reason];
 }
 
-/// Rank 0 post-processes and writes the result file; a failure there is raised on every rank.
-void write_on_root(MPI_Comm comm, const ProblemSetup &s, const BemOperator &op, const std::vector<double> &xall, const HssbemSolveInfo &info, OperatorType type,
-                   std::map<std::string, double> seconds)
+/// Every rank post-processes the whole solution (cheap beside the solve) and the ranks write the
+/// result file together, each its rows (write_result); a failure on any rank is raised on every rank.
+void write_collectively(MPI_Comm comm, const ProblemSetup &s, const BemOperator &op, const std::vector<double> &xall, const HssbemSolveInfo &info, OperatorType type,
+                        std::map<std::string, double> seconds)
 {
-  PetscMPIInt rank, size;
+  PetscMPIInt size;
+  ResultData  r;
 
-  HssbemCallMPIThrow(MPI_Comm_rank(comm, &rank));
   HssbemCallMPIThrow(MPI_Comm_size(comm, &size));
   run_collectively(comm, [&] {
-    if (rank != 0) return;
-    ResultData  r = result_base(s, size);
-    const Timer timer;
-    {
-      const EventScope event(BEM_Post);
-      fill_result(s, op, xall, r);
-    }
+    r = result_base(s, size);
+    const Timer      timer;
+    const EventScope event(BEM_Post);
+    fill_result(s, op, xall, r);
     seconds["post"] += timer.seconds();
-    describe(s, info, type, r);
-    r.timings = seconds;
-    if (s.output.empty()) return;
-    {
-      const EventScope event(BEM_Output);
-      write_result(s.output, r);
-    }
-    HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF, "hssbem: wrote %s\n", s.output.c_str()));
   });
+  describe(s, info, type, r);
+  r.timings = seconds; // rank 0's are written
+  if (s.output.empty()) return;
+  {
+    const EventScope event(BEM_Output);
+    write_result(comm, s.output, r);
+  }
+  HssbemCallThrow(PetscPrintf(comm, "hssbem: wrote %s\n", s.output.c_str()));
 }
 
 } // namespace
@@ -239,11 +237,11 @@ void run_problem(MPI_Comm comm, const std::string &problem_file, const ProblemOv
                               s.mesh->num_vertices(), s.mesh->num_triangles(), s.disc->num_nodes(), s.disc->num_sharp_vertices(), 3 * s.disc->num_nodes(), size,
                               operator_type_name(type), why.c_str()));
   fault_point("Driver"); /* tests: an error no guard makes collective (the last resort of app/main.hpp) */
-  const std::vector<double> xall = solve_problem(comm, s, op, type, false, &info, &seconds);
+  const std::vector<double> xall = solve_problem(comm, s, op, type, true, &info, &seconds);
   HssbemCallThrow(PetscPrintf(comm, "hssbem: solved with %s/%s%s%s: %" PetscInt_FMT " iterations, relative residual %.3e\n", info.ksp_type.c_str(), info.pc_type.c_str(),
                               info.solver_type.empty() ? "" : "/", info.solver_type.c_str(), info.iterations, (double)info.residual));
   check_unused_options(comm, false);
-  write_on_root(comm, s, op, xall, info, type, seconds);
+  write_collectively(comm, s, op, xall, info, type, seconds);
 }
 
 void run_driver(MPI_Comm comm)

@@ -79,7 +79,7 @@ FrameWriter::Impl::Impl(const std::string &path_, const ResultData &base)
   h5_tmp = files->add(path);
   xdmf_tmp = files->add(detail::xdmf_path(path));
   h5.emplace(h5_tmp, path);
-  detail::write_result_groups(*h5, base);
+  detail::write_result_groups(*h5, base, detail::metadata_of(base));
   H5Handle g = h5->group("/frames");
   h5->end_group(g, "/frames");
   h5->flush();

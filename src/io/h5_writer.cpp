@@ -1,9 +1,13 @@
 /// \file h5_writer.cpp
-/// HDF5 plumbing of the result writers (see h5_writer.hpp). Serial HDF5 C API with default
-/// property lists: the caller gathers to one rank, so MPI-IO would buy nothing.
+/// HDF5 plumbing of the result writers (see h5_writer.hpp): the HDF5 C API, serial with default
+/// property lists, or collective over the MPI-IO driver with each rank writing its rows.
 #include "h5_writer.hpp"
 
+#include "collective.hpp"
+
 #include "hssbem/io/hdf5_output.hpp"
+
+#include <algorithm>
 
 namespace hssbem::detail {
 
@@ -43,39 +47,94 @@ std::string h5_reason()
   return reason;
 }
 
+/// Rows [first, last) of `rows` for `rank` of `size`: an even split in rank order when every
+/// rank gets a row, else all of them on rank 0. (HDF5 1.10 lets a rank with an empty selection
+/// leave a collective H5Dwrite early while the others wait in it: no rank may have none.)
+std::pair<hsize_t, hsize_t> row_block(hsize_t rows, int rank, int size)
+{
+  const auto r = static_cast<hsize_t>(rank), n = static_cast<hsize_t>(size);
+  if (rows < n)
+    return rank == 0 ? std::make_pair(hsize_t{0}, rows) : std::make_pair(hsize_t{0}, hsize_t{0});
+  return {rows * r / n, rows * (r + 1) / n};
+}
+
+/// Writes `block` rows from `data` at `start` of `set`; returns the first failing status. Local:
+/// the caller agrees on the status with the other ranks.
+herr_t write_block(hid_t set, hid_t xfer, const H5Array &a, const std::vector<hsize_t> &start,
+                   const std::vector<hsize_t> &block, const void *data)
+{
+  const int rank = static_cast<int>(block.size());
+  const hid_t file_space = H5Dget_space(set);
+  const hid_t mem_space = H5Screate_simple(rank, block.data(), nullptr);
+  herr_t status = file_space < 0 || mem_space < 0 ? -1 : 0;
+  if (status >= 0)
+    status = H5Sselect_hyperslab(file_space, H5S_SELECT_SET, start.data(), nullptr, block.data(),
+                                 nullptr);
+  if (status >= 0)
+    status = H5Dwrite(set, a.mem_type, mem_space, file_space, xfer, data);
+  if (mem_space >= 0 && H5Sclose(mem_space) < 0)
+    status = -1;
+  if (file_space >= 0 && H5Sclose(file_space) < 0)
+    status = -1;
+  return status;
+}
+
+std::string failure_message(const std::string &path, const std::string &object, const char *call)
+{
+  const std::string reason = h5_reason();
+  return "cannot write output '" + path + "': " + call + " failed for " + object +
+         (reason.empty() ? "" : ": " + reason);
+}
+
 } // namespace
 
 void H5Writer::h5_fail(const std::string &object, const char *call) const
 {
-  const std::string reason = h5_reason();
-  fail_output(m_path, std::string(call) + " failed for " + object + (reason.empty() ? "" : ": " + reason));
+  throw OutputError(failure_message(m_path, object, call));
 }
 
+/// A handle the ranks failed to agree on is not closed (closing is collective for some objects,
+/// and the ranks that failed would not join): the library releases it at exit.
 H5Handle H5Writer::open(hid_t id, H5Handle::Closer closer, const std::string &object,
                         const char *call) const
 {
-  if (id < 0)
-    h5_fail(object, call);
+  check(id < 0 ? -1 : 0, object, call);
   return H5Handle(id, closer);
 }
 
 void H5Writer::check(herr_t status, const std::string &object, const char *call) const
 {
-  if (status < 0)
-    h5_fail(object, call);
+  if (!parallel()) {
+    if (status < 0)
+      h5_fail(object, call);
+    return;
+  }
+  const std::string failure = status < 0 ? failure_message(m_path, object, call) : std::string();
+  agree_on_failure(m_comm, status < 0 ? &failure : nullptr);
 }
 
-H5Writer::H5Writer(const std::string &tmp_path, std::string path)
-    : m_path(std::move(path)), m_file(create_file(tmp_path), H5Fclose)
+H5Writer::H5Writer(const std::string &tmp_path, std::string path, MPI_Comm comm)
+    : m_path(std::move(path)), m_comm(comm), m_rank(comm_rank(comm)), m_size(comm_size(comm)),
+      m_file(create_file(tmp_path), H5Fclose)
 {
 }
 
 hid_t H5Writer::create_file(const std::string &tmp_path) const
 {
-  const hid_t id = H5Fcreate(tmp_path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
-  if (id < 0)
-    h5_fail("file '" + tmp_path + "'", "H5Fcreate");
-  return id;
+  const std::string object = "file '" + tmp_path + "'";
+  if (!parallel())
+    return open(H5Fcreate(tmp_path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose,
+                object, "H5Fcreate")
+        .release();
+  H5Handle fapl = open(H5Pcreate(H5P_FILE_ACCESS), H5Pclose, object, "H5Pcreate");
+  check(H5Pset_fapl_mpio(fapl.get(), m_comm, MPI_INFO_NULL), object, "H5Pset_fapl_mpio");
+  // Every rank makes every metadata call anyway: let HDF5 do them collectively too.
+  check(H5Pset_all_coll_metadata_ops(fapl.get(), true), object, "H5Pset_all_coll_metadata_ops");
+  check(H5Pset_coll_metadata_write(fapl.get(), true), object, "H5Pset_coll_metadata_write");
+  H5Handle file = open(H5Fcreate(tmp_path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()),
+                       H5Fclose, object, "H5Fcreate");
+  check(fapl.close(), object, "H5Pclose");
+  return file.release();
 }
 
 H5Handle H5Writer::group(const std::string &name)
@@ -91,13 +150,42 @@ void H5Writer::dataset(hid_t group, const std::string &group_name, const std::st
   const int rank = static_cast<int>(a.dims.size());
   H5Handle space = open(H5Screate_simple(rank, a.dims.data(), nullptr), H5Sclose, object,
                         "H5Screate_simple");
+  H5Handle create = open(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, object, "H5Pcreate");
+  // Every element is written below: filling the dataset first would write it twice.
+  check(H5Pset_fill_time(create.get(), H5D_FILL_TIME_NEVER), object, "H5Pset_fill_time");
   H5Handle set = open(H5Dcreate2(group, name.c_str(), a.file_type, space.get(), H5P_DEFAULT,
-                                 H5P_DEFAULT, H5P_DEFAULT),
+                                 create.get(), H5P_DEFAULT),
                       H5Dclose, object, "H5Dcreate2");
-  check(H5Dwrite(set.get(), a.mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, a.data), object,
-        "H5Dwrite");
+  if (parallel())
+    write_rows(set.get(), object, a);
+  else
+    check(H5Dwrite(set.get(), a.mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, a.data), object,
+          "H5Dwrite");
   check(set.close(), object, "H5Dclose");
+  check(create.close(), object, "H5Pclose");
   check(space.close(), object, "H5Sclose");
+}
+
+void H5Writer::write_rows(hid_t set, const std::string &object, const H5Array &a)
+{
+  const auto [first, last] = row_block(a.dims[0], m_rank, m_size);
+  const bool collective = a.dims[0] >= static_cast<hsize_t>(m_size);
+  H5Handle xfer = open(H5Pcreate(H5P_DATASET_XFER), H5Pclose, object, "H5Pcreate");
+  check(H5Pset_dxpl_mpio(xfer.get(), collective ? H5FD_MPIO_COLLECTIVE : H5FD_MPIO_INDEPENDENT),
+        object, "H5Pset_dxpl_mpio");
+  herr_t status = 0;
+  if (last > first) {
+    std::vector<hsize_t> start(a.dims.size(), 0), block = a.dims;
+    start[0] = first;
+    block[0] = last - first;
+    hsize_t row_size = H5Tget_size(a.mem_type);
+    for (std::size_t d = 1; d < a.dims.size(); ++d)
+      row_size *= a.dims[d];
+    status = write_block(set, xfer.get(), a, start, block,
+                         static_cast<const char *>(a.data) + first * row_size);
+  }
+  check(status, object, "H5Dwrite"); // agreed by all ranks, also those that wrote nothing
+  check(xfer.close(), object, "H5Pclose");
 }
 
 void H5Writer::attribute(hid_t owner, const std::string &owner_name, const std::string &name,

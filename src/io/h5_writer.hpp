@@ -6,6 +6,7 @@
 #include "hssbem/core/geometry.hpp"
 
 #include <hdf5.h>
+#include <mpi.h>
 
 #include <array>
 #include <cstdint>
@@ -50,6 +51,8 @@ public:
   hid_t get() const { return m_id; }
   /// Closes now and reports the status, for the success path where it matters.
   herr_t close() { return m_closer(std::exchange(m_id, H5I_INVALID_HID)); }
+  /// Gives the identifier up, unclosed, to the caller.
+  hid_t release() { return std::exchange(m_id, H5I_INVALID_HID); }
 
 private:
   hid_t m_id;
@@ -73,9 +76,16 @@ struct H5Scalar {
 };
 
 /// One HDF5 file being written under a temporary name; errors name the final path.
+///
+/// Serial (comm = MPI_COMM_NULL): this process writes everything with HDF5's default driver.
+/// Collective (a communicator): every rank of `comm` opens the file with the MPI-IO driver and
+/// makes every call, in the same order and with the same arguments; each rank writes its own
+/// contiguous block of rows (the first dimension, split evenly in rank order) of each dataset
+/// from the whole array it passes. Every HDF5 status is agreed on by all ranks, so a failure on
+/// one rank throws the same OutputError on all of them at the same call.
 class H5Writer {
 public:
-  H5Writer(const std::string &tmp_path, std::string path);
+  H5Writer(const std::string &tmp_path, std::string path, MPI_Comm comm = MPI_COMM_NULL);
   /// Creates group `name` (an absolute path such as "/mesh" or "/frames/3", whose parent
   /// exists) and returns its handle.
   H5Handle group(const std::string &name);
@@ -103,8 +113,13 @@ private:
   H5Handle open(hid_t id, H5Handle::Closer closer, const std::string &object,
                 const char *call) const;
   void check(herr_t status, const std::string &object, const char *call) const;
+  bool parallel() const { return m_comm != MPI_COMM_NULL; }
+  /// Writes this rank's rows of `a` into the open dataset `set` (collective).
+  void write_rows(hid_t set, const std::string &object, const H5Array &a);
 
   std::string m_path; // initialised first: create_file's errors name it
+  MPI_Comm m_comm;
+  int m_rank = 0, m_size = 1;
   H5Handle m_file;
 };
 

@@ -4,6 +4,7 @@
 /// finished. The HDF5 plumbing is in h5_writer.cpp, the renaming in file_commit.cpp.
 #include "hssbem/io/hdf5_output.hpp"
 
+#include "collective.hpp"
 #include "file_commit.hpp"
 #include "result_layout.hpp"
 
@@ -11,6 +12,7 @@
 
 #include <cerrno>
 #include <filesystem>
+#include <optional>
 #include <system_error>
 
 #include <unistd.h>
@@ -65,10 +67,10 @@ void write_bc(H5Writer &w, const ResultData &d)
   w.end_group(g, "/bc");
 }
 
-void write_reactions(H5Writer &w, const ResultData &d)
+void write_reactions(H5Writer &w, const std::map<std::string, Vec3> &reactions)
 {
   H5Handle g = w.group("/reactions");
-  for (const auto &[region, force] : d.reactions)
+  for (const auto &[region, force] : reactions)
     w.dataset(g.get(), "/reactions", region, doubles({force.begin(), force.end()}, {3}));
   w.end_group(g, "/reactions");
 }
@@ -86,14 +88,19 @@ void write_interior(H5Writer &w, const ResultData &d)
 
 } // namespace
 
-void write_result_groups(H5Writer &w, const ResultData &d)
+ResultMetadata metadata_of(const ResultData &d)
+{
+  return {d.attributes_real, d.attributes_int, d.attributes_str, d.timings, d.reactions};
+}
+
+void write_result_groups(H5Writer &w, const ResultData &d, const ResultMetadata &meta)
 {
   write_mesh(w, d);
   write_fields(w, d);
   write_bc(w, d);
-  write_reactions(w, d);
+  write_reactions(w, meta.reactions);
   write_interior(w, d);
-  write_attributes(w, w.root(), "/", {d.attributes_real, d.attributes_int, d.attributes_str});
+  write_attributes(w, w.root(), "/", {meta.attributes_real, meta.attributes_int, meta.attributes_str});
 }
 
 void write_timings(H5Writer &w, const std::map<std::string, double> &timings)
@@ -243,12 +250,56 @@ void check_parent_directory(const std::string &path)
 }
 
 /// The whole HDF5 file under `tmp_path`, closed (and so flushed) on return.
-void write_h5(const std::string &tmp_path, const std::string &path, const ResultData &d)
+/// Collective over `comm` when it is not MPI_COMM_NULL: see H5Writer.
+void write_h5(const std::string &tmp_path, const std::string &path, const ResultData &d,
+              const ResultMetadata &meta, MPI_Comm comm)
 {
-  H5Writer w(tmp_path, path);
-  write_result_groups(w, d);
-  write_timings(w, d.timings);
+  H5Writer w(tmp_path, path, comm);
+  write_result_groups(w, d, meta);
+  write_timings(w, meta.timings);
   w.close();
+}
+
+/// Rank 0 registers the temporary names (its process id in them) and owns their removal and
+/// the renaming; every rank learns the HDF5 file's temporary name.
+std::string register_files(MPI_Comm comm, const std::string &path,
+                           std::optional<FileSetCommit> &files, std::string &xdmf_tmp)
+{
+  std::string h5_tmp;
+  run_agreed(comm, [&] {
+    if (comm_rank(comm) != 0)
+      return;
+    check_output_path(path);
+    files.emplace(path); // removes the temporary files on error and on SIGINT/SIGTERM/SIGHUP
+    h5_tmp = files->add(path);
+    xdmf_tmp = files->add(xdmf_path(path));
+  });
+  return broadcast_from_root(comm, h5_tmp);
+}
+
+/// The collective write_result: every rank writes its rows into one file, rank 0 renames it.
+void write_result_collectively(MPI_Comm comm, const std::string &path, const ResultData &d)
+{
+  const bool root = comm_rank(comm) == 0;
+  run_agreed(comm, [&] { validate_result(path, d); });
+  check_same_shape(comm, path, d);
+  const ResultMetadata meta = broadcast_metadata(comm, d);
+  const H5ErrorSilencer quiet;
+  std::optional<FileSetCommit> files; // rank 0's
+  std::string xdmf_tmp;
+  const std::string h5_tmp = register_files(comm, path, files, xdmf_tmp);
+  write_h5(h5_tmp, path, d, meta, comm); // every rank has closed the file on return
+  run_agreed(comm, [&] {
+    if (root) {
+      sync_file(h5_tmp, path);
+      write_text_file(xdmf_tmp, xdmf_document(result_grid(path, d)), path);
+    }
+    fault_point("Write"); // tests: the temporary files are complete, nothing is renamed yet
+  });
+  run_agreed(comm, [&] {
+    if (root)
+      files->commit(); // the h5 first, as in write_result
+  });
 }
 
 } // namespace
@@ -269,12 +320,20 @@ void write_result(const std::string &path, const ResultData &data)
   const H5ErrorSilencer quiet;
   FileSetCommit files(path); // removes the temporary files on error and on SIGINT/SIGTERM/SIGHUP
   const std::string h5_tmp = files.add(path), xdmf_tmp = files.add(xdmf_path(path));
-  write_h5(h5_tmp, path, data);
+  write_h5(h5_tmp, path, data, metadata_of(data), MPI_COMM_NULL);
   sync_file(h5_tmp, path);
   write_text_file(xdmf_tmp, xdmf_document(result_grid(path, data)), path);
   fault_point("Write"); // tests: the temporary files are complete, nothing is renamed yet
   // The h5 goes first: a sidecar must never point at a file that is not there yet.
   files.commit();
+}
+
+void write_result(MPI_Comm comm, const std::string &path, const ResultData &data)
+{
+  if (detail::comm_size(comm) == 1)
+    write_result(path, data);
+  else
+    detail::write_result_collectively(comm, path, data);
 }
 
 } // namespace hssbem

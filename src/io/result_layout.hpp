@@ -4,6 +4,7 @@
 /// hdf5_output.cpp.
 #pragma once
 
+#include "collective.hpp"
 #include "h5_writer.hpp"
 #include "xdmf.hpp"
 
@@ -26,8 +27,12 @@ void check_size(const std::string &path, const std::string &dataset, std::size_t
 /// names) before any file is created. Throws OutputError naming `path`.
 void validate_result(const std::string &path, const ResultData &d);
 
-/// /mesh, /fields, /bc, /reactions, /interior and the root attributes of `d`; not /timings.
-void write_result_groups(H5Writer &w, const ResultData &d);
+/// The attributes, timings and reactions of `d`.
+ResultMetadata metadata_of(const ResultData &d);
+
+/// /mesh, /fields, /bc and /interior of `d`, /reactions and the root attributes of `meta`; not
+/// /timings.
+void write_result_groups(H5Writer &w, const ResultData &d, const ResultMetadata &meta);
 
 /// /timings: one float64 attribute per phase (seconds).
 void write_timings(H5Writer &w, const std::map<std::string, double> &timings);

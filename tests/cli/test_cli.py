@@ -782,6 +782,56 @@ class ParallelTests(CliTestCase):
         r = self.run_problem(np=2, timeout=TIMEOUT_RUN)
         self.assertSucceeds(r, self.out, self.path("out.xdmf"))
 
+    def read_result(self, name):
+        """Every dataset, the root attributes and the /timings attributes of a result file."""
+        import h5py
+        data = {}
+        with h5py.File(self.path(name), "r") as f:
+            f.visititems(lambda n, o: data.__setitem__(n, o[()])
+                         if isinstance(o, h5py.Dataset) else None)
+            attrs = {k: f.attrs[k] for k in f.attrs}
+            timings = {k: float(f["/timings"].attrs[k]) for k in f["/timings"].attrs}
+        return data, attrs, timings
+
+    def test_collective_file_matches_one_rank(self):
+        # The ranks write one file together, each its rows: 2 and 4 ranks (oversubscribed)
+        # give the 1-rank file to round-off (the dense LU of PETSc vs ScaLAPACK's), with the
+        # same datasets, shapes, types, attributes and timed phases; the sidecars differ in
+        # the file name they point at only.
+        import numpy as np
+        self.cube_l0_problem([{"where": {"region": "z0"}, "displacement": [0, 0, 0]},
+                              {"where": {"region": "z1"}, "traction": [0, 0, 10.0]}],
+                             interior_points=[[0.5, 0.5, 0.5], [0.3, 0.6, 0.4]])
+        for np_ in (1, 2, 4):
+            r = self.run_driver("-problem", "problem.json", "-bem_mat_type", "dense",
+                                "-o", self.path("r%d.h5" % np_), np=np_, timeout=TIMEOUT_RUN)
+            self.assertSucceeds(r, self.path("r%d.h5" % np_), self.path("r%d.xdmf" % np_))
+            self.assertRegex(r.output, r"hssbem: wrote .*r%d\.h5" % np_, r.describe())
+        ref, ref_attrs, ref_timings = self.read_result("r1.h5")
+        self.assertGreaterEqual(len(ref), 12, sorted(ref))
+        # The total reaction nearly vanishes (equilibrium): compare it at the regions' scale.
+        force = max(np.max(np.abs(a)) for n, a in ref.items() if n.startswith("reactions/"))
+        with open(self.path("r1.xdmf")) as f:
+            ref_xdmf = f.read().replace("r1.h5", "R.h5")
+        for np_ in (2, 4):
+            with self.subTest(ranks=np_):
+                data, attrs, timings = self.read_result("r%d.h5" % np_)
+                self.assertEqual(sorted(data), sorted(ref))
+                for name, a in ref.items():
+                    b = data[name]
+                    self.assertEqual((b.shape, b.dtype), (a.shape, a.dtype), name)
+                    scale = force if name.startswith("reactions/") else np.max(np.abs(a))
+                    self.assertLessEqual(np.max(np.abs(b - a)) / scale, 1e-10, name)
+                self.assertEqual(sorted(attrs), sorted(ref_attrs))
+                self.assertEqual(int(attrs["ranks"]), np_)
+                for key in ("E", "nu", "solver", "mat_type", "num_dofs", "version"):
+                    self.assertEqual(attrs[key], ref_attrs[key], key)
+                self.assertLess(float(attrs["residual"]), 1e-10)
+                self.assertEqual(sorted(timings), sorted(ref_timings))
+                self.assertTrue(all(t >= 0 for t in timings.values()), timings)
+                with open(self.path("r%d.xdmf" % np_)) as f:
+                    self.assertEqual(f.read().replace("r%d.h5" % np_, "R.h5"), ref_xdmf)
+
 
 # ---------------------------------------------------------------------------------------------
 # The one error path: every failure ends with one "hssbem: error:" line, exit status 1,

@@ -5,6 +5,8 @@
 
 #include "hssbem/core/geometry.hpp"
 
+#include <mpi.h>
+
 #include <array>
 #include <cstddef>
 #include <map>
@@ -20,7 +22,8 @@ public:
   using std::runtime_error::runtime_error;
 };
 
-/// Everything a result file holds, all arrays in mesh vertex order. Serial: the caller gathers.
+/// Everything a result file holds, all arrays in mesh vertex order (whole on every rank that
+/// writes: see the collective write_result).
 struct ResultData {
   std::vector<Vec3> vertices;
   std::vector<std::array<int, 3>> triangles;
@@ -56,6 +59,17 @@ void check_output_path(const std::string &path);
 /// arrays are skipped. Arrays that are not empty must have one entry per vertex (triangle).
 /// Throws OutputError; on error no temporary file is left and an existing result is untouched.
 void write_result(const std::string &path, const ResultData &data);
+
+/// write_result, collective over `comm`: every rank passes the whole `data` (arrays of the same
+/// sizes on all ranks) and the file is written once, with HDF5's MPI-IO driver: each rank writes
+/// its own contiguous block of rows of every dataset (the rows split evenly in rank order), the
+/// ranks create groups, datasets and attributes together, and the attributes, timings and
+/// reactions written are rank 0's. Rank 0 checks `path`, owns the temporary names (its process
+/// id in them) and the signal handling, and renames the pair into place once every rank has
+/// closed the file and agreed that the write succeeded. Any failure, on any rank, throws the same
+/// OutputError on every rank and leaves no file behind; an existing result stays untouched. With
+/// one rank it is the serial write_result.
+void write_result(MPI_Comm comm, const std::string &path, const ResultData &data);
 
 /// One frame of a scene, all arrays in mesh vertex order.
 struct FrameData {
