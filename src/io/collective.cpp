@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <cstring>
+#include <string>
 #include <new>
 #include <type_traits>
 #include <vector>
@@ -116,13 +117,15 @@ int comm_size(MPI_Comm comm)
 void agree_on_failure(MPI_Comm comm, const std::string *failure)
 {
   const int rank = comm_rank(comm), size = comm_size(comm);
-  const int mine = failure ? rank : size;
-  int lowest = size;
+  const int mine = failure ? rank : size, failed = failure ? 1 : 0;
+  int lowest = size, nfailed = 0;
   check_mpi(MPI_Allreduce(&mine, &lowest, 1, MPI_INT, MPI_MIN, comm), "MPI_Allreduce");
   if (lowest == size)
     return;
+  check_mpi(MPI_Allreduce(&failed, &nfailed, 1, MPI_INT, MPI_SUM, comm), "MPI_Allreduce");
   std::string message = failure ? *failure : std::string();
   broadcast_text(comm, lowest, message);
+  if (nfailed < size) message += " (on rank " + std::to_string(lowest) + ")"; // as the driver's other errors say
   throw OutputError(message);
 }
 

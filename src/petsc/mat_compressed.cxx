@@ -63,7 +63,9 @@ PetscErrorCode MatMult_Compressed(Mat A, Vec x, Vec y)
   if (p.h2dist) {
     PetscCall(VecGetArrayRead(x, &xa));
     PetscCall(VecGetArrayWrite(y, &ya));
-    guard.Run("MatMult", [&] {
+    guard.Run([&] {
+      /* the ranks meet in the product's exchanges: a fault here must be agreed on first */
+      hssbem::collectively(*p.comm, [] { hssbem::fault_point("MatMult"); });
       p.h2dist->apply(p.sel, xa, ya);
       if (!p.modes.empty()) AddDistributedRegularization_Private(p, xa, ya);
     });
@@ -282,7 +284,8 @@ static PetscErrorCode CreateDistributedH2_Private(MPI_Comm comm, HssbemSystemCon
   PetscCallMPI(MPI_Bcast(figures, 7, MPI_DOUBLE, 0, comm));
   sys->partition = hssbem::NodePartitionStats{(int)figures[0], (long)figures[1], (long)figures[2], figures[3], (int)figures[4], (int)figures[5], (int)figures[6]};
   PetscCall(PetscLogEventEnd(BEM_Partition, 0, 0, 0, 0));
-  guard.Run("Compression", [&] {
+  guard.Run([&] {
+    hssbem::collectively(*sys->comm, [] { hssbem::fault_point("Compression"); }); /* as in MatMult */
     auto K       = std::make_shared<hssbem::H2DistributedSystem>(op, sys->h2_options, part, *sys->comm);
     sys->h2dist  = K;
     b0           = K->rhs(sys->sel);

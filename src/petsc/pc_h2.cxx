@@ -106,7 +106,7 @@ PetscErrorCode PCSetUp_H2(PC pc)
   h2->inverse_error = -1;
   if (p->h2dist && !p->h2_gathered && h2->rel_tol >= p->h2_options.rel_tol) {
     /* The factorization runs on rank 0 (not distributed yet): the matrix's parts gathered there. */
-    guard.Run("PCSetUp", [&] {
+    guard.Run([&] {
       std::optional<hssbem::H2Matrix> whole = hssbem::gather_h2_matrix(p->h2dist->matrix(), *p->comm);
       if (whole) p->h2 = std::make_shared<const hssbem::H2BemSystem>(std::move(*whole));
     });

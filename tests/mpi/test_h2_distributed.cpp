@@ -61,7 +61,7 @@ TEST(H2Distributed, PartitionIsBalancedAndConnected)
     EXPECT_GT(f.stats.edge_cut, 0);
     EXPECT_LT(f.stats.edge_cut, f.stats.edges / 4); // a patch per part, not a scatter
   }
-  EXPECT_THROW(partition_nodes(*f.setup.disc, f.setup.disc->num_nodes() / 8, nullptr), std::invalid_argument);
+  EXPECT_THROW(partition_nodes(*f.setup.disc, f.setup.disc->num_nodes() / 2, nullptr), std::invalid_argument); // 2 nodes a rank
 }
 
 TEST(H2Distributed, ProductMatchesTheWholeMatrix)

@@ -23,11 +23,11 @@ struct NodePartitionStats {
 /// part[i] in [0, nparts) for dof node i; every part non-empty. One part: all zeros, no METIS.
 /// k-way METIS (contiguous parts where the surface is connected, recursive bisection when
 /// k-way leaves a part empty), deterministic for a given mesh and nparts. Throws
-/// std::invalid_argument when nparts < 1 or the surface has fewer than 2·nparts nodes per part
-/// (more parts than the surface can feed).
+/// std::invalid_argument when nparts < 1 or the surface has fewer than k_min_nodes_per_part
+/// nodes per part (more ranks than the surface can feed).
 std::vector<int> partition_nodes(const Discretization &disc, int nparts, NodePartitionStats *stats = nullptr);
 
 /// The least number of dof nodes a part must have (partition_nodes refuses smaller parts).
-constexpr int k_min_nodes_per_part = 16;
+constexpr int k_min_nodes_per_part = 4;
 
 } // namespace hssbem
