@@ -6,6 +6,9 @@
 #include "h2_transfer.hpp"
 
 #include <algorithm>
+#include <cstdint>
+#include <cstring>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -249,19 +252,30 @@ namespace hssbem {
 
 namespace {
 
-/// A flat record of doubles (indices and sizes are exact in a double).
-struct Record {
-  std::vector<double> v;
-  void put(double x) { v.push_back(x); }
+/// Bytes of a cluster's bases and blocks: counted first (out null), then written into a buffer of
+/// that size; arrays go as their size and raw contents (floats stay 4 bytes).
+struct Packer {
+  char *out = nullptr;
+  std::size_t n = 0;
+  void raw(const void *p, std::size_t bytes)
+  {
+    if (out && bytes) std::memcpy(out + n, p, bytes);
+    n += bytes;
+  }
+  template <class T>
+  void put(T v)
+  {
+    raw(&v, sizeof v);
+  }
   template <class T>
   void put_all(const std::vector<T> &a)
   {
-    put(static_cast<double>(a.size()));
-    v.insert(v.end(), a.begin(), a.end());
+    put<std::int64_t>(static_cast<std::int64_t>(a.size()));
+    raw(a.data(), a.size() * sizeof(T));
   }
   void put_interpolation(const StoredInterpolation &s)
   {
-    put(s.candidates);
+    put<int>(s.candidates);
     put_all(s.skel_pos);
     put_all(s.red_pos);
     put_all(s.Tf);
@@ -269,36 +283,46 @@ struct Record {
   }
   void put_block(const H2Block &B)
   {
-    put(B.col_cluster);
-    put(B.M.m);
-    put(B.M.n);
+    put<int>(B.col_cluster);
+    put<int>(B.M.m);
+    put<int>(B.M.n);
     put_all(B.M.a);
     put_all(B.single);
-    put(B.rank);
+    put<int>(B.rank);
     put_all(B.lr_a);
     put_all(B.lr_w);
   }
 };
 
 struct Reader {
-  const std::vector<double> &v;
-  std::size_t at = 0;
-  double get() { return v.at(at++); }
-  int get_int() { return static_cast<int>(get()); }
+  const char *in;
+  std::size_t size, at = 0;
+  void raw(void *p, std::size_t bytes)
+  {
+    if (at + bytes > size) throw std::logic_error("H2 gather: a truncated record");
+    if (bytes) std::memcpy(p, in + at, bytes);
+    at += bytes;
+  }
+  template <class T>
+  T get()
+  {
+    T v;
+    raw(&v, sizeof v);
+    return v;
+  }
   template <class T>
   std::vector<T> get_all()
   {
-    const std::size_t n = static_cast<std::size_t>(get());
-    if (at + n > v.size()) throw std::logic_error("H2 gather: a truncated record");
+    const auto n = static_cast<std::size_t>(get<std::int64_t>());
+    if (n > size) throw std::logic_error("H2 gather: a corrupt record");
     std::vector<T> a(n);
-    for (std::size_t k = 0; k < n; ++k) a[k] = static_cast<T>(v[at + k]);
-    at += n;
+    raw(a.data(), n * sizeof(T));
     return a;
   }
   StoredInterpolation get_interpolation()
   {
     StoredInterpolation s;
-    s.candidates = get_int();
+    s.candidates = get<int>();
     s.skel_pos = get_all<int>();
     s.red_pos = get_all<int>();
     s.Tf = get_all<float>();
@@ -308,12 +332,12 @@ struct Reader {
   H2Block get_block()
   {
     H2Block B;
-    B.col_cluster = get_int();
-    const int m = get_int(), n = get_int();
-    B.M.m = m, B.M.n = n;
+    B.col_cluster = get<int>();
+    B.M.m = get<int>();
+    B.M.n = get<int>();
     B.M.a = get_all<double>();
     B.single = get_all<float>();
-    B.rank = get_int();
+    B.rank = get<int>();
     B.lr_a = get_all<float>();
     B.lr_w = get_all<float>();
     return B;
@@ -325,42 +349,52 @@ struct Reader {
 std::optional<H2Matrix> gather_h2_matrix(const H2Matrix &K, const RankComm &comm, int root)
 {
   const int P = comm.size(), me = comm.rank(), nc = K.tree().num_clusters();
-  Record rec;
-  collectively(comm, [&] {
+  const auto pack = [&](Packer &p) {
     for (int c = 0; c < nc; ++c) {
-      if (!K.holds(c) || me == root) continue;
-      rec.put(c);
-      rec.put_interpolation(K.row_interpolation(c));
-      rec.put_interpolation(K.col_interpolation(c));
-      rec.put(static_cast<double>(K.far_blocks(c).size()));
-      for (const H2Block &B : K.far_blocks(c)) rec.put_block(B);
-      rec.put(static_cast<double>(K.near_blocks(c).size()));
-      for (const H2Block &B : K.near_blocks(c)) rec.put_block(B);
+      if (!K.holds(c)) continue;
+      p.put<int>(c);
+      p.put_interpolation(K.row_interpolation(c));
+      p.put_interpolation(K.col_interpolation(c));
+      p.put<std::int64_t>(static_cast<std::int64_t>(K.far_blocks(c).size()));
+      for (const H2Block &B : K.far_blocks(c)) p.put_block(B);
+      p.put<std::int64_t>(static_cast<std::int64_t>(K.near_blocks(c).size()));
+      for (const H2Block &B : K.near_blocks(c)) p.put_block(B);
     }
-  });
+  };
+  std::vector<std::vector<double>> send(P), recv(P); // bytes, in doubles' storage (one allocation)
   std::vector<std::vector<int>> sizes(P);
-  if (me != root) sizes[root] = {static_cast<int>(rec.v.size())};
+  collectively(comm, [&] {
+    if (me == root) return;
+    Packer count;
+    pack(count);
+    send[root].resize((count.n + sizeof(double) - 1) / sizeof(double));
+    Packer write;
+    write.out = reinterpret_cast<char *>(send[root].data());
+    pack(write);
+    if (send[root].size() > static_cast<std::size_t>(std::numeric_limits<int>::max())) throw std::length_error("H2 gather: a part too large for one message");
+    sizes[root] = {static_cast<int>(send[root].size())};
+  });
   const std::vector<std::vector<int>> from = comm.exchange(sizes);
-  std::vector<std::vector<double>> send(P), recv(P);
-  if (me != root) send[root] = std::move(rec.v);
   for (int q = 0; q < P; ++q)
     if (!from[q].empty()) recv[q].resize(static_cast<std::size_t>(from[q][0]));
   comm.exchange(send, recv);
+  send.clear();
   std::optional<H2Matrix> whole;
   collectively(comm, [&] {
     if (me != root) return;
     whole.emplace(K);
     for (int q = 0; q < P; ++q) {
-      Reader r{recv[q]};
-      while (r.at < recv[q].size()) {
-        const int c = r.get_int();
+      Reader r{reinterpret_cast<const char *>(recv[q].data()), recv[q].size() * sizeof(double)};
+      while (r.size - r.at >= sizeof(int) + 2 * sizeof(std::int64_t)) {
+        const int c = r.get<int>();
         StoredInterpolation U = r.get_interpolation(), V = r.get_interpolation();
-        std::vector<H2Block> far(static_cast<std::size_t>(r.get_int())), near;
+        std::vector<H2Block> far(static_cast<std::size_t>(r.get<std::int64_t>())), near;
         for (H2Block &B : far) B = r.get_block();
-        near.resize(static_cast<std::size_t>(r.get_int()));
+        near.resize(static_cast<std::size_t>(r.get<std::int64_t>()));
         for (H2Block &B : near) B = r.get_block();
         whole->adopt(c, std::move(U), std::move(V), std::move(far), std::move(near));
       }
+      std::vector<double>().swap(recv[q]);
     }
     whole->set_owners({}, 0);
     whole->update_stats();

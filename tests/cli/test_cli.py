@@ -832,6 +832,16 @@ class ParallelTests(CliTestCase):
                 with open(self.path("r%d.xdmf" % np_)) as f:
                     self.assertEqual(f.read().replace("r%d.h5" % np_, "R.h5"), ref_xdmf)
 
+    def test_more_ranks_than_the_surface_feeds(self):
+        # The cube has 24 dof nodes (a node per face at each corner): METIS needs 4 a rank, so
+        # 7 ranks are refused with the count and the most ranks that work (h2 only: the dense
+        # and HSS paths do not partition the surface).
+        self.write_cube()
+        self.problem()
+        r = self.run_problem("problem.json", "-bem_mat_type", "h2", np=7)
+        self.assertFailsCleanly(r, r"24 dof nodes, too few for 7 MPI ranks", r"at most 6 ranks")
+        self.assertErrorLine(r)
+
     def test_distributed_h2_agrees_across_ranks(self):
         # -bem_mat_type h2 on 2 and 4 ranks (oversubscribed) is distributed: METIS splits the
         # surface, each rank compresses and applies its part. The answers agree with the 1-rank

@@ -28,7 +28,10 @@
      and scatter the vectors.
    - mat_type HSSBEM_MAT_H2: the same MatShell over an H² compression (strong admissibility,
      -mat_h2_* options, see HssbemH2OptionsFromDatabase()): cheaper to build and to apply at
-     scale, for Krylov solvers; -pc_type hss then compresses its own HSS preconditioner.
+     scale, for Krylov solvers; -pc_type hss then compresses its own HSS preconditioner. On
+     several ranks it is distributed: METIS splits the surface into one part per rank, each rank
+     compresses and applies its part, and the rows are in cluster order, rank p holding part p's
+     nodes (HssbemVecToMeshOrder() converts; see below).
    - mat_type HSSBEM_MAT_DENSE: MATDENSE, filled row by row with the operator primitive.
    With rigid_modes (orthonormal, row-major 3N × 6, see orthonormal_rigid_modes()), A gets
    + rigid_regularization_weight · Q Qᵀ (pure-traction problems).
