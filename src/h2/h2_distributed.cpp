@@ -92,7 +92,7 @@ H2DistributedProduct::H2DistributedProduct(const H2Matrix &K, const RankComm &co
       for (int b : bp.far[a])
         if (!K.holds(b)) (m_above[b] ? need_top : need_low)[K.owner(b)].push_back(b);
       const Cluster &ca = tree.cluster(a);
-      if (m_above[a] && ca.left >= 0)
+      if (m_above[a] && ca.left >= 0 && K.col_interpolation(a).rank() > 0) // its moments need its children's
         for (int ch : {ca.left, ca.right})
           if (!K.holds(ch)) need_low[K.owner(ch)].push_back(ch);
       if (ca.left < 0)
