@@ -28,16 +28,33 @@ struct Fixture {
   std::vector<int> part;
   NodePartitionStats stats;
   H2Options opts;
+  std::unique_ptr<H2DistributedSystem> dist; ///< over the ranks
+  std::unique_ptr<H2Matrix> whole;           ///< the same tree, compressed on one rank
 
   Fixture() : setup(setup_problem(kelvin_mixed_spec("sphere_l1.msh", KelvinField{Material{1000.0, 0.3}, {1.2, 0.9, 1.0}, {1.0, -2.0, 0.5}}), ProblemOverrides{}))
   {
     op = std::make_unique<BemOperator>(*setup.disc, setup.material);
     part = partition_nodes(*setup.disc, comm.size(), &stats);
     MPI_Bcast(part.data(), static_cast<int>(part.size()), MPI_INT, 0, PETSC_COMM_WORLD); // one partition, whatever METIS does per rank
-    opts.rel_tol = 1e-7;
+    opts.rel_tol = 1e-6;
     opts.leaf_size = 16;
+    dist = std::make_unique<H2DistributedSystem>(*op, opts, part, comm);
+    whole = std::make_unique<H2Matrix>(compress_bem_operator_h2(*op, opts, part, SerialComm()));
   }
 };
+
+/// One problem and its two compressions for all the tests (they dominate the run time).
+class H2Distributed : public ::testing::Test {
+protected:
+  static void SetUpTestSuite() { f = new Fixture; }
+  static void TearDownTestSuite()
+  {
+    delete f;
+    f = nullptr;
+  }
+  static Fixture *f;
+};
+Fixture *H2Distributed::f = nullptr;
 
 double rel(const std::vector<double> &a, const std::vector<double> &b, MPI_Comm comm)
 {
@@ -51,9 +68,9 @@ double rel(const std::vector<double> &a, const std::vector<double> &b, MPI_Comm 
   return std::sqrt(s[0] / s[1]);
 }
 
-TEST(H2Distributed, PartitionIsBalancedAndConnected)
+TEST_F(H2Distributed, PartitionIsBalancedAndConnected)
 {
-  Fixture f;
+  const Fixture &f = *H2Distributed::f;
   EXPECT_EQ(f.stats.parts, f.comm.size());
   EXPECT_LE(f.stats.imbalance, 1.05);
   EXPECT_EQ(f.stats.disconnected_parts, 0);
@@ -64,11 +81,11 @@ TEST(H2Distributed, PartitionIsBalancedAndConnected)
   EXPECT_THROW(partition_nodes(*f.setup.disc, f.setup.disc->num_nodes() / 2, nullptr), std::invalid_argument); // 2 nodes a rank
 }
 
-TEST(H2Distributed, ProductMatchesTheWholeMatrix)
+TEST_F(H2Distributed, ProductMatchesTheWholeMatrix)
 {
-  Fixture f;
-  const H2DistributedSystem dist(*f.op, f.opts, f.part, f.comm);
-  const H2Matrix whole = compress_bem_operator_h2(*f.op, f.opts, f.part, SerialComm()); // same tree, one rank
+  const Fixture &f = *H2Distributed::f;
+  const H2DistributedSystem &dist = *f.dist;
+  const H2Matrix &whole = *f.whole; // same tree, one rank
   const int n = whole.tree().num_points(), w = whole.col_block(), nrhs = 2;
   std::mt19937 gen(7);
   std::uniform_real_distribution<double> u(-1, 1);
@@ -108,11 +125,11 @@ TEST(H2Distributed, ProductMatchesTheWholeMatrix)
   }
 }
 
-TEST(H2Distributed, SystemRowsMatchTheMeshOrderSystem)
+TEST_F(H2Distributed, SystemRowsMatchTheMeshOrderSystem)
 {
-  Fixture f;
-  const H2DistributedSystem dist(*f.op, f.opts, f.part, f.comm);
-  const H2BemSystem whole(compress_bem_operator_h2(*f.op, f.opts, f.part, SerialComm()));
+  const Fixture &f = *H2Distributed::f;
+  const H2DistributedSystem &dist = *f.dist;
+  const H2BemSystem whole(*f.whole); // a copy in the mesh-order interface
   const SystemSelection &sel = f.setup.selection;
   const int nn = f.op->num_nodes();
   std::mt19937 gen(11);
