@@ -368,17 +368,8 @@ PetscErrorCode HssbemRootExchange::SetUp(Vec x)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/*@C
-  HssbemVecToMeshOrder - Copies x, a vector of A's layout (HssbemCreateSystem()), into y, laid out
-  like the dense system's vectors: mesh order (3 rows per dof node), nodes split in contiguous
-  blocks across the ranks. The H² system on several ranks orders its rows by the METIS partition
-  (cluster order); the other systems are in mesh order already (then this is a copy).
-
-  Collective
-
-  Level: intermediate
-@*/
-PetscErrorCode HssbemVecToMeshOrder(Mat A, Vec x, Vec y)
+/* Copies between x (A's layout) and y (mesh order): forward y := x, reverse x := y. */
+static PetscErrorCode MeshOrderScatter_Private(Mat A, Vec x, Vec y, ScatterMode mode)
 {
   HssbemSystemContext *p;
   PetscInt             lo, hi;
@@ -391,10 +382,32 @@ PetscErrorCode HssbemVecToMeshOrder(Mat A, Vec x, Vec y)
   if (!p || p->system_of_dof.empty()) PetscCall(ISCreateStride(PetscObjectComm((PetscObject)y), hi - lo, lo, 1, &from));
   else PetscCall(ISCreateGeneral(PetscObjectComm((PetscObject)y), hi - lo, p->system_of_dof.data() + lo, PETSC_COPY_VALUES, &from));
   PetscCall(VecScatterCreate(x, from, y, NULL, &sc));
-  PetscCall(VecScatterBegin(sc, x, y, INSERT_VALUES, SCATTER_FORWARD));
-  PetscCall(VecScatterEnd(sc, x, y, INSERT_VALUES, SCATTER_FORWARD));
+  if (mode == SCATTER_FORWARD) {
+    PetscCall(VecScatterBegin(sc, x, y, INSERT_VALUES, SCATTER_FORWARD));
+    PetscCall(VecScatterEnd(sc, x, y, INSERT_VALUES, SCATTER_FORWARD));
+  } else {
+    PetscCall(VecScatterBegin(sc, y, x, INSERT_VALUES, SCATTER_REVERSE));
+    PetscCall(VecScatterEnd(sc, y, x, INSERT_VALUES, SCATTER_REVERSE));
+  }
   PetscCall(VecScatterDestroy(&sc));
   PetscCall(ISDestroy(&from));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/*@C
+  HssbemVecToMeshOrder - Copies x, a vector of A's layout (HssbemCreateSystem()), into y, laid out
+  like the dense system's vectors: mesh order (3 rows per dof node), nodes split in contiguous
+  blocks across the ranks. The H² system on several ranks orders its rows by the METIS partition
+  (cluster order); the other systems are in mesh order already (then this is a copy).
+
+  Collective
+
+  Level: intermediate
+@*/
+PetscErrorCode HssbemVecToMeshOrder(Mat A, Vec x, Vec y)
+{
+  PetscFunctionBegin;
+  PetscCall(MeshOrderScatter_Private(A, x, y, SCATTER_FORWARD));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -408,21 +421,8 @@ PetscErrorCode HssbemVecToMeshOrder(Mat A, Vec x, Vec y)
 @*/
 PetscErrorCode HssbemVecFromMeshOrder(Mat A, Vec y, Vec x)
 {
-  HssbemSystemContext *p;
-  PetscInt             lo, hi;
-  IS                   from;
-  VecScatter           sc;
-
   PetscFunctionBegin;
-  PetscCall(HssbemMatGetSystemContext(A, &p));
-  PetscCall(VecGetOwnershipRange(y, &lo, &hi));
-  if (!p || p->system_of_dof.empty()) PetscCall(ISCreateStride(PetscObjectComm((PetscObject)y), hi - lo, lo, 1, &from));
-  else PetscCall(ISCreateGeneral(PetscObjectComm((PetscObject)y), hi - lo, p->system_of_dof.data() + lo, PETSC_COPY_VALUES, &from));
-  PetscCall(VecScatterCreate(x, from, y, NULL, &sc));
-  PetscCall(VecScatterBegin(sc, y, x, INSERT_VALUES, SCATTER_REVERSE));
-  PetscCall(VecScatterEnd(sc, y, x, INSERT_VALUES, SCATTER_REVERSE));
-  PetscCall(VecScatterDestroy(&sc));
-  PetscCall(ISDestroy(&from));
+  PetscCall(MeshOrderScatter_Private(A, x, y, SCATTER_REVERSE));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
