@@ -2,6 +2,7 @@
 // preconditioner, as a direct solver, on the dense and HSS matrices, on a regularised
 // pure-traction problem, its breakdown reported as a PC failure, and its option checks.
 #include "solve_helpers.hpp"
+#include "vec_compare.hpp"
 #include "test_shapes.hpp"
 
 #include "hssbem/bem/rigid_modes.hpp"
@@ -16,30 +17,6 @@ using namespace hssbem;
 using namespace hssbem::test;
 
 namespace {
-
-double rel_diff(Vec a, Vec b)
-{
-  Vec d;
-  PetscReal nd, nb;
-  PetscCallAbort(PETSC_COMM_WORLD, VecDuplicate(a, &d));
-  PetscCallAbort(PETSC_COMM_WORLD, VecWAXPY(d, -1.0, b, a));
-  PetscCallAbort(PETSC_COMM_WORLD, VecNorm(d, NORM_2, &nd));
-  PetscCallAbort(PETSC_COMM_WORLD, VecNorm(b, NORM_2, &nb));
-  PetscCallAbort(PETSC_COMM_WORLD, VecDestroy(&d));
-  return nd / nb;
-}
-
-/// ‖a − b‖ / ‖b‖ for a in A's layout (the distributed H² system's is cluster order) and b in
-/// mesh order (the dense system's).
-double rel_diff(Mat A, Vec a, Vec b)
-{
-  Vec am;
-  PetscCallAbort(PETSC_COMM_WORLD, HssbemMatCreateMeshOrderVec(A, &am));
-  PetscCallAbort(PETSC_COMM_WORLD, HssbemVecToMeshOrder(A, a, am));
-  const double d = rel_diff(am, b);
-  PetscCallAbort(PETSC_COMM_WORLD, VecDestroy(&am));
-  return d;
-}
 
 /// A problem on sphere_l1 (2994 unknowns; H² leaves of 16 nodes, so the factorization has levels
 /// below its dense top) as dense and H² systems (and HSS on request).

@@ -3,6 +3,7 @@
 // a GMRES preconditioner on the HSS, H² and dense matrices, the H² matrix's default Krylov
 // solver, and a breakdown reported as a PC failure.
 #include "solve_helpers.hpp"
+#include "vec_compare.hpp"
 #include "test_shapes.hpp"
 
 #include "hssbem/petsc/pc_hss.h"
@@ -24,31 +25,6 @@ using namespace hssbem;
 using namespace hssbem::test;
 
 namespace {
-
-/// ‖a − b‖ / ‖b‖.
-double rel_diff(Vec a, Vec b)
-{
-  Vec d;
-  PetscReal nd, nb;
-  PetscCallAbort(PETSC_COMM_WORLD, VecDuplicate(a, &d));
-  PetscCallAbort(PETSC_COMM_WORLD, VecWAXPY(d, -1.0, b, a));
-  PetscCallAbort(PETSC_COMM_WORLD, VecNorm(d, NORM_2, &nd));
-  PetscCallAbort(PETSC_COMM_WORLD, VecNorm(b, NORM_2, &nb));
-  PetscCallAbort(PETSC_COMM_WORLD, VecDestroy(&d));
-  return nd / nb;
-}
-
-/// ‖a − b‖ / ‖b‖ for a in A's layout (the distributed H² system's is cluster order) and b in
-/// mesh order (the dense system's).
-double rel_diff(Mat A, Vec a, Vec b)
-{
-  Vec am;
-  PetscCallAbort(PETSC_COMM_WORLD, HssbemMatCreateMeshOrderVec(A, &am));
-  PetscCallAbort(PETSC_COMM_WORLD, HssbemVecToMeshOrder(A, a, am));
-  const double d = rel_diff(am, b);
-  PetscCallAbort(PETSC_COMM_WORLD, VecDestroy(&am));
-  return d;
-}
 
 /// A problem with its dense and HSS systems (-mat_hss_rel_tol at its default, 1e-8).
 struct Systems {
