@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <stdexcept>
 #include <string>
 
@@ -29,81 +30,90 @@ void invert(int m, std::vector<T> &a, std::vector<T> &inv, const char *what)
   lapack::getrs('N', m, m, a.data(), m, piv.data(), inv.data(), m);
 }
 
-/// The k×k matrix M restricted to the positions `keep` (in that order).
+/// Removes the slots R from the inverse of C (k slots in use, leading dimension ld): with P the
+/// other slots, the inverse of C(P, P) is C⁻¹(P, P) − C⁻¹(P, R) C⁻¹(R, R)⁻¹ C⁻¹(R, P). Written
+/// over all k slots, the same rank-|R| update also takes rows and columns R to zero, which is
+/// then made exact.
 template <class T>
-std::vector<T> restrict_to(const std::vector<T> &M, int k, const std::vector<int> &keep)
+void drop_slots(std::vector<T> &inv, int ld, int k, const std::vector<int> &R)
 {
-  const int kp = static_cast<int>(keep.size());
-  std::vector<T> out(sq(kp));
-#pragma omp parallel for schedule(static) if (kp > 512)
-  for (int q = 0; q < kp; ++q)
-    for (int p = 0; p < kp; ++p) out[p + static_cast<std::size_t>(q) * kp] = M[keep[p] + static_cast<std::size_t>(keep[q]) * k];
-  return out;
-}
-
-/// With P the kept positions and R the dropped ones, the inverse of C(P, P) is
-/// C⁻¹(P, P) − C⁻¹(P, R) C⁻¹(R, R)⁻¹ C⁻¹(R, P).
-template <class T>
-void drop_from_inverse(std::vector<T> &inv, int k, const std::vector<int> &P, const std::vector<int> &R)
-{
-  const int kp = static_cast<int>(P.size()), m = static_cast<int>(R.size());
-  auto at = [&](int i, int j) { return inv[i + static_cast<std::size_t>(j) * k]; };
-  std::vector<T> A = restrict_to(inv, k, P), B(static_cast<std::size_t>(kp) * m), S(sq(m)), Tm(static_cast<std::size_t>(m) * kp);
-  for (int q = 0; q < m; ++q)
-    for (int p = 0; p < kp; ++p) B[p + static_cast<std::size_t>(q) * kp] = at(P[p], R[q]);
-  for (int q = 0; q < m; ++q)
-    for (int p = 0; p < m; ++p) S[p + static_cast<std::size_t>(q) * m] = at(R[p], R[q]);
-  for (int q = 0; q < kp; ++q)
-    for (int p = 0; p < m; ++p) Tm[p + static_cast<std::size_t>(q) * m] = at(R[p], P[q]);
-  if (kp > 0) {
-    std::vector<int> piv(m);
-    if (lapack::getrf(m, S.data(), m, piv.data()) != 0) throw std::runtime_error("capacitance matrix: the block of the dropped indices is singular");
-    lapack::getrs('N', m, kp, S.data(), m, piv.data(), Tm.data(), m);
-    gemm_over_threads<T>('N', 'N', kp, kp, m, T(-1), B.data(), kp, Tm.data(), m, T(1), A.data(), kp);
-  }
-  inv = std::move(A);
-}
-
-/// C' = [C B; D E]: with X = C⁻¹B, Y = D C⁻¹ and S = E − D X,
-/// C'⁻¹ = [C⁻¹ + X S⁻¹ Y, −X S⁻¹; −S⁻¹ Y, S⁻¹].
-template <class T>
-void add_to_inverse(std::vector<T> &inv, int k, int m, const std::vector<T> &B, const std::vector<T> &D, std::vector<T> S)
-{
-  const int kn = k + m, lk = std::max(k, 1);
-  std::vector<T> X(static_cast<std::size_t>(k) * m), Y(static_cast<std::size_t>(m) * k);
-  gemm_over_threads<T>('N', 'N', k, m, k, T(1), inv.data(), lk, B.data(), lk, T(0), X.data(), lk);
-  gemm_over_threads<T>('N', 'N', m, k, k, T(1), D.data(), m, inv.data(), lk, T(0), Y.data(), m);
-  lapack::gemm('N', 'N', m, m, k, T(-1), D.data(), m, X.data(), lk, T(1), S.data(), m);
-  std::vector<T> Sinv;
-  invert(m, S, Sinv, "the Schur complement of the added indices");
-  std::vector<T> Z(static_cast<std::size_t>(m) * k); // S⁻¹ Y
-  lapack::gemm('N', 'N', m, k, m, T(1), Sinv.data(), m, Y.data(), m, T(0), Z.data(), m);
-  std::vector<T> out(sq(kn));
+  const int m = static_cast<int>(R.size());
+  auto at = [&](int i, int j) -> T & { return inv[i + static_cast<std::size_t>(j) * ld]; };
+  std::vector<T> B(static_cast<std::size_t>(k) * m), S(sq(m)), Z(static_cast<std::size_t>(m) * k);
+  for (int q = 0; q < m; ++q) std::copy_n(&at(0, R[q]), k, &B[static_cast<std::size_t>(q) * k]);
 #pragma omp parallel for schedule(static) if (k > 512)
   for (int q = 0; q < k; ++q)
-    std::copy_n(&inv[static_cast<std::size_t>(q) * k], k, &out[static_cast<std::size_t>(q) * kn]);
-  gemm_over_threads<T>('N', 'N', k, k, m, T(1), X.data(), lk, Z.data(), m, T(1), out.data(), kn); // C⁻¹ + X S⁻¹ Y
-  lapack::gemm('N', 'N', k, m, m, T(-1), X.data(), lk, Sinv.data(), m, T(0), &out[static_cast<std::size_t>(k) * kn], kn);
-  for (int q = 0; q < k; ++q)
-    for (int p = 0; p < m; ++p) out[k + p + static_cast<std::size_t>(q) * kn] = -Z[p + static_cast<std::size_t>(q) * m];
+    for (int p = 0; p < m; ++p) Z[p + static_cast<std::size_t>(q) * m] = at(R[p], q);
   for (int q = 0; q < m; ++q)
-    for (int p = 0; p < m; ++p) out[k + p + static_cast<std::size_t>(k + q) * kn] = Sinv[p + static_cast<std::size_t>(q) * m];
-  inv = std::move(out);
+    for (int p = 0; p < m; ++p) S[p + static_cast<std::size_t>(q) * m] = at(R[p], R[q]);
+  std::vector<int> piv(m);
+  if (lapack::getrf(m, S.data(), m, piv.data()) != 0) throw std::runtime_error("capacitance matrix: the block of the dropped indices is singular");
+  lapack::getrs('N', m, k, S.data(), m, piv.data(), Z.data(), m);
+  gemm_over_threads<T>('N', 'N', k, k, m, T(-1), B.data(), k, Z.data(), m, T(1), inv.data(), ld);
+  for (int r : R) {
+    std::fill_n(&at(0, r), k, T(0));
+    for (int q = 0; q < k; ++q) at(r, q) = T(0);
+  }
 }
 
-/// The block (rows r0.., cols c0..) of the ld-leading column-major double matrix M as T.
+/// Puts new indices into the empty slots A of the inverse of C (k slots in use, leading
+/// dimension ld; rows and columns A of the inverse are zero). With B = C(:, A), D = C(A, :),
+/// E = C(A, A), X = C⁻¹B, Y = D C⁻¹ and S = E − D X, the new inverse is C⁻¹ + X S⁻¹ Y on the old
+/// slots, −X S⁻¹ in columns A, −S⁻¹ Y in rows A and S⁻¹ in (A, A). Rows A of X and columns A of
+/// Y are zero (so are the rows and columns A of C⁻¹), so every product runs over all k slots.
 template <class T>
-std::vector<T> block_of(const std::vector<double> &M, int ld, int r0, int nr, int c0, int nc)
+void add_slots(std::vector<T> &inv, int ld, int k, const std::vector<int> &A, const std::vector<T> &B, const std::vector<T> &D, std::vector<T> S)
 {
-  std::vector<T> out(static_cast<std::size_t>(nr) * nc);
-  for (int q = 0; q < nc; ++q)
-    for (int p = 0; p < nr; ++p) out[p + static_cast<std::size_t>(q) * nr] = static_cast<T>(M[r0 + p + static_cast<std::size_t>(c0 + q) * ld]);
+  const int m = static_cast<int>(A.size());
+  auto at = [&](int i, int j) -> T & { return inv[i + static_cast<std::size_t>(j) * ld]; };
+  std::vector<T> X(static_cast<std::size_t>(k) * m), Y(static_cast<std::size_t>(m) * k);
+  gemm_over_threads<T>('N', 'N', k, m, k, T(1), inv.data(), ld, B.data(), k, T(0), X.data(), k);
+  gemm_over_threads<T>('N', 'N', m, k, k, T(1), D.data(), m, inv.data(), ld, T(0), Y.data(), m);
+  lapack::gemm('N', 'N', m, m, k, T(-1), D.data(), m, X.data(), k, T(1), S.data(), m);
+  std::vector<T> Sinv;
+  invert(m, S, Sinv, "the Schur complement of the added indices");
+  std::vector<T> Z(static_cast<std::size_t>(m) * k), XS(static_cast<std::size_t>(k) * m); // S⁻¹ Y, X S⁻¹
+  gemm_over_threads<T>('N', 'N', m, k, m, T(1), Sinv.data(), m, Y.data(), m, T(0), Z.data(), m);
+  lapack::gemm('N', 'N', k, m, m, T(-1), X.data(), k, Sinv.data(), m, T(0), XS.data(), k);
+  gemm_over_threads<T>('N', 'N', k, k, m, T(1), X.data(), k, Z.data(), m, T(1), inv.data(), ld); // C⁻¹ + X S⁻¹ Y
+  for (int q = 0; q < m; ++q) std::copy_n(&XS[static_cast<std::size_t>(q) * k], k, &at(0, A[q]));
+#pragma omp parallel for schedule(static) if (k > 512)
+  for (int q = 0; q < k; ++q)
+    for (int p = 0; p < m; ++p) at(A[p], q) = -Z[p + static_cast<std::size_t>(q) * m];
+  for (int q = 0; q < m; ++q)
+    for (int p = 0; p < m; ++p) at(A[p], A[q]) = Sinv[p + static_cast<std::size_t>(q) * m];
+}
+
+/// The rows `rows` and columns `cols` of the ld-leading column-major double matrix M as T.
+template <class T>
+std::vector<T> gather(const std::vector<double> &M, int ld, const std::vector<int> &rows, const std::vector<int> &cols)
+{
+  const std::size_t nr = rows.size();
+  std::vector<T> out(nr * cols.size());
+  for (std::size_t q = 0; q < cols.size(); ++q)
+    for (std::size_t p = 0; p < nr; ++p) out[p + q * nr] = static_cast<T>(M[rows[p] + static_cast<std::size_t>(cols[q]) * ld]);
   return out;
+}
+
+/// The first k×k of an old_ld-leading array in a new_ld × new_ld array of zeros (slots `keep`
+/// in that order, or all k when keep is empty).
+template <class T>
+void relayout(std::vector<T> &M, int old_ld, int new_ld, int k, const std::vector<int> &keep = {})
+{
+  if (M.empty()) return;
+  const int kk = keep.empty() ? k : static_cast<int>(keep.size());
+  std::vector<T> out(sq(new_ld), T(0));
+#pragma omp parallel for schedule(static) if (kk > 512)
+  for (int q = 0; q < kk; ++q) {
+    const std::size_t col = static_cast<std::size_t>(keep.empty() ? q : keep[q]) * old_ld;
+    for (int p = 0; p < kk; ++p) out[p + static_cast<std::size_t>(q) * new_ld] = M[(keep.empty() ? p : keep[p]) + col];
+  }
+  M = std::move(out);
 }
 
 } // namespace
 
-CapacitanceInverse::CapacitanceInverse(const double *W, int n, int single_from) : m_W(W), m_n(n), m_single_from(single_from), m_pos(n, -1) {}
+CapacitanceInverse::CapacitanceInverse(const double *W, int n, int single_from) : m_W(W), m_n(n), m_single_from(single_from), m_slot_of(n, -1), m_pos(n, -1) {}
 
 double CapacitanceInverse::update_flops(double k, double r, double a)
 {
@@ -113,29 +123,33 @@ double CapacitanceInverse::update_flops(double k, double r, double a)
 
 void CapacitanceInverse::rebuild(const std::vector<int> &J, bool force_double)
 {
-  for (int j : m_J) m_pos[j] = -1;
-  m_J.clear();
   const int k = static_cast<int>(J.size());
+  std::vector<int> slot_of(m_n, -1);
   for (int p = 0; p < k; ++p) {
-    if (J[p] < 0 || J[p] >= m_n || m_pos[J[p]] >= 0) {
-      for (int q = 0; q < p; ++q) m_pos[J[q]] = -1;
-      throw std::invalid_argument("CapacitanceInverse::rebuild: index out of range or repeated");
-    }
-    m_pos[J[p]] = p;
+    if (J[p] < 0 || J[p] >= m_n || slot_of[J[p]] >= 0) throw std::invalid_argument("CapacitanceInverse::rebuild: index out of range or repeated");
+    slot_of[J[p]] = p;
   }
-  m_J = J;
-  m_C.resize(sq(k));
+  m_slot_of = std::move(slot_of);
+  m_slot_index = J;
+  m_empty.clear();
+  m_k = k;
+  m_ld = k + std::max(32, k / 16); // room for a contact that grows a little
+  m_C.assign(sq(m_ld), 0.0);
 #pragma omp parallel for schedule(static) if (k > 512)
   for (int q = 0; q < k; ++q)
-    for (int p = 0; p < k; ++p) m_C[p + static_cast<std::size_t>(q) * k] = w(m_J[p], m_J[q]);
+    for (int p = 0; p < k; ++p) c(p, q) = w(J[p], J[q]);
   m_single = !force_double && k >= m_single_from;
+  refresh_view();
+  // The inverse of the compact W(J, J), then spread to the leading dimension m_ld.
   if (m_single) {
-    std::vector<float> a = block_of<float>(m_C, k, 0, k, 0, k);
+    std::vector<float> a = gather<float>(m_C, m_ld, slots_upto(k), slots_upto(k));
     invert(k, a, m_invf, "W(J, J)");
+    relayout(m_invf, k, m_ld, k);
     std::vector<double>().swap(m_inv);
   } else {
-    std::vector<double> a = m_C;
+    std::vector<double> a = gather<double>(m_C, m_ld, slots_upto(k), slots_upto(k));
     invert(k, a, m_inv, "W(J, J)");
+    relayout(m_inv, k, m_ld, k);
     std::vector<float>().swap(m_invf);
   }
 }
@@ -144,95 +158,167 @@ void CapacitanceInverse::update(const std::vector<int> &drop, const std::vector<
 {
   if (!drop.empty()) drop_indices(drop);
   if (!add.empty()) add_indices(add);
+  if (static_cast<int>(m_empty.size()) * 8 > m_k) squeeze();
+  refresh_view();
 }
 
 void CapacitanceInverse::drop_indices(const std::vector<int> &drop)
 {
-  const int k = size();
-  std::vector<char> dropped(k, 0);
+  std::vector<int> R;
   for (int j : drop) {
-    if (j < 0 || j >= m_n || m_pos[j] < 0 || dropped[m_pos[j]]) throw std::invalid_argument("CapacitanceInverse::update: dropped index not in the set");
-    dropped[m_pos[j]] = 1;
+    if (j < 0 || j >= m_n || m_slot_of[j] < 0 || std::find(R.begin(), R.end(), m_slot_of[j]) != R.end())
+      throw std::invalid_argument("CapacitanceInverse::update: dropped index not in the set");
+    R.push_back(m_slot_of[j]);
   }
-  std::vector<int> P, R;
-  for (int p = 0; p < k; ++p) (dropped[p] ? R : P).push_back(p);
-  if (m_single) drop_from_inverse(m_invf, k, P, R);
-  else drop_from_inverse(m_inv, k, P, R);
-  m_C = restrict_to(m_C, k, P);
-  std::vector<int> J(P.size());
-  for (std::size_t p = 0; p < P.size(); ++p) J[p] = m_J[P[p]];
-  for (int j : m_J) m_pos[j] = -1;
-  m_J = std::move(J);
-  for (int p = 0; p < size(); ++p) m_pos[m_J[p]] = p;
+  if (m_single) drop_slots(m_invf, m_ld, m_k, R);
+  else drop_slots(m_inv, m_ld, m_k, R);
+  for (int r : R) {
+    std::fill_n(&c(0, r), m_k, 0.0);
+    for (int q = 0; q < m_k; ++q) c(r, q) = 0.0;
+    m_slot_of[m_slot_index[r]] = -1;
+    m_slot_index[r] = -1;
+    m_empty.push_back(r);
+  }
 }
 
 void CapacitanceInverse::add_indices(const std::vector<int> &add)
 {
-  const int k = size(), m = static_cast<int>(add.size()), kn = k + m;
-  for (std::size_t p = 0; p < add.size(); ++p) {
-    const int j = add[p];
-    if (j < 0 || j >= m_n || m_pos[j] >= 0) {
-      for (std::size_t q = 0; q < p; ++q) m_pos[add[q]] = -1;
-      throw std::invalid_argument("CapacitanceInverse::update: added index out of range or already in the set");
-    }
-    m_pos[j] = k + static_cast<int>(p); // also catches a repeat within `add`
+  const int m = static_cast<int>(add.size());
+  std::vector<char> seen(m_n, 0);
+  for (int j : add) {
+    if (j < 0 || j >= m_n || m_slot_of[j] >= 0 || seen[j]) throw std::invalid_argument("CapacitanceInverse::update: added index out of range or already in the set");
+    seen[j] = 1;
   }
-  // C' = [C, W(J, a); W(a, J), W(a, a)]
-  std::vector<double> C(sq(kn));
+  // Slots: the empty ones first (highest first, so a later squeeze moves less), then new ones.
+  std::sort(m_empty.begin(), m_empty.end());
+  const int reuse = std::min<int>(m, static_cast<int>(m_empty.size()));
+  std::vector<int> A(m_empty.end() - reuse, m_empty.end());
+  const int fresh = m - reuse;
+  if (m_k + fresh > m_ld) reserve(m_k + fresh);
+  for (int q = 0; q < fresh; ++q) A.push_back(m_k + q);
+  const int k = m_k + fresh;
+  // C's new rows and columns (the empty slots among them stay zero).
+  std::vector<int> idx(k, -1);
+  for (int p = 0; p < m_k; ++p) idx[p] = m_slot_index[p];
+  for (int q = 0; q < m; ++q) idx[A[q]] = add[q];
 #pragma omp parallel for schedule(static) if (k > 512)
-  for (int q = 0; q < kn; ++q) {
-    double *c = &C[static_cast<std::size_t>(q) * kn];
-    if (q < k) std::copy_n(&m_C[static_cast<std::size_t>(q) * k], k, c);
-    else
-      for (int p = 0; p < k; ++p) c[p] = w(m_J[p], add[q - k]);
-    const int jq = q < k ? m_J[q] : add[q - k];
-    for (int p = 0; p < m; ++p) c[k + p] = w(add[p], jq);
-  }
+  for (int q = 0; q < m; ++q)
+    for (int p = 0; p < k; ++p) c(p, A[q]) = idx[p] >= 0 ? w(idx[p], add[q]) : 0.0;
+#pragma omp parallel for schedule(static) if (k > 512)
+  for (int q = 0; q < k; ++q)
+    for (int p = 0; p < m; ++p) c(A[p], q) = idx[q] >= 0 ? w(add[p], idx[q]) : 0.0;
+  const std::vector<int> all = slots_upto(k);
   try {
-    if (m_single) add_to_inverse(m_invf, k, m, block_of<float>(C, kn, 0, k, k, m), block_of<float>(C, kn, k, m, 0, k), block_of<float>(C, kn, k, m, k, m));
-    else add_to_inverse(m_inv, k, m, block_of<double>(C, kn, 0, k, k, m), block_of<double>(C, kn, k, m, 0, k), block_of<double>(C, kn, k, m, k, m));
-  } catch (...) {
-    for (int j : add) m_pos[j] = -1;
+    if (m_single) add_slots(m_invf, m_ld, k, A, gather<float>(m_C, m_ld, all, A), gather<float>(m_C, m_ld, A, all), gather<float>(m_C, m_ld, A, A));
+    else add_slots(m_inv, m_ld, k, A, gather<double>(m_C, m_ld, all, A), gather<double>(m_C, m_ld, A, all), gather<double>(m_C, m_ld, A, A));
+  } catch (...) { // the caller rebuilds; leave C as it was
+    for (int q = 0; q < m; ++q) {
+      std::fill_n(&c(0, A[q]), k, 0.0);
+      for (int p = 0; p < k; ++p) c(A[q], p) = 0.0;
+    }
     throw;
   }
-  m_C = std::move(C);
-  m_J.insert(m_J.end(), add.begin(), add.end());
+  m_empty.resize(m_empty.size() - static_cast<std::size_t>(reuse));
+  m_k = k;
+  m_slot_index.resize(k, -1);
+  for (int q = 0; q < m; ++q) {
+    m_slot_index[A[q]] = add[q];
+    m_slot_of[add[q]] = A[q];
+  }
 }
 
-bool CapacitanceInverse::solve(const double *r, double *s) const
+std::vector<int> CapacitanceInverse::slots_upto(int k)
 {
-  const int k = size();
-  if (k == 0) return true;
+  std::vector<int> s(k);
+  std::iota(s.begin(), s.end(), 0);
+  return s;
+}
+
+void CapacitanceInverse::reserve(int slots)
+{
+  const int ld = std::max(slots, m_ld + m_ld / 4 + 32);
+  relayout(m_C, m_ld, ld, m_k);
+  relayout(m_inv, m_ld, ld, m_k);
+  relayout(m_invf, m_ld, ld, m_k);
+  m_ld = ld;
+}
+
+void CapacitanceInverse::squeeze()
+{
+  std::vector<int> keep;
+  for (int p = 0; p < m_k; ++p)
+    if (m_slot_index[p] >= 0) keep.push_back(p);
+  relayout(m_C, m_ld, m_ld, m_k, keep);
+  relayout(m_inv, m_ld, m_ld, m_k, keep);
+  relayout(m_invf, m_ld, m_ld, m_k, keep);
+  std::vector<int> index(keep.size());
+  for (std::size_t p = 0; p < keep.size(); ++p) {
+    index[p] = m_slot_index[keep[p]];
+    m_slot_of[index[p]] = static_cast<int>(p);
+  }
+  m_slot_index = std::move(index);
+  m_k = static_cast<int>(keep.size());
+  m_empty.clear();
+}
+
+void CapacitanceInverse::refresh_view()
+{
+  for (int j : m_J) m_pos[j] = -1;
+  m_J.clear();
+  m_pos_slot.clear();
+  for (int p = 0; p < m_k; ++p)
+    if (m_slot_index[p] >= 0) {
+      m_pos[m_slot_index[p]] = static_cast<int>(m_J.size());
+      m_J.push_back(m_slot_index[p]);
+      m_pos_slot.push_back(p);
+    }
+}
+
+bool CapacitanceInverse::solve(const double *r_in, double *s_out) const
+{
+  const int n = size(), k = m_k;
+  if (n == 0) return true;
+  // By slots: r is zero on the empty ones, whose rows and columns are zero in C and C⁻¹.
+  std::vector<double> r(k, 0.0), s(k, 0.0);
+  for (int p = 0; p < n; ++p) r[m_pos_slot[p]] = r_in[p];
+  const auto out = [&] {
+    for (int p = 0; p < n; ++p) s_out[p] = s[m_pos_slot[p]];
+  };
   if (!m_single) {
-    gemv_over_threads(k, k, m_inv.data(), k, r, s);
+    gemv_over_threads(k, k, m_inv.data(), m_ld, r.data(), s.data());
+    out();
     return true;
   }
   double nr = 0;
   for (int i = 0; i < k; ++i) nr += r[i] * r[i];
   nr = std::sqrt(nr);
   std::vector<float> rf(k), sf(k);
-  std::vector<double> res(r, r + k);
-  std::fill(s, s + k, 0.0);
+  std::vector<double> res = r;
   double previous = nr;
+  bool converged = false;
   for (int it = 0; it < 12; ++it) { // s ← s + C⁻¹ (r − C s), the correction in single precision
     for (int i = 0; i < k; ++i) rf[i] = static_cast<float>(res[i]);
-    gemv_over_threads(k, k, m_invf.data(), k, rf.data(), sf.data());
+    gemv_over_threads(k, k, m_invf.data(), m_ld, rf.data(), sf.data());
     for (int i = 0; i < k; ++i) s[i] += sf[i];
-    gemv_over_threads(k, k, m_C.data(), k, s, res.data());
+    gemv_over_threads(k, k, m_C.data(), m_ld, s.data(), res.data());
     for (int i = 0; i < k; ++i) res[i] = r[i] - res[i];
     double nres = 0;
     for (int i = 0; i < k; ++i) nres += res[i] * res[i];
     nres = std::sqrt(nres);
-    if (nres <= 1e-13 * nr || nres == 0) return true;
-    if (nres > 0.5 * previous) return false; // no longer contracting
+    if (nres <= 1e-13 * nr || nres == 0) {
+      converged = true;
+      break;
+    }
+    if (nres > 0.5 * previous) break; // no longer contracting
     previous = nres;
   }
-  return false;
+  out();
+  return converged;
 }
 
 double CapacitanceInverse::inverse_entry(int p, int q) const
 {
-  const std::size_t i = p + static_cast<std::size_t>(q) * size();
+  const std::size_t i = m_pos_slot[p] + static_cast<std::size_t>(m_pos_slot[q]) * m_ld;
   return m_single ? m_invf[i] : m_inv[i];
 }
 

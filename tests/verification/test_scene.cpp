@@ -121,6 +121,66 @@ TEST(Capacitance, SinglePrecisionInverseRefinesToDoubleAccuracy)
   EXPECT_GT(e, 1e-12);
 }
 
+TEST(Capacitance, InPlaceSlotsSurviveShrinkingGrowingAndSqueezing)
+{
+  // Updates work in place on slots: a dropped index leaves an empty slot, an added one fills
+  // one or appends. Drive every case — drops without adds (empty slots, then a squeeze), adds
+  // beyond the capacity (growth), swaps of equal size (slots reused) — in double and in single
+  // precision, and compare each state with a rebuild and with C⁻¹ C = I.
+  const int n = 400;
+  const std::vector<double> W = random_matrix(n, 21);
+  for (const int single_from : {INT_MAX, 0}) {
+    CapacitanceInverse inc(W.data(), n, single_from), full(W.data(), n);
+    std::vector<int> set;
+    for (int j = 0; j < 60; ++j) set.push_back(3 * j);
+    inc.rebuild(set);
+    const int cap0 = inc.capacity();
+    ASSERT_GT(cap0, 60);
+    auto apply = [&](const std::vector<int> &drop, const std::vector<int> &add) {
+      inc.update(drop, add);
+      std::vector<int> next;
+      for (int j : set)
+        if (std::find(drop.begin(), drop.end(), j) == drop.end()) next.push_back(j);
+      next.insert(next.end(), add.begin(), add.end());
+      set = next;
+      full.rebuild(set);
+      ASSERT_EQ(inc.size(), static_cast<int>(set.size()));
+      const double tol = single_from == 0 ? 1e-5 : 1e-11; // single: the inverse itself is float
+      EXPECT_LT(max_diff(inc, full), tol);
+      // the same right-hand side by index (the two keep their indices in different orders)
+      std::vector<double> r(set.size()), rf(set.size()), s(set.size()), e(set.size());
+      for (std::size_t i = 0; i < r.size(); ++i) {
+        r[i] = std::cos(0.7 * inc.indices()[i]) + 0.2;
+        rf[full.position(inc.indices()[i])] = r[i];
+      }
+      ASSERT_TRUE(inc.solve(r.data(), s.data()));
+      full.solve(rf.data(), e.data());
+      double d = 0, nrm = 0;
+      for (std::size_t i = 0; i < r.size(); ++i) {
+        const double ei = e[full.position(inc.indices()[i])];
+        d += (s[i] - ei) * (s[i] - ei), nrm += ei * ei;
+      }
+      EXPECT_LT(std::sqrt(d / nrm), 1e-11);
+    };
+    // Drop 5: five empty slots, not yet squeezed (5·8 ≤ 60).
+    apply({0, 9, 30, 90, 177}, {});
+    EXPECT_EQ(inc.slots(), 60);
+    // Swap 4 for 4: the empty slots are reused, none appended.
+    apply({3, 6}, {1, 4, 7, 10});
+    EXPECT_EQ(inc.slots(), 60);
+    // Add more than the capacity holds: the arrays grow.
+    std::vector<int> add;
+    for (int j = 0; static_cast<int>(add.size()) < cap0; ++j)
+      if (std::find(set.begin(), set.end(), j) == set.end()) add.push_back(j);
+    apply({12}, add);
+    EXPECT_GT(inc.capacity(), cap0);
+    // Drop a third: the empty slots exceed 1/8 and are squeezed out.
+    std::vector<int> drop(set.begin(), set.begin() + static_cast<std::ptrdiff_t>(set.size() / 3));
+    apply(drop, {});
+    EXPECT_EQ(inc.slots(), inc.size());
+  }
+}
+
 TEST(Capacitance, IllConditionedSinglePrecisionAsksForARebuild)
 {
   const int n = 60;

@@ -28,15 +28,28 @@ private:
 };
 
 /// C ← alpha op(A) op(B) + beta C (as lapack::gemm; T = double or float) split over the OpenMP
-/// threads by column blocks of C, each block a serial BLAS call: for code that keeps OpenBLAS on
-/// one thread (SerialBlas) so that its own OpenMP loops and BLAS never spin against each other.
-/// Serial when small.
+/// threads, each block a serial BLAS call: for code that keeps OpenBLAS on one thread
+/// (SerialBlas) so that its own OpenMP loops and BLAS never spin against each other. Serial when
+/// small. A wide C is split by column blocks; a tall, narrow one (n < m) by row blocks, so that
+/// op(A) is streamed once and not once per column block: for C = A B with A 3 015², B 3 015×100
+/// in single precision, 33 ms in 12 column blocks against 10 ms in row blocks (2 cores).
 template <class T>
 void gemm_over_threads(char transa, char transb, int m, int n, int k, T alpha, const T *a, int lda, const T *b, int ldb, T beta, T *c, int ldc)
 {
-  const bool par = static_cast<double>(m) * n * k > 2e6 && n >= 16;
+  const bool par = static_cast<double>(m) * n * k > 2e6 && std::max(m, n) >= 16;
   const SerialBlas serial(par);
-  const int nb = par ? std::min(n / 8, 64) : 1, width = (n + nb - 1) / nb;
+  if (par && n < m) { // row blocks of C: rows of op(A)
+    const int nb = std::max(1, std::min(m / 64, 16)), height = (m + nb - 1) / nb;
+#pragma omp parallel for schedule(dynamic, 1)
+    for (int i = 0; i < nb; ++i) {
+      const int i0 = i * height, h = std::min(m, i0 + height) - i0;
+      if (h <= 0) continue;
+      const T *ai = transa == 'N' ? a + i0 : a + static_cast<std::size_t>(i0) * lda;
+      lapack::gemm(transa, transb, h, n, k, alpha, ai, lda, b, ldb, beta, c + i0, ldc);
+    }
+    return;
+  }
+  const int nb = par ? std::max(1, std::min(n / 8, 64)) : 1, width = (n + nb - 1) / nb;
 #pragma omp parallel for schedule(dynamic, 1) if (par)
   for (int j = 0; j < nb; ++j) {
     const int j0 = j * width, w = std::min(n, j0 + width) - j0;
