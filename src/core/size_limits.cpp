@@ -21,12 +21,13 @@ long long largest_local_rows(long long unknowns, int ranks)
   return 3 * ((nodes + ranks - 1) / ranks);
 }
 
-/// Memory on one node: its ranks' share of a distributed operator, or all of a rank-0 one.
+/// Memory on one node: its ranks' share of a distributed operator (dense; H², whose parts the
+/// ranks hold), or all of a rank-0 one (HSS).
 double need_per_node(OperatorType type, long long unknowns, bool single, const MachineLimits &m)
 {
   const double total = estimated_bytes(type, unknowns, single);
-  if (type == OperatorType::Dense) return total * m.ranks_per_node / m.ranks;
-  return total; // the compressed engines live on rank 0 (not distributed yet)
+  if (type == OperatorType::Hss) return total; // lives on rank 0 (not distributed yet)
+  return total * m.ranks_per_node / m.ranks;
 }
 
 /// Why `type` cannot take the problem (empty: it can), without the suggestion.

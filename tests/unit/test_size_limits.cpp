@@ -53,6 +53,18 @@ TEST(SizeLimits, H2SuggestsSinglePrecisionThenNothing)
   EXPECT_NE(none.find("no operator path fits"), std::string::npos) << none;
 }
 
+TEST(SizeLimits, H2SplitsOverTheRanksNodesButHssDoesNot)
+{
+  // 2 000 000 unknowns in single precision do not fit one 24 GiB node; the distributed H² matrix
+  // spread over 8 nodes does, but not 8 ranks on one node. HSS stays on rank 0.
+  EXPECT_NE(size_refusal(OperatorType::H2, 2000000, true, machine(24)), "");
+  EXPECT_EQ(size_refusal(OperatorType::H2, 2000000, true, machine(24, 8, 1)), "");
+  EXPECT_NE(size_refusal(OperatorType::H2, 2000000, true, machine(24, 8, 8)), "");
+  const double hss = estimated_bytes(OperatorType::Hss, 60000, false);
+  EXPECT_GT(hss, 24 * 1073741824.0);
+  EXPECT_NE(size_refusal(OperatorType::Hss, 60000, false, machine(24, 8, 1)), "");
+}
+
 TEST(SizeLimits, HssGrowsFasterThanH2)
 {
   EXPECT_GT(estimated_bytes(OperatorType::Hss, 100000, false), estimated_bytes(OperatorType::H2, 100000, false));

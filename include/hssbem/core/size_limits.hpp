@@ -28,8 +28,10 @@ struct MachineLimits {
 double estimated_bytes(OperatorType type, long long unknowns, bool single_precision);
 
 /// Why `type` cannot take `unknowns` unknowns on this machine: its entries or a rank's block
-/// exceed the index width, or it needs more memory than the nodes have; with the size, the need
-/// and the path that can take it. Empty when it fits.
+/// exceed the index width, or it needs more memory than the nodes have (dense and H² are split
+/// over the ranks, a node holding its ranks' shares; HSS lives on rank 0); with the size, the
+/// need and the path that can take it. Empty when it fits. (On several ranks, `-pc_type h2`
+/// gathers the H² matrix on rank 0, which this check does not foresee.)
 std::string size_refusal(OperatorType type, long long unknowns, bool single_precision, const MachineLimits &m);
 
 } // namespace hssbem
