@@ -32,6 +32,16 @@ std::vector<double> random_matrix(int n, unsigned seed)
   return W;
 }
 
+/// The index set after an update: `set` without `drop`, then `add`.
+std::vector<int> after_update(const std::vector<int> &set, const std::vector<int> &drop, const std::vector<int> &add)
+{
+  std::vector<int> next;
+  for (int j : set)
+    if (std::find(drop.begin(), drop.end(), j) == drop.end()) next.push_back(j);
+  next.insert(next.end(), add.begin(), add.end());
+  return next;
+}
+
 double max_diff(const CapacitanceInverse &a, const CapacitanceInverse &b)
 {
   // same index set, possibly another order: compare entry (J_p, J_q)
@@ -60,11 +70,7 @@ TEST(Capacitance, UpdatesMatchTheRebuildAndInvertTheSubmatrix)
     for (int j = 0; j < n; ++j)
       if (std::find(set.begin(), set.end(), j) == set.end() && gen() % 12 == 0) add.push_back(j);
     inc.update(drop, add);
-    std::vector<int> next;
-    for (int j : set)
-      if (std::find(drop.begin(), drop.end(), j) == drop.end()) next.push_back(j);
-    next.insert(next.end(), add.begin(), add.end());
-    set = next;
+    set = after_update(set, drop, add);
     full.rebuild(set);
     ASSERT_EQ(inc.size(), static_cast<int>(set.size()));
     EXPECT_LT(max_diff(inc, full), 1e-11) << "step " << step;
@@ -99,11 +105,7 @@ TEST(Capacitance, SinglePrecisionInverseRefinesToDoubleAccuracy)
     for (int j = 1; j < n; j += 2)
       if (std::find(set.begin(), set.end(), j) == set.end() && gen() % 30 == 0) add.push_back(j);
     single.update(drop, add);
-    std::vector<int> next;
-    for (int j : set)
-      if (std::find(drop.begin(), drop.end(), j) == drop.end()) next.push_back(j);
-    next.insert(next.end(), add.begin(), add.end());
-    set = next;
+    set = after_update(set, drop, add);
   }
   exact.rebuild(single.indices());
   ASSERT_FALSE(exact.single());
@@ -138,11 +140,7 @@ TEST(Capacitance, InPlaceSlotsSurviveShrinkingGrowingAndSqueezing)
     ASSERT_GT(cap0, 60);
     auto apply = [&](const std::vector<int> &drop, const std::vector<int> &add) {
       inc.update(drop, add);
-      std::vector<int> next;
-      for (int j : set)
-        if (std::find(drop.begin(), drop.end(), j) == drop.end()) next.push_back(j);
-      next.insert(next.end(), add.begin(), add.end());
-      set = next;
+      set = after_update(set, drop, add);
       full.rebuild(set);
       ASSERT_EQ(inc.size(), static_cast<int>(set.size()));
       const double tol = single_from == 0 ? 1e-5 : 1e-11; // single: the inverse itself is float
