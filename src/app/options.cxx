@@ -180,7 +180,7 @@ AppOptions read_app_options(MPI_Comm comm)
 
 OperatorType choose_operator(long long unknowns, const MachineLimits &limits)
 {
-  if (unknowns < k_auto_dense_max_unknowns && size_refusal(OperatorType::Dense, unknowns, false, limits).empty()) return OperatorType::Dense;
+  if (unknowns < k_auto_dense_max_unknowns && size_refusal(OperatorType::Dense, unknowns, SizeOptions{}, limits).empty()) return OperatorType::Dense;
   return OperatorType::H2;
 }
 

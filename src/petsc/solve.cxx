@@ -79,6 +79,29 @@ static PetscErrorCode KSPSolveInLayout_Private(KSP ksp, Mat op, Vec b, Vec x, Pe
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+PetscErrorCode HssbemDefaultPCType(MPI_Comm comm, hssbem::OperatorType type, const char **pc_type)
+{
+  PetscMPIInt size;
+
+  PetscFunctionBegin;
+  PetscCallMPI(MPI_Comm_size(comm, &size));
+  *pc_type = type == hssbem::OperatorType::Hss ? PCHSS : type == hssbem::OperatorType::H2 ? (size > 1 ? PCJACOBI : PCH2) : PCLU;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode HssbemH2WillBeFactored(MPI_Comm comm, bool *factored)
+{
+  char        given[64];
+  PetscBool   set;
+  const char *def;
+
+  PetscFunctionBegin;
+  PetscCall(PetscOptionsGetString(NULL, NULL, "-pc_type", given, sizeof(given), &set));
+  PetscCall(HssbemDefaultPCType(comm, hssbem::OperatorType::H2, &def));
+  *factored = std::string(set ? given : def) == PCH2;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 /*@C
   HssbemKSPCreate - Creates the main solver (no prefix) with the defaults of the matrix type
   (-ksp_type preonly with -pc_type hss on the HSS matrix; GMRES(100), right-preconditioned so that
@@ -96,7 +119,7 @@ PetscErrorCode HssbemKSPCreate(MPI_Comm comm, const char *mat_type, KSP *ksp)
 {
   PC                   pc;
   hssbem::OperatorType type;
-  PetscMPIInt          size;
+  const char          *pc_type;
 
   PetscFunctionBegin;
   PetscCall(HssbemOperatorTypeFromName(comm, mat_type, &type));
@@ -109,8 +132,8 @@ PetscErrorCode HssbemKSPCreate(MPI_Comm comm, const char *mat_type, KSP *ksp)
     PetscCall(KSPSetPCSide(*ksp, PC_RIGHT));
   }
   PetscCall(KSPGetPC(*ksp, &pc));
-  PetscCallMPI(MPI_Comm_size(comm, &size));
-  PetscCall(PCSetType(pc, type == hssbem::OperatorType::Hss ? PCHSS : h2 ? (size > 1 ? PCJACOBI : PCH2) : PCLU));
+  PetscCall(HssbemDefaultPCType(comm, type, &pc_type));
+  PetscCall(PCSetType(pc, pc_type));
   PetscCall(KSPSetFromOptions(*ksp));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

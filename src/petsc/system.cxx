@@ -218,14 +218,14 @@ PetscErrorCode HssbemMachineLimits(MPI_Comm comm, hssbem::MachineLimits *limits)
 }
 
 /* Refuses (on comm) a system of `type` that does not fit this machine, before it is allocated. */
-static PetscErrorCode CheckSize_Private(MPI_Comm comm, hssbem::OperatorType type, PetscInt nnodes, bool single)
+static PetscErrorCode CheckSize_Private(MPI_Comm comm, hssbem::OperatorType type, PetscInt nnodes, const hssbem::SizeOptions &o)
 {
   hssbem::MachineLimits limits;
   std::string           why;
 
   PetscFunctionBegin;
   PetscCall(HssbemMachineLimits(comm, &limits));
-  PetscCallCXX(why = hssbem::size_refusal(type, 3 * (long long)nnodes, single, limits));
+  PetscCallCXX(why = hssbem::size_refusal(type, 3 * (long long)nnodes, o, limits));
   PetscCheck(why.empty(), comm, PETSC_ERR_MEM, "%s", why.c_str());
   PetscFunctionReturn(PETSC_SUCCESS);
 }
@@ -255,10 +255,10 @@ PetscErrorCode HssbemCreateSystem(MPI_Comm comm, const hssbem::BemOperator &op, 
   const bool pressure = std::any_of(sel.pressure.begin(), sel.pressure.end(), [](double p) { return !std::isnan(p); });
   switch (type) {
   case hssbem::OperatorType::Dense:
-    PetscCall(CheckSize_Private(comm, type, op.num_nodes(), false));
+    PetscCall(CheckSize_Private(comm, type, op.num_nodes(), hssbem::SizeOptions{}));
     PetscCall(HssbemAssembleDense(comm, op, sel, rigid_modes, A, b));
     break;
-  case hssbem::OperatorType::H2:
+  case hssbem::OperatorType::H2: {
     ctx->h2_options.pressure_columns = pressure;
     /* The driver's defaults (README, "Choosing the operator"): 1e-5 keeps the H² solution within
        ~5e-6 of dense LU's, well below the discretisation error of any mesh it pays on, and
@@ -266,14 +266,17 @@ PetscErrorCode HssbemCreateSystem(MPI_Comm comm, const hssbem::BemOperator &op, 
     ctx->h2_options.rel_tol          = 1e-5;
     ctx->h2_options.single_precision = true;
     PetscCall(HssbemH2OptionsFromDatabase(comm, NULL, &ctx->h2_options));
-    PetscCall(CheckSize_Private(comm, type, op.num_nodes(), ctx->h2_options.single_precision));
+    hssbem::SizeOptions size_options{ctx->h2_options.single_precision, ctx->h2_options.rel_tol, false};
+    PetscCall(HssbemH2WillBeFactored(comm, &size_options.h2_factored));
+    PetscCall(CheckSize_Private(comm, type, op.num_nodes(), size_options));
     PetscCall(HssbemMatCreateCompressed_Private(comm, ctx.get(), A, b));
     break;
+  }
   case hssbem::OperatorType::Hss:
     ctx->hss_options.rel_tol          = 1e-8;
     ctx->hss_options.pressure_columns = pressure;
     PetscCall(HssbemHssOptionsFromDatabase(comm, NULL, &ctx->hss_options));
-    PetscCall(CheckSize_Private(comm, type, op.num_nodes(), false));
+    PetscCall(CheckSize_Private(comm, type, op.num_nodes(), hssbem::SizeOptions{}));
     PetscCall(HssbemMatCreateCompressed_Private(comm, ctx.get(), A, b));
     break;
   }

@@ -57,6 +57,12 @@ PetscErrorCode HssbemMatGetSystemContext(Mat A, HssbemSystemContext **ctx);
 /* The operator type named mat_type (HSSBEM_MAT_*); an error on comm for any other name. */
 PetscErrorCode HssbemOperatorTypeFromName(MPI_Comm comm, const char *mat_type, hssbem::OperatorType *type);
 
+/* The main solver's default PC for an operator type on comm (PCHSS, PCH2 on one rank and PCJACOBI
+   on several for H², PCLU for dense), and whether the H² operator will be factored by PC h2 (the
+   -pc_type of the options database, else that default). */
+PetscErrorCode HssbemDefaultPCType(MPI_Comm comm, hssbem::OperatorType type, const char **pc_type);
+PetscErrorCode HssbemH2WillBeFactored(MPI_Comm comm, bool *factored);
+
 /* Dof nodes owned by this rank: a contiguous block [nstart, nstart + nlocal), 3 rows each. */
 PetscErrorCode HssbemOwnedNodes(MPI_Comm comm, PetscInt nnodes, PetscInt *nstart, PetscInt *nlocal);
 

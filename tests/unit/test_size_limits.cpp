@@ -24,51 +24,69 @@ TEST(SizeLimits, DenseBeyondTheIndexWidthIsRefusedNamingH2)
 {
   // 47 000 unknowns on one rank: 2.2e9 entries, more than a 32-bit PetscInt indexes (and the
   // memory would not suffice either on 24 GiB; with 1 TiB only the index width refuses).
-  const std::string why = size_refusal(OperatorType::Dense, 47001, false, machine(1024));
+  const std::string why = size_refusal(OperatorType::Dense, 47001, SizeOptions{}, machine(1024));
   EXPECT_NE(why.find("47001 unknowns"), std::string::npos) << why;
   EXPECT_NE(why.find("32-bit PetscInt"), std::string::npos) << why;
   EXPECT_NE(why.find("use -bem_mat_type h2"), std::string::npos) << why;
   // Split over 4 ranks the blocks fit the index width.
-  EXPECT_EQ(size_refusal(OperatorType::Dense, 47001, false, machine(1024, 4, 1)), "");
+  EXPECT_EQ(size_refusal(OperatorType::Dense, 47001, SizeOptions{}, machine(1024, 4, 1)), "");
 }
 
 TEST(SizeLimits, DenseBeyondMemoryIsRefused)
 {
-  EXPECT_EQ(size_refusal(OperatorType::Dense, 30000, false, machine(24)), ""); // 14.4 GB
-  const std::string why = size_refusal(OperatorType::Dense, 42000, false, machine(24)); // 28 GB
+  EXPECT_EQ(size_refusal(OperatorType::Dense, 30000, SizeOptions{}, machine(24)), ""); // 14.4 GB
+  const std::string why = size_refusal(OperatorType::Dense, 42000, SizeOptions{}, machine(24)); // 28 GB
   EXPECT_NE(why.find("needs about 28.2 GB per node"), std::string::npos) << why;
   EXPECT_NE(why.find("use -bem_mat_type h2"), std::string::npos) << why;
   // Two ranks on one node share its memory: no help; on two nodes each holds half.
-  EXPECT_NE(size_refusal(OperatorType::Dense, 42000, false, machine(24, 2, 2)), "");
-  EXPECT_EQ(size_refusal(OperatorType::Dense, 42000, false, machine(24, 2, 1)), "");
+  EXPECT_NE(size_refusal(OperatorType::Dense, 42000, SizeOptions{}, machine(24, 2, 2)), "");
+  EXPECT_EQ(size_refusal(OperatorType::Dense, 42000, SizeOptions{}, machine(24, 2, 1)), "");
 }
 
-TEST(SizeLimits, H2SuggestsSinglePrecisionThenNothing)
+TEST(SizeLimits, H2SuggestsSinglePrecisionThenJacobiThenALooserToleranceThenNothing)
 {
-  EXPECT_EQ(size_refusal(OperatorType::H2, 150000, false, machine(24)), "");
-  const std::string single = size_refusal(OperatorType::H2, 300000, false, machine(24));
-  EXPECT_NE(single.find("-mat_h2_single_precision"), std::string::npos) << single;
-  EXPECT_EQ(size_refusal(OperatorType::H2, 300000, true, machine(24)), "");
-  const std::string none = size_refusal(OperatorType::H2, 2000000, true, machine(24));
+  const SizeOptions dbl{false, 1e-5, true}, single{true, 1e-5, true}, jacobi{true, 1e-5, false};
+  // Double precision with PC h2: 150k fits 24 GiB (12.8 GB); 320k (27.3 GB) does in single.
+  EXPECT_EQ(size_refusal(OperatorType::H2, 150000, dbl, machine(24)), "");
+  const std::string s1 = size_refusal(OperatorType::H2, 320000, dbl, machine(24));
+  EXPECT_NE(s1.find("use -mat_h2_single_precision"), std::string::npos) << s1;
+  EXPECT_EQ(size_refusal(OperatorType::H2, 320000, single, machine(24)), "");
+  // 500k in single precision with PC h2 (30.1 GB): Jacobi leaves out the factorization (15.8 GB).
+  const std::string s2 = size_refusal(OperatorType::H2, 500000, single, machine(24));
+  EXPECT_NE(s2.find("use -pc_type jacobi"), std::string::npos) << s2;
+  EXPECT_EQ(size_refusal(OperatorType::H2, 500000, jacobi, machine(24)), "");
+  // One million with Jacobi at 1e-5 (31.6 GB): at 1e-4 (23.1 GB) it fits.
+  const std::string s3 = size_refusal(OperatorType::H2, 1000000, jacobi, machine(24));
+  EXPECT_NE(s3.find("needs about 31.6 GB per node"), std::string::npos) << s3;
+  EXPECT_NE(s3.find("use -mat_h2_rel_tol 1e-4"), std::string::npos) << s3;
+  EXPECT_EQ(size_refusal(OperatorType::H2, 1000000, SizeOptions{true, 1e-4, false}, machine(24)), "");
+  // From double precision with PC h2, every step is named at once.
+  const std::string s4 = size_refusal(OperatorType::H2, 1000000, dbl, machine(24));
+  EXPECT_NE(s4.find("use -mat_h2_single_precision -pc_type jacobi -mat_h2_rel_tol 1e-4"), std::string::npos) << s4;
+  const std::string none = size_refusal(OperatorType::H2, 2000000, jacobi, machine(24));
   EXPECT_NE(none.find("no operator path fits"), std::string::npos) << none;
+  // The estimate falls with the tolerance and rises with the factorization.
+  EXPECT_LT(estimated_bytes(OperatorType::H2, 100000, SizeOptions{true, 1e-4, false}), estimated_bytes(OperatorType::H2, 100000, jacobi));
+  EXPECT_LT(estimated_bytes(OperatorType::H2, 100000, jacobi), estimated_bytes(OperatorType::H2, 100000, single));
 }
 
 TEST(SizeLimits, H2SplitsOverTheRanksNodesButHssDoesNot)
 {
-  // 2 000 000 unknowns in single precision do not fit one 24 GiB node; the distributed H² matrix
-  // spread over 8 nodes does, but not 8 ranks on one node. HSS stays on rank 0.
-  EXPECT_NE(size_refusal(OperatorType::H2, 2000000, true, machine(24)), "");
-  EXPECT_EQ(size_refusal(OperatorType::H2, 2000000, true, machine(24, 8, 1)), "");
-  EXPECT_NE(size_refusal(OperatorType::H2, 2000000, true, machine(24, 8, 8)), "");
-  const double hss = estimated_bytes(OperatorType::Hss, 60000, false);
+  // 2 000 000 unknowns in single precision (63 GB) do not fit one 24 GiB node; the distributed
+  // H² matrix spread over 8 nodes does, but not 8 ranks on one node. HSS stays on rank 0.
+  const SizeOptions jacobi{true, 1e-5, false};
+  EXPECT_NE(size_refusal(OperatorType::H2, 2000000, jacobi, machine(24)), "");
+  EXPECT_EQ(size_refusal(OperatorType::H2, 2000000, jacobi, machine(24, 8, 1)), "");
+  EXPECT_NE(size_refusal(OperatorType::H2, 2000000, jacobi, machine(24, 8, 8)), "");
+  const double hss = estimated_bytes(OperatorType::Hss, 60000, SizeOptions{});
   EXPECT_GT(hss, 24 * 1073741824.0);
-  EXPECT_NE(size_refusal(OperatorType::Hss, 60000, false, machine(24, 8, 1)), "");
+  EXPECT_NE(size_refusal(OperatorType::Hss, 60000, SizeOptions{}, machine(24, 8, 1)), "");
 }
 
 TEST(SizeLimits, HssGrowsFasterThanH2)
 {
-  EXPECT_GT(estimated_bytes(OperatorType::Hss, 100000, false), estimated_bytes(OperatorType::H2, 100000, false));
-  EXPECT_NE(size_refusal(OperatorType::Hss, 100000, false, machine(24)).find("use -bem_mat_type h2"), std::string::npos);
+  EXPECT_GT(estimated_bytes(OperatorType::Hss, 100000, SizeOptions{}), estimated_bytes(OperatorType::H2, 100000, SizeOptions{}));
+  EXPECT_NE(size_refusal(OperatorType::Hss, 100000, SizeOptions{}, machine(24)).find("use -bem_mat_type h2"), std::string::npos);
 }
 
 TEST(AutoOperator, DenseBelowTheCrossoverH2AboveAndWhereDenseDoesNotFit)

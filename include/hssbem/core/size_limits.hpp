@@ -18,20 +18,32 @@ struct MachineLimits {
   long long index_max = 2147483647; ///< largest index of the linear-algebra library (PetscInt)
 };
 
+/// What else than its type and size decides an operator's memory.
+struct SizeOptions {
+  bool   single_precision = false; ///< H²: single-precision blocks
+  double h2_rel_tol = 1e-5;        ///< H²: the compression's tolerance
+  bool   h2_factored = false;      ///< H²: PC h2 factors it (GMRES + PC h2, or a direct solve)
+};
+
 /// Bytes the operator `type` needs at its peak for `unknowns` unknowns (whole run):
 /// - dense: the matrix and its LU factor, 16 N² (PETSc's dense LU and ScaLAPACK keep both);
-/// - H²: measured 44 kB per unknown with single-precision blocks (disk organ, tol 1e-5, the
-///   README's sweep) and 1.8 times that in double precision, plus 25 % margin;
+/// - H²: the matrix, 28.7 kB per unknown with single-precision blocks at tol 1e-5 (the disk
+///   organ at 20k, the largest of the sweep: 20–22 kB on spheres) times (1e-5 / tol)^0.135
+///   (measured from 1e-4 to 1e-5: 14.8, 17.5 and 20.1 kB on a 20k sphere) and 1.8 times that in
+///   double precision; PC h2's factorization adds 26 kB (its factors, 9.6 kB per unknown at its
+///   default 3e-3, and its workspace: 57 kB per unknown at the peak of bench_h2_factor on the
+///   300k sphere, holding two factorizations); all plus 10 % margin;
 /// - HSS: measured 268 MB at 2 994 unknowns at tol 1e-8, growing as N^1.5 (the ranks grow as the
 ///   square root of a cluster's size), plus 25 % margin.
 /// Estimates for a refusal with a margin, not a forecast.
-double estimated_bytes(OperatorType type, long long unknowns, bool single_precision);
+double estimated_bytes(OperatorType type, long long unknowns, const SizeOptions &o);
 
 /// Why `type` cannot take `unknowns` unknowns on this machine: its entries or a rank's block
 /// exceed the index width, or it needs more memory than the nodes have (dense and H² are split
 /// over the ranks, a node holding its ranks' shares; HSS lives on rank 0); with the size, the
-/// need and the path that can take it. Empty when it fits. (On several ranks, `-pc_type h2`
-/// gathers the H² matrix on rank 0, which this check does not foresee.)
-std::string size_refusal(OperatorType type, long long unknowns, bool single_precision, const MachineLimits &m);
+/// need and the options that can take it (another operator, single precision, Jacobi instead of
+/// PC h2, a looser H² tolerance). Empty when it fits. (On several ranks, `-pc_type h2` gathers the
+/// H² matrix on rank 0, which this check does not foresee.)
+std::string size_refusal(OperatorType type, long long unknowns, const SizeOptions &o, const MachineLimits &m);
 
 } // namespace hssbem
