@@ -1276,6 +1276,36 @@ class HssOptionTests(CliTestCase):
         self.assertNoUnusedOptions(r)
         # (Where the dense matrix does not fit, auto takes H²: test_size_limits, AutoOperator.)
 
+    def test_kelvin_problem_script_measures_the_driver_error(self):
+        # scripts/kelvin_problem.py writes Kelvin's mixed problem on a sphere and checks a result
+        # against the exact field; on sphere_l1 with dense LU its displacement error is the
+        # verification suite's (5.92e-4, tests/verification), through H² at 1e-5 the same to 1 %.
+        script = os.path.join(os.path.dirname(MESHES), "scripts", "kelvin_problem.py")
+        mesh = self.path(self.copy_mesh("sphere_l1.msh"))
+        w = subprocess.run([sys.executable, script, "write", "--mesh", mesh, "--out", self.path("kelvin.json")],
+                           capture_output=True, text=True, timeout=TIMEOUT_RUN)
+        self.assertEqual(w.returncode, 0, w.stderr)
+        errors = {}
+        for name, opts in (("dense", ("-bem_mat_type", "dense")), ("h2", ("-bem_mat_type", "h2", "-mat_h2_leaf_size", "16"))):
+            out = self.path(name + ".h5")
+            r = self.run_driver("-problem", self.path("kelvin.json"), "-o", out, *opts, timeout=TIMEOUT_RUN)
+            self.assertSucceeds(r, out)
+            c = subprocess.run([sys.executable, script, "check", "--result", out], capture_output=True, text=True, timeout=TIMEOUT_RUN)
+            self.assertEqual(c.returncode, 0, c.stderr)
+            errors[name] = json.loads(c.stdout)
+        self.assertEqual(errors["dense"]["vertices"], 998)
+        self.assertGreater(errors["dense"]["displacement_error"], 5.8e-4)
+        self.assertLess(errors["dense"]["displacement_error"], 6.0e-4)
+        self.assertGreater(errors["dense"]["traction_error"], 1e-3)  # the traction converges slower
+        self.assertLess(errors["dense"]["traction_error"], 5e-2)
+        self.assertLess(abs(errors["h2"]["displacement_error"] / errors["dense"]["displacement_error"] - 1), 0.01)
+        # a source inside the sphere is refused
+        bad = subprocess.run([sys.executable, script, "write", "--mesh", mesh, "--out", self.path("bad.json"), "--source", "0,0,0.5"],
+                             capture_output=True, text=True, timeout=TIMEOUT_RUN)
+        self.assertNotEqual(bad.returncode, 0)
+        self.assertIn("not outside the sphere", bad.stderr)
+        self.assertFalse(os.path.exists(self.path("bad.json")))
+
     def test_too_large_for_the_chosen_path_is_refused_before_allocating(self):
         # sphere_l2 (11 958 unknowns): the dense matrix and its factor need 2.29 GB, more than a
         # node of 2 GB (as -hssbem_memory_limit says); H² fits there. Refused at once.
