@@ -948,11 +948,11 @@ class ErrorPathTests(OneCleanError, CliTestCase):
         self.assertOneCleanError(r, r"PC hss: injected fault at PCApply")
 
     def test_fault_in_pc_h2(self):
-        # The H² factorization (the H² matrix's default preconditioner): set-up on 2 ranks, and
-        # its application on the rank that does not hold it.
-        r = self.run_failing("-bem_mat_type", "h2", "-hssbem_fault", "PCSetUp", np=2)
+        # The H² factorization (the H² matrix's default preconditioner on one rank, asked for on
+        # several): set-up on 2 ranks, and its application on the rank that does not hold it.
+        r = self.run_failing("-bem_mat_type", "h2", "-pc_type", "h2", "-hssbem_fault", "PCSetUp", np=2)
         self.assertOneCleanError(r, r"PC h2 set-up: injected fault at PCSetUp")
-        r = self.run_failing("-bem_mat_type", "h2", "-hssbem_fault", "PCApply", "-hssbem_fault_rank", "1", np=2)
+        r = self.run_failing("-bem_mat_type", "h2", "-pc_type", "h2", "-hssbem_fault", "PCApply", "-hssbem_fault_rank", "1", np=2)
         self.assertOneCleanError(r, r"PC h2: injected fault at PCApply \(on rank 1\)")
 
     def test_fault_in_pcsetup_two_ranks(self):
