@@ -108,7 +108,7 @@ PetscErrorCode HssbemH2WillBeFactored(MPI_Comm comm, bool *factored)
   -ksp_rtol 1e-8 bounds the true residual, on the H² one, with -pc_type h2 (the H² factorization
   at its default tolerance) on one rank and -pc_type jacobi on several: PC h2 gathers the
   distributed matrix on rank 0 and factors it there, which made it the slower choice on 2 ranks
-  (80k sphere: 51 s against 31 s; 20k disk organ with nu = 0.49: 16 s against 9 s);
+  (80k sphere: 53.8 s against 34.1 s; 20k disk organ with nu = 0.49: 15.9 s against 9.3 s);
   -pc_type lu on the dense one) and applies
   the options database, before there is a matrix, so that option errors surface before the
   expensive assembly.
