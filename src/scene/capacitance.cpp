@@ -30,6 +30,14 @@ void invert(int m, std::vector<T> &a, std::vector<T> &inv, const char *what)
   lapack::getrs('N', m, m, a.data(), m, piv.data(), inv.data(), m);
 }
 
+/// Zero row and column `slot` of the ld-leading matrix M over its first k slots.
+template <class T>
+void clear_slot(std::vector<T> &M, int ld, int k, int slot)
+{
+  std::fill_n(&M[static_cast<std::size_t>(slot) * ld], k, T(0));
+  for (int q = 0; q < k; ++q) M[slot + static_cast<std::size_t>(q) * ld] = T(0);
+}
+
 /// Removes the slots R from the inverse of C (k slots in use, leading dimension ld): with P the
 /// other slots, the inverse of C(P, P) is C⁻¹(P, P) − C⁻¹(P, R) C⁻¹(R, R)⁻¹ C⁻¹(R, P). Written
 /// over all k slots, the same rank-|R| update also takes rows and columns R to zero, which is
@@ -50,10 +58,7 @@ void drop_slots(std::vector<T> &inv, int ld, int k, const std::vector<int> &R)
   if (lapack::getrf(m, S.data(), m, piv.data()) != 0) throw std::runtime_error("capacitance matrix: the block of the dropped indices is singular");
   lapack::getrs('N', m, k, S.data(), m, piv.data(), Z.data(), m);
   gemm_over_threads<T>('N', 'N', k, k, m, T(-1), B.data(), k, Z.data(), m, T(1), inv.data(), ld);
-  for (int r : R) {
-    std::fill_n(&at(0, r), k, T(0));
-    for (int q = 0; q < k; ++q) at(r, q) = T(0);
-  }
+  for (int r : R) clear_slot(inv, ld, k, r);
 }
 
 /// Puts new indices into the empty slots A of the inverse of C (k slots in use, leading
@@ -173,8 +178,7 @@ void CapacitanceInverse::drop_indices(const std::vector<int> &drop)
   if (m_single) drop_slots(m_invf, m_ld, m_k, R);
   else drop_slots(m_inv, m_ld, m_k, R);
   for (int r : R) {
-    std::fill_n(&c(0, r), m_k, 0.0);
-    for (int q = 0; q < m_k; ++q) c(r, q) = 0.0;
+    clear_slot(m_C, m_ld, m_k, r);
     m_slot_of[m_slot_index[r]] = -1;
     m_slot_index[r] = -1;
     m_empty.push_back(r);
@@ -212,10 +216,7 @@ void CapacitanceInverse::add_indices(const std::vector<int> &add)
     if (m_single) add_slots(m_invf, m_ld, k, A, gather<float>(m_C, m_ld, all, A), gather<float>(m_C, m_ld, A, all), gather<float>(m_C, m_ld, A, A));
     else add_slots(m_inv, m_ld, k, A, gather<double>(m_C, m_ld, all, A), gather<double>(m_C, m_ld, A, all), gather<double>(m_C, m_ld, A, A));
   } catch (...) { // the caller rebuilds; leave C as it was
-    for (int q = 0; q < m; ++q) {
-      std::fill_n(&c(0, A[q]), k, 0.0);
-      for (int p = 0; p < k; ++p) c(A[q], p) = 0.0;
-    }
+    for (int a : A) clear_slot(m_C, m_ld, k, a);
     throw;
   }
   m_empty.resize(m_empty.size() - static_cast<std::size_t>(reuse));
