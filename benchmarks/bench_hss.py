@@ -420,9 +420,13 @@ def print_report(rows, logs_dir, fit_min, fit_max):
 # plot
 
 
-def plot(rows, path):
-    """Left: HSS setup, HSS solve and dense assembly + LU time vs N with N^1.5, N^1 and N^3 guide
-    lines. Right: max rank (and top front size) vs N with an N^0.5 guide line."""
+def plot(rows, path, fit_min=FIT_MIN, fit_max=FIT_MAX):
+    """Log-log scaling plot. Left: wall time to a solution against N (HSS: compression +
+    factorization + solve; H²: compression + GMRES), its set-up part, and dense assembly + LU
+    where it was run.
+    Right: memory against N (the compressed matrix plus its factorization, and the run's peak
+    RSS), beside the dense matrix's 8 N² bytes. Each measured series is labelled with its fitted
+    slope (fit range as in the report); grey lines are reference slopes."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -431,53 +435,63 @@ def plot(rows, path):
     if not groups:
         log("(nothing to plot)")
         return
-    fig, (ax, axr) = plt.subplots(1, 2, figsize=(13, 7))
+    fig, (ax, axm) = plt.subplots(1, 2, figsize=(14, 7.5))
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
-    label_tol = len({(k[2], k[3]) for k, _ in groups}) > 1
+    label_tol = len({(k[1], k[2], k[3]) for k, _ in groups}) > len({k[1] for k, _ in groups})
+    markers = {"sphere": "o", "disk": "s"}
+    names = {"hss": "HSS direct", "h2": "H² + GMRES"}
+
+    def slope_text(ns, ys):
+        sl, _, _, cnt = loglog_slope(list(zip(ns, ys)), fit_min, fit_max)
+        return f"slope {sl:.2f}" if finite(sl) and cnt >= 2 else "one point"
 
     def guide(axis, n_ref, y_ref, n_max, power, text):
         """Grey line y = y_ref (N / n_ref)^power from n_ref to n_max, labelled at its end."""
         ns = np.array([n_ref, n_max], float)
-        axis.plot(ns, y_ref * (ns / n_ref) ** power, color="0.6", lw=1, ls="-", zorder=0)
-        axis.annotate(text, (ns[-1], y_ref * (ns[-1] / n_ref) ** power), color="0.4",
+        axis.plot(ns, y_ref * (ns / n_ref) ** power, color="0.7", lw=1, ls="-", zorder=0)
+        axis.annotate(text, (ns[-1], y_ref * (ns[-1] / n_ref) ** power), color="0.45",
                       fontsize=9, xytext=(3, 0), textcoords="offset points", va="center")
 
     all_n = [r["N"] for _, g in groups for r in g]
     n_lo, n_hi = min(all_n), max(all_n)
-    first = {"setup": None, "solve": None, "dense": None, "rank": None}
-    for i, ((family, solver, tol, leaf), grp) in enumerate(groups):
-        c = colors[i % len(colors)]
-        name = f"{family} {solver}" + (f" (tol {tol}, leaf {leaf:.0f})" if label_tol else "")
+    dense_pts = {}
+    ci = 0
+    for (family, solver, tol, leaf), grp in groups:
+        c = colors[ci % len(colors)]
+        ci += 1
+        mk = markers.get(family, "^")
+        name = f"{family}, {names.get(solver, solver)}" + (f" (tol {tol}, leaf {leaf:.0f})" if label_tol else "")
         N = np.array([r["N"] for r in grp])
+        total = np.array([derived(r)["hss_total"] for r in grp])
+        mem = np.array([r["hss_memory_mb"] + (r["factor_memory_mb"] if finite(r["factor_memory_mb"]) else 0.0) for r in grp]) / 1024
+        rss = np.array([r["peak_rss_mb"] for r in grp]) / 1024
         setup = np.array([derived(r)["setup"] for r in grp])
-        solve = np.array([r["solve_s"] for r in grp])
-        dense = np.array([derived(r)["dense_total"] for r in grp])
-        rank = np.array([derived(r)["max_rank"] for r in grp])
-        front = np.array([r["top_front"] for r in grp])
-        ax.plot(N, setup, "o-", color=c, label=f"{name}: setup (compress + factor)")
-        ax.plot(N, solve, "s--", color=c, label=f"{name}: solve")
-        ok = np.isfinite(dense)
-        if ok.any():
-            ax.plot(N[ok], dense[ok], "^:", color=c, label=f"{name}: dense assembly + LU")
-        axr.plot(N, rank, "o-", color=c, label=f"{name}: max rank (row/col)")
-        if np.isfinite(front).any():
-            axr.plot(N, front, "s--", color=c, label=f"{name}: top front")
-        # guide lines start at the smallest-N point of the first group that has the series
-        for key, ys, msk in (("setup", setup, np.isfinite(setup)), ("solve", solve, np.isfinite(solve)),
-                             ("dense", dense, ok), ("rank", rank, np.isfinite(rank))):
-            if first[key] is None and msk.any():
-                j = int(np.flatnonzero(msk)[0])
-                first[key] = (N[j], ys[j])
-    if first["setup"]:
-        guide(ax, *first["setup"], n_hi, 1.5, r"$N^{1.5}$")
-    if first["solve"]:
-        guide(ax, *first["solve"], n_hi, 1.0, r"$N$")
-    if first["dense"]:
-        n_dense_hi = max(r["N"] for _, g in groups for r in g if finite(derived(r)["dense_total"]))
-        guide(ax, *first["dense"], max(n_dense_hi, 2 * first["dense"][0]), 3.0, r"$N^3$")
-    if first["rank"]:
-        guide(axr, *first["rank"], n_hi, 0.5, r"$N^{0.5}$")
-    for a, title, ylabel in ((ax, "time vs N", "wall time [s]"), (axr, "rank vs N", "rank / front size")):
+        ax.plot(N, total, mk + "-", color=c, label=f"{name}, total: {slope_text(N, total)}")
+        ax.plot(N, setup, mk + ":", color=c, alpha=0.6, mfc="none",
+                label=f"{name}, set-up ({'compression + factorization' if solver == 'hss' else 'compression'}): {slope_text(N, setup)}")
+        what = "matrix + factorization" if solver == "hss" else "matrix"
+        axm.plot(N, mem, mk + "-", color=c, label=f"{name}, {what}: {slope_text(N, mem)}")
+        axm.plot(N, rss, mk + ":", color=c, alpha=0.6, label=f"{name}, peak RSS: {slope_text(N, rss)}")
+        for r in grp:
+            d = derived(r)["dense_total"]
+            if finite(d):
+                dense_pts.setdefault(family, {})[r["N"]] = d
+    for family, pts in dense_pts.items():
+        ns = sorted(pts)
+        ys = [pts[n] for n in ns]
+        ax.plot(ns, ys, markers.get(family, "^") + "--", color="k", mfc="none",
+                label=f"{family}, dense assembly + LU: {slope_text(ns, ys)}")
+    nd = np.geomspace(n_lo, n_hi, 20)
+    axm.plot(nd, 8.0 * nd ** 2 / 2 ** 30, "k--", label="dense matrix, 8 N² bytes: slope 2")
+    axm.axhline(24, color="tab:red", lw=1, ls="-.")
+    axm.annotate("24 GiB (this machine)", (n_lo, 24), color="tab:red", fontsize=9, xytext=(2, 3), textcoords="offset points")
+    first_total = min(((g[0]["N"], derived(g[0])["hss_total"]) for _, g in groups), key=lambda p: p[0])
+    guide(ax, *first_total, n_hi, 1.0, r"$N$")
+    if dense_pts:
+        fam, pts = next(iter(dense_pts.items()))
+        n0 = min(pts)
+        guide(ax, n0, pts[n0], n_hi, 3.0, r"$N^3$")
+    for a, title, ylabel in ((ax, "time to a solution", "wall time [s]"), (axm, "memory", "memory [GiB]")):
         a.set_xscale("log")
         a.set_yscale("log")
         a.set_xlabel("N (unknowns)")
@@ -485,15 +499,14 @@ def plot(rows, path):
         a.set_title(title)
         a.set_xlim(n_lo / 1.3, n_hi * 1.6)
         a.grid(True, which="both", alpha=0.3)
-        # below the axes, so that it never hides data points
-        a.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2)
-    solvers = sorted({k[1] for k, _ in groups})
-    what = {"hss": "HSS direct solver (bench_hss)", "h2": "H² + GMRES/Jacobi (bench_h2)"}
-    fig.suptitle(f"hssbem: {' and '.join(what.get(x, x) for x in solvers)} vs dense assembly + LU; "
-                 "grey lines: reference slopes", fontsize=10)
+        a.legend(fontsize=7.5, loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=1)
+    ax.set_ylim(top=max(ax.get_ylim()[1], 1e4) if dense_pts else None)
+    axm.set_ylim(1e-2, 1e3)
+    fig.suptitle("hssbem: time and memory against N (2 cores; slopes fitted for "
+                 f"{fit_min:,} ≤ N ≤ {fit_max:,}; grey lines: reference slopes)", fontsize=10)
     fig.tight_layout()
     os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
-    fig.savefig(path, dpi=120)
+    fig.savefig(path, dpi=110)
     plt.close(fig)
     log(f"\nplot written to {path}")
 
@@ -592,7 +605,7 @@ def main():
     ap.add_argument("--append", action="store_true",
                     help="append to an existing CSV (without it a new CSV is started and an existing one is "
                          "renamed to FILE.bak)")
-    ap.add_argument("--plot", metavar="FILE.png", help="write a log-log plot of times and ranks vs N")
+    ap.add_argument("--plot", metavar="FILE.png", help="write a log-log plot of time and memory against N, with slopes")
     ap.add_argument("--mesh-dir", default=os.path.join(REPO, "build", "bench-meshes"),
                     help="mesh cache directory (default: build/bench-meshes)")
     ap.add_argument("--timeout", type=float, default=7200,
@@ -602,19 +615,21 @@ def main():
                          '(a single word: --extra=--dense)')
     ap.add_argument("--fit-min", type=int, default=FIT_MIN, help=f"slope fit: smallest N (default: {FIT_MIN})")
     ap.add_argument("--fit-max", type=int, default=FIT_MAX, help=f"slope fit: largest N (default: {FIT_MAX})")
-    ap.add_argument("--from-csv", metavar="FILE",
-                    help="run nothing: only print the tables and slopes (and --plot) of this CSV")
+    ap.add_argument("--from-csv", metavar="FILE[,FILE...]",
+                    help="run nothing: only print the tables and slopes (and --plot) of these CSVs, "
+                         "e.g. an HSS and an H² sweep in one plot")
     args = ap.parse_args()
     if args.bench is None:
         prog = SOLVERS[args.solver]
         args.bench = os.environ.get(prog.upper(), os.path.join(REPO, "build", "bin", prog))
 
     if args.from_csv:
-        rows = read_csv(args.from_csv)
-        log(f"# {len(rows)} rows from {args.from_csv}")
-        print_report(rows, logs_dir_for(args.from_csv), args.fit_min, args.fit_max)
+        files = [f for f in args.from_csv.split(",") if f]
+        rows = [r for f in files for r in read_csv(f)]
+        log(f"# {len(rows)} rows from {', '.join(files)}")
+        print_report(rows, logs_dir_for(files[0]), args.fit_min, args.fit_max)
         if args.plot:
-            plot(rows, args.plot)
+            plot(rows, args.plot, args.fit_min, args.fit_max)
         return 0
 
     if not (os.path.isfile(args.bench) and os.access(args.bench, os.X_OK)):
@@ -635,7 +650,7 @@ def main():
     rows = read_csv(args.csv)
     print_report(rows, logs_dir_for(args.csv), args.fit_min, args.fit_max)
     if args.plot:
-        plot(rows, args.plot)
+        plot(rows, args.plot, args.fit_min, args.fit_max)
     if failures:
         log(f"\n{len(failures)} failed run(s):")
         for what, lf in failures:

@@ -60,4 +60,25 @@ double max_abs(const DenseMatrix &M)
   return v;
 }
 
+double largest_col_norm(const DenseMatrix &M)
+{
+  double big = 0;
+  for (int j = 0; j < M.n; ++j) {
+    double s = 0;
+    for (int i = 0; i < M.m; ++i) s += M(i, j) * M(i, j);
+    big = std::max(big, s);
+  }
+  return std::sqrt(big);
+}
+
+double largest_row_norm(const DenseMatrix &M)
+{
+  std::vector<double> r(static_cast<std::size_t>(M.m), 0.0);
+  for (int j = 0; j < M.n; ++j)
+    for (int i = 0; i < M.m; ++i) r[static_cast<std::size_t>(i)] += M(i, j) * M(i, j);
+  double big = 0;
+  for (const double v : r) big = std::max(big, v);
+  return std::sqrt(big);
+}
+
 } // namespace hssbem::dense

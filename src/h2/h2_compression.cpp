@@ -5,6 +5,7 @@
 #include "hssbem/compress/kernel_blocks.hpp"
 #include "hssbem/compress/skeletonizer.hpp"
 #include "hssbem/core/blas_threads.hpp"
+#include "hssbem/core/dense_ops.hpp"
 #include "hssbem/core/phase.hpp"
 #include "hssbem/core/timer.hpp"
 #include "hssbem/h2/h2_distributed.hpp"
@@ -233,18 +234,26 @@ H2Matrix compress_bem_operator_h2(const BemOperator &op, const H2Options &option
     const std::vector<std::vector<int>> rigid = rigid_term_leaves(op, tree);
     for_each_cluster(held_leaves, [&](int a) {
       const std::vector<int> rows = leaf_indices(tree, a, 3);
+      std::vector<H2Block> &near = K.near_blocks(a);
       for (int b : part.near[a]) {
         const std::vector<int> cols = leaf_indices(tree, b, w);
         H2Block B;
         B.col_cluster = b;
         B.M = DenseMatrix(static_cast<int>(rows.size()), static_cast<int>(cols.size()));
         skel->block(rows, cols, B.M.data(), 1, B.M.ld());
+        near.push_back(std::move(B));
+      }
+      // The low-rank near blocks are truncated relative to the leaf's own block (a, a), the
+      // largest part of its rows: a weak block between leaves a little apart need not keep
+      // digits that the rows' sums do not have.
+      const auto self = std::find_if(near.begin(), near.end(), [a](const H2Block &B) { return B.col_cluster == a; });
+      const double row_scale = self != near.end() ? dense::largest_row_norm(self->M) : 0.0, col_scale = self != near.end() ? dense::largest_col_norm(self->M) : 0.0;
+      for (H2Block &B : near) {
         // Blocks that will receive rigid-body terms stay dense (the diagonal ones, and those of
         // moved collocation points whose triangle reaches into another leaf).
-        const bool gets_rigid = std::binary_search(rigid[a].begin(), rigid[a].end(), b);
-        if (options.single_precision && options.low_rank_near && !gets_rigid) B.compress(options.rel_tol / 30);
+        const bool gets_rigid = std::binary_search(rigid[a].begin(), rigid[a].end(), B.col_cluster);
+        if (options.single_precision && options.low_rank_near && !gets_rigid) B.compress(options.rel_tol / 30, row_scale, col_scale);
         else if (options.single_precision) B.demote();
-        K.near_blocks(a).push_back(std::move(B));
       }
     });
   });

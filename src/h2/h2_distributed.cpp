@@ -289,8 +289,10 @@ struct Packer {
     put_all(B.M.a);
     put_all(B.single);
     put<int>(B.rank);
-    put_all(B.lr_a);
-    put_all(B.lr_w);
+    put<int>(B.lr_rows ? 1 : 0);
+    put_all(B.lr_s);
+    put_all(B.lr_slot);
+    put_all(B.lr_t);
   }
 };
 
@@ -338,8 +340,10 @@ struct Reader {
     B.M.a = get_all<double>();
     B.single = get_all<float>();
     B.rank = get<int>();
-    B.lr_a = get_all<float>();
-    B.lr_w = get_all<float>();
+    B.lr_rows = get<int>() != 0;
+    B.lr_s = get_all<float>();
+    B.lr_slot = get_all<int>();
+    B.lr_t = get_all<float>();
     return B;
   }
 };

@@ -2,6 +2,7 @@
 // dense operator.
 #include "hssbem/bem/bem_operator.hpp"
 #include "hssbem/compress/compression.hpp"
+#include "hssbem/core/dense_ops.hpp"
 #include "hssbem/h2/h2_compression.hpp"
 #include "hss_test_helpers.hpp"
 #include "test_shapes.hpp"
@@ -157,6 +158,37 @@ TEST(H2Accuracy, SinglePrecisionBlocksHalveTheMemory)
   EXPECT_NEAR(blocks_s / blocks_d, 0.5, 0.02);
 }
 
+TEST(H2Accuracy, LowRankSinglePrecisionBlocksKeepTheTolerance)
+{
+  // The default storage (single precision, far and near blocks in low-rank form, the near ones
+  // truncated against their leaf's own block) stays within 10·tol of dense K, takes no more
+  // than the dense single-precision blocks (less at a loose tolerance), and does hold low-rank
+  // near blocks.
+  auto L = load("cardioid_832.msh");
+  const auto dense = dense_k(*L->op, 7);
+  for (const double tol : {1e-3, 1e-5}) {
+    H2Options o;
+    o.rel_tol = tol;
+    o.leaf_size = 16;
+    o.pressure_columns = true;
+    o.single_precision = true;
+    const H2Matrix K = compress_bem_operator_h2(*L->op, o);
+    o.low_rank_far = o.low_rank_near = false;
+    const H2Matrix Ks = compress_bem_operator_h2(*L->op, o);
+    long low_rank_near = 0;
+    for (int c : K.tree().leaves())
+      for (const H2Block &B : K.near_blocks(c)) low_rank_near += B.is_low_rank() && B.rank < std::min(B.M.m, B.M.n);
+    const double e = matvec_error(K, dense, 7), es = matvec_error(Ks, dense, 7);
+    const double blocks = K.stats().far_bytes + K.stats().near_bytes, blocks_s = Ks.stats().far_bytes + Ks.stats().near_bytes;
+    std::printf("tol %.0e: error %.2e (dense single blocks %.2e), blocks %.2f MB against %.2f MB, %ld low-rank near blocks\n", tol, e, es, blocks / 1e6,
+                blocks_s / 1e6, low_rank_near);
+    EXPECT_LE(e, 10 * tol);
+    EXPECT_LE(blocks, blocks_s); // a block takes the low-rank form only where it saves memory
+    if (tol >= 1e-3) EXPECT_LT(blocks, 0.85 * blocks_s); // at 1e-5 this mesh is too small to save much (3 %)
+    EXPECT_GT(low_rank_near, 0);
+  }
+}
+
 TEST(H2Block, SingleBlockProductWidensEachEntry)
 {
   // The one-column product of a single-precision block (its own kernel) against the widened
@@ -231,6 +263,95 @@ TEST(H2Block, LowRankBlockMatchesItsEntries)
   R.compress(1e-6);
   EXPECT_FALSE(R.is_low_rank());
   EXPECT_TRUE(R.is_single());
+}
+
+TEST(H2Block, InterpolativeFormStoresNoUnitRows)
+{
+  // The low-rank form keeps the skeleton side's true entries and only the redundant rows of the
+  // interpolation matrix: rank·(m + n − rank) floats and one slot per position of the other
+  // side. Both orientations (a column ID when n ≤ m, a row ID otherwise).
+  std::mt19937 gen(12);
+  std::uniform_real_distribution<double> U01;
+  for (const auto [m, n] : {std::pair{80, 50}, std::pair{50, 80}}) {
+    H2Block B;
+    B.M = DenseMatrix(m, n);
+    std::vector<Vec3> x(m), y(n);
+    for (Vec3 &p : x) p = {U01(gen), U01(gen), U01(gen)};
+    for (Vec3 &p : y) p = {2.5 + U01(gen), U01(gen), U01(gen)};
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < m; ++i) B.M(i, j) = 1.0 / norm(x[i] - y[j]);
+    const DenseMatrix ref = B.M;
+    B.compress(1e-7);
+    ASSERT_TRUE(B.is_low_rank());
+    const int k = B.rank, other = n <= m ? n : m;
+    EXPECT_EQ(B.lr_rows, n > m);
+    EXPECT_GT(k, 5);             // a real decomposition, not a tiny one
+    EXPECT_LT(k, std::min(m, n)); // and it did compress
+    EXPECT_EQ(B.bytes(), sizeof(float) * static_cast<std::size_t>(k) * (m + n - k) + sizeof(int) * static_cast<std::size_t>(other));
+    // the skeleton side holds true entries (rounded to float)
+    int skeletons = 0;
+    for (int p = 0; p < other; ++p) {
+      if (B.lr_slot[p] < 0) continue;
+      ++skeletons;
+      for (int q = 0; q < (n <= m ? m : n); ++q) {
+        const int i = n <= m ? q : p, j = n <= m ? p : q;
+        ASSERT_EQ(B.entry(i, j), static_cast<double>(static_cast<float>(ref(i, j))));
+      }
+    }
+    EXPECT_EQ(skeletons, k);
+  }
+}
+
+TEST(H2Block, ScaleFloorTruncatesAgainstAReferenceNorm)
+{
+  // compress(rel_tol, row_scale, col_scale): pivots below rel_tol·scale are dropped even where
+  // the block alone would keep them, so a block that is weak against the reference keeps a lower
+  // rank (within rel_tol·scale of its entries), and one entirely below it keeps rank 0.
+  std::mt19937 gen(13);
+  std::uniform_real_distribution<double> U01;
+  std::normal_distribution<double> N01;
+  for (const auto [m, n] : {std::pair{70, 40}, std::pair{40, 70}}) {
+    DenseMatrix A(m, n);
+    std::vector<Vec3> x(m), y(n);
+    for (Vec3 &p : x) p = {U01(gen), U01(gen), U01(gen)};
+    for (Vec3 &p : y) p = {2 + U01(gen), U01(gen), U01(gen)};
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < m; ++i) A(i, j) = 1.0 / norm(x[i] - y[j]);
+    const bool by_cols = n <= m;
+    const double p1 = by_cols ? dense::largest_col_norm(A) : dense::largest_row_norm(A);
+    const auto compressed = [&](double scale) {
+      H2Block B;
+      B.M = A;
+      B.compress(1e-8, by_cols ? 0.0 : scale, by_cols ? scale : 0.0);
+      return B;
+    };
+    const H2Block own = compressed(0), floored = compressed(1e3 * p1), wrong_side = [&] {
+      H2Block B;
+      B.M = A;
+      B.compress(1e-8, by_cols ? 1e3 * p1 : 0.0, by_cols ? 0.0 : 1e3 * p1); // the other side's scale is not used
+      return B;
+    }();
+    ASSERT_TRUE(own.is_low_rank() && floored.is_low_rank() && wrong_side.is_low_rank());
+    EXPECT_EQ(wrong_side.rank, own.rank);
+    EXPECT_LT(floored.rank, own.rank - 3);
+    EXPECT_GT(floored.rank, 0);
+    const auto max_error = [&](const H2Block &B) {
+      double e = 0;
+      for (int j = 0; j < n; ++j)
+        for (int i = 0; i < m; ++i) e = std::max(e, std::abs(B.entry(i, j) - A(i, j)));
+      return e;
+    };
+    const double err = max_error(floored);
+    EXPECT_LE(err, 1e-8 * 1e3 * p1 * std::sqrt(double(std::min(m, n)))) << "rank " << floored.rank;
+    EXPECT_GT(err, 10 * max_error(own)); // it did drop what the block alone would have kept
+    const H2Block gone = compressed(1e9 * p1);
+    EXPECT_EQ(gone.rank, 0);
+    EXPECT_EQ(gone.entry(m - 1, n - 1), 0.0);
+    std::vector<double> X(n, 1.0), Y(m, 2.0), buf;
+    gone.multiply_add(X.data(), n, Y.data(), m, 1, buf);
+    EXPECT_EQ(Y, std::vector<double>(m, 2.0));
+    EXPECT_LT(gone.bytes(), sizeof(float) * 8);
+  }
 }
 
 TEST(H2Block, TransposedProductInEveryForm)

@@ -46,22 +46,23 @@ TEST(SizeLimits, DenseBeyondMemoryIsRefused)
 TEST(SizeLimits, H2SuggestsSinglePrecisionThenJacobiThenALooserToleranceThenNothing)
 {
   const SizeOptions dbl{false, 1e-5, true}, single{true, 1e-5, true}, jacobi{true, 1e-5, false};
-  // Double precision with PC h2: 150k fits 24 GiB (12.8 GB); 320k (27.3 GB) does in single.
+  // Double precision with PC h2: 150k fits 24 GiB (10.8 GB); 400k (27.9 GB) does in single (20.6 GB).
   EXPECT_EQ(size_refusal(OperatorType::H2, 150000, dbl, machine(24)), "");
-  const std::string s1 = size_refusal(OperatorType::H2, 320000, dbl, machine(24));
+  const std::string s1 = size_refusal(OperatorType::H2, 400000, dbl, machine(24));
   EXPECT_NE(s1.find("use -mat_h2_single_precision"), std::string::npos) << s1;
-  EXPECT_EQ(size_refusal(OperatorType::H2, 320000, single, machine(24)), "");
-  // 500k in single precision with PC h2 (30.1 GB): Jacobi leaves out the factorization (15.8 GB).
-  const std::string s2 = size_refusal(OperatorType::H2, 500000, single, machine(24));
+  EXPECT_EQ(size_refusal(OperatorType::H2, 400000, single, machine(24)), "");
+  // 600k in single precision with PC h2 (30.5 GB): Jacobi leaves out the factorization (13.4 GB).
+  const std::string s2 = size_refusal(OperatorType::H2, 600000, single, machine(24));
   EXPECT_NE(s2.find("use -pc_type jacobi"), std::string::npos) << s2;
-  EXPECT_EQ(size_refusal(OperatorType::H2, 500000, jacobi, machine(24)), "");
-  // One million with Jacobi at 1e-5 (31.6 GB): at 1e-4 (23.1 GB) it fits.
-  const std::string s3 = size_refusal(OperatorType::H2, 1000000, jacobi, machine(24));
-  EXPECT_NE(s3.find("needs about 31.6 GB per node"), std::string::npos) << s3;
+  EXPECT_EQ(size_refusal(OperatorType::H2, 600000, jacobi, machine(24)), "");
+  // One million with Jacobi at 1e-5 fits (21.6 GB); 1.4 million (29.6 GB) at 1e-4 (21.7 GB).
+  EXPECT_EQ(size_refusal(OperatorType::H2, 1000000, jacobi, machine(24)), "");
+  const std::string s3 = size_refusal(OperatorType::H2, 1400000, jacobi, machine(24));
+  EXPECT_NE(s3.find("needs about 29.6 GB per node"), std::string::npos) << s3;
   EXPECT_NE(s3.find("use -mat_h2_rel_tol 1e-4"), std::string::npos) << s3;
-  EXPECT_EQ(size_refusal(OperatorType::H2, 1000000, SizeOptions{true, 1e-4, false}, machine(24)), "");
+  EXPECT_EQ(size_refusal(OperatorType::H2, 1400000, SizeOptions{true, 1e-4, false}, machine(24)), "");
   // From double precision with PC h2, every step is named at once.
-  const std::string s4 = size_refusal(OperatorType::H2, 1000000, dbl, machine(24));
+  const std::string s4 = size_refusal(OperatorType::H2, 1400000, dbl, machine(24));
   EXPECT_NE(s4.find("use -mat_h2_single_precision -pc_type jacobi -mat_h2_rel_tol 1e-4"), std::string::npos) << s4;
   const std::string none = size_refusal(OperatorType::H2, 2000000, jacobi, machine(24));
   EXPECT_NE(none.find("no operator path fits"), std::string::npos) << none;
@@ -72,7 +73,7 @@ TEST(SizeLimits, H2SuggestsSinglePrecisionThenJacobiThenALooserToleranceThenNoth
 
 TEST(SizeLimits, H2SplitsOverTheRanksNodesButHssDoesNot)
 {
-  // 2 000 000 unknowns in single precision (63 GB) do not fit one 24 GiB node; the distributed
+  // 2 000 000 unknowns in single precision (41 GB) do not fit one 24 GiB node; the distributed
   // H² matrix spread over 8 nodes does, but not 8 ranks on one node. HSS stays on rank 0.
   const SizeOptions jacobi{true, 1e-5, false};
   EXPECT_NE(size_refusal(OperatorType::H2, 2000000, jacobi, machine(24)), "");

@@ -25,5 +25,9 @@ DenseMatrix vcat(const DenseMatrix &A, const DenseMatrix &B);
 DenseMatrix product(const DenseMatrix &A, char ta, const DenseMatrix &B, char tb);
 /// max |M(i, j)| (0 for an empty matrix).
 double max_abs(const DenseMatrix &M);
+/// The largest Euclidean norm of one of M's columns (0 for an empty matrix).
+double largest_col_norm(const DenseMatrix &M);
+/// The largest Euclidean norm of one of M's rows (0 for an empty matrix).
+double largest_row_norm(const DenseMatrix &M);
 
 } // namespace hssbem::dense

@@ -27,9 +27,11 @@ struct SizeOptions {
 
 /// Bytes the operator `type` needs at its peak for `unknowns` unknowns (whole run):
 /// - dense: the matrix and its LU factor, 16 N² (PETSc's dense LU and ScaLAPACK keep both);
-/// - H²: the matrix, 28.7 kB per unknown with single-precision blocks at tol 1e-5 (the disk
-///   organ at 20k, the largest of the sweep: 20–22 kB on spheres) times (1e-5 / tol)^0.135
-///   (measured from 1e-4 to 1e-5: 14.8, 17.5 and 20.1 kB on a 20k sphere) and 1.8 times that in
+/// - H²: the matrix, 23.8 kB per unknown with single-precision blocks at tol 1e-5 up to 40 000
+///   unknowns (the disk organ at 40k, the largest of the sweep: 18.6–19.2 kB on spheres), falling
+///   as (N / 40 000)^-0.06 beyond (the disk organ: 22.4, 21.6 and 21.0 kB at 80k, 160k and 300k),
+///   times (1e-5 / tol)^0.135 (measured from 1e-4 to 1e-5: 14.8, 17.5 and 20.1 kB on a 20k
+///   sphere) and 1.8 times that in
 ///   double precision; PC h2's factorization adds 26 kB (its factors, 9.6 kB per unknown at its
 ///   default 3e-3, and its workspace: 57 kB per unknown at the peak of bench_h2_factor on the
 ///   300k sphere, holding two factorizations); all plus 10 % margin;

@@ -35,12 +35,15 @@ struct H2Options {
   /// relative 6e-8, harmless for rel_tol ≥ 1e-6). Bases stay in double.
   bool single_precision = false;
   /// With single_precision: store each far block in low-rank form (an ID at rel_tol / 10, the
-  /// factors in single precision) when that takes less memory. Measured on a 20k sphere at
-  /// 1e-5: far blocks 0.44 of their dense size, sampled error of K unchanged to 1 %.
+  /// skeleton side's entries and the interpolation weights in single precision, no unit rows;
+  /// H2Block) when that takes less memory. Measured on a 20k sphere at 1e-5: far blocks 0.44 of
+  /// their dense size, sampled error of K unchanged to 1 %.
   bool low_rank_far = true;
-  /// With single_precision: likewise for the near blocks between different leaves (at
-  /// rel_tol / 30; those that receive rigid-body terms stay dense). Measured on the 20k sphere at
-  /// 1e-5: near blocks 253 -> 211 MB, sampled error of K unchanged (at rel_tol / 10: 199 MB, +4 %).
+  /// With single_precision: likewise for the near blocks between different leaves, at rel_tol / 30
+  /// of the larger of the block's own largest row norm and that of its row leaf's diagonal block
+  /// (those that receive rigid-body terms stay dense). Measured at 1e-5 with the far blocks'
+  /// change above (20k unknowns): near blocks 301 -> 236 MB (disk organ) and 213 -> 172 MB
+  /// (sphere), sampled error of K +0.1 % and +3 %.
   bool low_rank_near = true;
 };
 

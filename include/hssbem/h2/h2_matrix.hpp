@@ -26,31 +26,42 @@ namespace hssbem {
 /// One stored block of an H² matrix: far (skeleton × skeleton) or near (leaf × leaf). M holds
 /// its dimensions always, and its entries when the block is dense in double precision. To save
 /// memory a block may instead be dense in single precision (`single`, column-major with M's
-/// dimensions), or of low rank in single precision: B ≈ A Wᵀ with A (M.m × rank) and W
-/// (M.n × rank) column-major in `lr_a`, `lr_w` (a far block of well-separated clusters has
-/// numerical rank well below its dimensions). Products always compute in double: stored floats are
+/// dimensions), or of low rank in single precision, kept as its interpolative decomposition
+/// (a far block of well-separated clusters has numerical rank well below its dimensions):
+///   column ID (lr_rows false):  B ≈ B(:, S) Pᵀ,   row ID (lr_rows true):  B ≈ P B(S, :),
+/// where the skeleton side B(:, S) (or B(S, :)ᵀ) is stored in `lr_s` (len × rank, column-major,
+/// len = M.m for a column ID, M.n for a row ID) and P (other × rank, other the remaining
+/// dimension) has a unit row at each skeleton position, which is not stored: lr_slot[p] = t for
+/// the skeleton position p (P(p, :) = e_t), −1 − j for a redundant one (P(p, :) = row j of lr_t,
+/// (other − rank) × rank, column-major). Storage rank·(m + n − rank) floats plus `other` slots,
+/// below m·n whenever rank < min(m, n). Products always compute in double: stored floats are
 /// widened on the fly, so only the storage rounds (relative 6e-8 per stored number).
 struct H2Block {
   int col_cluster = -1;
   DenseMatrix M;
   std::vector<float> single;
-  int rank = -1; ///< ≥ 0: low rank, in lr_a and lr_w
-  std::vector<float> lr_a, lr_w;
+  int rank = -1;       ///< ≥ 0: low rank, in lr_s, lr_slot, lr_t
+  bool lr_rows = false; ///< the ID is of rows (P on the row side)
+  std::vector<float> lr_s, lr_t;
+  std::vector<int> lr_slot;
 
   bool is_single() const { return !single.empty(); }
   bool is_low_rank() const { return rank >= 0; }
   /// Move the entries to single precision (no-op for an empty block or one not dense in double).
   void demote();
-  /// From dense double entries: the low-rank form of the block (a column or row ID at relative
-  /// tolerance rel_tol, from the smaller side) when it takes less memory than single precision,
-  /// else single precision.
-  void compress(double rel_tol);
+  /// From dense double entries: the low-rank form of the block (an ID from the smaller side:
+  /// columns when M.n ≤ M.m, else rows) when it takes less memory than single precision, else
+  /// single precision. The ID keeps pivots above rel_tol · max(p₁, scale), p₁ its largest pivot
+  /// (the largest column norm for a column ID, row norm for a row ID) and scale = col_scale or
+  /// row_scale, a reference norm of the block's columns or rows elsewhere in the matrix (0: the
+  /// tolerance is relative to the block alone). A block below rel_tol · scale keeps rank 0.
+  void compress(double rel_tol, double row_scale = 0, double col_scale = 0);
   double entry(int i, int j) const;
   /// Add v to entry (i, j) (a dense block only: throws std::logic_error for a low-rank one).
   void add(int i, int j, double v);
   /// Set every stored number to zero (the block then contributes nothing).
   void clear();
-  std::size_t bytes() const { return M.bytes() + (single.size() + lr_a.size() + lr_w.size()) * sizeof(float); }
+  std::size_t bytes() const { return M.bytes() + (single.size() + lr_s.size() + lr_t.size()) * sizeof(float) + lr_slot.size() * sizeof(int); }
   /// The entries in double: M's data, or the stored form expanded into buf.
   const double *data(std::vector<double> &buf) const;
   /// Y += B X for nrhs columns (X: M.n × nrhs, Y: M.m × nrhs, column-major). A single-precision
