@@ -471,7 +471,10 @@ def plot(rows, path, fit_min=FIT_MIN, fit_max=FIT_MAX):
                 label=f"{name}, set-up ({'compression + factorization' if solver == 'hss' else 'compression'}): {slope_text(N, setup)}")
         what = "matrix + factorization" if solver == "hss" else "matrix"
         axm.plot(N, mem, mk + "-", color=c, label=f"{name}, {what}: {slope_text(N, mem)}")
-        axm.plot(N, rss, mk + ":", color=c, alpha=0.6, label=f"{name}, peak RSS: {slope_text(N, rss)}")
+        alone = ~np.isfinite(np.array([derived(r)["dense_total"] for r in grp]))  # a dense run in the same process sets its peak
+        if alone.any():
+            axm.plot(N[alone], rss[alone], mk + ":", color=c, alpha=0.6,
+                     label=f"{name}, peak RSS (runs without dense): {slope_text(N[alone], rss[alone])}")
         for r in grp:
             d = derived(r)["dense_total"]
             if finite(d):
