@@ -81,7 +81,7 @@ double estimated_bytes(OperatorType type, long long unknowns, const SizeOptions 
   case OperatorType::H2: {
     const double tol = o.h2_rel_tol > 0 ? o.h2_rel_tol : 1e-5;
     const double matrix = 23.8e3 * std::pow(std::max(n, 4e4) / 4e4, -0.06) * std::pow(1e-5 / tol, 0.135) * (o.single_precision ? 1.0 : 1.8);
-    return 1.1 * n * (matrix + (o.h2_factored ? 26e3 : 0.0));
+    return 1.1 * n * (matrix + (o.h2_factored ? 40e3 : 0.0));
   }
   case OperatorType::Hss: return 1.25 * 268e6 * std::pow(n / 2994.0, 1.5);
   }

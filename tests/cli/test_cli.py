@@ -1316,15 +1316,15 @@ class HssOptionTests(CliTestCase):
         self.assertErrorLine(r)
         self.assertNotRegex(r.output, r"solved", r.describe())
         r = self.run_problem("problem.json", "-bem_mat_type", "h2", "-mat_h2_single_precision", "false",
-                             "-hssbem_memory_limit", "0.8e9")
-        # double precision with PC h2 (the default on one rank): 0.906 GB; single precision fits
-        self.assertFailsCleanly(r, r"the h2 operator of 11958 unknowns needs about 0\.906 GB per node, "
-                                   r"more than the 0\.8 GB of memory there; use -mat_h2_single_precision")
-        # on 0.6 GB single precision with PC h2 (0.655 GB) is not enough: Jacobi leaves out the
+                             "-hssbem_memory_limit", "1e9")
+        # double precision with PC h2 (the default on one rank): 1.09 GB; single precision fits
+        self.assertFailsCleanly(r, r"the h2 operator of 11958 unknowns needs about 1\.09 GB per node, "
+                                   r"more than the 1 GB of memory there; use -mat_h2_single_precision")
+        # on 0.7 GB single precision with PC h2 (0.839 GB) is not enough: Jacobi leaves out the
         # factorization (0.313 GB)
         r = self.run_problem("problem.json", "-bem_mat_type", "h2", "-mat_h2_single_precision", "false",
-                             "-hssbem_memory_limit", "0.6e9")
-        self.assertFailsCleanly(r, r"needs about 0\.906 GB per node, more than the 0\.6 GB of memory there; "
+                             "-hssbem_memory_limit", "0.7e9")
+        self.assertFailsCleanly(r, r"needs about 1\.09 GB per node, more than the 0\.7 GB of memory there; "
                                    r"use -mat_h2_single_precision -pc_type jacobi")
         r = self.run_problem("problem.json", "-bem_mat_type", "h2", "-mat_h2_single_precision", "false", "-pc_type", "jacobi",
                              "-hssbem_memory_limit", "0.5e9")

@@ -46,12 +46,12 @@ TEST(SizeLimits, DenseBeyondMemoryIsRefused)
 TEST(SizeLimits, H2SuggestsSinglePrecisionThenJacobiThenALooserToleranceThenNothing)
 {
   const SizeOptions dbl{false, 1e-5, true}, single{true, 1e-5, true}, jacobi{true, 1e-5, false};
-  // Double precision with PC h2: 150k fits 24 GiB (10.8 GB); 400k (27.9 GB) does in single (20.6 GB).
+  // Double precision with PC h2: 150k fits 24 GiB (13.1 GB); 350k (29.9 GB) does in single (23.4 GB).
   EXPECT_EQ(size_refusal(OperatorType::H2, 150000, dbl, machine(24)), "");
-  const std::string s1 = size_refusal(OperatorType::H2, 400000, dbl, machine(24));
+  const std::string s1 = size_refusal(OperatorType::H2, 350000, dbl, machine(24));
   EXPECT_NE(s1.find("use -mat_h2_single_precision"), std::string::npos) << s1;
-  EXPECT_EQ(size_refusal(OperatorType::H2, 400000, single, machine(24)), "");
-  // 600k in single precision with PC h2 (30.5 GB): Jacobi leaves out the factorization (13.4 GB).
+  EXPECT_EQ(size_refusal(OperatorType::H2, 350000, single, machine(24)), "");
+  // 600k in single precision with PC h2 (39.8 GB): Jacobi leaves out the factorization (13.4 GB).
   const std::string s2 = size_refusal(OperatorType::H2, 600000, single, machine(24));
   EXPECT_NE(s2.find("use -pc_type jacobi"), std::string::npos) << s2;
   EXPECT_EQ(size_refusal(OperatorType::H2, 600000, jacobi, machine(24)), "");

@@ -31,10 +31,10 @@ struct SizeOptions {
 ///   unknowns (the disk organ at 40k, the largest of the sweep: 18.6–19.2 kB on spheres), falling
 ///   as (N / 40 000)^-0.06 beyond (the disk organ: 22.4, 21.6 and 21.0 kB at 80k, 160k and 300k),
 ///   times (1e-5 / tol)^0.135 (measured from 1e-4 to 1e-5: 14.8, 17.5 and 20.1 kB on a 20k
-///   sphere) and 1.8 times that in
-///   double precision; PC h2's factorization adds 26 kB (its factors, 9.6 kB per unknown at its
-///   default 3e-3, and its workspace: 57 kB per unknown at the peak of bench_h2_factor on the
-///   300k sphere, holding two factorizations); all plus 10 % margin;
+///   sphere) and 1.8 times that in double precision; PC h2's factorization adds 40 kB (its
+///   factors, workspace and the rest of the driver at its peak: 300k through the driver with
+///   GMRES + PC h2 peaked at 60.7 kB per unknown on the disk organ, 39.7 kB beyond its matrix,
+///   and 45.7 kB on the sphere, 27 kB beyond); all plus 10 % margin;
 /// - HSS: measured 268 MB at 2 994 unknowns at tol 1e-8, growing as N^1.5 (the ranks grow as the
 ///   square root of a cluster's size), plus 25 % margin.
 /// Estimates for a refusal with a margin, not a forecast.
