@@ -174,15 +174,11 @@ const double *H2Block::data(std::vector<double> &buf) const
   if (is_low_rank()) {
     buf.assign(Size(M.m) * M.n, 0.0);
     if (rank == 0) return buf.data();
-    // P expanded (other × rank), then B = S Pᵀ (column ID) or P Sᵀ (row ID)
+    // P expanded (other × rank) as P I, then B = S Pᵀ (column ID) or P Sᵀ (row ID)
     const Interp P = interp_of(*this);
-    std::vector<double> Pd(Size(P.other) * rank, 0.0), S;
-    for (int p = 0; p < P.other; ++p) {
-      const int s = lr_slot[Size(p)];
-      if (s >= 0) Pd[Size(p) + Size(s) * P.other] = 1.0;
-      else
-        for (int t = 0; t < rank; ++t) Pd[Size(p) + Size(t) * P.other] = lr_t[Size(-1 - s) + Size(t) * P.red()];
-    }
+    std::vector<double> I(Size(rank) * rank, 0.0), Pd(Size(P.other) * rank, 0.0), S, g;
+    for (int t = 0; t < rank; ++t) I[Size(t) * rank + t] = 1.0;
+    interp_add(P, I.data(), rank, Pd.data(), P.other, g);
     widen(lr_s, S);
     if (lr_rows) lapack::gemm('N', 'T', M.m, M.n, rank, 1.0, Pd.data(), M.m, S.data(), M.n, 0.0, buf.data(), M.m);
     else lapack::gemm('N', 'T', M.m, M.n, rank, 1.0, S.data(), M.m, Pd.data(), M.n, 0.0, buf.data(), M.m);
