@@ -36,6 +36,20 @@ std::unique_ptr<Loaded> load(SurfaceMesh mesh)
 
 std::unique_ptr<Loaded> load(const std::string &name) { return load(read_mesh(std::string(HSSBEM_MESHES) + "/" + name)); }
 
+/// 1/|x − y| between m points in the unit cube and n points in the cube shifted by `gap` along
+/// x: a smooth block of numerically low rank.
+DenseMatrix smooth_block(int m, int n, double gap, std::mt19937 &gen)
+{
+  std::uniform_real_distribution<double> U01;
+  std::vector<Vec3> x(m), y(n);
+  for (Vec3 &p : x) p = {U01(gen), U01(gen), U01(gen)};
+  for (Vec3 &p : y) p = {gap + U01(gen), U01(gen), U01(gen)};
+  DenseMatrix A(m, n);
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < m; ++i) A(i, j) = 1.0 / norm(x[i] - y[j]);
+  return A;
+}
+
 void print_stats(const H2Matrix &K)
 {
   const H2Stats &st = K.stats();
@@ -222,16 +236,10 @@ TEST(H2Block, LowRankBlockMatchesItsEntries)
   // expanded entries, data() expands them, it takes less memory than single precision, and a
   // block that does not pay stays dense.
   std::mt19937 gen(9);
-  std::uniform_real_distribution<double> U01;
   std::normal_distribution<double> N01;
   for (const auto [m, n] : {std::pair{60, 90}, std::pair{90, 60}}) {
     H2Block B;
-    B.M = DenseMatrix(m, n);
-    std::vector<Vec3> x(m), y(n);
-    for (Vec3 &p : x) p = {U01(gen), U01(gen), U01(gen)};
-    for (Vec3 &p : y) p = {3 + U01(gen), U01(gen), U01(gen)};
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < m; ++i) B.M(i, j) = 1.0 / norm(x[i] - y[j]);
+    B.M = smooth_block(m, n, 3, gen);
     const DenseMatrix ref = B.M;
     B.compress(1e-6);
     ASSERT_TRUE(B.is_low_rank());
@@ -271,15 +279,9 @@ TEST(H2Block, InterpolativeFormStoresNoUnitRows)
   // interpolation matrix: rank·(m + n − rank) floats and one slot per position of the other
   // side. Both orientations (a column ID when n ≤ m, a row ID otherwise).
   std::mt19937 gen(12);
-  std::uniform_real_distribution<double> U01;
   for (const auto [m, n] : {std::pair{80, 50}, std::pair{50, 80}}) {
     H2Block B;
-    B.M = DenseMatrix(m, n);
-    std::vector<Vec3> x(m), y(n);
-    for (Vec3 &p : x) p = {U01(gen), U01(gen), U01(gen)};
-    for (Vec3 &p : y) p = {2.5 + U01(gen), U01(gen), U01(gen)};
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < m; ++i) B.M(i, j) = 1.0 / norm(x[i] - y[j]);
+    B.M = smooth_block(m, n, 2.5, gen);
     const DenseMatrix ref = B.M;
     B.compress(1e-7);
     ASSERT_TRUE(B.is_low_rank());
@@ -308,15 +310,8 @@ TEST(H2Block, ScaleFloorTruncatesAgainstAReferenceNorm)
   // the block alone would keep them, so a block that is weak against the reference keeps a lower
   // rank (within rel_tol·scale of its entries), and one entirely below it keeps rank 0.
   std::mt19937 gen(13);
-  std::uniform_real_distribution<double> U01;
-  std::normal_distribution<double> N01;
   for (const auto [m, n] : {std::pair{70, 40}, std::pair{40, 70}}) {
-    DenseMatrix A(m, n);
-    std::vector<Vec3> x(m), y(n);
-    for (Vec3 &p : x) p = {U01(gen), U01(gen), U01(gen)};
-    for (Vec3 &p : y) p = {2 + U01(gen), U01(gen), U01(gen)};
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < m; ++i) A(i, j) = 1.0 / norm(x[i] - y[j]);
+    const DenseMatrix A = smooth_block(m, n, 2, gen);
     const bool by_cols = n <= m;
     const double p1 = by_cols ? dense::largest_col_norm(A) : dense::largest_row_norm(A);
     const auto compressed = [&](double scale) {
@@ -359,17 +354,12 @@ TEST(H2Block, TransposedProductInEveryForm)
   // X += Bᵀ Y for a block dense in double, dense in single and of low rank, with 1 and 3
   // right-hand sides, against the block's (stored) entries.
   std::mt19937 gen(10);
-  std::uniform_real_distribution<double> U01;
   std::normal_distribution<double> N01;
   const int m = 45, n = 70;
-  std::vector<Vec3> x(m), y(n);
-  for (Vec3 &p : x) p = {U01(gen), U01(gen), U01(gen)};
-  for (Vec3 &p : y) p = {3 + U01(gen), U01(gen), U01(gen)};
+  const DenseMatrix A = smooth_block(m, n, 3, gen);
   for (int form = 0; form < 3; ++form) {
     H2Block B;
-    B.M = DenseMatrix(m, n);
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < m; ++i) B.M(i, j) = 1.0 / norm(x[i] - y[j]);
+    B.M = A;
     if (form == 1) B.demote();
     if (form == 2) B.compress(1e-6);
     ASSERT_EQ(B.is_single(), form == 1);
