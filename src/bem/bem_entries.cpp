@@ -60,74 +60,113 @@ void EntrySelection::finish()
   m_col_groups = group(m_cols);
 }
 
-void BemOperator::add_selected_point(const Vec3 &x, int row, const int *comp, const int *out_row, int nr, const EntrySelection::Group &cols, double *out,
-                                     long rs, long cs, Workspace &ws) const
+void BemOperator::add_selected_points(const RowPoint *pts, int np, const EntrySelection::Group &cols, bool gn, double *out, long rs, long cs,
+                                      Workspace &ws) const
 {
-  // Sum each column node's corner sums over its triangles first (the 7-point triangles batched,
-  // the others one by one, as point_integrals), then hand out the requested entries once.
+  // Sum each column node's corner sums over its triangles for every point first, then hand out
+  // the requested entries once. acc holds, per column node and sum, one number per lane.
+  constexpr int L = RegularRule::lanes;
   const std::vector<int> &col_pos = ws.col_pos;
   const std::size_t nj = cols.nodes.size();
-  const bool gn = std::find(cols.what.begin(), cols.what.end(), 6) != cols.what.end();
-  ws.acc.assign(nj * acc_size, 0.0);
+  ws.acc.assign(nj * acc_size * L, 0.0);
+  double *acc = ws.acc.data();
+  alignas(64) double x[3][L];
+  for (int k = 0; k < L; ++k)
+    for (int c = 0; c < 3; ++c) x[c][k] = pts[std::min(k, np - 1)].x[c]; // spare lanes repeat the last point
+  const unsigned used = (1u << np) - 1;
+  // Lanes whose collocation point lies on a triangle, by triangle: those take the singular rule.
+  alignas(64) double S[3][CornerSums::size][L];
   ElementIntegrals ei;
   double v[CornerSums::size];
-  ws.regular.clear();
   for (int t : ws.elems) {
-    if (!(row >= 0 && contains(row, t)) && m_regular.is_regular(x, t)) {
-      ws.regular.push_back(t);
-      continue;
-    }
-    element_integrals(x, row, t, ei);
-    for (int a = 0; a < 3; ++a) {
-      const int p = col_pos[m_disc->element_node(t, a)];
-      if (p < 0) continue;
-      CornerSums::compress(ei.G[a].data(), ei.H[a].data(), v);
-      add_sums(&ws.acc[p * acc_size], v, m_tri[t].n, gn);
-    }
-  }
-  const int n = static_cast<int>(ws.regular.size());
-  if (static_cast<int>(ws.sums.size()) < n) ws.sums.resize(n);
-  m_regular.sums(x, ws.regular.data(), n, ws.sums.data());
-  for (int k = 0; k < n; ++k) {
-    const int t = ws.regular[k];
-    for (int a = 0; a < 3; ++a) {
-      const int p = col_pos[m_disc->element_node(t, a)];
-      if (p >= 0) add_sums(&ws.acc[p * acc_size], ws.sums[k].v[a], m_tri[t].n, gn);
-    }
-  }
-  for (std::size_t p = 0; p < nj; ++p) {
-    const double *acc = &ws.acc[p * acc_size];
-    for (int e = cols.start[p]; e < cols.start[p + 1]; ++e) {
-      double *o = out + cols.out[e] * cs;
-      for (int i = 0; i < nr; ++i) {
-        const Pick pk = pick_of(comp[i], cols.what[e]);
-        o[out_row[i] * rs] += acc[pk.i] + pk.sign * acc[pk.j];
+    const int p[3] = {col_pos[m_disc->element_node(t, 0)], col_pos[m_disc->element_node(t, 1)], col_pos[m_disc->element_node(t, 2)]};
+    unsigned regular = m_regular.regular_lanes(x, t) & used;
+    for (int k = 0; k < np; ++k)
+      if (pts[k].row >= 0 && (regular >> k & 1u) && contains(pts[k].row, t)) regular &= ~(1u << k);
+    if (regular) {
+      m_regular.lane_sums(x, t, S);
+      alignas(64) double keep[L];
+      for (int k = 0; k < L; ++k) keep[k] = regular >> k & 1u;
+      const Vec3 &n = m_tri[t].n;
+      for (int c = 0; c < 3; ++c) {
+        if (p[c] < 0) continue;
+        double *a = acc + static_cast<std::size_t>(p[c]) * acc_size * L;
+        for (int m = 0; m < CornerSums::size; ++m) {
+#pragma omp simd
+          for (int k = 0; k < L; ++k) a[m * L + k] += keep[k] != 0.0 ? S[c][m][k] : 0.0;
+        }
+        if (!gn) continue;
+        for (int d = 0; d < 3; ++d) {
+          const double *s0 = S[c][sym_index(d, 0)], *s1 = S[c][sym_index(d, 1)], *s2 = S[c][sym_index(d, 2)];
+#pragma omp simd
+          for (int k = 0; k < L; ++k) a[(acc_gn + d) * L + k] += keep[k] != 0.0 ? s0[k] * n[0] + s1[k] * n[1] + s2[k] * n[2] : 0.0;
+        }
       }
+    }
+    for (unsigned special = used & ~regular; special; special &= special - 1) {
+      const int k = __builtin_ctz(special);
+      element_integrals(pts[k].x, pts[k].row, t, ei);
+      for (int c = 0; c < 3; ++c) {
+        if (p[c] < 0) continue;
+        CornerSums::compress(ei.G[c].data(), ei.H[c].data(), v);
+        double *a = acc + static_cast<std::size_t>(p[c]) * acc_size * L + k;
+        for (int m = 0; m < CornerSums::size; ++m) a[m * L] += v[m];
+        if (gn)
+          for (int d = 0; d < 3; ++d) a[(acc_gn + d) * L] += v[sym_index(d, 0)] * m_tri[t].n[0] + v[sym_index(d, 1)] * m_tri[t].n[1] + v[sym_index(d, 2)] * m_tri[t].n[2];
+      }
+    }
+  }
+  for (std::size_t q = 0; q < nj; ++q) {
+    const double *a = acc + q * acc_size * L;
+    for (int e = cols.start[q]; e < cols.start[q + 1]; ++e) {
+      double *o = out + cols.out[e] * cs;
+      for (int k = 0; k < np; ++k)
+        for (int i = 0; i < pts[k].nr; ++i) {
+          const Pick pk = pick_of(pts[k].comp[i], cols.what[e]);
+          o[pts[k].out_row[i] * rs] += a[pk.i * L + k] + pk.sign * a[pk.j * L + k];
+        }
     }
   }
 }
 
 void BemOperator::add_selected(const EntrySelection &sel, double *out, long rs, long cs, Workspace &ws) const
 {
+  constexpr int L = RegularRule::lanes;
   const EntrySelection::Group &R = sel.rows(), &C = sel.cols();
   for (std::size_t p = 0; p < C.nodes.size(); ++p) ws.col_pos[C.nodes[p]] = static_cast<int>(p);
   elements_touching(C.nodes, ws);
-  for (std::size_t r = 0; r < R.nodes.size(); ++r) {
-    const int i = R.nodes[r], b = R.start[r], e = R.start[r + 1];
-    add_selected_point(m_disc->node(i).point, i, R.what.data() + b, R.out.data() + b, e - b, C, out, rs, cs, ws);
+  const bool gn = std::find(C.what.begin(), C.what.end(), 6) != C.what.end();
+  RowPoint pts[L];
+  const int nr = static_cast<int>(R.nodes.size());
+  for (int r0 = 0; r0 < nr; r0 += L) {
+    const int np = std::min(L, nr - r0);
+    for (int k = 0; k < np; ++k) {
+      const int i = R.nodes[r0 + k], b = R.start[r0 + k], e = R.start[r0 + k + 1];
+      pts[k] = {m_disc->node(i).point, i, R.what.data() + b, R.out.data() + b, e - b};
+    }
+    add_selected_points(pts, np, C, gn, out, rs, cs, ws);
   }
   for (int j : C.nodes) ws.col_pos[j] = -1;
 }
 
 void BemOperator::add_selected_at_points(const std::vector<Vec3> &X, const EntrySelection &sel, double *out, long rs, long cs, Workspace &ws) const
 {
+  constexpr int L = RegularRule::lanes;
   const EntrySelection::Group &C = sel.cols();
   for (std::size_t p = 0; p < C.nodes.size(); ++p) ws.col_pos[C.nodes[p]] = static_cast<int>(p);
   elements_touching(C.nodes, ws);
-  const int comp[3] = {0, 1, 2};
-  for (std::size_t r = 0; r < X.size(); ++r) {
-    const int out_row[3] = {static_cast<int>(3 * r), static_cast<int>(3 * r + 1), static_cast<int>(3 * r + 2)};
-    add_selected_point(X[r], -1, comp, out_row, 3, C, out, rs, cs, ws);
+  const bool gn = std::find(C.what.begin(), C.what.end(), 6) != C.what.end();
+  static constexpr int comp[3] = {0, 1, 2};
+  int out_row[L][3];
+  RowPoint pts[L];
+  const int nx = static_cast<int>(X.size());
+  for (int r0 = 0; r0 < nx; r0 += L) {
+    const int np = std::min(L, nx - r0);
+    for (int k = 0; k < np; ++k) {
+      for (int c = 0; c < 3; ++c) out_row[k][c] = 3 * (r0 + k) + c;
+      pts[k] = {X[r0 + k], -1, comp, out_row[k], 3};
+    }
+    add_selected_points(pts, np, C, gn, out, rs, cs, ws);
   }
   for (int j : C.nodes) ws.col_pos[j] = -1;
 }

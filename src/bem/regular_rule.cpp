@@ -142,6 +142,68 @@ void RegularRule::batch(const Vec3 &x, const int *tris, CornerSums *out) const
       for (int m = 0; m < 15; ++m) out[k].v[c][m] = S[c][m][k];
 }
 
+unsigned RegularRule::regular_lanes(const double (&x)[3][lanes], int t) const
+{
+  const TriangleData &d = m_tri[t];
+  unsigned bits = 0;
+  for (int k = 0; k < lanes; ++k) {
+    const double d0 = x[0][k] - d.centroid[0], d1 = x[1][k] - d.centroid[1], d2 = x[2][k] - d.centroid[2];
+    const double r2 = d0 * d0 + d1 * d1 + d2 * d2;
+    bits |= static_cast<unsigned>(r2 >= d.near2 && r2 < d.far2) << k;
+  }
+  return bits;
+}
+
+void RegularRule::lane_sums(const double (&x)[3][lanes], int t, double (&out)[3][CornerSums::size][lanes]) const
+{
+  // As batch, with the points as lanes: the triangle's data are scalars, nothing is gathered.
+  constexpr int L = lanes;
+  static_assert(L == 8, "inv_sqrt8 serves 8 lanes");
+  const TriangleData &d = m_tri[t];
+  const double nx = d.n[0], ny = d.n[1], nz = d.n[2], su0 = d.area * m_k.cu, sp0 = d.area * m_k.cp;
+  const double cd = m_k.cu_diag, om = m_k.one_m_2nu;
+  alignas(64) double K[7][CornerSums::size][L];
+  for (int q = 0; q < 7; ++q) {
+    const double yx = d.q[0][q], yy = d.q[1][q], yz = d.q[2][q], su1 = weight[q] * su0, sp1 = weight[q] * sp0;
+    alignas(64) double r2[L], ir[L];
+#pragma omp simd aligned(r2 : 64)
+    for (int k = 0; k < L; ++k) {
+      const double d0 = yx - x[0][k], d1 = yy - x[1][k], d2 = yz - x[2][k];
+      r2[k] = d0 * d0 + d1 * d1 + d2 * d2;
+    }
+    inv_sqrt8(r2, ir);
+#pragma omp simd aligned(ir : 64)
+    for (int k = 0; k < L; ++k) {
+      const double inv_r = ir[k];
+      const double g0 = (yx - x[0][k]) * inv_r, g1 = (yy - x[1][k]) * inv_r, g2 = (yz - x[2][k]) * inv_r;
+      const double su = su1 * inv_r, sp = sp1 * inv_r * inv_r;
+      const double ts = sp * (g0 * nx + g1 * ny + g2 * nz), ta = -sp * om;
+      K[q][0][k] = su * (cd + g0 * g0);
+      K[q][1][k] = su * (cd + g1 * g1);
+      K[q][2][k] = su * (cd + g2 * g2);
+      K[q][3][k] = su * g0 * g1;
+      K[q][4][k] = su * g0 * g2;
+      K[q][5][k] = su * g1 * g2;
+      K[q][6][k] = ts * (om + 3 * g0 * g0);
+      K[q][7][k] = ts * (om + 3 * g1 * g1);
+      K[q][8][k] = ts * (om + 3 * g2 * g2);
+      K[q][9][k] = 3 * ts * g0 * g1;
+      K[q][10][k] = 3 * ts * g0 * g2;
+      K[q][11][k] = 3 * ts * g1 * g2;
+      K[q][12][k] = ta * (g0 * ny - g1 * nx);
+      K[q][13][k] = ta * (g0 * nz - g2 * nx);
+      K[q][14][k] = ta * (g1 * nz - g2 * ny);
+    }
+  }
+  for (int m = 0; m < CornerSums::size; ++m) {
+#pragma omp simd
+    for (int k = 0; k < L; ++k) {
+      const double base = K[0][m][k] * (1.0 / 3) + ra * (K[1][m][k] + K[2][m][k] + K[3][m][k]) + rb * (K[4][m][k] + K[5][m][k] + K[6][m][k]);
+      for (int c = 0; c < 3; ++c) out[c][m][k] = base + (1 - 3 * ra) * K[3 - c][m][k] + (1 - 3 * rb) * K[6 - c][m][k];
+    }
+  }
+}
+
 void RegularRule::sums(const Vec3 &x, const int *tris, int n, CornerSums *out) const
 {
   constexpr int B = 8;

@@ -133,6 +133,73 @@ TEST(Operator, BlocksEqualTheFullMatrixWithSharpNodes)
   EXPECT_GT(scale, 0.0);
 }
 
+TEST(Operator, SelectedEntriesEqualTheFullBlocks)
+{
+  // add_selected evaluates row points eight at a time (the 7-point rule with the points as SIMD
+  // lanes, the singular and near-singular pairs one by one): every requested entry, for row
+  // counts that leave a partial batch, sharp nodes and Gn columns, equals fill_hg's.
+  const SurfaceMesh mesh = hssbem::test::unit_cube(2);
+  const Discretization disc(mesh, 40.0);
+  const BemOperator op(disc, Material{1000.0, 0.3});
+  BemOperator::Workspace ws(op);
+  const int nn = disc.num_nodes();
+  std::vector<int> I, J;
+  for (int i = 0; i < nn; i += 2) I.push_back(i); // 13 or more rows: one full batch and a partial one
+  for (int j = 0; j < nn; j += 3) J.push_back(j);
+  ASSERT_GT(I.size(), 9u);
+  const long ld = 3 * static_cast<long>(J.size()), ldn = static_cast<long>(J.size());
+  std::vector<double> H(3 * I.size() * ld), G(H.size()), Gn(3 * I.size() * ldn);
+  op.fill_hg_without_rigid(I, J, H.data(), G.data(), ld, Gn.data(), ldn, ws);
+  const auto reference = [&](const double *h, const double *g, const double *gn, std::size_t r, std::size_t jq, int kind) {
+    return kind < 3 ? h[r * ld + 3 * jq + kind] : kind < 6 ? g[r * ld + 3 * jq + kind - 3] : gn[r * ldn + jq];
+  };
+  // Rows: every component of some nodes, one of others; columns: assorted kinds.
+  EntrySelection sel;
+  std::vector<std::pair<std::size_t, int>> rows, cols; // (position in I or J, component or kind)
+  for (std::size_t p = 0; p < I.size(); ++p)
+    for (int a = 0; a < 3; ++a)
+      if (p % 3 == 0 || a == static_cast<int>(p % 3)) rows.push_back({p, a});
+  for (std::size_t q = 0; q < J.size(); ++q)
+    for (int k = 0; k < 7; ++k)
+      if ((q + k) % 2 == 0) cols.push_back({q, k});
+  for (std::size_t r = 0; r < rows.size(); ++r) sel.add_row(I[rows[r].first], rows[r].second, static_cast<int>(r));
+  for (std::size_t c = 0; c < cols.size(); ++c) sel.add_col(J[cols[c].first], cols[c].second, static_cast<int>(c));
+  sel.finish();
+  const long rs = 1, cs = static_cast<long>(rows.size());
+  std::vector<double> out(rows.size() * cols.size(), 0.0);
+  op.add_selected(sel, out.data(), rs, cs, ws);
+  double err = 0, scale = 0;
+  for (std::size_t r = 0; r < rows.size(); ++r)
+    for (std::size_t c = 0; c < cols.size(); ++c) {
+      const double want = reference(H.data(), G.data(), Gn.data(), 3 * rows[r].first + rows[r].second, cols[c].first, cols[c].second);
+      err = std::max(err, std::abs(out[r * rs + c * cs] - want));
+      scale = std::max(scale, std::abs(want));
+    }
+  EXPECT_GT(scale, 0.0);
+  EXPECT_LT(err, 1e-13 * scale);
+
+  // Arbitrary points as rows: near a face (its triangles subdivided), on no node, and far away.
+  std::vector<Vec3> X;
+  for (int p = 0; p < 11; ++p) X.push_back(p % 3 == 0 ? Vec3{0.3 + 0.04 * p, 0.45, 1.02} : Vec3{2.0 + p, -1.5, 0.5 * p});
+  std::vector<double> HX(3 * X.size() * ld), GX(HX.size()), GnX(3 * X.size() * ldn);
+  op.fill_hg_at_points(X, J, HX.data(), GX.data(), ld, GnX.data(), ldn, ws);
+  EntrySelection at;
+  for (std::size_t c = 0; c < cols.size(); ++c) at.add_col(J[cols[c].first], cols[c].second, static_cast<int>(c));
+  at.finish();
+  std::vector<double> outX(3 * X.size() * cols.size(), 0.0);
+  const long csx = static_cast<long>(3 * X.size());
+  op.add_selected_at_points(X, at, outX.data(), 1, csx, ws);
+  err = scale = 0;
+  for (std::size_t r = 0; r < 3 * X.size(); ++r)
+    for (std::size_t c = 0; c < cols.size(); ++c) {
+      const double want = reference(HX.data(), GX.data(), GnX.data(), r, cols[c].first, cols[c].second);
+      err = std::max(err, std::abs(outX[r + c * csx] - want));
+      scale = std::max(scale, std::abs(want));
+    }
+  EXPECT_GT(scale, 0.0);
+  EXPECT_LT(err, 1e-13 * scale);
+}
+
 TEST(Operator, SystemColumnsAreHWhereUIsUnknownAndMinusGWhereTIs)
 {
   const SurfaceMesh mesh = icosphere(1);

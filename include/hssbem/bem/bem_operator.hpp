@@ -63,7 +63,7 @@ public:
     std::vector<int> elems;      ///< triangles touching the columns
     std::vector<int> regular;    ///< those a row sees through the 7-point rule
     std::vector<CornerSums> sums; ///< their corner sums
-    std::vector<double> acc;      ///< per column node of a selection: its blocks summed over its triangles
+    std::vector<double> acc;      ///< per column node of a selection: its blocks summed over its triangles (per row point)
   };
 
   BemOperator(const Discretization &disc, const Material &material, const QuadratureOptions &options = {});
@@ -130,10 +130,17 @@ private:
   /// that do not contain the point.
   void point_integrals(const Vec3 &x, int row, const BlockRows &out, Workspace &ws, Mat3 *D) const;
   void elements_touching(const std::vector<int> &J, Workspace &ws) const;
-  /// add_selected for one point x (collocation point of `row`, or any point when row < 0) and
-  /// its requested components comp[0..nr) going to output rows out_row[0..nr).
-  void add_selected_point(const Vec3 &x, int row, const int *comp, const int *out_row, int nr, const EntrySelection::Group &cols, double *out, long rs,
-                          long cs, Workspace &ws) const;
+  /// One row point of add_selected: x (collocation point of `row`, or any point when row < 0)
+  /// and its requested components comp[0..nr) going to output rows out_row[0..nr).
+  struct RowPoint {
+    Vec3 x;
+    int row;
+    const int *comp, *out_row;
+    int nr;
+  };
+  /// add_selected for up to RegularRule::lanes row points at once (the triangles' 7-point sums
+  /// with the points as SIMD lanes, the other pairs one by one).
+  void add_selected_points(const RowPoint *pts, int np, const EntrySelection::Group &cols, bool gn, double *out, long rs, long cs, Workspace &ws) const;
   enum class Rigid { with, without };
   void fill_rows(const std::vector<int> &I, const std::vector<int> &J, double *H, double *G, long ld, double *Gn, long ldn, Workspace &ws,
                  Rigid rigid) const;

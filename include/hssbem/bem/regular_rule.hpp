@@ -45,6 +45,15 @@ public:
   /// Corner sums of triangles tris[0..n) at x (out[k] for tris[k]); each must be regular at x.
   void sums(const Vec3 &x, const int *tris, int n, CornerSums *out) const;
 
+  /// The other way round, for blocks with many rows: one triangle t at `lanes` points at once,
+  /// given by coordinates x[0][k], x[1][k], x[2][k] (aligned to 64 bytes).
+  static constexpr int lanes = 8;
+  /// Bit k set when t is regular at point k (is_regular for each lane).
+  unsigned regular_lanes(const double (&x)[3][lanes], int t) const;
+  /// out[c][m][k]: corner c's sum m (CornerSums layout) of t at point k. Lanes at which t is not
+  /// regular get meaningless (possibly infinite) numbers that the caller must not use.
+  void lane_sums(const double (&x)[3][lanes], int t, double (&out)[3][CornerSums::size][lanes]) const;
+
 private:
   struct TriangleData {
     double q[3][8];     ///< quadrature points (coordinate, point), the 8th unused
