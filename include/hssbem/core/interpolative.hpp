@@ -42,13 +42,13 @@ struct IdOptions {
   /// Take the pivots from a pivoted Cholesky factorization of AᵀA instead of a pivoted QR of A
   /// when rel_tol ≥ gram_min_tol: the same greedy pivots and stopping rule (the Cholesky factor is
   /// R), one symmetric rank-k update of A at full level-3 speed instead of Householder updates.
-  /// The Gram matrix resolves residual norms down to about sqrt(machine epsilon)·‖A‖, hence the
-  /// floor. False: always QR.
+  /// The Gram matrix resolves residual norms down to about sqrt(machine epsilon)·‖A‖ ≈ 1.5e-8·‖A‖,
+  /// hence the floor (seven times above that). False: always QR.
   bool gram = false;
 };
 
 /// Tolerances from which IdOptions::gram takes effect.
-constexpr double gram_min_tol = 1e-6;
+constexpr double gram_min_tol = 1e-7;
 
 /// Result of a column ID (and, read transposed, of a row ID; see the file comment).
 struct ColumnId {
