@@ -171,6 +171,8 @@ int main(int argc, char **argv)
     else if (a == "--tol") opt.rel_tol = hss.rel_tol = std::stod(next());
     else if (a == "--leaf") opt.leaf_size = std::stoi(next());
     else if (a == "--eta") opt.eta = std::stod(next());
+    else if (a == "--proxy-ratio") opt.proxy_ratio = std::stod(next());
+    else if (a == "--proxy-points") opt.proxy_points = std::stoi(next());
     else if (a == "--single") opt.single_precision = std::stoi(next()) != 0;
     else if (a == "--dense") dense = std::stoi(next()) != 0;
     else if (a == "--rtol") rtol = std::stod(next());
