@@ -6,6 +6,7 @@
 #include "hssbem/core/timer.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numeric>
 
@@ -256,16 +257,23 @@ void Skeletonizer::skeletonize_rows(int c, const std::vector<int> &sources, bool
   // Columns of the sources whose quadrature reaches inside the proxy sphere. A source whose
   // columns are skeletonized already offers its skeleton (it stands for all of its columns
   // against anything outside its own proxy spheres), the others their candidates.
-  std::vector<int> near_cols;
+  // For the far blocks: per source, its columns' range in near_cols and their places in its list.
+  std::vector<int> near_cols, near_place;
+  std::vector<std::array<int, 3>> ranges; // source, first, end
   for (int o : sources) {
     if (nrow == 0) break;
     const Cluster &oc = m_tree.cluster(o);
     const std::vector<int> &o_cols = m_in_front[o] && !m_col_done[o] ? m_active_cols[o] : m_bases[o]->col_skel;
     if (norm(oc.centre - cl.centre) - m_reach.reach_r[o] >= sp.r_row) continue;
-    for (int q : o_cols) {
-      const int j = perm[q / m_w];
-      if (norm(disc.node_position(j) - cl.centre) - m_reach.sigma[j] < sp.r_row) near_cols.push_back(q);
+    const int first = static_cast<int>(near_cols.size());
+    for (std::size_t t = 0; t < o_cols.size(); ++t) {
+      const int q = o_cols[t], j = perm[q / m_w];
+      if (norm(disc.node_position(j) - cl.centre) - m_reach.sigma[j] < sp.r_row) {
+        near_cols.push_back(q);
+        near_place.push_back(static_cast<int>(t));
+      }
     }
+    ranges.push_back({o, first, static_cast<int>(near_cols.size())});
   }
   // Features of candidate row r: Kelvin sources at the proxy points, then the near columns.
   const int nfr = 3 * np + static_cast<int>(near_cols.size());
@@ -297,6 +305,44 @@ void Skeletonizer::skeletonize_rows(int c, const std::vector<int> &sources, bool
   h.U = need ? std::move(s.W) : DenseMatrix(static_cast<int>(rows.size()), 0);
   h.row_forced = s.forced;
   m_t_id[thread_index()] += timer.seconds();
+  if (need && m_far_sink) far_blocks_from_samples(c, X, nfr, 3 * np, s.local, near_place, ranges);
+}
+
+void Skeletonizer::far_blocks_from_samples(int a, const std::vector<double> &X, int nfr, int first_col, const std::vector<int> &skel_local,
+                                           const std::vector<int> &near_place, const std::vector<std::array<int, 3>> &ranges)
+{
+  const std::vector<int> &rows = m_bases[a]->row_skel;
+  const int ka = static_cast<int>(rows.size());
+  std::vector<int> missing, missing_at;
+  std::vector<double> tmp;
+  for (int b : (*m_far)[a]) {
+    if (!m_in_front[b] || !m_col_done[b]) continue;
+    const std::vector<int> &cols = m_bases[b]->col_skel;
+    const int kb = static_cast<int>(cols.size());
+    DenseMatrix M(ka, kb);
+    std::vector<char> have(kb, 0);
+    const auto r = std::find_if(ranges.begin(), ranges.end(), [b](const std::array<int, 3> &x) { return x[0] == b; });
+    if (r != ranges.end())
+      for (int pos = (*r)[1]; pos < (*r)[2]; ++pos) {
+        const int t = near_place[pos];
+        have[t] = 1;
+        for (int i = 0; i < ka; ++i) M(i, t) = X[static_cast<std::size_t>(skel_local[i]) * nfr + first_col + pos];
+      }
+    missing.clear();
+    missing_at.clear();
+    for (int t = 0; t < kb; ++t)
+      if (!have[t]) {
+        missing.push_back(cols[t]);
+        missing_at.push_back(t);
+      }
+    if (!missing.empty()) {
+      tmp.assign(static_cast<std::size_t>(ka) * missing.size(), 0.0);
+      block(rows, missing, tmp.data(), 1, ka);
+      for (std::size_t u = 0; u < missing.size(); ++u)
+        for (int i = 0; i < ka; ++i) M(i, missing_at[u]) = tmp[u * ka + i];
+    }
+    m_far_sink(a, b, M);
+  }
 }
 
 void Skeletonizer::skeletonize_cols(int c, const std::vector<int> &sources, bool need)

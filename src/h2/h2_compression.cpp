@@ -134,6 +134,13 @@ void share_skeletons(H2Matrix &K, const RankComm &comm, int l, bool columns)
   }
 }
 
+/// A far block's stored form: low rank at a tenth of the tolerance, or single precision.
+void finish_far_block(H2Block &B, const H2Options &options)
+{
+  if (options.single_precision && options.low_rank_far) B.compress(options.rel_tol / 10);
+  else if (options.single_precision) B.demote();
+}
+
 } // namespace
 
 H2Matrix compress_bem_operator_h2(const BemOperator &op, const H2Options &options)
@@ -157,12 +164,14 @@ H2Matrix compress_bem_operator_h2(const BemOperator &op, const H2Options &option
   // agreement (the level's skeleton exchange), then throws.
   std::optional<H2Matrix> built;
   std::optional<Skeletonizer> skel;
+  std::vector<std::vector<H2Block>> early_far; // per row cluster: far blocks built while skeletonizing
   try {
     const std::vector<Vec3> points = collocation_points(op.discretization());
     built.emplace(nparts > 1 ? ClusterTree(points, node_part, nparts, topts) : ClusterTree(points, topts), 3, w);
     H2Matrix &K = *built;
     const ClusterTree &tree = K.tree();
     K.set_owners(cluster_owners(tree, ranks), comm.rank());
+    early_far.resize(tree.num_clusters());
     phase.reset();
     phase.emplace(Phase::Compression);
     K.set_col_scales(kernel_column_scales(op, w));
@@ -192,6 +201,15 @@ H2Matrix compress_bem_operator_h2(const BemOperator &op, const H2Options &option
         if (comm.any(false)) throw PeerFault();
         share_skeletons(K, comm, l, columns);
       };
+    // Far blocks between clusters of one level come out of the row skeletonization, which has
+    // sampled their columns inside the row cluster's proxy sphere already.
+    skel->build_far_blocks(part.far, [&](int a, int b, DenseMatrix &M) {
+      H2Block B;
+      B.col_cluster = b;
+      B.M = std::move(M);
+      finish_far_block(B, options);
+      early_far[a].push_back(std::move(B));
+    });
     for (int l = tree.levels() - 1; l >= 1; --l) skel->skeletonize_level(l, sources, &part.has_far, &part.has_far, ranks > 1 ? &skip : nullptr, sync);
   } catch (const PeerFault &) {
     throw;
@@ -213,15 +231,21 @@ H2Matrix compress_bem_operator_h2(const BemOperator &op, const H2Options &option
     for (int c : tree.leaves())
       if (K.holds(c)) held_leaves.push_back(c);
     for_each_cluster(held, [&](int a) {
+      std::vector<H2Block> &early = early_far[a];
       for (int b : part.far[a]) {
+        const auto e = std::find_if(early.begin(), early.end(), [b](const H2Block &B) { return B.col_cluster == b; });
+        if (e != early.end()) {
+          K.far_blocks(a).push_back(std::move(*e));
+          continue;
+        }
         H2Block B;
         B.col_cluster = b;
         B.M = DenseMatrix(static_cast<int>(K.row_skeleton(a).size()), static_cast<int>(K.col_skeleton(b).size()));
         skel->block(K.row_skeleton(a), K.col_skeleton(b), B.M.data(), 1, B.M.ld());
-        if (options.single_precision && options.low_rank_far) B.compress(options.rel_tol / 10);
-        else if (options.single_precision) B.demote();
+        finish_far_block(B, options);
         K.far_blocks(a).push_back(std::move(B));
       }
+      std::vector<H2Block>().swap(early);
     });
   });
   K.stats().time_far = timer.seconds();

@@ -26,6 +26,7 @@
 #include "hssbem/compress/quadrature_reach.hpp"
 #include "hssbem/core/cluster_tree.hpp"
 
+#include <array>
 #include <functional>
 #include <memory>
 #include <vector>
@@ -75,6 +76,18 @@ public:
   void skeletonize_level(int l, const Sources &sources, const std::vector<char> *need_rows = nullptr, const std::vector<char> *need_cols = nullptr,
                          const std::vector<char> *skip = nullptr, const LevelSync &sync = {});
 
+  /// Far blocks taken from the row IDs' samples (strong admissibility, columns_first): once the
+  /// row skeleton of a cluster a is chosen, every b in far[a] on the frontier whose column
+  /// skeleton is final gets its block K(row_skel(a), col_skel(b)) handed to sink(a, b, block) on
+  /// the same thread: the columns inside a's proxy sphere are copied from the samples the ID
+  /// just used, only the others are evaluated. Pairs not handed over are the caller's to build.
+  using FarSink = std::function<void(int a, int b, DenseMatrix &block)>;
+  void build_far_blocks(const std::vector<std::vector<int>> &far, FarSink sink)
+  {
+    m_far = &far;
+    m_far_sink = std::move(sink);
+  }
+
   /// out(r, q) = K(rows[r], cols[q]) (scaled, no rigid-body terms) at out[r·rs + q·cs]; counted
   /// in entries(). Thread-safe.
   void block(const std::vector<int> &rows, const std::vector<int> &cols, double *out, long rs, long cs);
@@ -93,6 +106,10 @@ private:
   Spheres spheres(int c) const;
   void skeletonize_rows(int c, const std::vector<int> &sources, bool need);
   void skeletonize_cols(int c, const std::vector<int> &sources, bool need);
+  /// build_far_blocks for cluster a, its row ID's features X (nfr per candidate, the sources'
+  /// columns from first_col on, placed and ranged as skeletonize_rows recorded them).
+  void far_blocks_from_samples(int a, const std::vector<double> &X, int nfr, int first_col, const std::vector<int> &skel_local,
+                               const std::vector<int> &near_place, const std::vector<std::array<int, 3>> &ranges);
   BemOperator::Workspace &ws();
   bool row_forced(int c, int node) const;
   bool col_forced(int c, int node) const;
@@ -113,6 +130,8 @@ private:
   std::vector<char> m_in_front;
   std::vector<char> m_col_done; ///< columns_first: the cluster's column skeleton is final
   std::vector<std::vector<int>> m_active_rows, m_active_cols;
+  const std::vector<std::vector<int>> *m_far = nullptr;
+  FarSink m_far_sink;
 };
 
 } // namespace hssbem
