@@ -28,6 +28,18 @@ constexpr Pick pick_of(int a, int k)
   return Pick{acc_gn + a, acc_zero, 0.0};                                                                                       // Gn
 }
 
+/// pick_of for every component and kind.
+struct PickTable {
+  Pick p[3][7];
+  constexpr PickTable() : p{}
+  {
+    for (int a = 0; a < 3; ++a)
+      for (int k = 0; k < 7; ++k) p[a][k] = pick_of(a, k);
+  }
+  constexpr const Pick *operator[](int a) const { return p[a]; }
+};
+constexpr PickTable pick_table;
+
 /// acc += one corner's sums v; with Gn, also G n.
 inline void add_sums(double *__restrict acc, const double *__restrict v, const Vec3 &n, bool gn)
 {
@@ -66,7 +78,6 @@ void BemOperator::add_selected_points(const RowPoint *pts, int np, const EntrySe
   // Sum each column node's corner sums over its triangles for every point first, then hand out
   // the requested entries once. acc holds, per column node and sum, one number per lane.
   constexpr int L = RegularRule::lanes;
-  const std::vector<int> &col_pos = ws.col_pos;
   const std::size_t nj = cols.nodes.size();
   ws.acc.assign(nj * acc_size * L, 0.0);
   double *acc = ws.acc.data();
@@ -78,8 +89,8 @@ void BemOperator::add_selected_points(const RowPoint *pts, int np, const EntrySe
   alignas(64) double S[3][CornerSums::size][L];
   ElementIntegrals ei;
   double v[CornerSums::size];
-  for (int t : ws.elems) {
-    const int p[3] = {col_pos[m_disc->element_node(t, 0)], col_pos[m_disc->element_node(t, 1)], col_pos[m_disc->element_node(t, 2)]};
+  for (std::size_t e = 0; e < ws.elems.size(); ++e) {
+    const int t = ws.elems[e], *p = &ws.elem_pos[3 * e];
     unsigned regular = m_regular.regular_lanes(x, t) & used;
     for (int k = 0; k < np; ++k)
       if (pts[k].row >= 0 && (regular >> k & 1u) && contains(pts[k].row, t)) regular &= ~(1u << k);
@@ -122,11 +133,18 @@ void BemOperator::add_selected_points(const RowPoint *pts, int np, const EntrySe
       double *o = out + cols.out[e] * cs;
       for (int k = 0; k < np; ++k)
         for (int i = 0; i < pts[k].nr; ++i) {
-          const Pick pk = pick_of(pts[k].comp[i], cols.what[e]);
+          const Pick &pk = pick_table[pts[k].comp[i]][cols.what[e]];
           o[pts[k].out_row[i] * rs] += a[pk.i * L + k] + pk.sign * a[pk.j * L + k];
         }
     }
   }
+}
+
+void BemOperator::corner_positions(Workspace &ws) const
+{
+  ws.elem_pos.resize(3 * ws.elems.size());
+  for (std::size_t e = 0; e < ws.elems.size(); ++e)
+    for (int c = 0; c < 3; ++c) ws.elem_pos[3 * e + c] = ws.col_pos[m_disc->element_node(ws.elems[e], c)];
 }
 
 void BemOperator::add_selected(const EntrySelection &sel, double *out, long rs, long cs, Workspace &ws) const
@@ -135,6 +153,7 @@ void BemOperator::add_selected(const EntrySelection &sel, double *out, long rs, 
   const EntrySelection::Group &R = sel.rows(), &C = sel.cols();
   for (std::size_t p = 0; p < C.nodes.size(); ++p) ws.col_pos[C.nodes[p]] = static_cast<int>(p);
   elements_touching(C.nodes, ws);
+  corner_positions(ws);
   const bool gn = std::find(C.what.begin(), C.what.end(), 6) != C.what.end();
   RowPoint pts[L];
   const int nr = static_cast<int>(R.nodes.size());
@@ -155,6 +174,7 @@ void BemOperator::add_selected_at_points(const std::vector<Vec3> &X, const Entry
   const EntrySelection::Group &C = sel.cols();
   for (std::size_t p = 0; p < C.nodes.size(); ++p) ws.col_pos[C.nodes[p]] = static_cast<int>(p);
   elements_touching(C.nodes, ws);
+  corner_positions(ws);
   const bool gn = std::find(C.what.begin(), C.what.end(), 6) != C.what.end();
   static constexpr int comp[3] = {0, 1, 2};
   int out_row[L][3];

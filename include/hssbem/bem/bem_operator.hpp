@@ -61,6 +61,7 @@ public:
     std::vector<int> col_pos;   ///< node -> column position in J, or -1 (kept at -1 between calls)
     std::vector<char> elem_mark; ///< triangle already listed (kept at 0 between calls)
     std::vector<int> elems;      ///< triangles touching the columns
+    std::vector<int> elem_pos;   ///< their corners' column positions (col_pos), three per triangle
     std::vector<int> regular;    ///< those a row sees through the 7-point rule
     std::vector<CornerSums> sums; ///< their corner sums
     std::vector<double> acc;      ///< per column node of a selection: its blocks summed over its triangles (per row point)
@@ -130,6 +131,8 @@ private:
   /// that do not contain the point.
   void point_integrals(const Vec3 &x, int row, const BlockRows &out, Workspace &ws, Mat3 *D) const;
   void elements_touching(const std::vector<int> &J, Workspace &ws) const;
+  /// ws.elem_pos for ws.elems and ws.col_pos.
+  void corner_positions(Workspace &ws) const;
   /// One row point of add_selected: x (collocation point of `row`, or any point when row < 0)
   /// and its requested components comp[0..nr) going to output rows out_row[0..nr).
   struct RowPoint {
