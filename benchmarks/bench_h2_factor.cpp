@@ -167,9 +167,9 @@ void print_levels(const H2FactorStats &st)
   for (const H2FactorLevelStats &l : st.levels)
     std::fprintf(stderr, "level %d: %d boxes, %.0f unknowns per box (max %d) -> skeleton %.0f (max %d), %lld eliminated, %.1f MB, %.2f s\n", l.level, l.boxes, l.mean_candidates,
                  l.max_candidates, l.mean_rank, l.max_rank, l.eliminated, l.bytes / 1048576.0, l.seconds);
-  std::fprintf(stderr, "factorization %.2f s: sketch %.2f (p = %d), first boxes %.2f, skeletons %.2f, eliminations %.2f (thread-s), merges %.2f, top %.2f (%d unknowns); %.3g Schur flop; %.1f MB (%s panels)\n",
+  std::fprintf(stderr, "factorization %.2f s: sketch %.2f (p = %d), first boxes %.2f, skeletons %.2f, eliminations %.2f (thread-s), merges %.2f, top %.2f (%d unknowns); %.3g Schur flop; %.1f MB (%s panels), working blocks at most %.1f MB\n",
                st.seconds(), st.time_sketch, st.sketch_columns, st.time_init, st.time_skeleton, st.time_eliminate, st.time_merge, st.time_top, st.top_size, st.flops_schur, st.bytes / 1048576.0,
-               st.single_panels ? "single" : "double");
+               st.single_panels ? "single" : "double", st.workspace_bytes / 1048576.0);
 }
 
 } // namespace

@@ -181,7 +181,7 @@ void right_multiply(DenseMatrix &B, const DenseMatrix &inv)
 
 void Frontier::precondition(int X, Step *st)
 {
-  DenseMatrix &XX = m_M[X].at(X);
+  DenseMatrix &XX = open(X, m_M[X].at(X));
   st->box = m_D[X];
   st->D = XX;
   if (!lu_regular(st->D, st->dpiv))
@@ -190,8 +190,8 @@ void Frontier::precondition(int X, Step *st)
   XX = DenseMatrix(m, m);
   for (int i = 0; i < m; ++i) XX(i, i) = 1.0;
   const DenseMatrix inv = inverse(st->D, st->dpiv);
-  for (int Y : neighbours(X)) right_multiply(m_M[Y].at(X), inv);
-  for (int Z : m_fill_cols[X]) right_multiply(m_F[Z].at(X), inv);
+  for (int Y : neighbours(X)) right_multiply(open(X, m_M[Y].at(X)), inv);
+  for (int Z : m_fill_cols[X]) right_multiply(open(X, m_F[Z].at(X)), inv);
   // X's columns as the far field sees them, K(F, C) Ŵᵀ and c Φ Ψᵀ: Ŵ ← A_XX⁻ᵀ Ŵ, Ψ likewise.
   for (DenseMatrix *W : {&m_Ew[X], &m_Psi[X]}) {
     if (W->n == 0 || W->m == 0) continue;
@@ -218,14 +218,14 @@ BoxSkeleton Frontier::skeleton(int X, double tol) const
     }
   // The Gram loses what lies below the rounding of its squared entries: below ~1e-7, the ID.
   if (tol < 1e-7) {
-    for (const auto &e : m_F[X]) parts.push_back(e.second);
-    for (int Z : m_fill_cols[X]) parts.push_back(transposed(m_F[Z].at(X)));
+    for (const auto &e : m_F[X]) parts.push_back(e.second.value());
+    for (int Z : m_fill_cols[X]) parts.push_back(transposed(m_F[Z].at(X).value()));
     return skeleton_from_features(parts, m, tol);
   }
   DenseMatrix G(m, m);
   for (const DenseMatrix &P : parts) gram_add(G, P, 'N');
-  for (const auto &e : m_F[X]) gram_add(G, e.second, 'N');
-  for (int Z : m_fill_cols[X]) gram_add(G, m_F[Z].at(X), 'T');
+  for (const auto &e : m_F[X]) gram_add(G, e.second.value(), 'N');
+  for (int Z : m_fill_cols[X]) gram_add(G, m_F[Z].at(X).value(), 'T');
   return skeleton_from_gram(std::move(G), tol);
 }
 
@@ -252,20 +252,21 @@ void Frontier::eliminate(int X, const BoxSkeleton &sk, Step *out, double *flops,
     B = columns_at(B, order);
     if (k > 0 && B.m > 0) lapack::gemm('N', 'N', B.m, r, k, -1.0, B.data(), B.ld(), sk.T.data(), sk.T.ld(), 1.0, B.data() + static_cast<std::size_t>(k) * B.m, B.ld());
   };
-  DenseMatrix &XX = m_M[X].at(X);
+  DenseMatrix &XX = open(X, m_M[X].at(X));
   row_op(XX);
   col_op(XX);
   for (int Y : nb) {
-    row_op(m_M[X].at(Y));
-    col_op(m_M[Y].at(X));
+    row_op(open(X, m_M[X].at(Y)));
+    col_op(open(X, m_M[Y].at(X)));
   }
   // Fill-in beyond the neighbours: the sparsified redundant part is below the tolerance.
   for (auto &e : m_F[X]) {
-    row_op(e.second);
-    e.second = dense::row_block(e.second, 0, k);
+    DenseMatrix &B = open(X, e.second);
+    row_op(B);
+    B = dense::row_block(B, 0, k);
   }
   for (int Z : m_fill_cols[X]) {
-    DenseMatrix &B = m_F[Z].at(X);
+    DenseMatrix &B = open(X, m_F[Z].at(X));
     col_op(B);
     keep_columns(B, k);
   }
@@ -283,7 +284,7 @@ void Frontier::eliminate(int X, const BoxSkeleton &sk, Step *out, double *flops,
   st.Up = DenseMatrix(r, nI);
   for (std::size_t t = 0; t < targets.size(); ++t) {
     const int Y = targets[t], rows = off[t + 1] - off[t];
-    const DenseMatrix &AYR = t == 0 ? XX : m_M[Y].at(X), &ARY = t == 0 ? XX : m_M[X].at(Y);
+    const DenseMatrix &AYR = t == 0 ? XX : m_M[Y].at(X).open(), &ARY = t == 0 ? XX : m_M[X].at(Y).open(); // opened above
     for (int j = 0; j < r; ++j) {
       const double *src = AYR.data() + static_cast<std::size_t>(k + j) * AYR.m;
       std::copy(src, src + rows, &st.Lp(off[t], j));
@@ -306,12 +307,12 @@ void Frontier::eliminate(int X, const BoxSkeleton &sk, Step *out, double *flops,
     for (std::size_t tz = 0; tz < targets.size(); ++tz) {
       const int Y = targets[ty], Z = targets[tz], my = off[ty + 1] - off[ty], mz = off[tz + 1] - off[tz];
       DenseMatrix *B;
-      if (ty == 0) B = &m_M[X].at(tz == 0 ? X : Z);
-      else if (tz == 0) B = &m_M[Y].at(X);
-      else if (m_part.is_close(Y, Z)) B = &m_M[Y].at(Z);
+      if (ty == 0) B = &open(X, m_M[X].at(tz == 0 ? X : Z));
+      else if (tz == 0) B = &open(X, m_M[Y].at(X));
+      else if (m_part.is_close(Y, Z)) B = &open(X, m_M[Y].at(Z));
       else {
         const auto it = m_F[Y].find(Z);
-        if (it != m_F[Y].end()) B = &it->second;
+        if (it != m_F[Y].end()) B = &open(X, it->second);
         else {
           fresh->push_back(NewFill{Y, Z, DenseMatrix(my, mz)});
           B = &fresh->back().B;
@@ -326,8 +327,9 @@ void Frontier::eliminate(int X, const BoxSkeleton &sk, Step *out, double *flops,
   // X keeps its skeleton.
   XX = dense::sub(XX, 0, k, 0, k);
   for (int Y : nb) {
-    m_M[X].at(Y) = dense::row_block(m_M[X].at(Y), 0, k);
-    keep_columns(m_M[Y].at(X), k);
+    DenseMatrix &XY = open(X, m_M[X].at(Y));
+    XY = dense::row_block(XY, 0, k);
+    keep_columns(open(X, m_M[Y].at(X)), k);
   }
   m_D[X] = st.S;
   m_Eu[X] = dense::rows_at(m_Eu[X], sk.S);
@@ -343,7 +345,7 @@ void Frontier::add_fill(std::vector<NewFill> &&fresh)
 {
   for (NewFill &f : fresh) {
     m_fill_cols[f.col].push_back(f.row);
-    m_F[f.row].emplace(f.col, std::move(f.B));
+    settle(m_F[f.row].emplace(f.col, StoredBlock(std::move(f.B))).first->second);
   }
   fresh.clear();
 }

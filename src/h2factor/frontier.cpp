@@ -43,8 +43,34 @@ DenseMatrix widened(const H2Block &B)
 
 } // namespace
 
-Frontier::Frontier(const H2Matrix &K, const FarFieldSketch &sketch, const Pattern &pattern)
-  : m_K(K), m_tree(K.tree()), m_part(K.partition()), m_sketch(sketch), m_pat(pattern), m_w(K.col_block())
+DenseMatrix &StoredBlock::open()
+{
+  if (m_parked) {
+    m_d.a.assign(m_s.begin(), m_s.end());
+    std::vector<float>().swap(m_s);
+    m_parked = false;
+  }
+  return m_d;
+}
+
+void StoredBlock::park()
+{
+  if (m_parked) return;
+  m_s.assign(m_d.a.begin(), m_d.a.end());
+  std::vector<double>().swap(m_d.a);
+  m_parked = true;
+}
+
+DenseMatrix StoredBlock::value() const
+{
+  if (!m_parked) return m_d;
+  DenseMatrix out(m_d.m, m_d.n);
+  std::copy(m_s.begin(), m_s.end(), out.a.begin());
+  return out;
+}
+
+Frontier::Frontier(const H2Matrix &K, const FarFieldSketch &sketch, const Pattern &pattern, bool single)
+  : m_K(K), m_tree(K.tree()), m_part(K.partition()), m_sketch(sketch), m_pat(pattern), m_w(K.col_block()), m_single(single)
 {
   const int nc = m_tree.num_clusters();
   m_in_front.assign(nc, 0);
@@ -56,6 +82,7 @@ Frontier::Frontier(const H2Matrix &K, const FarFieldSketch &sketch, const Patter
   m_M.resize(nc);
   m_F.resize(nc);
   m_fill_cols.resize(nc);
+  m_opened.resize(nc);
   m_front = m_tree.leaves();
   for (int c : m_front) {
     const Cluster &cl = m_tree.cluster(c);
@@ -79,8 +106,9 @@ Frontier::Frontier(const H2Matrix &K, const FarFieldSketch &sketch, const Patter
     for (int b : m_part.near[a]) {
       DenseMatrix B = leaf_near(a, b);
       add_regularisation(B, a, b);
-      m_M[a].emplace(b, std::move(B));
+      settle(m_M[a].emplace(b, StoredBlock(std::move(B))).first->second);
     }
+  note_bytes();
 }
 
 DenseMatrix Frontier::leaf_col_basis(int c) const
@@ -165,8 +193,10 @@ DenseMatrix Frontier::far_part(int P, int Q) const
       DenseMatrix out = multiply(multiply(restricted_basis(P, a, true), widened(find_far_block(m_K, a, b))), restricted_basis(Q, b, false), 'T');
       add_regularisation(out, P, Q);
       const auto it = m_F[P].find(Q);
-      if (it != m_F[P].end())
-        for (std::size_t i = 0; i < out.a.size(); ++i) out.a[i] += it->second.a[i];
+      if (it != m_F[P].end()) {
+        const DenseMatrix f = it->second.value();
+        for (std::size_t i = 0; i < out.a.size(); ++i) out.a[i] += f.a[i];
+      }
       return out;
     }
   throw std::logic_error("H2 factorization: no far block above a pair that is not close");
@@ -187,7 +217,7 @@ DenseMatrix Frontier::assemble_close(int P, int Q, int l) const
     int co = 0;
     for (int c : parts_of(Q, l)) {
       const auto it = m_M[b].find(c);
-      dense::put(B, ro, co, it != m_M[b].end() ? it->second : far_part(b, c));
+      dense::put(B, ro, co, it != m_M[b].end() ? it->second.value() : far_part(b, c));
       co += static_cast<int>(m_D[c].size());
     }
     ro += static_cast<int>(m_D[b].size());
@@ -226,11 +256,16 @@ void Frontier::merge(int l)
   for (int P : front) in_front[P] = 1;
   // Blocks between close new boxes, from the children's blocks and far parts; fill-in between
   // boxes whose parents are still not close stays fill-in, on the parents.
-  std::vector<std::map<int, DenseMatrix>> M(m_tree.num_clusters());
+  std::vector<std::map<int, StoredBlock>> M(m_tree.num_clusters());
   for (int P : front)
     for (int Q : m_part.close[P])
-      if (in_front[Q]) M[P].emplace(Q, assemble_close(P, Q, l));
-  std::vector<std::map<int, DenseMatrix>> F = merged_fill(l);
+      if (in_front[Q]) settle(M[P].emplace(Q, StoredBlock(assemble_close(P, Q, l))).first->second);
+  std::vector<std::map<int, StoredBlock>> F = merged_fill(l);
+  std::size_t added = 0;
+  for (const auto *store : {&M, &F})
+    for (const auto &row : *store)
+      for (const auto &e : row) added += e.second.bytes();
+  m_peak = std::max(m_peak, store_bytes() + added);
   m_M.swap(M);
   m_F.swap(F);
   for (int P : m_front) // boxes now inside a parent
@@ -248,7 +283,7 @@ void Frontier::merge(int l)
     for (const auto &e : m_F[P]) m_fill_cols[e.first].push_back(P);
 }
 
-std::vector<std::map<int, DenseMatrix>> Frontier::merged_fill(int l) const
+std::vector<std::map<int, StoredBlock>> Frontier::merged_fill(int l) const
 {
   const auto up = [&](int b) { return m_tree.cluster(b).level == l ? m_tree.cluster(b).parent : b; };
   const auto offset = [&](int P, int b) {
@@ -261,16 +296,42 @@ std::vector<std::map<int, DenseMatrix>> Frontier::merged_fill(int l) const
   };
   std::vector<std::map<int, DenseMatrix>> F(m_tree.num_clusters());
   for (int b : m_front)
-    for (const auto &[c, B] : m_F[b]) {
+    for (const auto &[c, stored] : m_F[b]) {
       const int P = up(b), Q = up(c);
       if (m_part.is_close(P, Q)) continue; // inside the close block of P and Q (assemble_close)
       auto it = F[P].find(Q);
       if (it == F[P].end()) it = F[P].emplace(Q, DenseMatrix(static_cast<int>(m_D[P].size()), static_cast<int>(m_D[Q].size()))).first;
       const int ro = offset(P, b), co = offset(Q, c);
+      const DenseMatrix B = stored.value();
       for (int j = 0; j < B.n; ++j)
         for (int i = 0; i < B.m; ++i) it->second(ro + i, co + j) += B(i, j);
     }
-  return F;
+  std::vector<std::map<int, StoredBlock>> out(F.size());
+  for (std::size_t P = 0; P < F.size(); ++P)
+    for (auto &[Q, B] : F[P]) settle(out[P].emplace(Q, StoredBlock(std::move(B))).first->second);
+  return out;
+}
+
+DenseMatrix &Frontier::open(int X, StoredBlock &b)
+{
+  if (m_single) m_opened[X].push_back(&b);
+  return b.open();
+}
+
+void Frontier::rest(int X)
+{
+  for (StoredBlock *b : m_opened[X]) b->park();
+  std::vector<StoredBlock *>().swap(m_opened[X]);
+}
+
+std::size_t Frontier::store_bytes() const
+{
+  std::size_t s = 0;
+  for (const auto *store : {&m_M, &m_F})
+    for (const auto &row : *store)
+      for (const auto &e : row) s += e.second.bytes();
+  for (int X : m_front) s += m_Eu[X].bytes() + m_Ew[X].bytes();
+  return s;
 }
 
 DenseMatrix Frontier::dense_top(std::vector<int> *dofs) const
@@ -282,7 +343,7 @@ DenseMatrix Frontier::dense_top(std::vector<int> *dofs) const
     for (std::size_t t = 0; t < m_front.size(); ++t) {
       const int P = m_front[s], Q = m_front[t];
       const auto it = m_M[P].find(Q);
-      dense::put(A, off[s], off[t], it != m_M[P].end() ? it->second : far_part(P, Q));
+      dense::put(A, off[s], off[t], it != m_M[P].end() ? it->second.value() : far_part(P, Q));
     }
   dofs->clear();
   for (int P : m_front) dofs->insert(dofs->end(), m_D[P].begin(), m_D[P].end());

@@ -6,6 +6,7 @@
 #include "hssbem/h2/h2_matrix.hpp"
 #include "hssbem/h2factor/far_sketch.hpp"
 
+#include <algorithm>
 #include <map>
 #include <vector>
 
@@ -46,6 +47,29 @@ struct Step {
 /// (a zero pivot, or the smallest |U_ii| at most 1e-14 of the largest |A_ij|, as for HSS).
 bool lu_regular(DenseMatrix &A, std::vector<int> &piv);
 
+/// A block of the frontier's store. With single-precision storage (a loose tolerance) it rests
+/// in single precision between the steps that change it: open() widens it to double for a step,
+/// park() narrows it again. The rounding (6e-8) lies far below such a tolerance, and the store
+/// (the near field in double at the first level, the bulk of the factorization's workspace)
+/// halves.
+class StoredBlock {
+public:
+  StoredBlock() = default;
+  explicit StoredBlock(DenseMatrix B) : m_d(std::move(B)) {}
+  int rows() const { return m_d.m; }
+  int cols() const { return m_d.n; }
+  DenseMatrix &open();
+  void park();
+  /// A copy in double, parked or not.
+  DenseMatrix value() const;
+  std::size_t bytes() const { return m_d.bytes() + m_s.size() * sizeof(float); }
+
+private:
+  DenseMatrix m_d;        ///< sizes always; entries while open
+  std::vector<float> m_s; ///< entries while parked
+  bool m_parked = false;
+};
+
 /// A fill-in block that an elimination created between two boxes that are not close; kept aside
 /// while other boxes of the same colour class are eliminated, then added with add_fill().
 struct NewFill {
@@ -61,8 +85,9 @@ struct BoxSkeleton {
 
 class Frontier {
 public:
-  /// The leaves of K, with their near blocks in A-hat form.
-  Frontier(const H2Matrix &K, const FarFieldSketch &sketch, const Pattern &pattern);
+  /// The leaves of K, with their near blocks in A-hat form; `single`: blocks rest in single
+  /// precision (StoredBlock).
+  Frontier(const H2Matrix &K, const FarFieldSketch &sketch, const Pattern &pattern, bool single);
 
   const std::vector<int> &boxes() const { return m_front; }
   const std::vector<int> &active(int X) const { return m_D[X]; }
@@ -86,8 +111,16 @@ public:
   /// with disjoint closed neighbourhoods may go through steps 0–3 concurrently (nothing else
   /// changes the block store then).
   void eliminate(int X, const BoxSkeleton &sk, Step *st, double *flops, std::vector<NewFill> *fresh);
+  /// Park the blocks that precondition() and eliminate() opened for X (single precision only).
+  void rest(int X);
   /// Store fill-in blocks that eliminate() created.
   void add_fill(std::vector<NewFill> &&fresh);
+  /// Bytes of the block store, fill-in and restricted bases now.
+  std::size_t store_bytes() const;
+  /// The largest store_bytes() seen at the checkpoints (construction, note_bytes(), and a merge,
+  /// which holds both levels' blocks for a moment).
+  std::size_t peak_bytes() const { return m_peak; }
+  void note_bytes() { m_peak = std::max(m_peak, store_bytes()); }
   /// The frontier of level l − 1 from that of level l.
   void merge(int l);
   /// All remaining unknowns as one dense matrix (their dof indices in *dofs).
@@ -100,7 +133,13 @@ private:
   DenseMatrix restricted_basis(int P, int a, bool rows) const;
   DenseMatrix far_part(int P, int Q) const;
   DenseMatrix assemble_close(int P, int Q, int l) const;
-  std::vector<std::map<int, DenseMatrix>> merged_fill(int l) const;
+  std::vector<std::map<int, StoredBlock>> merged_fill(int l) const;
+  /// b opened for box X's step (logged for rest(X)).
+  DenseMatrix &open(int X, StoredBlock &b);
+  void settle(StoredBlock &b) const
+  {
+    if (m_single) b.park();
+  }
   std::vector<int> parts_of(int P, int l) const;
 
   const H2Matrix &m_K;
@@ -114,8 +153,11 @@ private:
   std::vector<std::vector<int>> m_D;          ///< active unknowns of each frontier box
   std::vector<DenseMatrix> m_Eu, m_Ew;        ///< H² row and column bases restricted to m_D (expanded)
   std::vector<DenseMatrix> m_Phi, m_Psi;      ///< regularisation c Φ Ψᵀ: Φ and Ψ restricted to m_D (|m_D| × 6)
-  std::vector<std::map<int, DenseMatrix>> m_M; ///< blocks between close frontier boxes (current values)
-  std::vector<std::map<int, DenseMatrix>> m_F; ///< fill-in between boxes that are not close (updates only)
+  bool m_single;
+  std::vector<std::map<int, StoredBlock>> m_M; ///< blocks between close frontier boxes (current values)
+  std::vector<std::map<int, StoredBlock>> m_F; ///< fill-in between boxes that are not close (updates only)
+  std::vector<std::vector<StoredBlock *>> m_opened; ///< per box: blocks its step has opened
+  std::size_t m_peak = 0;
   std::vector<std::vector<int>> m_fill_cols;   ///< m_fill_cols[X]: boxes Z with a block m_F[Z][X]
 };
 

@@ -146,7 +146,9 @@ H2Factorization::H2Factorization(H2FactorCache &cache, const SystemSelection &se
   m_slot = m_f->pattern.slot;
 
   Timer timer;
-  h2f::Frontier front(m_K, *sketch, m_f->pattern);
+  // Blocks rest in single precision with the panels, unless everything goes to the dense top at
+  // once: its singularity test (a pure-traction pattern without regularisation) needs them exact.
+  h2f::Frontier front(m_K, *sketch, m_f->pattern, m_stats.single_panels && m_f->pattern.dofs() > options.top_size);
   const int l0 = first_level(tree, options.leaf_size);
   for (int l = tree.levels() - 1; l > l0; --l) front.merge(l);
   m_stats.time_init = timer.seconds();
@@ -171,6 +173,7 @@ H2Factorization::H2Factorization(H2FactorCache &cache, const SystemSelection &se
           t_skel[X] = t.seconds();
           t.restart();
           front.eliminate(X, sk, &steps[X], &flops[X], &fills[X]);
+          front.rest(X);
           t_elim[X] = t.seconds();
           steps[X].candidates = m;
         });
@@ -196,6 +199,7 @@ H2Factorization::H2Factorization(H2FactorCache &cache, const SystemSelection &se
       ls.mean_candidates /= ls.boxes;
       ls.mean_rank /= ls.boxes;
     }
+    front.note_bytes();
     {
       PhaseScope phase(Phase::H2Merge);
       Timer t;
@@ -212,6 +216,7 @@ H2Factorization::H2Factorization(H2FactorCache &cache, const SystemSelection &se
   if (!h2f::lu_regular(m_f->top_lu, m_f->top_piv))
     throw H2Breakdown("H2 factorization broke down: the top block (" + std::to_string(n) + " unknowns) is singular to working precision");
   m_stats.time_top = timer.seconds();
+  m_stats.workspace_bytes = std::max(front.peak_bytes(), front.store_bytes() + m_f->top_lu.bytes());
   m_stats.top_size = n;
   m_stats.top_bytes = m_f->top_lu.bytes();
   m_stats.bytes = m_stats.top_bytes;

@@ -214,8 +214,8 @@ PetscErrorCode ViewFactorization_Private(PetscViewer viewer, const hssbem::H2Fac
   PetscFunctionBegin;
   PetscCall(PetscViewerASCIIPrintf(viewer, "factorization: %.2f s (sketch %.2f, first boxes %.2f, skeletons %.2f, eliminations %.2f, merges %.2f, top %.2f; thread-seconds for skeletons and eliminations)\n",
                                    st.seconds(), st.time_sketch, st.time_init, st.time_skeleton, st.time_eliminate, st.time_merge, st.time_top));
-  PetscCall(PetscViewerASCIIPrintf(viewer, "factors: %.1f MB (%s panels), dense top %d unknowns (%.1f MB), sketch of %d vectors\n", st.bytes / 1048576.0, st.single_panels ? "single-precision" : "double-precision",
-                                   st.top_size, st.top_bytes / 1048576.0, st.sketch_columns));
+  PetscCall(PetscViewerASCIIPrintf(viewer, "factors: %.1f MB (%s panels and working blocks; those peaked at %.1f MB), dense top %d unknowns (%.1f MB), sketch of %d vectors\n", st.bytes / 1048576.0,
+                                   st.single_panels ? "single-precision" : "double-precision", st.workspace_bytes / 1048576.0, st.top_size, st.top_bytes / 1048576.0, st.sketch_columns));
   for (const hssbem::H2FactorLevelStats &l : st.levels)
     PetscCall(PetscViewerASCIIPrintf(viewer, "level %d: %d boxes, %.0f unknowns per box (max %d) -> skeleton %.0f (max %d), %lld eliminated, %.1f MB, %.2f s\n", l.level, l.boxes, l.mean_candidates,
                                      l.max_candidates, l.mean_rank, l.max_rank, l.eliminated, l.bytes / 1048576.0, l.seconds));

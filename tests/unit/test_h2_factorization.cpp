@@ -151,6 +151,40 @@ TEST(H2FactorAccuracy, LooseToleranceIsApproximate)
   EXPECT_LE(err, 1.0);
 }
 
+TEST(H2FactorMemory, SinglePrecisionWorkingBlocksHalveTheStore)
+{
+  // At a loose tolerance the working blocks rest in single precision between the steps that
+  // change them (with the panels): the factorization's largest working store falls to about half
+  // and the solution moves by far less than the tolerance.
+  auto L = load("cardioid_fine.msh");
+  const int n = L->op->num_nodes();
+  H2Options o;
+  o.rel_tol = 1e-6;
+  o.leaf_size = 32;
+  const H2Matrix K = compress_bem_operator_h2(*L->op, o);
+  const SystemSelection sel = selection(n, random_pattern(n, 0.5, 17));
+  H2FactorCache cache(K);
+  H2FactorOptions fo;
+  fo.rel_tol = 1e-4;
+  fo.top_size = 0;
+  fo.single_panels = 0;
+  const H2Factorization Fd(cache, sel, fo);
+  fo.single_panels = 1;
+  const H2Factorization Fs(cache, sel, fo);
+  const std::vector<double> b = random_vector(3L * n, 5);
+  std::vector<double> xd(b.size()), xs(b.size());
+  Fd.solve(b.data(), xd.data());
+  Fs.solve(b.data(), xs.data());
+  const double moved = rel(xs, xd), err = rel(xs, dense_solve(dense_a(dense_k(*L->op, 6), n, 6, sel.displacement_known), b));
+  const std::size_t wd = Fd.stats().workspace_bytes, ws = Fs.stats().workspace_bytes;
+  std::printf("working store %.2f MB in double, %.2f MB at rest in single; solutions differ by %.2e, error vs dense LU %.2e\n", wd / 1e6, ws / 1e6, moved, err);
+  EXPECT_GT(ws, 0u);
+  EXPECT_LT(ws, 0.65 * wd);
+  EXPECT_GT(ws, 0.4 * wd); // the restricted bases and the open blocks stay in double
+  EXPECT_LE(moved, 1e-2 * fo.rel_tol);
+  EXPECT_LE(err, 10 * fo.rel_tol);
+}
+
 TEST(H2FactorPatterns, TwoPatternsOneCompression)
 {
   // One H² matrix (and one cached sketch) serves a second pattern with 30 % of the vertices

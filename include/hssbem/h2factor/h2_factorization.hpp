@@ -48,7 +48,7 @@ struct H2FactorOptions {
   int leaf_size = 0;       ///< dof nodes per box at the first level factored (≥ the H² leaves); 0: the H² leaves
   int sketch_columns = 0;  ///< random vectors of the far-field sketch; 0: chosen from rel_tol
   int top_size = 2000;     ///< factor the rest densely once at most this many unknowns remain
-  int single_panels = -1;  ///< elimination panels in single precision: 1, 0, or -1 (when rel_tol ≥ 1e-5)
+  int single_panels = -1;  ///< elimination panels and the working blocks at rest in single precision: 1, 0, or -1 (when rel_tol ≥ 1e-5)
 };
 
 /// A singular pivot block (e.g. a pure-traction problem without its rigid-mode regularisation).
@@ -73,6 +73,9 @@ struct H2FactorStats {
   std::vector<H2FactorLevelStats> levels; ///< from the finest level factored up
   int top_size = 0;                       ///< unknowns of the dense top block
   std::size_t bytes = 0, top_bytes = 0;   ///< all factors; the top's LU
+  /// The largest working store of the factorization (blocks between active boxes, fill-in,
+  /// restricted bases), which is freed when it ends.
+  std::size_t workspace_bytes = 0;
   double time_sketch = 0;                 ///< far-field sketch (0 when cached)
   double time_init = 0, time_skeleton = 0, time_eliminate = 0, time_merge = 0, time_top = 0;
   double flops_schur = 0;                 ///< of the Schur complement products
