@@ -294,21 +294,30 @@ std::vector<std::map<int, StoredBlock>> Frontier::merged_fill(int l) const
     }
     return o;
   };
-  std::vector<std::map<int, DenseMatrix>> F(m_tree.num_clusters());
-  for (int b : m_front)
-    for (const auto &[c, stored] : m_F[b]) {
-      const int P = up(b), Q = up(c);
-      if (m_part.is_close(P, Q)) continue; // inside the close block of P and Q (assemble_close)
-      auto it = F[P].find(Q);
-      if (it == F[P].end()) it = F[P].emplace(Q, DenseMatrix(static_cast<int>(m_D[P].size()), static_cast<int>(m_D[Q].size()))).first;
-      const int ro = offset(P, b), co = offset(Q, c);
-      const DenseMatrix B = stored.value();
-      for (int j = 0; j < B.n; ++j)
-        for (int i = 0; i < B.m; ++i) it->second(ro + i, co + j) += B(i, j);
+  // Parent by parent (its row of fill comes from its own parts only), each parked when complete.
+  std::vector<std::map<int, StoredBlock>> out(m_tree.num_clusters());
+  std::vector<int> parents;
+  for (int b : m_front) parents.push_back(up(b));
+  std::sort(parents.begin(), parents.end());
+  parents.erase(std::unique(parents.begin(), parents.end()), parents.end());
+  std::map<int, DenseMatrix> F;
+  for (int P : parents) {
+    F.clear();
+    for (int b : parts_of(P, l)) {
+      if (!m_in_front[b]) continue;
+      for (const auto &[c, stored] : m_F[b]) {
+        const int Q = up(c);
+        if (m_part.is_close(P, Q)) continue; // inside the close block of P and Q (assemble_close)
+        auto it = F.find(Q);
+        if (it == F.end()) it = F.emplace(Q, DenseMatrix(static_cast<int>(m_D[P].size()), static_cast<int>(m_D[Q].size()))).first;
+        const int ro = offset(P, b), co = offset(Q, c);
+        const DenseMatrix B = stored.value();
+        for (int j = 0; j < B.n; ++j)
+          for (int i = 0; i < B.m; ++i) it->second(ro + i, co + j) += B(i, j);
+      }
     }
-  std::vector<std::map<int, StoredBlock>> out(F.size());
-  for (std::size_t P = 0; P < F.size(); ++P)
-    for (auto &[Q, B] : F[P]) settle(out[P].emplace(Q, StoredBlock(std::move(B))).first->second);
+    for (auto &[Q, B] : F) settle(out[P].emplace(Q, StoredBlock(std::move(B))).first->second);
+  }
   return out;
 }
 

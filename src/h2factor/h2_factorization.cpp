@@ -174,6 +174,7 @@ H2Factorization::H2Factorization(H2FactorCache &cache, const SystemSelection &se
           t.restart();
           front.eliminate(X, sk, &steps[X], &flops[X], &fills[X]);
           front.rest(X);
+          if (m_stats.single_panels) steps[X].demote();
           t_elim[X] = t.seconds();
           steps[X].candidates = m;
         });
@@ -189,7 +190,6 @@ H2Factorization::H2Factorization(H2FactorCache &cache, const SystemSelection &se
           m_stats.flops_schur += flops[X];
           m_stats.time_skeleton += t_skel[X];
           m_stats.time_eliminate += t_elim[X];
-          if (m_stats.single_panels) steps[X].demote();
           ls.bytes += steps[X].bytes();
           m_f->steps.push_back(std::move(steps[X]));
         }
