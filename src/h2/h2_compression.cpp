@@ -210,7 +210,12 @@ H2Matrix compress_bem_operator_h2(const BemOperator &op, const H2Options &option
       finish_far_block(B, options);
       early_far[a].push_back(std::move(B));
     });
-    for (int l = tree.levels() - 1; l >= 1; --l) skel->skeletonize_level(l, sources, &part.has_far, &part.has_far, ranks > 1 ? &skip : nullptr, sync);
+    // Each level's interpolation matrices go to their stored form as soon as the level is done,
+    // so that the far blocks built meanwhile do not sit beside all the bases in double.
+    for (int l = tree.levels() - 1; l >= 1; --l) {
+      skel->skeletonize_level(l, sources, &part.has_far, &part.has_far, ranks > 1 ? &skip : nullptr, sync);
+      K.store_level_bases(l, options.single_precision);
+    }
   } catch (const PeerFault &) {
     throw;
   } catch (...) {

@@ -123,23 +123,43 @@ NestedBasis H2Matrix::basis(int c) const
   return b;
 }
 
-void H2Matrix::store_bases(bool single)
+void H2Matrix::prepare_stored_bases()
 {
-  const int nc = m_tree.num_clusters();
+  const std::size_t nc = static_cast<std::size_t>(m_tree.num_clusters());
+  if (m_basis_stored.size() == nc) return;
   m_U.assign(nc, {});
   m_V.assign(nc, {});
   m_row_forced.assign(nc, 0);
   m_col_forced.assign(nc, 0);
+  m_basis_stored.assign(nc, 0);
+}
+
+void H2Matrix::store_basis(int c, bool single)
+{
+  if (m_basis_stored[c] || !holds(c)) return; // another rank's: its skeletons only
+  NestedBasis &b = m_bases[c];
+  m_U[c] = StoredInterpolation::from(b.U, basis_candidates(m_tree, m_bases, c, m_row_block, true), b.row_skel, single);
+  m_V[c] = StoredInterpolation::from(b.V, basis_candidates(m_tree, m_bases, c, m_col_block, false), b.col_skel, single);
+  m_row_forced[c] = b.row_forced;
+  m_col_forced[c] = b.col_forced;
+  b.U = DenseMatrix();
+  b.V = DenseMatrix();
+  m_basis_stored[c] = 1;
+}
+
+void H2Matrix::store_level_bases(int l, bool single)
+{
+  prepare_stored_bases();
+  for_each_cluster(m_tree.clusters_at_level(l), [&](int c) { store_basis(c, single); });
+}
+
+void H2Matrix::store_bases(bool single)
+{
+  prepare_stored_bases();
+  const int nc = m_tree.num_clusters();
   std::vector<int> all(nc);
   std::iota(all.begin(), all.end(), 0);
-  for_each_cluster(all, [&](int c) {
-    if (!holds(c)) return; // another rank's: its skeletons only
-    const NestedBasis &b = m_bases[c];
-    m_U[c] = StoredInterpolation::from(b.U, basis_candidates(m_tree, m_bases, c, m_row_block, true), b.row_skel, single);
-    m_V[c] = StoredInterpolation::from(b.V, basis_candidates(m_tree, m_bases, c, m_col_block, false), b.col_skel, single);
-    m_row_forced[c] = b.row_forced;
-    m_col_forced[c] = b.col_forced;
-  });
+  for_each_cluster(all, [&](int c) { store_basis(c, single); });
   m_row_skel.resize(nc);
   m_col_skel.resize(nc);
   for (int c = 0; c < nc; ++c) {
@@ -148,6 +168,7 @@ void H2Matrix::store_bases(bool single)
   }
   m_bases.clear();
   m_bases.shrink_to_fit();
+  std::vector<char>().swap(m_basis_stored);
 }
 
 std::vector<DenseMatrix> H2Matrix::skeleton_far_field(const double *X, int ldx, int nrhs) const

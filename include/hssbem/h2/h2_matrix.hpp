@@ -142,6 +142,9 @@ public:
   /// and empties this.
   std::vector<NestedBasis> &bases() { return m_bases; }
   void store_bases(bool single);
+  /// The interpolation matrices of level l's clusters (held here) into the stored form now,
+  /// their U and V in bases() freed; the skeletons stay until store_bases().
+  void store_level_bases(int l, bool single);
   /// Far blocks of row cluster a: K(S_a, C_b), one per b in partition().far[a], same order.
   std::vector<H2Block> &far_blocks(int a) { return m_far[a]; }
   const std::vector<H2Block> &far_blocks(int a) const { return m_far[a]; }
@@ -187,6 +190,9 @@ private:
   std::vector<std::vector<int>> m_row_skel, m_col_skel;
   std::vector<int> m_row_forced, m_col_forced;
   std::vector<StoredInterpolation> m_U, m_V;
+  std::vector<char> m_basis_stored; ///< while the compression runs: c's U and V are in m_U, m_V
+  void store_basis(int c, bool single);
+  void prepare_stored_bases();
   std::vector<std::vector<H2Block>> m_far, m_near;
   std::vector<int> m_owner;
   int m_rank = 0;
