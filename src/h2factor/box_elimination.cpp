@@ -193,7 +193,7 @@ void Frontier::precondition(int X, Step *st)
   for (int Y : neighbours(X)) right_multiply(open(X, m_M[Y].at(X)), inv);
   for (int Z : m_fill_cols[X]) right_multiply(open(X, m_F[Z].at(X)), inv);
   // X's columns as the far field sees them, K(F, C) Ŵᵀ and c Φ Ψᵀ: Ŵ ← A_XX⁻ᵀ Ŵ, Ψ likewise.
-  for (DenseMatrix *W : {&m_Ew[X], &m_Psi[X]}) {
+  for (DenseMatrix *W : {&open(X, m_Ew[X]), &m_Psi[X]}) {
     if (W->n == 0 || W->m == 0) continue;
     DenseMatrix out(W->m, W->n);
     lapack::gemm('T', 'N', m, W->n, m, 1.0, inv.data(), inv.ld(), W->data(), W->ld(), 0.0, out.data(), out.ld());
@@ -208,8 +208,8 @@ BoxSkeleton Frontier::skeleton(int X, double tol) const
 {
   const int m = static_cast<int>(m_D[X].size());
   std::vector<DenseMatrix> parts; // features as columns (rows = candidates)
-  if (m_Eu[X].n > 0 && m_sketch.row[X].n > 0) parts.push_back(product(m_Eu[X], m_sketch.row[X]));
-  if (m_Ew[X].n > 0 && m_sketch.col[X].n > 0) parts.push_back(product(m_Ew[X], m_sketch.col[X]));
+  if (m_Eu[X].cols() > 0 && m_sketch.row[X].n > 0) parts.push_back(product(m_Eu[X].value(), m_sketch.row[X]));
+  if (m_Ew[X].cols() > 0 && m_sketch.col[X].n > 0) parts.push_back(product(m_Ew[X].value(), m_sketch.col[X]));
   if (m_pat.regularised())
     for (const DenseMatrix *R : {&m_Phi[X], &m_Psi[X]}) {
       DenseMatrix P = *R;
@@ -332,8 +332,10 @@ void Frontier::eliminate(int X, const BoxSkeleton &sk, Step *out, double *flops,
     keep_columns(open(X, m_M[Y].at(X)), k);
   }
   m_D[X] = st.S;
-  m_Eu[X] = dense::rows_at(m_Eu[X], sk.S);
-  m_Ew[X] = dense::rows_at(m_Ew[X], sk.S);
+  for (StoredBlock *E : {&m_Eu[X], &m_Ew[X]}) {
+    DenseMatrix &e = open(X, *E);
+    e = dense::rows_at(e, sk.S);
+  }
   if (m_pat.regularised()) {
     m_Phi[X] = dense::rows_at(m_Phi[X], sk.S);
     m_Psi[X] = dense::rows_at(m_Psi[X], sk.S);

@@ -89,8 +89,10 @@ Frontier::Frontier(const H2Matrix &K, const FarFieldSketch &sketch, const Patter
     m_in_front[c] = 1;
     m_D[c].resize(3 * static_cast<std::size_t>(cl.size()));
     for (int i = 0; i < 3 * cl.size(); ++i) m_D[c][i] = 3 * cl.begin + i;
-    m_Eu[c] = basis_side(K, c, true);
-    m_Ew[c] = leaf_col_basis(c);
+    m_Eu[c] = StoredBlock(basis_side(K, c, true));
+    m_Ew[c] = StoredBlock(leaf_col_basis(c));
+    settle(m_Eu[c]);
+    settle(m_Ew[c]);
     if (m_pat.regularised()) {
       const std::size_t N = static_cast<std::size_t>(m_pat.dofs());
       m_Phi[c] = DenseMatrix(static_cast<int>(m_D[c].size()), 6);
@@ -160,7 +162,7 @@ bool Frontier::level_has_far_field(int l) const
 {
   if (m_pat.regularised()) return true;
   for (int X : m_tree.clusters_at_level(l))
-    if (m_in_front[X] && (m_Eu[X].n > 0 || m_Ew[X].n > 0 || !m_F[X].empty() || !m_fill_cols[X].empty())) return true;
+    if (m_in_front[X] && (m_Eu[X].cols() > 0 || m_Ew[X].cols() > 0 || !m_F[X].empty() || !m_fill_cols[X].empty())) return true;
   return false;
 }
 
@@ -174,7 +176,7 @@ std::vector<int> Frontier::neighbours(int X) const
 
 DenseMatrix Frontier::restricted_basis(int P, int a, bool rows) const
 {
-  DenseMatrix E = rows ? m_Eu[P] : m_Ew[P];
+  DenseMatrix E = (rows ? m_Eu[P] : m_Ew[P]).value();
   for (int x = P; x != a;) {
     const int par = m_tree.cluster(x).parent, left = m_tree.cluster(par).left;
     const DenseMatrix B = basis_side(m_K, par, rows);
@@ -243,13 +245,15 @@ void Frontier::merge(int l)
     }
     for (int rows = 0; rows < 2; ++rows) {
       const DenseMatrix B = basis_side(m_K, P, rows);
-      const DenseMatrix &Ea = rows ? m_Eu[a] : m_Ew[a], &Eb = rows ? m_Eu[b] : m_Ew[b];
-      DenseMatrix &E = rows ? m_Eu[P] : m_Ew[P];
-      E = DenseMatrix(static_cast<int>(m_D[P].size()), B.n);
+      const DenseMatrix Ea = (rows ? m_Eu[a] : m_Ew[a]).value(), Eb = (rows ? m_Eu[b] : m_Ew[b]).value();
+      StoredBlock &stored = rows ? m_Eu[P] : m_Ew[P];
+      stored = StoredBlock(DenseMatrix(static_cast<int>(m_D[P].size()), B.n));
+      DenseMatrix &E = stored.open();
       if (B.n == 0) continue;
       if (B.m != Ea.n + Eb.n) throw std::logic_error("H2 factorization: a basis does not match its children's");
       if (Ea.m > 0 && Ea.n > 0) lapack::gemm('N', 'N', Ea.m, B.n, Ea.n, 1.0, Ea.data(), Ea.ld(), B.data(), B.ld(), 0.0, E.data(), E.ld());
       if (Eb.m > 0 && Eb.n > 0) lapack::gemm('N', 'N', Eb.m, B.n, Eb.n, 1.0, Eb.data(), Eb.ld(), B.data() + Ea.n, B.ld(), 0.0, E.data() + Ea.m, E.ld());
+      settle(stored);
     }
   }
   std::vector<char> in_front(m_tree.num_clusters(), 0);
@@ -271,8 +275,8 @@ void Frontier::merge(int l)
   for (int P : m_front) // boxes now inside a parent
     if (!in_front[P]) {
       m_D[P].clear();
-      m_Eu[P] = DenseMatrix();
-      m_Ew[P] = DenseMatrix();
+      m_Eu[P] = StoredBlock();
+      m_Ew[P] = StoredBlock();
       m_Phi[P] = DenseMatrix();
       m_Psi[P] = DenseMatrix();
     }

@@ -151,7 +151,7 @@ private:
   std::vector<int> m_front;
   std::vector<char> m_in_front;
   std::vector<std::vector<int>> m_D;          ///< active unknowns of each frontier box
-  std::vector<DenseMatrix> m_Eu, m_Ew;        ///< H² row and column bases restricted to m_D (expanded)
+  std::vector<StoredBlock> m_Eu, m_Ew;        ///< H² row and column bases restricted to m_D (expanded; at rest like the blocks)
   std::vector<DenseMatrix> m_Phi, m_Psi;      ///< regularisation c Φ Ψᵀ: Φ and Ψ restricted to m_D (|m_D| × 6)
   bool m_single;
   std::vector<std::map<int, StoredBlock>> m_M; ///< blocks between close frontier boxes (current values)
