@@ -2,10 +2,12 @@
 // into its parents, and the dense top (see frontier.hpp).
 #include "frontier.hpp"
 
+#include "hssbem/core/blas_threads.hpp"
 #include "hssbem/core/dense_ops.hpp"
 #include "hssbem/core/lapack.hpp"
 
 #include <algorithm>
+#include <numeric>
 #include <stdexcept>
 
 namespace hssbem::h2f {
@@ -233,9 +235,11 @@ void Frontier::merge(int l)
   for (int c : m_tree.leaves())
     if (m_tree.cluster(c).level < l - 1) front.push_back(c);
   // Unknowns and restricted bases of the new boxes: children's, concatenated and transferred.
-  for (int P : front) {
+  std::vector<int> parents;
+  for (int P : front)
+    if (m_tree.cluster(P).level == l - 1 && m_tree.cluster(P).left >= 0) parents.push_back(P);
+  for_each_cluster(parents, [&](int P) {
     const Cluster &cp = m_tree.cluster(P);
-    if (!(cp.level == l - 1 && cp.left >= 0)) continue;
     const int a = cp.left, b = cp.right;
     m_D[P] = m_D[a];
     m_D[P].insert(m_D[P].end(), m_D[b].begin(), m_D[b].end());
@@ -255,15 +259,16 @@ void Frontier::merge(int l)
       if (Eb.m > 0 && Eb.n > 0) lapack::gemm('N', 'N', Eb.m, B.n, Eb.n, 1.0, Eb.data(), Eb.ld(), B.data() + Ea.n, B.ld(), 0.0, E.data() + Ea.m, E.ld());
       settle(stored);
     }
-  }
+  });
   std::vector<char> in_front(m_tree.num_clusters(), 0);
   for (int P : front) in_front[P] = 1;
   // Blocks between close new boxes, from the children's blocks and far parts; fill-in between
   // boxes whose parents are still not close stays fill-in, on the parents.
   std::vector<std::map<int, StoredBlock>> M(m_tree.num_clusters());
-  for (int P : front)
+  for_each_cluster(front, [&](int P) {
     for (int Q : m_part.close[P])
       if (in_front[Q]) settle(M[P].emplace(Q, StoredBlock(assemble_close(P, Q, l))).first->second);
+  });
   std::vector<std::map<int, StoredBlock>> F = merged_fill(l);
   std::size_t added = 0;
   for (const auto *store : {&M, &F})
@@ -304,9 +309,8 @@ std::vector<std::map<int, StoredBlock>> Frontier::merged_fill(int l) const
   for (int b : m_front) parents.push_back(up(b));
   std::sort(parents.begin(), parents.end());
   parents.erase(std::unique(parents.begin(), parents.end()), parents.end());
-  std::map<int, DenseMatrix> F;
-  for (int P : parents) {
-    F.clear();
+  for_each_cluster(parents, [&](int P) {
+    std::map<int, DenseMatrix> F;
     for (int b : parts_of(P, l)) {
       if (!m_in_front[b]) continue;
       for (const auto &[c, stored] : m_F[b]) {
@@ -321,7 +325,7 @@ std::vector<std::map<int, StoredBlock>> Frontier::merged_fill(int l) const
       }
     }
     for (auto &[Q, B] : F) settle(out[P].emplace(Q, StoredBlock(std::move(B))).first->second);
-  }
+  });
   return out;
 }
 
@@ -352,12 +356,16 @@ DenseMatrix Frontier::dense_top(std::vector<int> *dofs) const
   std::vector<int> off(m_front.size() + 1, 0);
   for (std::size_t t = 0; t < m_front.size(); ++t) off[t + 1] = off[t] + static_cast<int>(m_D[m_front[t]].size());
   DenseMatrix A(off.back(), off.back());
-  for (std::size_t s = 0; s < m_front.size(); ++s)
+  std::vector<int> block_rows(m_front.size());
+  std::iota(block_rows.begin(), block_rows.end(), 0);
+  for_each_cluster(block_rows, [&](int s) {
+    const int P = m_front[s];
     for (std::size_t t = 0; t < m_front.size(); ++t) {
-      const int P = m_front[s], Q = m_front[t];
+      const int Q = m_front[t];
       const auto it = m_M[P].find(Q);
       dense::put(A, off[s], off[t], it != m_M[P].end() ? it->second.value() : far_part(P, Q));
     }
+  });
   dofs->clear();
   for (int P : m_front) dofs->insert(dofs->end(), m_D[P].begin(), m_D[P].end());
   return A;
