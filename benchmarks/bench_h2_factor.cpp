@@ -4,7 +4,7 @@
 // of the same system in the same run. Prints one CSV row (see --header); levels on stderr.
 //
 //   bench_h2_factor --mesh FILE [--tol 1e-5] [--leaf 64] [--single 1] [--ftol 3e-3] [--fleaf 0]
-//                   [--top 2000] [--sketch 0] [--mode pc|direct] [--rtol 1e-8] [--refactor 1] [--ierr 3]
+//                   [--top 2000] [--mixed-top 4000] [--sketch 0] [--mode pc|direct] [--rtol 1e-8] [--refactor 1] [--ierr 3]
 //                   [--dense 0|1] [--header]
 //
 // Problem (as bench_h2): the nodes below the median height clamped, the others loaded by a
@@ -57,6 +57,7 @@ Args parse(int argc, char **argv)
     else if (k == "--ftol") a.factor.rel_tol = std::stod(next());
     else if (k == "--fleaf") a.factor.leaf_size = std::stoi(next());
     else if (k == "--top") a.factor.top_size = std::stoi(next());
+    else if (k == "--mixed-top") a.factor.mixed_top_from = std::stoi(next());
     else if (k == "--sketch") a.factor.sketch_columns = std::stoi(next());
     else if (k == "--mode") a.mode = next();
     else if (k == "--rtol") a.rtol = std::stod(next());
@@ -167,8 +168,8 @@ void print_levels(const H2FactorStats &st)
   for (const H2FactorLevelStats &l : st.levels)
     std::fprintf(stderr, "level %d: %d boxes, %.0f unknowns per box (max %d) -> skeleton %.0f (max %d), %lld eliminated, %.1f MB, %.2f s\n", l.level, l.boxes, l.mean_candidates,
                  l.max_candidates, l.mean_rank, l.max_rank, l.eliminated, l.bytes / 1048576.0, l.seconds);
-  std::fprintf(stderr, "factorization %.2f s: sketch %.2f (p = %d), first boxes %.2f, skeletons %.2f, eliminations %.2f (thread-s), merges %.2f, top %.2f (%d unknowns); %.3g Schur flop; %.1f MB (%s panels), working blocks at most %.1f MB\n",
-               st.seconds(), st.time_sketch, st.sketch_columns, st.time_init, st.time_skeleton, st.time_eliminate, st.time_merge, st.time_top, st.top_size, st.flops_schur, st.bytes / 1048576.0,
+  std::fprintf(stderr, "factorization %.2f s: sketch %.2f (p = %d), first boxes %.2f, skeletons %.2f, eliminations %.2f (thread-s), merges %.2f, top %.2f (%d unknowns%s); %.3g Schur flop; %.1f MB (%s panels), working blocks at most %.1f MB\n",
+               st.seconds(), st.time_sketch, st.sketch_columns, st.time_init, st.time_skeleton, st.time_eliminate, st.time_merge, st.time_top, st.top_size, st.top_mixed ? ", single-precision LU refined in double" : "", st.flops_schur, st.bytes / 1048576.0,
                st.single_panels ? "single" : "double", st.workspace_bytes / 1048576.0);
 }
 

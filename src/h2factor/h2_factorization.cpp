@@ -2,6 +2,7 @@
 #include "hssbem/h2factor/h2_factorization.hpp"
 
 #include "frontier.hpp"
+#include "top_block.hpp"
 
 #include "hssbem/bem/rigid_modes.hpp"
 #include "hssbem/compress/pattern_columns.hpp"
@@ -22,8 +23,7 @@ struct H2Factorization::Factors {
   h2f::Pattern pattern;
   std::vector<h2f::Step> steps;
   std::vector<int> top_dofs;
-  DenseMatrix top_lu;
-  std::vector<int> top_piv;
+  h2f::TopBlock top;
 };
 
 int default_sketch_columns(double rel_tol)
@@ -85,11 +85,14 @@ h2f::Pattern make_pattern(const H2Matrix &K, const SystemSelection &sel, const s
 }
 
 /// The level of the first boxes factored: the highest whose clusters hold at most leaf_size
-/// nodes (0: the leaves' level).
-int first_level(const ClusterTree &tree, int leaf_size)
+/// nodes. With leaf_size 0 the leaves' level, or below rel_tol 1e-5 the level above it: there a
+/// leaf's skeleton keeps most of its unknowns (20k sphere: 155 of 157 at 1e-7, 143 at 1e-6, 121 at
+/// 1e-5), so its elimination costs a level's time for little (starting one level up: 1e-7 34.4 ->
+/// 29.8 s, 1e-6 23.5 -> 20.8 s).
+int first_level(const ClusterTree &tree, int leaf_size, double rel_tol)
 {
   int l = tree.levels() - 1;
-  if (leaf_size <= 0) return l;
+  if (leaf_size <= 0) return rel_tol < 1e-5 ? std::max(1, l - 1) : l;
   while (l > 1) {
     int largest = 0;
     for (int c : tree.clusters_at_level(l - 1)) largest = std::max(largest, tree.cluster(c).size());
@@ -149,7 +152,7 @@ H2Factorization::H2Factorization(H2FactorCache &cache, const SystemSelection &se
   // Blocks rest in single precision with the panels, unless everything goes to the dense top at
   // once: its singularity test (a pure-traction pattern without regularisation) needs them exact.
   h2f::Frontier front(m_K, *sketch, m_f->pattern, m_stats.single_panels && m_f->pattern.dofs() > options.top_size);
-  const int l0 = first_level(tree, options.leaf_size);
+  const int l0 = first_level(tree, options.leaf_size, options.rel_tol);
   for (int l = tree.levels() - 1; l > l0; --l) front.merge(l);
   m_stats.time_init = timer.seconds();
   for (int l = l0; l >= 1; --l) {
@@ -211,14 +214,13 @@ H2Factorization::H2Factorization(H2FactorCache &cache, const SystemSelection &se
   }
   PhaseScope phase(Phase::H2Top);
   timer.restart();
-  m_f->top_lu = front.dense_top(&m_f->top_dofs);
-  const int n = m_f->top_lu.m;
-  if (!h2f::lu_regular(m_f->top_lu, m_f->top_piv))
-    throw H2Breakdown("H2 factorization broke down: the top block (" + std::to_string(n) + " unknowns) is singular to working precision");
+  if (!m_f->top.factor(front.dense_top(&m_f->top_dofs), options.mixed_top_from))
+    throw H2Breakdown("H2 factorization broke down: the top block (" + std::to_string(m_f->top.size()) + " unknowns) is singular to working precision");
   m_stats.time_top = timer.seconds();
-  m_stats.workspace_bytes = std::max(front.peak_bytes(), front.store_bytes() + m_f->top_lu.bytes());
-  m_stats.top_size = n;
-  m_stats.top_bytes = m_f->top_lu.bytes();
+  m_stats.workspace_bytes = std::max(front.peak_bytes(), front.store_bytes() + m_f->top.bytes());
+  m_stats.top_size = m_f->top.size();
+  m_stats.top_mixed = m_f->top.mixed();
+  m_stats.top_bytes = m_f->top.bytes();
   m_stats.bytes = m_stats.top_bytes;
   for (const H2FactorLevelStats &ls : m_stats.levels) m_stats.bytes += ls.bytes;
 }
@@ -240,7 +242,7 @@ void H2Factorization::solve(const double *b, double *x) const
   if (nt > 0) {
     work.resize(nt);
     for (int i = 0; i < nt; ++i) work[i] = y[m_f->top_dofs[i]];
-    lapack::getrs('N', nt, 1, m_f->top_lu.data(), m_f->top_lu.ld(), m_f->top_piv.data(), work.data(), nt);
+    m_f->top.solve(work.data());
     for (int i = 0; i < nt; ++i) y[m_f->top_dofs[i]] = work[i];
   }
   for (auto it = m_f->steps.rbegin(); it != m_f->steps.rend(); ++it) it->backward(y.data(), work);

@@ -21,6 +21,7 @@ struct PC_H2 {
   PetscReal rel_tol        = HSSBEM_PC_H2_DEFAULT_REL_TOL;
   PetscInt  leaf_size      = 0;    /* 0: the H² matrix's leaves */
   PetscInt  top_size       = 2000; /* unknowns factored densely at the top */
+  PetscInt  mixed_top      = 4000; /* from this top size on, its LU in single precision refined in double (<= 0: never) */
   PetscInt  sketch_size    = 0;    /* 0: from the tolerance */
   PetscInt  estimate_error = 0;    /* power iterations of the ‖I − A F⁻¹‖ estimate (0: none) */
   /* set up (rank 0) */
@@ -40,6 +41,7 @@ hssbem::H2FactorOptions FactorOptions(const PC_H2 &h2)
   o.rel_tol        = h2.rel_tol;
   o.leaf_size      = (int)h2.leaf_size;
   o.top_size       = (int)h2.top_size;
+  o.mixed_top_from = (int)h2.mixed_top;
   o.sketch_columns = (int)h2.sketch_size;
   return o;
 }
@@ -175,6 +177,7 @@ PetscErrorCode PCDestroy_H2(PC pc)
   PetscCall(PetscObjectComposeFunction((PetscObject)pc, "PCH2SetRelTol_C", NULL));
   PetscCall(PetscObjectComposeFunction((PetscObject)pc, "PCH2SetLeafSize_C", NULL));
   PetscCall(PetscObjectComposeFunction((PetscObject)pc, "PCH2SetTopSize_C", NULL));
+  PetscCall(PetscObjectComposeFunction((PetscObject)pc, "PCH2SetMixedTop_C", NULL));
   PetscCall(PetscObjectComposeFunction((PetscObject)pc, "PCH2SetSketchSize_C", NULL));
   PetscCall(PetscObjectComposeFunction((PetscObject)pc, "PCH2SetEstimateError_C", NULL));
   PetscFunctionReturn(PETSC_SUCCESS);
@@ -200,8 +203,9 @@ PetscErrorCode PCSetFromOptions_H2(PC pc, PetscOptionItems *PetscOptionsObject)
   PetscFunctionBegin;
   PetscOptionsHeadBegin(PetscOptionsObject, "H2 factorization options");
   PetscCall(PetscOptionsReal("-pc_h2_rel_tol", "Relative tolerance of the factorization (of each skeleton)", "PCH2SetRelTol", h2->rel_tol, &h2->rel_tol, NULL));
-  PetscCall(PetscOptionsInt("-pc_h2_leaf_size", "Dof nodes per box at the first level factored (0: the H2 matrix's leaves)", "PCH2SetLeafSize", h2->leaf_size, &h2->leaf_size, NULL));
+  PetscCall(PetscOptionsInt("-pc_h2_leaf_size", "Dof nodes per box at the first level factored (0: the H2 matrix's leaves, below tolerance 1e-5 their parents)", "PCH2SetLeafSize", h2->leaf_size, &h2->leaf_size, NULL));
   PetscCall(PetscOptionsInt("-pc_h2_top_size", "Unknowns factored densely at the top", "PCH2SetTopSize", h2->top_size, &h2->top_size, NULL));
+  PetscCall(PetscOptionsInt("-pc_h2_mixed_top", "From this many unknowns on, the dense top's LU in single precision, each solve refined in double (0: always double)", "PCH2SetMixedTop", h2->mixed_top, &h2->mixed_top, NULL));
   PetscCall(PetscOptionsInt("-pc_h2_sketch_size", "Random vectors of the far-field sketch (0: from the tolerance)", "PCH2SetSketchSize", h2->sketch_size, &h2->sketch_size, NULL));
   PetscCall(PetscOptionsInt("-pc_h2_estimate_error", "Power iterations of the ||I - A F^-1|| estimate shown by -ksp_view (0: none)", "PCH2SetEstimateError", h2->estimate_error, &h2->estimate_error, NULL));
   PetscOptionsHeadEnd();
@@ -214,8 +218,9 @@ PetscErrorCode ViewFactorization_Private(PetscViewer viewer, const hssbem::H2Fac
   PetscFunctionBegin;
   PetscCall(PetscViewerASCIIPrintf(viewer, "factorization: %.2f s (sketch %.2f, first boxes %.2f, skeletons %.2f, eliminations %.2f, merges %.2f, top %.2f; thread-seconds for skeletons and eliminations)\n",
                                    st.seconds(), st.time_sketch, st.time_init, st.time_skeleton, st.time_eliminate, st.time_merge, st.time_top));
-  PetscCall(PetscViewerASCIIPrintf(viewer, "factors: %.1f MB (%s panels and working blocks; those peaked at %.1f MB), dense top %d unknowns (%.1f MB), sketch of %d vectors\n", st.bytes / 1048576.0,
-                                   st.single_panels ? "single-precision" : "double-precision", st.workspace_bytes / 1048576.0, st.top_size, st.top_bytes / 1048576.0, st.sketch_columns));
+  PetscCall(PetscViewerASCIIPrintf(viewer, "factors: %.1f MB (%s panels and working blocks; those peaked at %.1f MB), dense top %d unknowns (%.1f MB%s), sketch of %d vectors\n", st.bytes / 1048576.0,
+                                   st.single_panels ? "single-precision" : "double-precision", st.workspace_bytes / 1048576.0, st.top_size, st.top_bytes / 1048576.0,
+                                   st.top_mixed ? "; LU in single precision, solves refined in double" : "", st.sketch_columns));
   for (const hssbem::H2FactorLevelStats &l : st.levels)
     PetscCall(PetscViewerASCIIPrintf(viewer, "level %d: %d boxes, %.0f unknowns per box (max %d) -> skeleton %.0f (max %d), %lld eliminated, %.1f MB, %.2f s\n", l.level, l.boxes, l.mean_candidates,
                                      l.max_candidates, l.mean_rank, l.max_rank, l.eliminated, l.bytes / 1048576.0, l.seconds));
@@ -274,6 +279,13 @@ PetscErrorCode PCH2SetTopSize_H2(PC pc, PetscInt n)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+PetscErrorCode PCH2SetMixedTop_H2(PC pc, PetscInt n)
+{
+  PetscFunctionBegin;
+  ((PC_H2 *)pc->data)->mixed_top = n; /* any value: <= 0 means always double */
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 PetscErrorCode PCH2SetSketchSize_H2(PC pc, PetscInt n)
 {
   PetscFunctionBegin;
@@ -297,8 +309,9 @@ PetscErrorCode PCH2SetEstimateError_H2(PC pc, PetscInt n)
 
   Options Database Keys:
 + -pc_h2_rel_tol <tol>        - relative tolerance of each skeleton (default 3e-3: a preconditioner)
-. -pc_h2_leaf_size <n>        - dof nodes per box at the first level factored (0: the H² leaves)
+. -pc_h2_leaf_size <n>        - dof nodes per box at the first level factored (0: the H² leaves; below 1e-5 their parents)
 . -pc_h2_top_size <n>         - unknowns factored densely at the top (default 2000)
+. -pc_h2_mixed_top <n>        - from this top size on (default 4000), its LU in single precision, solves refined in double (0: never)
 . -pc_h2_sketch_size <p>      - random vectors of the far-field sketch (0: from the tolerance)
 - -pc_h2_estimate_error <k>   - power iterations of the ||I - A F^-1|| estimate in -ksp_view (0: none)
 
@@ -324,6 +337,7 @@ PETSC_EXTERN PetscErrorCode PCCreate_H2(PC pc)
   PetscCall(PetscObjectComposeFunction((PetscObject)pc, "PCH2SetRelTol_C", PCH2SetRelTol_H2));
   PetscCall(PetscObjectComposeFunction((PetscObject)pc, "PCH2SetLeafSize_C", PCH2SetLeafSize_H2));
   PetscCall(PetscObjectComposeFunction((PetscObject)pc, "PCH2SetTopSize_C", PCH2SetTopSize_H2));
+  PetscCall(PetscObjectComposeFunction((PetscObject)pc, "PCH2SetMixedTop_C", PCH2SetMixedTop_H2));
   PetscCall(PetscObjectComposeFunction((PetscObject)pc, "PCH2SetSketchSize_C", PCH2SetSketchSize_H2));
   PetscCall(PetscObjectComposeFunction((PetscObject)pc, "PCH2SetEstimateError_C", PCH2SetEstimateError_H2));
   PetscFunctionReturn(PETSC_SUCCESS);
@@ -344,7 +358,8 @@ PetscErrorCode PCH2SetRelTol(PC pc, PetscReal tol)
 }
 
 /*@
-  PCH2SetLeafSize - Sets the dof nodes per box at the first level factored (0: the H² leaves).
+  PCH2SetLeafSize - Sets the dof nodes per box at the first level factored (0: the H² leaves, or
+  their parents below tolerance 1e-5).
 
   Logically Collective
 
@@ -368,6 +383,22 @@ PetscErrorCode PCH2SetTopSize(PC pc, PetscInt n)
 {
   PetscFunctionBegin;
   PetscTryMethod(pc, "PCH2SetTopSize_C", (PC, PetscInt), (pc, n));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/*@
+  PCH2SetMixedTop - Sets the top size from which the dense top is factored in single precision and
+  every solve is refined in double against it (as accurate as a double LU, about half its time);
+  0 or less: always in double.
+
+  Logically Collective
+
+  Level: advanced
+@*/
+PetscErrorCode PCH2SetMixedTop(PC pc, PetscInt n)
+{
+  PetscFunctionBegin;
+  PetscTryMethod(pc, "PCH2SetMixedTop_C", (PC, PetscInt), (pc, n));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

@@ -96,7 +96,8 @@ TEST_P(H2FactorAccuracy, SolveMatchesDenseLU)
   H2FactorCache cache(K);
   H2FactorOptions fo;
   fo.rel_tol = c.tol;
-  fo.top_size = 0; // factor every level that has a far field
+  fo.top_size = 0;       // factor every level that has a far field,
+  fo.leaf_size = c.leaf; // from the H² leaves up (by default, below 1e-5, from their parents)
   const H2Factorization F(cache, sel, fo);
   const std::vector<double> b = random_vector(3L * n, 5);
   std::vector<double> x(b.size());
@@ -267,8 +268,45 @@ TEST(H2FactorPureTraction, UnregularisedBreaksDown)
   H2FactorCache cache(K);
   H2FactorOptions fo;
   fo.top_size = 3 * n; // all of it in the top
-  EXPECT_THROW(H2Factorization(cache, selection(n, std::vector<std::array<bool, 3>>(n, {false, false, false})), fo), H2Breakdown);
-  EXPECT_NO_THROW(H2Factorization(cache, selection(n, random_pattern(n, 0.5, 2)), fo));
+  for (int mixed : {0, 1}) { // the single-precision LU does not hide it: its refinement stalls, the double LU's test fires
+    fo.mixed_top_from = mixed;
+    EXPECT_THROW(H2Factorization(cache, selection(n, std::vector<std::array<bool, 3>>(n, {false, false, false})), fo), H2Breakdown);
+    EXPECT_NO_THROW(H2Factorization(cache, selection(n, random_pattern(n, 0.5, 2)), fo));
+  }
+}
+
+TEST(H2FactorTop, MixedPrecisionTopSolvesLikeTheDoubleLU)
+{
+  // The whole system in the top: its LU in single precision with refinement in double must give
+  // the double LU's solution to rounding level, not single precision's (~1e-7 · cond).
+  auto L = load("cardioid_fine.msh");
+  const int n = L->op->num_nodes();
+  H2Options o;
+  o.rel_tol = 1e-8;
+  o.leaf_size = 32;
+  const H2Matrix K = compress_bem_operator_h2(*L->op, o);
+  H2FactorCache cache(K);
+  const SystemSelection sel = selection(n, random_pattern(n, 0.5, 9));
+  H2FactorOptions fo;
+  fo.top_size = 3 * n;
+  fo.mixed_top_from = 0;
+  const H2Factorization plain(cache, sel, fo);
+  fo.mixed_top_from = 3 * n; // from exactly this size on
+  const H2Factorization mixed(cache, sel, fo);
+  EXPECT_FALSE(plain.stats().top_mixed);
+  ASSERT_TRUE(mixed.stats().top_mixed);
+  EXPECT_EQ(mixed.stats().top_size, 3 * n);
+  // The double block is kept beside the single-precision LU: 1.5 times the bytes.
+  EXPECT_NEAR(static_cast<double>(mixed.stats().top_bytes) / plain.stats().top_bytes, 1.5, 0.01);
+  const std::vector<double> b = random_vector(3L * n, 3);
+  std::vector<double> x1(b.size()), x2(b.size());
+  plain.solve(b.data(), x1.data());
+  mixed.solve(b.data(), x2.data());
+  const double diff = rel(x2, x1);
+  std::printf("cardioid, %d unknowns in the top: mixed against double LU %.2e\n", 3 * n, diff);
+  EXPECT_LE(diff, 1e-12);
+  fo.mixed_top_from = 3 * n + 1; // one above: double
+  EXPECT_FALSE(H2Factorization(cache, sel, fo).stats().top_mixed);
 }
 
 TEST(H2FactorOptionsCheck, LeafSizeStartsHigherAndBadOptionsThrow)
@@ -284,12 +322,22 @@ TEST(H2FactorOptionsCheck, LeafSizeStartsHigherAndBadOptionsThrow)
   H2FactorOptions fo;
   fo.rel_tol = 1e-6;
   fo.top_size = 0;
+  fo.leaf_size = 16; // the H² leaves (14-16 nodes)
   const H2Factorization fine(cache, sel, fo);
-  fo.leaf_size = 64; // boxes of up to 64 nodes: two levels above the H² leaves (14-16 nodes)
+  fo.leaf_size = 64; // boxes of up to 64 nodes: two levels above the H² leaves
   const H2Factorization coarse(cache, sel, fo);
   ASSERT_FALSE(fine.stats().levels.empty());
   ASSERT_FALSE(coarse.stats().levels.empty());
-  EXPECT_EQ(coarse.stats().levels.front().level, fine.stats().levels.front().level - 2);
+  const int leaves = K.tree().levels() - 1;
+  EXPECT_EQ(fine.stats().levels.front().level, leaves);
+  EXPECT_EQ(coarse.stats().levels.front().level, leaves - 2);
+  // Leaf size 0: the leaves from tolerance 1e-5 on, their parents below (a leaf's skeleton would
+  // keep most of it).
+  fo.leaf_size = 0;
+  EXPECT_EQ(H2Factorization(cache, sel, fo).stats().levels.front().level, leaves - 1);
+  fo.rel_tol = 1e-5;
+  EXPECT_EQ(H2Factorization(cache, sel, fo).stats().levels.front().level, leaves);
+  fo.rel_tol = 1e-6;
   const std::vector<double> b = random_vector(3L * n, 2);
   std::vector<double> x1(b.size()), x2(b.size());
   fine.solve(b.data(), x1.data());

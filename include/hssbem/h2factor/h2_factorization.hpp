@@ -49,6 +49,10 @@ struct H2FactorOptions {
   int sketch_columns = 0;  ///< random vectors of the far-field sketch; 0: chosen from rel_tol
   int top_size = 2000;     ///< factor the rest densely once at most this many unknowns remain
   int single_panels = -1;  ///< elimination panels and the working blocks at rest in single precision: 1, 0, or -1 (when rel_tol ≥ 1e-5)
+  /// From this many unknowns on, the dense top is factored in single precision and every solve
+  /// refines in double against the top block (as accurate as a double LU, which is twice the
+  /// time); ≤ 0: always double.
+  int mixed_top_from = 4000;
 };
 
 /// A singular pivot block (e.g. a pure-traction problem without its rigid-mode regularisation).
@@ -72,7 +76,8 @@ struct H2FactorLevelStats {
 struct H2FactorStats {
   std::vector<H2FactorLevelStats> levels; ///< from the finest level factored up
   int top_size = 0;                       ///< unknowns of the dense top block
-  std::size_t bytes = 0, top_bytes = 0;   ///< all factors; the top's LU
+  bool top_mixed = false;                 ///< the top's LU in single precision, refined in double (H2FactorOptions::mixed_top_from)
+  std::size_t bytes = 0, top_bytes = 0;   ///< all factors; the top's LU (and, mixed, the top block in double)
   /// The largest working store of the factorization (blocks between active boxes, fill-in,
   /// restricted bases), which is freed when it ends.
   std::size_t workspace_bytes = 0;
