@@ -38,6 +38,38 @@ inline void inv_sqrt8(const double *r2, double *out)
 #endif
 }
 
+/// The rule's 15 kernel numbers at one quadrature point (CornerSums layout), weights included:
+/// g the unit vector from the point x to the quadrature point, su and sp the scaled weights of
+/// u* (1/r) and p* (1/r²), n the triangle's normal, cd and om the material's u* diagonal and
+/// 1 − 2ν. Writes K[m · stride] (inlined into the SIMD loops of batch and lane_sums).
+inline void kernel_numbers(double g0, double g1, double g2, double su, double sp, double nx, double ny, double nz, double cd, double om, double *K, int stride)
+{
+  const double ts = sp * (g0 * nx + g1 * ny + g2 * nz), ta = -sp * om;
+  K[0 * stride] = su * (cd + g0 * g0);
+  K[1 * stride] = su * (cd + g1 * g1);
+  K[2 * stride] = su * (cd + g2 * g2);
+  K[3 * stride] = su * g0 * g1;
+  K[4 * stride] = su * g0 * g2;
+  K[5 * stride] = su * g1 * g2;
+  K[6 * stride] = ts * (om + 3 * g0 * g0);
+  K[7 * stride] = ts * (om + 3 * g1 * g1);
+  K[8 * stride] = ts * (om + 3 * g2 * g2);
+  K[9 * stride] = 3 * ts * g0 * g1;
+  K[10 * stride] = 3 * ts * g0 * g2;
+  K[11 * stride] = 3 * ts * g1 * g2;
+  K[12 * stride] = ta * (g0 * ny - g1 * nx);
+  K[13 * stride] = ta * (g0 * nz - g2 * nx);
+  K[14 * stride] = ta * (g1 * nz - g2 * ny);
+}
+
+/// Corner c's sum of one kernel number over the 7 points, Σ_q N_c(q) K_q = K_0/3 + ra ΣA +
+/// (1 − 3ra) K_{3−c} + rb ΣB + (1 − 3rb) K_{6−c}: K[q · qstride] in, out[c · cstride] out.
+inline void corner_combination(const double *K, int qstride, double *out, int cstride)
+{
+  const double base = K[0] * (1.0 / 3) + ra * (K[qstride] + K[2 * qstride] + K[3 * qstride]) + rb * (K[4 * qstride] + K[5 * qstride] + K[6 * qstride]);
+  for (int c = 0; c < 3; ++c) out[c * cstride] = base + (1 - 3 * ra) * K[(3 - c) * qstride] + (1 - 3 * rb) * K[(6 - c) * qstride];
+}
+
 } // namespace
 
 void CornerSums::expand(const double *v, double G[9], double H[9])
@@ -110,32 +142,13 @@ void RegularRule::batch(const Vec3 &x, const int *tris, CornerSums *out) const
       const double inv_r = ir[k];
       const double g0 = d0 * inv_r, g1 = d1 * inv_r, g2 = d2 * inv_r;
       const double su = weight[q] * su0[k] * inv_r, sp = weight[q] * sp0[k] * inv_r * inv_r;
-      const double ts = sp * (g0 * nx[k] + g1 * ny[k] + g2 * nz[k]), ta = -sp * om;
-      K[q][0][k] = su * (cd + g0 * g0);
-      K[q][1][k] = su * (cd + g1 * g1);
-      K[q][2][k] = su * (cd + g2 * g2);
-      K[q][3][k] = su * g0 * g1;
-      K[q][4][k] = su * g0 * g2;
-      K[q][5][k] = su * g1 * g2;
-      K[q][6][k] = ts * (om + 3 * g0 * g0);
-      K[q][7][k] = ts * (om + 3 * g1 * g1);
-      K[q][8][k] = ts * (om + 3 * g2 * g2);
-      K[q][9][k] = 3 * ts * g0 * g1;
-      K[q][10][k] = 3 * ts * g0 * g2;
-      K[q][11][k] = 3 * ts * g1 * g2;
-      K[q][12][k] = ta * (g0 * ny[k] - g1 * nx[k]);
-      K[q][13][k] = ta * (g0 * nz[k] - g2 * nx[k]);
-      K[q][14][k] = ta * (g1 * nz[k] - g2 * ny[k]);
+      kernel_numbers(g0, g1, g2, su, sp, nx[k], ny[k], nz[k], cd, om, &K[q][0][k], B);
     }
   }
-  // Corner c: Σ_q N_c(q) K_q = K_0/3 + ra ΣA + (1 − 3ra) K_{3−c} + rb ΣB + (1 − 3rb) K_{6−c}.
   alignas(64) double S[3][15][B];
   for (int m = 0; m < 15; ++m) {
 #pragma omp simd
-    for (int k = 0; k < B; ++k) {
-      const double base = K[0][m][k] * (1.0 / 3) + ra * (K[1][m][k] + K[2][m][k] + K[3][m][k]) + rb * (K[4][m][k] + K[5][m][k] + K[6][m][k]);
-      for (int c = 0; c < 3; ++c) S[c][m][k] = base + (1 - 3 * ra) * K[3 - c][m][k] + (1 - 3 * rb) * K[6 - c][m][k];
-    }
+    for (int k = 0; k < B; ++k) corner_combination(&K[0][m][k], 15 * B, &S[0][m][k], 15 * B);
   }
   for (int k = 0; k < B; ++k)
     for (int c = 0; c < 3; ++c)
@@ -177,30 +190,12 @@ void RegularRule::lane_sums(const double (&x)[3][lanes], int t, double (&out)[3]
       const double inv_r = ir[k];
       const double g0 = (yx - x[0][k]) * inv_r, g1 = (yy - x[1][k]) * inv_r, g2 = (yz - x[2][k]) * inv_r;
       const double su = su1 * inv_r, sp = sp1 * inv_r * inv_r;
-      const double ts = sp * (g0 * nx + g1 * ny + g2 * nz), ta = -sp * om;
-      K[q][0][k] = su * (cd + g0 * g0);
-      K[q][1][k] = su * (cd + g1 * g1);
-      K[q][2][k] = su * (cd + g2 * g2);
-      K[q][3][k] = su * g0 * g1;
-      K[q][4][k] = su * g0 * g2;
-      K[q][5][k] = su * g1 * g2;
-      K[q][6][k] = ts * (om + 3 * g0 * g0);
-      K[q][7][k] = ts * (om + 3 * g1 * g1);
-      K[q][8][k] = ts * (om + 3 * g2 * g2);
-      K[q][9][k] = 3 * ts * g0 * g1;
-      K[q][10][k] = 3 * ts * g0 * g2;
-      K[q][11][k] = 3 * ts * g1 * g2;
-      K[q][12][k] = ta * (g0 * ny - g1 * nx);
-      K[q][13][k] = ta * (g0 * nz - g2 * nx);
-      K[q][14][k] = ta * (g1 * nz - g2 * ny);
+      kernel_numbers(g0, g1, g2, su, sp, nx, ny, nz, cd, om, &K[q][0][k], L);
     }
   }
   for (int m = 0; m < CornerSums::size; ++m) {
 #pragma omp simd
-    for (int k = 0; k < L; ++k) {
-      const double base = K[0][m][k] * (1.0 / 3) + ra * (K[1][m][k] + K[2][m][k] + K[3][m][k]) + rb * (K[4][m][k] + K[5][m][k] + K[6][m][k]);
-      for (int c = 0; c < 3; ++c) out[c][m][k] = base + (1 - 3 * ra) * K[3 - c][m][k] + (1 - 3 * rb) * K[6 - c][m][k];
-    }
+    for (int k = 0; k < L; ++k) corner_combination(&K[0][m][k], CornerSums::size * L, &out[0][m][k], CornerSums::size * L);
   }
 }
 

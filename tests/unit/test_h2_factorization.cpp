@@ -36,6 +36,15 @@ std::unique_ptr<Loaded> load(const std::string &name, double nu = 0.3)
   return L;
 }
 
+/// The H² matrix of L's operator at rel_tol with leaves of `leaf` nodes (0: H2Options' default).
+H2Matrix compress(const Loaded &L, double rel_tol, int leaf)
+{
+  H2Options o;
+  if (rel_tol > 0) o.rel_tol = rel_tol;
+  if (leaf > 0) o.leaf_size = leaf;
+  return compress_bem_operator_h2(*L.op, o);
+}
+
 SystemSelection selection(int n, std::vector<std::array<bool, 3>> known)
 {
   SystemSelection s;
@@ -87,10 +96,7 @@ TEST_P(H2FactorAccuracy, SolveMatchesDenseLU)
   const Case c = GetParam();
   auto L = load(c.mesh);
   const int n = L->op->num_nodes();
-  H2Options o;
-  o.rel_tol = c.tol / 100; // the factorization's error dominates the product's
-  o.leaf_size = c.leaf;
-  const H2Matrix K = compress_bem_operator_h2(*L->op, o);
+  const H2Matrix K = compress(*L, c.tol / 100, c.leaf); // the factorization's error dominates the product's
   const auto known = random_pattern(n, c.p_known, 17);
   const SystemSelection sel = selection(n, known);
   H2FactorCache cache(K);
@@ -133,10 +139,7 @@ TEST(H2FactorAccuracy, LooseToleranceIsApproximate)
   // The bound above must mean something: at 1e-2 the factorization is visibly inexact.
   auto L = load("sphere_l1.msh");
   const int n = L->op->num_nodes();
-  H2Options o;
-  o.rel_tol = 1e-8;
-  o.leaf_size = 16;
-  const H2Matrix K = compress_bem_operator_h2(*L->op, o);
+  const H2Matrix K = compress(*L, 1e-8, 16);
   const auto known = random_pattern(n, 0.3, 17);
   H2FactorCache cache(K);
   H2FactorOptions fo;
@@ -159,10 +162,7 @@ TEST(H2FactorMemory, SinglePrecisionWorkingBlocksHalveTheStore)
   // and the solution moves by far less than the tolerance.
   auto L = load("cardioid_fine.msh");
   const int n = L->op->num_nodes();
-  H2Options o;
-  o.rel_tol = 1e-6;
-  o.leaf_size = 32;
-  const H2Matrix K = compress_bem_operator_h2(*L->op, o);
+  const H2Matrix K = compress(*L, 1e-6, 32);
   const SystemSelection sel = selection(n, random_pattern(n, 0.5, 17));
   H2FactorCache cache(K);
   H2FactorOptions fo;
@@ -192,10 +192,7 @@ TEST(H2FactorPatterns, TwoPatternsOneCompression)
   // switched, without evaluating a kernel entry.
   auto L = load("cardioid_832.msh");
   const int n = L->op->num_nodes();
-  H2Options o;
-  o.rel_tol = 1e-8;
-  o.leaf_size = 16;
-  const H2Matrix K = compress_bem_operator_h2(*L->op, o);
+  const H2Matrix K = compress(*L, 1e-8, 16);
   const long long entries = K.stats().entries_evaluated;
   const auto Kd = dense_k(*L->op, 6);
   auto known = random_pattern(n, 0.5, 3);
@@ -225,10 +222,7 @@ TEST(H2FactorPureTraction, RegularisedMatchesDense)
   // All tractions known: A = H is singular (rigid modes); A + c Φ Φᵀ is not.
   auto L = load("sphere_l1.msh");
   const int n = L->op->num_nodes();
-  H2Options o;
-  o.rel_tol = 1e-9;
-  o.leaf_size = 16;
-  const H2Matrix K = compress_bem_operator_h2(*L->op, o);
+  const H2Matrix K = compress(*L, 1e-9, 16);
   const std::vector<std::array<bool, 3>> known(n, {false, false, false});
   const std::vector<double> modes = orthonormal_rigid_modes(*L->disc);
   std::vector<double> A = dense_a(dense_k(*L->op, 6), n, 6, known);
@@ -262,9 +256,7 @@ TEST(H2FactorPureTraction, UnregularisedBreaksDown)
   // rigid-body terms are built so): factored densely, the top block is singular.
   auto L = load("sphere_l0.msh");
   const int n = L->op->num_nodes();
-  H2Options o;
-  o.leaf_size = 16;
-  const H2Matrix K = compress_bem_operator_h2(*L->op, o);
+  const H2Matrix K = compress(*L, 0, 16);
   H2FactorCache cache(K);
   H2FactorOptions fo;
   fo.top_size = 3 * n; // all of it in the top
@@ -281,10 +273,7 @@ TEST(H2FactorTop, MixedPrecisionTopSolvesLikeTheDoubleLU)
   // the double LU's solution to rounding level, not single precision's (~1e-7 · cond).
   auto L = load("cardioid_fine.msh");
   const int n = L->op->num_nodes();
-  H2Options o;
-  o.rel_tol = 1e-8;
-  o.leaf_size = 32;
-  const H2Matrix K = compress_bem_operator_h2(*L->op, o);
+  const H2Matrix K = compress(*L, 1e-8, 32);
   H2FactorCache cache(K);
   const SystemSelection sel = selection(n, random_pattern(n, 0.5, 9));
   H2FactorOptions fo;
@@ -313,10 +302,7 @@ TEST(H2FactorOptionsCheck, LeafSizeStartsHigherAndBadOptionsThrow)
 {
   auto L = load("sphere_l1.msh");
   const int n = L->op->num_nodes();
-  H2Options o;
-  o.rel_tol = 1e-8;
-  o.leaf_size = 16;
-  const H2Matrix K = compress_bem_operator_h2(*L->op, o);
+  const H2Matrix K = compress(*L, 1e-8, 16);
   H2FactorCache cache(K);
   const SystemSelection sel = selection(n, random_pattern(n, 0.3, 4));
   H2FactorOptions fo;
