@@ -103,15 +103,6 @@ DenseMatrix transposed(const DenseMatrix &B)
   return T;
 }
 
-DenseMatrix columns_at(const DenseMatrix &M, const std::vector<int> &idx)
-{
-  DenseMatrix out(M.m, static_cast<int>(idx.size()));
-  const std::size_t m = static_cast<std::size_t>(M.m);
-  if (m == 0) return out;
-  for (std::size_t j = 0; j < idx.size(); ++j) std::copy_n(M.a.data() + static_cast<std::size_t>(idx[j]) * m, m, out.a.data() + j * m);
-  return out;
-}
-
 void keep_columns(DenseMatrix &M, int k)
 {
   M.a.resize(static_cast<std::size_t>(M.m) * k);
@@ -165,13 +156,46 @@ DenseMatrix inverse(const DenseMatrix &LU, const std::vector<int> &piv)
   return inv;
 }
 
+/// A buffer per thread, grown as needed and kept: a box step's products and permutations go
+/// through it rather than through fresh allocations of each block's size.
+std::vector<double> &scratch(std::size_t size)
+{
+  thread_local std::vector<double> s;
+  if (s.size() < size) s.resize(size);
+  return s;
+}
+
 /// B ← B A⁻¹ (one product with the explicit inverse: a GEMM runs faster than two triangular solves).
 void right_multiply(DenseMatrix &B, const DenseMatrix &inv)
 {
   if (B.m == 0 || B.n == 0) return;
-  DenseMatrix out(B.m, B.n);
-  lapack::gemm('N', 'N', B.m, B.n, B.n, 1.0, B.data(), B.ld(), inv.data(), inv.ld(), 0.0, out.data(), out.ld());
-  B = std::move(out);
+  std::vector<double> &w = scratch(B.a.size());
+  lapack::gemm('N', 'N', B.m, B.n, B.n, 1.0, B.data(), B.ld(), inv.data(), inv.ld(), 0.0, w.data(), B.ld());
+  std::copy_n(w.data(), B.a.size(), B.a.data());
+}
+
+/// B ← B(order, :) in place (order: a permutation of B's rows).
+void permute_rows(DenseMatrix &B, const std::vector<int> &order)
+{
+  if (B.m == 0 || B.n == 0) return;
+  std::vector<double> &w = scratch(B.a.size());
+  std::copy_n(B.a.data(), B.a.size(), w.data());
+  const std::size_t m = static_cast<std::size_t>(B.m);
+  for (std::size_t j = 0; j < static_cast<std::size_t>(B.n); ++j) {
+    const double *src = w.data() + j * m;
+    double *dst = B.a.data() + j * m;
+    for (std::size_t i = 0; i < m; ++i) dst[i] = src[order[i]];
+  }
+}
+
+/// B ← B(:, order) in place (order: a permutation of B's columns).
+void permute_columns(DenseMatrix &B, const std::vector<int> &order)
+{
+  if (B.m == 0 || B.n == 0) return;
+  std::vector<double> &w = scratch(B.a.size());
+  std::copy_n(B.a.data(), B.a.size(), w.data());
+  const std::size_t m = static_cast<std::size_t>(B.m);
+  for (std::size_t j = 0; j < order.size(); ++j) std::copy_n(w.data() + static_cast<std::size_t>(order[j]) * m, m, B.a.data() + j * m);
 }
 
 } // namespace
@@ -245,11 +269,11 @@ void Frontier::eliminate(int X, const BoxSkeleton &sk, Step *out, double *flops,
   std::vector<int> order = sk.S;
   order.insert(order.end(), sk.R.begin(), sk.R.end());
   const auto row_op = [&](DenseMatrix &B) {
-    B = dense::rows_at(B, order);
+    permute_rows(B, order);
     if (k > 0 && B.n > 0) lapack::gemm('T', 'N', r, B.n, k, -1.0, sk.T.data(), sk.T.ld(), B.data(), B.ld(), 1.0, B.data() + k, B.ld());
   };
   const auto col_op = [&](DenseMatrix &B) {
-    B = columns_at(B, order);
+    permute_columns(B, order);
     if (k > 0 && B.m > 0) lapack::gemm('N', 'N', B.m, r, k, -1.0, B.data(), B.ld(), sk.T.data(), sk.T.ld(), 1.0, B.data() + static_cast<std::size_t>(k) * B.m, B.ld());
   };
   DenseMatrix &XX = open(X, m_M[X].at(X));
@@ -299,13 +323,13 @@ void Frontier::eliminate(int X, const BoxSkeleton &sk, Step *out, double *flops,
     laswp(nI, st.Up.data(), st.Up.ld(), r, st.piv.data());
     lapack::trsm('L', 'L', 'N', 'U', r, nI, 1.0, st.LU.data(), st.LU.ld(), st.Up.data(), st.Up.ld());
   }
-  // Schur complement: one product, then into the blocks it touches.
-  DenseMatrix W(nI, nI);
-  if (nI > 0) lapack::gemm('N', 'N', nI, nI, r, 1.0, st.Lp.data(), st.Lp.ld(), st.Up.data(), st.Up.ld(), 0.0, W.data(), W.ld());
+  // Schur complement, block by block straight into the blocks it touches (a product of the whole
+  // |I| x |I| first would allocate and clear up to a few hundred MB per box at the upper levels).
   *flops += 2.0 * nI * nI * r;
   for (std::size_t ty = 0; ty < targets.size(); ++ty)
     for (std::size_t tz = 0; tz < targets.size(); ++tz) {
       const int Y = targets[ty], Z = targets[tz], my = off[ty + 1] - off[ty], mz = off[tz + 1] - off[tz];
+      if (my == 0 || mz == 0) continue;
       DenseMatrix *B;
       if (ty == 0) B = &open(X, m_M[X].at(tz == 0 ? X : Z));
       else if (tz == 0) B = &open(X, m_M[Y].at(X));
@@ -318,11 +342,8 @@ void Frontier::eliminate(int X, const BoxSkeleton &sk, Step *out, double *flops,
           B = &fresh->back().B;
         }
       }
-      for (int j = 0; j < mz; ++j) {
-        const double *src = &W(off[ty], off[tz] + j);
-        double *dst = B->data() + static_cast<std::size_t>(j) * B->m;
-        for (int i = 0; i < my; ++i) dst[i] -= src[i];
-      }
+      lapack::gemm('N', 'N', my, mz, r, -1.0, st.Lp.data() + off[ty], st.Lp.ld(), st.Up.data() + static_cast<std::size_t>(off[tz]) * st.Up.ld(), st.Up.ld(), 1.0,
+                   B->data(), B->ld());
     }
   // X keeps its skeleton.
   XX = dense::sub(XX, 0, k, 0, k);

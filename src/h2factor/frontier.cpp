@@ -6,6 +6,8 @@
 #include "hssbem/core/dense_ops.hpp"
 #include "hssbem/core/lapack.hpp"
 
+#include "top_block.hpp"
+
 #include <algorithm>
 #include <numeric>
 #include <stdexcept>
@@ -61,6 +63,13 @@ void StoredBlock::park()
   m_s.assign(m_d.a.begin(), m_d.a.end());
   std::vector<double>().swap(m_d.a);
   m_parked = true;
+}
+
+DenseMatrix StoredBlock::take()
+{
+  DenseMatrix out = m_parked ? value() : std::move(m_d);
+  *this = StoredBlock();
+  return out;
 }
 
 DenseMatrix StoredBlock::value() const
@@ -213,7 +222,7 @@ std::vector<int> Frontier::parts_of(int P, int l) const
   return {P};
 }
 
-DenseMatrix Frontier::assemble_close(int P, int Q, int l) const
+DenseMatrix Frontier::assemble_close(int P, int Q, int l)
 {
   DenseMatrix B(static_cast<int>(m_D[P].size()), static_cast<int>(m_D[Q].size()));
   int ro = 0;
@@ -221,7 +230,10 @@ DenseMatrix Frontier::assemble_close(int P, int Q, int l) const
     int co = 0;
     for (int c : parts_of(Q, l)) {
       const auto it = m_M[b].find(c);
-      dense::put(B, ro, co, it != m_M[b].end() ? it->second.value() : far_part(b, c));
+      if (it != m_M[b].end()) {
+        dense::put(B, ro, co, it->second.take());
+        m_M[b].erase(it);
+      } else dense::put(B, ro, co, far_part(b, c));
       co += static_cast<int>(m_D[c].size());
     }
     ro += static_cast<int>(m_D[b].size());
@@ -351,24 +363,27 @@ std::size_t Frontier::store_bytes() const
   return s;
 }
 
-DenseMatrix Frontier::dense_top(std::vector<int> *dofs) const
+BlockGrid Frontier::take_top(std::vector<int> *dofs)
 {
-  std::vector<int> off(m_front.size() + 1, 0);
-  for (std::size_t t = 0; t < m_front.size(); ++t) off[t + 1] = off[t] + static_cast<int>(m_D[m_front[t]].size());
-  DenseMatrix A(off.back(), off.back());
-  std::vector<int> block_rows(m_front.size());
+  BlockGrid G;
+  const int nb = static_cast<int>(m_front.size());
+  G.off.assign(nb + 1, 0);
+  for (int t = 0; t < nb; ++t) G.off[t + 1] = G.off[t] + static_cast<int>(m_D[m_front[t]].size());
+  G.blocks.resize(static_cast<std::size_t>(nb) * nb);
+  std::vector<int> block_rows(nb);
   std::iota(block_rows.begin(), block_rows.end(), 0);
   for_each_cluster(block_rows, [&](int s) {
     const int P = m_front[s];
-    for (std::size_t t = 0; t < m_front.size(); ++t) {
+    for (int t = 0; t < nb; ++t) {
       const int Q = m_front[t];
       const auto it = m_M[P].find(Q);
-      dense::put(A, off[s], off[t], it != m_M[P].end() ? it->second.value() : far_part(P, Q));
+      G.blocks[static_cast<std::size_t>(s) * nb + t] = it != m_M[P].end() ? it->second.take() : far_part(P, Q);
     }
+    m_M[P].clear();
   });
   dofs->clear();
   for (int P : m_front) dofs->insert(dofs->end(), m_D[P].begin(), m_D[P].end());
-  return A;
+  return G;
 }
 
 } // namespace hssbem::h2f

@@ -12,6 +12,8 @@
 
 namespace hssbem::h2f {
 
+struct BlockGrid;
+
 /// The columns of A-hat on K: column g (dof 3k + c of cluster order) is sign[g] × (K S)(:, w k +
 /// slot[g]); with a regularisation, A-hat also holds c Φ Ψᵀ (Φ: N × 6 column-major, Ψ = D Φ).
 struct Pattern {
@@ -62,6 +64,8 @@ public:
   void park();
   /// A copy in double, parked or not.
   DenseMatrix value() const;
+  /// The block in double, moved out (the stored block is left empty).
+  DenseMatrix take();
   std::size_t bytes() const { return m_d.bytes() + m_s.size() * sizeof(float); }
 
 private:
@@ -123,8 +127,9 @@ public:
   void note_bytes() { m_peak = std::max(m_peak, store_bytes()); }
   /// The frontier of level l − 1 from that of level l.
   void merge(int l);
-  /// All remaining unknowns as one dense matrix (their dof indices in *dofs).
-  DenseMatrix dense_top(std::vector<int> *dofs) const;
+  /// All remaining unknowns as one block matrix, their dof indices in *dofs; the blocks between
+  /// close boxes move out of the store (the frontier is spent).
+  BlockGrid take_top(std::vector<int> *dofs);
 
 private:
   DenseMatrix leaf_col_basis(int c) const;
@@ -132,7 +137,9 @@ private:
   void add_regularisation(DenseMatrix &B, int P, int Q) const;
   DenseMatrix restricted_basis(int P, int a, bool rows) const;
   DenseMatrix far_part(int P, int Q) const;
-  DenseMatrix assemble_close(int P, int Q, int l) const;
+  /// The block between close new boxes P and Q of level l − 1; the children's blocks it is made
+  /// of move out of the store (each serves exactly one such pair).
+  DenseMatrix assemble_close(int P, int Q, int l);
   std::vector<std::map<int, StoredBlock>> merged_fill(int l) const;
   /// b opened for box X's step (logged for rest(X)).
   DenseMatrix &open(int X, StoredBlock &b);

@@ -214,7 +214,7 @@ H2Factorization::H2Factorization(H2FactorCache &cache, const SystemSelection &se
   }
   PhaseScope phase(Phase::H2Top);
   timer.restart();
-  if (!m_f->top.factor(front.dense_top(&m_f->top_dofs), options.mixed_top_from))
+  if (!m_f->top.factor(front.take_top(&m_f->top_dofs), options.mixed_top_from))
     throw H2Breakdown("H2 factorization broke down: the top block (" + std::to_string(m_f->top.size()) + " unknowns) is singular to working precision");
   m_stats.time_top = timer.seconds();
   m_stats.workspace_bytes = std::max(front.peak_bytes(), front.store_bytes() + m_f->top.bytes());
