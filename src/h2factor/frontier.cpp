@@ -36,15 +36,6 @@ DenseMatrix basis_side(const H2Matrix &K, int c, bool rows) { return rows ? K.ro
 
 int basis_rank(const H2Matrix &K, int c, bool rows) { return rows ? K.row_interpolation(c).rank() : K.col_interpolation(c).rank(); }
 
-DenseMatrix widened(const H2Block &B)
-{
-  DenseMatrix D(B.M.m, B.M.n);
-  std::vector<double> buf;
-  const double *d = B.data(buf);
-  std::copy(d, d + D.a.size(), D.a.begin());
-  return D;
-}
-
 } // namespace
 
 DenseMatrix &StoredBlock::open()
@@ -198,21 +189,45 @@ DenseMatrix Frontier::restricted_basis(int P, int a, bool rows) const
   return E;
 }
 
-DenseMatrix Frontier::far_part(int P, int Q) const
+void Frontier::add_far_part(int P, int Q, double *out, int ld) const
 {
+  const int m = static_cast<int>(m_D[P].size()), n = static_cast<int>(m_D[Q].size());
   for (int a = P; a >= 0; a = m_tree.cluster(a).parent)
     for (int b = Q; b >= 0; b = m_tree.cluster(b).parent) {
       if (!m_part.is_far(a, b)) continue;
-      DenseMatrix out = multiply(multiply(restricted_basis(P, a, true), widened(find_far_block(m_K, a, b))), restricted_basis(Q, b, false), 'T');
-      add_regularisation(out, P, Q);
+      if (m == 0 || n == 0) return;
+      const H2Block &F = find_far_block(m_K, a, b);
+      std::vector<double> buf;
+      const double *f = F.data(buf); // any stored form, in double
+      // The bases as they rest when they need no carrying up, else carried to a and b.
+      DenseMatrix Uc, Wc;
+      const DenseMatrix *U = a == P ? m_Eu[P].peek() : nullptr, *W = b == Q ? m_Ew[Q].peek() : nullptr;
+      if (!U) U = &(Uc = restricted_basis(P, a, true));
+      if (!W) W = &(Wc = restricted_basis(Q, b, false));
+      if (F.M.m > 0 && F.M.n > 0) {
+        DenseMatrix UF(m, F.M.n);
+        lapack::gemm('N', 'N', m, F.M.n, F.M.m, 1.0, U->data(), U->ld(), f, F.M.ld(), 0.0, UF.data(), UF.ld());
+        lapack::gemm('N', 'T', m, n, F.M.n, 1.0, UF.data(), UF.ld(), W->data(), W->ld(), 1.0, out, ld);
+      }
+      if (m_pat.regularised()) lapack::gemm('N', 'T', m, n, 6, m_pat.c, m_Phi[P].data(), m_Phi[P].ld(), m_Psi[Q].data(), m_Psi[Q].ld(), 1.0, out, ld);
       const auto it = m_F[P].find(Q);
       if (it != m_F[P].end()) {
-        const DenseMatrix f = it->second.value();
-        for (std::size_t i = 0; i < out.a.size(); ++i) out.a[i] += f.a[i];
+        DenseMatrix fc;
+        const DenseMatrix *fill = it->second.peek();
+        if (!fill) fill = &(fc = it->second.value());
+        for (int j = 0; j < n; ++j)
+          for (int i = 0; i < m; ++i) out[i + static_cast<std::size_t>(j) * ld] += (*fill)(i, j);
       }
-      return out;
+      return;
     }
   throw std::logic_error("H2 factorization: no far block above a pair that is not close");
+}
+
+DenseMatrix Frontier::far_part(int P, int Q) const
+{
+  DenseMatrix out(static_cast<int>(m_D[P].size()), static_cast<int>(m_D[Q].size()));
+  add_far_part(P, Q, out.data(), out.ld());
+  return out;
 }
 
 std::vector<int> Frontier::parts_of(int P, int l) const
@@ -233,7 +248,8 @@ DenseMatrix Frontier::assemble_close(int P, int Q, int l)
       if (it != m_M[b].end()) {
         dense::put(B, ro, co, it->second.take());
         m_M[b].erase(it);
-      } else dense::put(B, ro, co, far_part(b, c));
+      } else if (B.m > 0)
+        add_far_part(b, c, &B(ro, co), B.ld());
       co += static_cast<int>(m_D[c].size());
     }
     ro += static_cast<int>(m_D[b].size());
@@ -304,7 +320,7 @@ void Frontier::merge(int l)
     for (const auto &e : m_F[P]) m_fill_cols[e.first].push_back(P);
 }
 
-std::vector<std::map<int, StoredBlock>> Frontier::merged_fill(int l) const
+std::vector<std::map<int, StoredBlock>> Frontier::merged_fill(int l)
 {
   const auto up = [&](int b) { return m_tree.cluster(b).level == l ? m_tree.cluster(b).parent : b; };
   const auto offset = [&](int P, int b) {
@@ -325,13 +341,13 @@ std::vector<std::map<int, StoredBlock>> Frontier::merged_fill(int l) const
     std::map<int, DenseMatrix> F;
     for (int b : parts_of(P, l)) {
       if (!m_in_front[b]) continue;
-      for (const auto &[c, stored] : m_F[b]) {
+      for (auto &[c, stored] : m_F[b]) {
         const int Q = up(c);
         if (m_part.is_close(P, Q)) continue; // inside the close block of P and Q (assemble_close)
         auto it = F.find(Q);
         if (it == F.end()) it = F.emplace(Q, DenseMatrix(static_cast<int>(m_D[P].size()), static_cast<int>(m_D[Q].size()))).first;
         const int ro = offset(P, b), co = offset(Q, c);
-        const DenseMatrix B = stored.value();
+        const DenseMatrix B = stored.take(); // this block's only use
         for (int j = 0; j < B.n; ++j)
           for (int i = 0; i < B.m; ++i) it->second(ro + i, co + j) += B(i, j);
       }

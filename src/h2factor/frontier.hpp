@@ -64,6 +64,8 @@ public:
   void park();
   /// A copy in double, parked or not.
   DenseMatrix value() const;
+  /// The block itself while it is open (in double), else null.
+  const DenseMatrix *peek() const { return m_parked ? nullptr : &m_d; }
   /// The block in double, moved out (the stored block is left empty).
   DenseMatrix take();
   std::size_t bytes() const { return m_d.bytes() + m_s.size() * sizeof(float); }
@@ -136,11 +138,15 @@ private:
   DenseMatrix leaf_near(int a, int b) const;
   void add_regularisation(DenseMatrix &B, int P, int Q) const;
   DenseMatrix restricted_basis(int P, int a, bool rows) const;
+  /// out (|P| × |Q|, leading dimension ld) += the current block between boxes P and Q that are
+  /// not close: the H² far block above them through their bases, the regularisation, the fill-in.
+  void add_far_part(int P, int Q, double *out, int ld) const;
   DenseMatrix far_part(int P, int Q) const;
   /// The block between close new boxes P and Q of level l − 1; the children's blocks it is made
   /// of move out of the store (each serves exactly one such pair).
   DenseMatrix assemble_close(int P, int Q, int l);
-  std::vector<std::map<int, StoredBlock>> merged_fill(int l) const;
+  /// The fill-in between the new boxes that are not close (the children's blocks move out).
+  std::vector<std::map<int, StoredBlock>> merged_fill(int l);
   /// b opened for box X's step (logged for rest(X)).
   DenseMatrix &open(int X, StoredBlock &b);
   void settle(StoredBlock &b) const
