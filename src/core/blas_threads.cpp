@@ -31,6 +31,11 @@ SerialBlas::~SerialBlas()
   if (m_saved > 1) openblas_set_num_threads(m_saved);
 }
 
+void SerialBlas::widen(bool on) const
+{
+  if (m_saved > 1) openblas_set_num_threads(on ? m_saved : 1);
+}
+
 int blas_loop_threads()
 {
 #ifdef _OPENMP

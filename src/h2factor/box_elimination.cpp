@@ -215,7 +215,7 @@ void Frontier::precondition(int X, Step *st)
   for (int i = 0; i < m; ++i) XX(i, i) = 1.0;
   const DenseMatrix inv = inverse(st->D, st->dpiv);
   for (int Y : neighbours(X)) right_multiply(open(X, m_M[Y].at(X)), inv);
-  for (int Z : m_fill_cols[X]) right_multiply(open(X, m_F[Z].at(X)), inv);
+  for (StoredBlock *B : m_fill_col_blocks[X]) right_multiply(open(X, *B), inv);
   // X's columns as the far field sees them, K(F, C) Ŵᵀ and c Φ Ψᵀ: Ŵ ← A_XX⁻ᵀ Ŵ, Ψ likewise.
   for (DenseMatrix *W : {&open(X, m_Ew[X]), &m_Psi[X]}) {
     if (W->n == 0 || W->m == 0) continue;
@@ -243,13 +243,13 @@ BoxSkeleton Frontier::skeleton(int X, double tol) const
   // The Gram loses what lies below the rounding of its squared entries: below ~1e-7, the ID.
   if (tol < 1e-7) {
     for (const auto &e : m_F[X]) parts.push_back(e.second.value());
-    for (int Z : m_fill_cols[X]) parts.push_back(transposed(m_F[Z].at(X).value()));
+    for (const StoredBlock *B : m_fill_col_blocks[X]) parts.push_back(transposed(B->value()));
     return skeleton_from_features(parts, m, tol);
   }
   DenseMatrix G(m, m);
   for (const DenseMatrix &P : parts) gram_add(G, P, 'N');
   for (const auto &e : m_F[X]) gram_add(G, e.second.value(), 'N');
-  for (int Z : m_fill_cols[X]) gram_add(G, m_F[Z].at(X).value(), 'T');
+  for (const StoredBlock *B : m_fill_col_blocks[X]) gram_add(G, B->value(), 'T');
   return skeleton_from_gram(std::move(G), tol);
 }
 
@@ -289,8 +289,8 @@ void Frontier::eliminate(int X, const BoxSkeleton &sk, Step *out, double *flops,
     row_op(B);
     B = dense::row_block(B, 0, k);
   }
-  for (int Z : m_fill_cols[X]) {
-    DenseMatrix &B = open(X, m_F[Z].at(X));
+  for (StoredBlock *F : m_fill_col_blocks[X]) {
+    DenseMatrix &B = open(X, *F);
     col_op(B);
     keep_columns(B, k);
   }

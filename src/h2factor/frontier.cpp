@@ -84,6 +84,7 @@ Frontier::Frontier(const H2Matrix &K, const FarFieldSketch &sketch, const Patter
   m_M.resize(nc);
   m_F.resize(nc);
   m_fill_cols.resize(nc);
+  m_fill_col_blocks.resize(nc);
   m_opened.resize(nc);
   m_front = m_tree.leaves();
   for (int c : m_front) {
@@ -316,6 +317,7 @@ void Frontier::merge(int l)
   m_front.swap(front);
   m_in_front.swap(in_front);
   for (auto &v : m_fill_cols) v.clear();
+  for (auto &v : m_fill_col_blocks) v.clear();
   for (int P : m_front)
     for (const auto &e : m_F[P]) m_fill_cols[e.first].push_back(P);
 }
@@ -361,6 +363,13 @@ DenseMatrix &Frontier::open(int X, StoredBlock &b)
 {
   if (m_single) m_opened[X].push_back(&b);
   return b.open();
+}
+
+void Frontier::claim(int X)
+{
+  std::vector<StoredBlock *> &v = m_fill_col_blocks[X];
+  v.clear();
+  for (int Z : m_fill_cols[X]) v.push_back(&m_F[Z].at(X));
 }
 
 void Frontier::rest(int X)

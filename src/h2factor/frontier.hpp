@@ -103,6 +103,10 @@ public:
   /// The close boxes of the frontier other than X.
   std::vector<int> neighbours(int X) const;
 
+  /// Before X's steps 0–3, with no step of another box adding fill-in meanwhile (add_fill()
+  /// inserts into the maps of the store): the fill-in blocks in X's columns, located once, so
+  /// that the steps never search a map that a concurrent add_fill() may change.
+  void claim(int X);
   /// Step 0: the unknowns of X become A_XX x_X (a block-Jacobi change of variables), so that X's
   /// diagonal block is the identity and the pivot block of step 3 is I + TᵀT, well conditioned
   /// whatever the mix of H and G columns in X. The LU of A_XX goes to st (box, D, dpiv). Throws
@@ -114,8 +118,10 @@ public:
   /// complement to the blocks of X's skeleton and neighbours; X keeps its skeleton. The rest of
   /// the step goes to st; adds the Schur complement's flops to *flops. Fill-in on pairs that had
   /// none goes to *fresh, for add_fill(). Throws H2Breakdown for a singular pivot block. Boxes
-  /// with disjoint closed neighbourhoods may go through steps 0–3 concurrently (nothing else
-  /// changes the block store then).
+  /// with disjoint closed neighbourhoods may go through steps 0–3 concurrently: they touch
+  /// disjoint blocks, and add_fill() for one of them (serialised with claim()) inserts only
+  /// into the rows of its own neighbourhood, which the other's steps reach through claim()'s
+  /// pointers alone.
   void eliminate(int X, const BoxSkeleton &sk, Step *st, double *flops, std::vector<NewFill> *fresh);
   /// Park the blocks that precondition() and eliminate() opened for X (single precision only).
   void rest(int X);
@@ -172,6 +178,7 @@ private:
   std::vector<std::vector<StoredBlock *>> m_opened; ///< per box: blocks its step has opened
   std::size_t m_peak = 0;
   std::vector<std::vector<int>> m_fill_cols;   ///< m_fill_cols[X]: boxes Z with a block m_F[Z][X]
+  std::vector<std::vector<StoredBlock *>> m_fill_col_blocks; ///< those blocks, as claim(X) found them
 };
 
 } // namespace hssbem::h2f

@@ -12,6 +12,9 @@
 #include "hssbem/core/timer.hpp"
 
 #include <algorithm>
+#include <condition_variable>
+#include <mutex>
+#include <set>
 #include <cmath>
 #include <random>
 #include <stdexcept>
@@ -102,10 +105,19 @@ int first_level(const ClusterTree &tree, int leaf_size, double rel_tol)
   return l;
 }
 
-/// Boxes of one level in classes whose closed neighbourhoods are disjoint, in tree order:
-/// boxes of one class can be eliminated concurrently, classes one after another.
-std::vector<std::vector<int>> colour_classes(const h2f::Frontier &F, const std::vector<int> &boxes, int nclusters)
+/// The boxes of one level in elimination order, each with the earlier boxes whose closed
+/// neighbourhoods meet its own (the steps that must come first; any other pair of steps touches
+/// disjoint blocks and may run at once, in either order, with the same result).
+struct LevelSchedule {
+  std::vector<int> order;              ///< boxes, in the order of greedy colour classes
+  std::vector<int> waits;              ///< per position: earlier boxes it must wait for
+  std::vector<std::vector<int>> after; ///< per position: later positions that wait for it
+};
+
+LevelSchedule level_schedule(const h2f::Frontier &F, const std::vector<int> &boxes, int nclusters)
 {
+  // Greedy colouring in tree order: boxes of one colour have disjoint closed neighbourhoods, and
+  // colour by colour is the order (a box waits only for earlier colours).
   std::vector<std::vector<int>> closed(boxes.size()), touching(nclusters);
   for (std::size_t i = 0; i < boxes.size(); ++i) {
     closed[i] = F.neighbours(boxes[i]);
@@ -124,9 +136,93 @@ std::vector<std::vector<int>> colour_classes(const h2f::Frontier &F, const std::
     while (used[c]) ++c;
     colour[i] = c;
     if (c == static_cast<int>(classes.size())) classes.emplace_back();
-    classes[c].push_back(boxes[i]);
+    classes[c].push_back(static_cast<int>(i));
   }
-  return classes;
+  LevelSchedule s;
+  std::vector<int> position(boxes.size());
+  for (const auto &cls : classes)
+    for (int i : cls) {
+      position[i] = static_cast<int>(s.order.size());
+      s.order.push_back(boxes[i]);
+    }
+  s.waits.assign(boxes.size(), 0);
+  s.after.resize(boxes.size());
+  std::vector<int> seen(boxes.size(), -1);
+  for (std::size_t i = 0; i < boxes.size(); ++i)
+    for (int Y : closed[i])
+      for (int j : touching[Y])
+        if (position[j] < position[i] && seen[j] != static_cast<int>(i)) {
+          seen[j] = static_cast<int>(i);
+          ++s.waits[position[i]];
+          s.after[position[j]].push_back(position[i]);
+        }
+  return s;
+}
+
+/// Run step(X) for every box of the schedule on the OpenMP threads (OpenBLAS serial), each as
+/// soon as the boxes it waits for are done, the earliest ready box first; finish(X) runs after
+/// step(X), one at a time, with no step starting meanwhile; start(X) likewise before it.
+template <class Start, class Step, class Finish>
+void run_schedule(const LevelSchedule &s, const Start &start, const Step &step, const Finish &finish)
+{
+  const int n = static_cast<int>(s.order.size());
+  std::vector<int> waits = s.waits;
+  std::set<int> ready;
+  for (int j = 0; j < n; ++j)
+    if (waits[j] == 0) ready.insert(j);
+  std::mutex mu;
+  std::condition_variable cv;
+  int done = 0, running = 0;
+  std::exception_ptr error;
+  const bool par = parallel_over_clusters(static_cast<std::size_t>(n));
+  SerialBlas serial(par);
+#pragma omp parallel if (par)
+  {
+    for (;;) {
+      int j = -1;
+      bool alone = false;
+      {
+        std::unique_lock<std::mutex> lock(mu);
+        cv.wait(lock, [&] { return !ready.empty() || done == n || error; });
+        if (done == n || error) break;
+        j = *ready.begin();
+        ready.erase(ready.begin());
+        // Nothing else running and nothing ready: no other step can start before this one ends
+        // (only a finish makes boxes ready), so BLAS may take all the threads meanwhile.
+        alone = par && running == 0 && ready.empty();
+        ++running;
+        if (alone) serial.widen(true);
+        try {
+          start(s.order[j]);
+        } catch (...) {
+          error = std::current_exception();
+        }
+      }
+      bool ok = !error;
+      if (ok) try {
+          step(s.order[j]);
+        } catch (...) {
+          std::lock_guard<std::mutex> lock(mu);
+          if (!error) error = std::current_exception();
+          ok = false;
+        }
+      {
+        std::lock_guard<std::mutex> lock(mu);
+        if (alone) serial.widen(false);
+        --running;
+        if (ok) try {
+            finish(s.order[j]);
+          } catch (...) {
+            if (!error) error = std::current_exception();
+          }
+        ++done;
+        for (int k : s.after[j])
+          if (--waits[k] == 0) ready.insert(k);
+      }
+      cv.notify_all();
+    }
+  }
+  if (error) std::rethrow_exception(error);
 }
 
 } // namespace
@@ -167,8 +263,10 @@ H2Factorization::H2Factorization(H2FactorCache &cache, const SystemSelection &se
       std::vector<h2f::Step> steps(tree.num_clusters());
       std::vector<double> flops(tree.num_clusters(), 0.0), t_skel(tree.num_clusters(), 0.0), t_elim(tree.num_clusters(), 0.0);
       std::vector<std::vector<h2f::NewFill>> fills(tree.num_clusters());
-      for (const std::vector<int> &cls : colour_classes(front, boxes, tree.num_clusters())) {
-        for_each_cluster(cls, [&](int X) {
+      const LevelSchedule schedule = level_schedule(front, boxes, tree.num_clusters());
+      run_schedule(
+        schedule, [&](int X) { front.claim(X); },
+        [&](int X) {
           Timer t;
           const int m = static_cast<int>(front.active(X).size());
           front.precondition(X, &steps[X]);
@@ -180,22 +278,22 @@ H2Factorization::H2Factorization(H2FactorCache &cache, const SystemSelection &se
           if (m_stats.single_panels) steps[X].demote();
           t_elim[X] = t.seconds();
           steps[X].candidates = m;
-        });
-        for (int X : cls) {
-          front.add_fill(std::move(fills[X]));
-          const h2f::Step &st = steps[X];
-          ls.boxes += 1;
-          ls.mean_candidates += st.candidates;
-          ls.max_candidates = std::max(ls.max_candidates, st.candidates);
-          ls.mean_rank += static_cast<double>(st.S.size());
-          ls.max_rank = std::max(ls.max_rank, static_cast<int>(st.S.size()));
-          ls.eliminated += static_cast<long long>(st.R.size());
-          m_stats.flops_schur += flops[X];
-          m_stats.time_skeleton += t_skel[X];
-          m_stats.time_eliminate += t_elim[X];
-          ls.bytes += steps[X].bytes();
-          m_f->steps.push_back(std::move(steps[X]));
-        }
+        },
+        [&](int X) { front.add_fill(std::move(fills[X])); });
+      // The solve replays the steps in the schedule's order (dependencies come first in it).
+      for (int X : schedule.order) {
+        const h2f::Step &st = steps[X];
+        ls.boxes += 1;
+        ls.mean_candidates += st.candidates;
+        ls.max_candidates = std::max(ls.max_candidates, st.candidates);
+        ls.mean_rank += static_cast<double>(st.S.size());
+        ls.max_rank = std::max(ls.max_rank, static_cast<int>(st.S.size()));
+        ls.eliminated += static_cast<long long>(st.R.size());
+        m_stats.flops_schur += flops[X];
+        m_stats.time_skeleton += t_skel[X];
+        m_stats.time_eliminate += t_elim[X];
+        ls.bytes += steps[X].bytes();
+        m_f->steps.push_back(std::move(steps[X]));
       }
     }
     if (ls.boxes > 0) {

@@ -22,6 +22,9 @@ public:
   ~SerialBlas();
   SerialBlas(const SerialBlas &) = delete;
   SerialBlas &operator=(const SerialBlas &) = delete;
+  /// While a caller knows that no other thread calls BLAS (the others wait), let BLAS run on the
+  /// threads it had before (true), or on one again (false).
+  void widen(bool on) const;
 
 private:
   int m_saved = 0;
