@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <condition_variable>
+#include <cstdint>
 #include <mutex>
 #include <set>
 #include <cmath>
@@ -112,7 +113,36 @@ struct LevelSchedule {
   std::vector<int> order;              ///< boxes, in the order of greedy colour classes
   std::vector<int> waits;              ///< per position: earlier boxes it must wait for
   std::vector<std::vector<int>> after; ///< per position: later positions that wait for it
+  /// Per position: every other box comes before it or after it in the graph, so it always runs
+  /// alone (and may use threaded BLAS: a property of the graph, so the factors do not depend on
+  /// the threads' timing).
+  std::vector<char> alone;
 };
+
+/// Which positions of s are ordered with respect to every other (transitive closure by bitsets).
+std::vector<char> lone_positions(const LevelSchedule &s)
+{
+  const std::size_t n = s.order.size(), words = (n + 63) / 64;
+  std::vector<std::uint64_t> anc(n * words, 0), desc(n * words, 0);
+  const auto set = [&](std::vector<std::uint64_t> &b, std::size_t row, std::size_t bit) { b[row * words + bit / 64] |= std::uint64_t{1} << (bit % 64); };
+  for (std::size_t i = 0; i < n; ++i) // positions are a topological order
+    for (int j : s.after[i]) {
+      for (std::size_t w = 0; w < words; ++w) anc[j * words + w] |= anc[i * words + w];
+      set(anc, j, i);
+    }
+  for (std::size_t i = n; i-- > 0;)
+    for (int j : s.after[i]) {
+      for (std::size_t w = 0; w < words; ++w) desc[i * words + w] |= desc[j * words + w];
+      set(desc, i, j);
+    }
+  std::vector<char> alone(n, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    std::size_t related = 0;
+    for (std::size_t w = 0; w < words; ++w) related += static_cast<std::size_t>(__builtin_popcountll(anc[i * words + w] | desc[i * words + w]));
+    alone[i] = related + 1 == n;
+  }
+  return alone;
+}
 
 LevelSchedule level_schedule(const h2f::Frontier &F, const std::vector<int> &boxes, int nclusters)
 {
@@ -156,12 +186,14 @@ LevelSchedule level_schedule(const h2f::Frontier &F, const std::vector<int> &box
           ++s.waits[position[i]];
           s.after[position[j]].push_back(position[i]);
         }
+  s.alone = lone_positions(s);
   return s;
 }
 
-/// Run step(X) for every box of the schedule on the OpenMP threads (OpenBLAS serial), each as
-/// soon as the boxes it waits for are done, the earliest ready box first; finish(X) runs after
-/// step(X), one at a time, with no step starting meanwhile; start(X) likewise before it.
+/// Run step(X) for every box of the schedule on the OpenMP threads (OpenBLAS serial, but threaded
+/// for a box that runs alone), each as soon as the boxes it waits for are done, the earliest
+/// ready box first; finish(X) runs after step(X), one at a time, with no step starting
+/// meanwhile; start(X) likewise before it.
 template <class Start, class Step, class Finish>
 void run_schedule(const LevelSchedule &s, const Start &start, const Step &step, const Finish &finish)
 {
@@ -172,7 +204,7 @@ void run_schedule(const LevelSchedule &s, const Start &start, const Step &step, 
     if (waits[j] == 0) ready.insert(j);
   std::mutex mu;
   std::condition_variable cv;
-  int done = 0, running = 0;
+  int done = 0;
   std::exception_ptr error;
   const bool par = parallel_over_clusters(static_cast<std::size_t>(n));
   SerialBlas serial(par);
@@ -187,10 +219,7 @@ void run_schedule(const LevelSchedule &s, const Start &start, const Step &step, 
         if (done == n || error) break;
         j = *ready.begin();
         ready.erase(ready.begin());
-        // Nothing else running and nothing ready: no other step can start before this one ends
-        // (only a finish makes boxes ready), so BLAS may take all the threads meanwhile.
-        alone = par && running == 0 && ready.empty();
-        ++running;
+        alone = par && s.alone[j]; // then nothing else runs or can start meanwhile
         if (alone) serial.widen(true);
         try {
           start(s.order[j]);
@@ -209,7 +238,6 @@ void run_schedule(const LevelSchedule &s, const Start &start, const Step &step, 
       {
         std::lock_guard<std::mutex> lock(mu);
         if (alone) serial.widen(false);
-        --running;
         if (ok) try {
             finish(s.order[j]);
           } catch (...) {
