@@ -147,11 +147,13 @@ DenseMatrix Frontier::leaf_near(int a, int b) const
   return out;
 }
 
-void Frontier::add_regularisation(DenseMatrix &B, int P, int Q) const
+void Frontier::add_regularisation(DenseMatrix &B, int P, int Q) const { add_regularisation(B.m, B.n, B.data(), B.ld(), P, Q); }
+
+void Frontier::add_regularisation(int m, int n, double *out, int ld, int P, int Q) const
 {
-  if (!m_pat.regularised() || B.m == 0 || B.n == 0) return;
+  if (!m_pat.regularised() || m == 0 || n == 0) return;
   const DenseMatrix &a = m_Phi[P], &b = m_Psi[Q];
-  lapack::gemm('N', 'T', B.m, B.n, 6, m_pat.c, a.data(), a.ld(), b.data(), b.ld(), 1.0, B.data(), B.ld());
+  lapack::gemm('N', 'T', m, n, 6, m_pat.c, a.data(), a.ld(), b.data(), b.ld(), 1.0, out, ld);
 }
 
 std::size_t Frontier::active_total() const
@@ -210,7 +212,7 @@ void Frontier::add_far_part(int P, int Q, double *out, int ld) const
         lapack::gemm('N', 'N', m, F.M.n, F.M.m, 1.0, U->data(), U->ld(), f, F.M.ld(), 0.0, UF.data(), UF.ld());
         lapack::gemm('N', 'T', m, n, F.M.n, 1.0, UF.data(), UF.ld(), W->data(), W->ld(), 1.0, out, ld);
       }
-      if (m_pat.regularised()) lapack::gemm('N', 'T', m, n, 6, m_pat.c, m_Phi[P].data(), m_Phi[P].ld(), m_Psi[Q].data(), m_Psi[Q].ld(), 1.0, out, ld);
+      add_regularisation(m, n, out, ld, P, Q);
       const auto it = m_F[P].find(Q);
       if (it != m_F[P].end()) {
         DenseMatrix fc;

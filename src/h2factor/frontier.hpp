@@ -143,6 +143,8 @@ private:
   DenseMatrix leaf_col_basis(int c) const;
   DenseMatrix leaf_near(int a, int b) const;
   void add_regularisation(DenseMatrix &B, int P, int Q) const;
+  /// The same into an m × n block at out (leading dimension ld).
+  void add_regularisation(int m, int n, double *out, int ld, int P, int Q) const;
   DenseMatrix restricted_basis(int P, int a, bool rows) const;
   /// out (|P| × |Q|, leading dimension ld) += the current block between boxes P and Q that are
   /// not close: the H² far block above them through their bases, the regularisation, the fill-in.

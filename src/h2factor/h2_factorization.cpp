@@ -212,7 +212,7 @@ void run_schedule(const LevelSchedule &s, const Start &start, const Step &step, 
   {
     for (;;) {
       int j = -1;
-      bool alone = false;
+      bool alone = false, ok = false;
       {
         std::unique_lock<std::mutex> lock(mu);
         cv.wait(lock, [&] { return !ready.empty() || done == n || error; });
@@ -226,8 +226,8 @@ void run_schedule(const LevelSchedule &s, const Start &start, const Step &step, 
         } catch (...) {
           error = std::current_exception();
         }
+        ok = !error; // read under the lock: another thread may be setting it
       }
-      bool ok = !error;
       if (ok) try {
           step(s.order[j]);
         } catch (...) {
