@@ -72,7 +72,7 @@ void EntrySelection::finish()
   m_col_groups = group(m_cols);
 }
 
-void BemOperator::add_selected_points(const RowPoint *pts, int np, const EntrySelection::Group &cols, bool gn, double *out, long rs, long cs,
+void BemOperator::selected_points(const RowPoint *pts, int np, const EntrySelection::Group &cols, bool gn, double *out, long rs, long cs,
                                       Workspace &ws) const
 {
   // Sum each column node's corner sums over its triangles for every point first, then hand out
@@ -85,15 +85,35 @@ void BemOperator::add_selected_points(const RowPoint *pts, int np, const EntrySe
   for (int k = 0; k < L; ++k)
     for (int c = 0; c < 3; ++c) x[c][k] = pts[std::min(k, np - 1)].x[c]; // spare lanes repeat the last point
   const unsigned used = (1u << np) - 1;
+  // The points' bounding ball: a triangle far enough from all of it is regular at every point.
+  Vec3 centre{0.0, 0.0, 0.0};
+  for (int k = 0; k < np; ++k) centre = centre + pts[k].x;
+  centre = (1.0 / np) * centre;
+  double radius = 0;
+  for (int k = 0; k < np; ++k) radius = std::max(radius, norm(pts[k].x - centre));
+  radius *= 1.0 + 1e-12;
   // Lanes whose collocation point lies on a triangle, by triangle: those take the singular rule.
   alignas(64) double S[3][CornerSums::size][L];
   ElementIntegrals ei;
   double v[CornerSums::size];
-  for (std::size_t e = 0; e < ws.elems.size(); ++e) {
+  const std::size_t ne = ws.elems.size();
+  for (std::size_t e = 0; e < ne; ++e) {
     const int t = ws.elems[e], *p = &ws.elem_pos[3 * e];
-    unsigned regular = m_regular.regular_lanes(x, t) & used;
-    for (int k = 0; k < np; ++k)
-      if (pts[k].row >= 0 && (regular >> k & 1u) && contains(pts[k].row, t)) regular &= ~(1u << k);
+    if (e + 4 < ne) m_regular.prefetch(ws.elems[e + 4]); // triangles lie scattered in memory
+    unsigned regular = used;
+    if (!m_regular.regular_in_ball(centre, radius, t)) {
+      // A point on t is within its diameter, inside the near zone: only those need the check.
+      regular = m_regular.regular_lanes(x, t) & used;
+      for (int k = 0; k < np; ++k)
+        if (pts[k].row >= 0 && (regular >> k & 1u) && contains(pts[k].row, t)) regular &= ~(1u << k);
+    }
+    if (regular == used && !gn) {
+      // Every point regular: the sums go straight into the corners' accumulators.
+      double *dest[3];
+      for (int c = 0; c < 3; ++c) dest[c] = p[c] < 0 ? nullptr : acc + static_cast<std::size_t>(p[c]) * acc_size * L;
+      m_regular.add_lane_sums(x, t, dest);
+      continue;
+    }
     if (regular) {
       m_regular.lane_sums(x, t, S);
       alignas(64) double keep[L];
@@ -127,6 +147,28 @@ void BemOperator::add_selected_points(const RowPoint *pts, int np, const EntrySe
       }
     }
   }
+  // The common case: every point asks for its three components, in rows 3k + 0, 1, 2 after the
+  // first point's. Its hand-out needs no per-entry lookups.
+  bool whole = true;
+  for (int k = 0; k < np && whole; ++k)
+    whole = pts[k].nr == 3 && pts[k].comp[0] == 0 && pts[k].comp[1] == 1 && pts[k].comp[2] == 2 && pts[k].out_row[0] == pts[0].out_row[0] + 3 * k &&
+            pts[k].out_row[1] == pts[k].out_row[0] + 1 && pts[k].out_row[2] == pts[k].out_row[0] + 2;
+  if (whole) {
+    const long first = pts[0].out_row[0] * rs;
+    for (std::size_t q = 0; q < nj; ++q) {
+      const double *a = acc + q * acc_size * L;
+      for (int e = cols.start[q]; e < cols.start[q + 1]; ++e) {
+        double *o = out + cols.out[e] * cs + first;
+        const Pick *pk = nullptr;
+        for (int i = 0; i < 3; ++i) {
+          pk = &pick_table[i][cols.what[e]];
+          const double *ai = a + pk->i * L, *aj = a + pk->j * L, sign = pk->sign;
+          for (int k = 0; k < np; ++k) o[(3 * k + i) * rs] = ai[k] + sign * aj[k];
+        }
+      }
+    }
+    return;
+  }
   for (std::size_t q = 0; q < nj; ++q) {
     const double *a = acc + q * acc_size * L;
     for (int e = cols.start[q]; e < cols.start[q + 1]; ++e) {
@@ -134,7 +176,7 @@ void BemOperator::add_selected_points(const RowPoint *pts, int np, const EntrySe
       for (int k = 0; k < np; ++k)
         for (int i = 0; i < pts[k].nr; ++i) {
           const Pick &pk = pick_table[pts[k].comp[i]][cols.what[e]];
-          o[pts[k].out_row[i] * rs] += a[pk.i * L + k] + pk.sign * a[pk.j * L + k];
+          o[pts[k].out_row[i] * rs] = a[pk.i * L + k] + pk.sign * a[pk.j * L + k];
         }
     }
   }
@@ -147,7 +189,7 @@ void BemOperator::corner_positions(Workspace &ws) const
     for (int c = 0; c < 3; ++c) ws.elem_pos[3 * e + c] = ws.col_pos[m_disc->element_node(ws.elems[e], c)];
 }
 
-void BemOperator::add_selected(const EntrySelection &sel, double *out, long rs, long cs, Workspace &ws) const
+void BemOperator::selected(const EntrySelection &sel, double *out, long rs, long cs, Workspace &ws) const
 {
   constexpr int L = RegularRule::lanes;
   const EntrySelection::Group &R = sel.rows(), &C = sel.cols();
@@ -163,12 +205,12 @@ void BemOperator::add_selected(const EntrySelection &sel, double *out, long rs, 
       const int i = R.nodes[r0 + k], b = R.start[r0 + k], e = R.start[r0 + k + 1];
       pts[k] = {m_disc->node(i).point, i, R.what.data() + b, R.out.data() + b, e - b};
     }
-    add_selected_points(pts, np, C, gn, out, rs, cs, ws);
+    selected_points(pts, np, C, gn, out, rs, cs, ws);
   }
   for (int j : C.nodes) ws.col_pos[j] = -1;
 }
 
-void BemOperator::add_selected_at_points(const std::vector<Vec3> &X, const EntrySelection &sel, double *out, long rs, long cs, Workspace &ws) const
+void BemOperator::selected_at_points(const std::vector<Vec3> &X, const EntrySelection &sel, double *out, long rs, long cs, Workspace &ws) const
 {
   constexpr int L = RegularRule::lanes;
   const EntrySelection::Group &C = sel.cols();
@@ -186,7 +228,7 @@ void BemOperator::add_selected_at_points(const std::vector<Vec3> &X, const Entry
       for (int c = 0; c < 3; ++c) out_row[k][c] = 3 * (r0 + k) + c;
       pts[k] = {X[r0 + k], -1, comp, out_row[k], 3};
     }
-    add_selected_points(pts, np, C, gn, out, rs, cs, ws);
+    selected_points(pts, np, C, gn, out, rs, cs, ws);
   }
   for (int j : C.nodes) ws.col_pos[j] = -1;
 }

@@ -5,6 +5,46 @@
 
 namespace hssbem {
 
+constexpr int kLanes = 8;
+
+/// The quadrature points of one (point, triangle) pair, gathered from every sub-triangle of a
+/// subdivision or a Duffy split before one pass sums them with the points as SIMD lanes:
+/// position y, weight w (area included), the corners' shape values for u* (nu) and for p* (np;
+/// nu − w_a on a singular triangle). The length is padded to whole lanes with zero weights.
+struct PointList {
+  std::vector<double> y[3], w, nu[3], np[3];
+  std::size_t n = 0;
+
+  void clear() { n = 0; }
+  void push(const Vec3 &at, double weight, const double *Nu, const double *Np)
+  {
+    if (n == w.size()) grow(std::max<std::size_t>(64, 2 * n));
+    for (int c = 0; c < 3; ++c) {
+      y[c][n] = at[c];
+      nu[c][n] = Nu[c];
+      np[c][n] = Np[c];
+    }
+    w[n++] = weight;
+  }
+  /// Pad to a multiple of kLanes with points one unit away from x and no weight.
+  void pad(const Vec3 &x)
+  {
+    static const double zero[3] = {0, 0, 0};
+    while (n % kLanes != 0) push(x + Vec3{1.0, 0.0, 0.0}, 0.0, zero, zero);
+  }
+
+private:
+  void grow(std::size_t cap)
+  {
+    for (int c = 0; c < 3; ++c) {
+      y[c].resize(cap);
+      nu[c].resize(cap);
+      np[c].resize(cap);
+    }
+    w.resize(cap);
+  }
+};
+
 namespace {
 
 // Symmetric triangle rules as {l0, l1, l2, weight}, weights summing to 1.
@@ -58,25 +98,6 @@ double area_of(const std::array<Vec3, 3> &p) { return 0.5 * norm(cross(p[1] - p[
 struct KernelSums {
   double u[3][6] = {}, s[3][6] = {}, a[3][3] = {};
 
-  /// Add the kernels at y (weight wt) times the shape values Nu (for u*) and Np (for p*).
-  inline void add(const KelvinConstants &k, const Vec3 &x, const Vec3 &y, const Vec3 &n, double wt, const double *Nu, const double *Np)
-  {
-    const double d0 = y[0] - x[0], d1 = y[1] - x[1], d2 = y[2] - x[2];
-    const double inv_r = 1.0 / std::sqrt(d0 * d0 + d1 * d1 + d2 * d2);
-    const double g0 = d0 * inv_r, g1 = d1 * inv_r, g2 = d2 * inv_r;
-    const double drdn = g0 * n[0] + g1 * n[1] + g2 * n[2];
-    const double su = wt * k.cu * inv_r, sp = wt * k.cp * inv_r * inv_r, ts = sp * drdn, ta = -sp * k.one_m_2nu;
-    const double U[6] = {su * (k.cu_diag + g0 * g0), su * (k.cu_diag + g1 * g1), su * (k.cu_diag + g2 * g2), su * g0 * g1, su * g0 * g2, su * g1 * g2};
-    const double S[6] = {ts * (k.one_m_2nu + 3 * g0 * g0), ts * (k.one_m_2nu + 3 * g1 * g1), ts * (k.one_m_2nu + 3 * g2 * g2),
-                         3 * ts * g0 * g1, 3 * ts * g0 * g2, 3 * ts * g1 * g2};
-    const double A[3] = {ta * (g0 * n[1] - g1 * n[0]), ta * (g0 * n[2] - g2 * n[0]), ta * (g1 * n[2] - g2 * n[1])};
-    for (int c = 0; c < 3; ++c) {
-      for (int m = 0; m < 6; ++m) u[c][m] += Nu[c] * U[m];
-      for (int m = 0; m < 6; ++m) s[c][m] += Np[c] * S[m];
-      for (int m = 0; m < 3; ++m) a[c][m] += Np[c] * A[m];
-    }
-  }
-
   /// Add the sums to the 3x3 blocks of `out` (row-major; (0,1) holds entry 01, (1,0) its mirror).
   void expand_into(ElementIntegrals &out) const
   {
@@ -91,6 +112,68 @@ struct KernelSums {
     }
   }
 };
+
+/// Every thread gathers into its own list (the quadrature object is shared).
+PointList &point_list()
+{
+  thread_local PointList list;
+  list.clear();
+  return list;
+}
+
+/// The kernel sums of the gathered points at x for a triangle of normal n (the list is padded).
+KernelSums sum_points(const KelvinConstants &k, const Vec3 &x, const Vec3 &n, PointList &P)
+{
+  P.pad(x);
+  alignas(64) double acc[3][15][kLanes] = {};
+  const double x0 = x[0], x1 = x[1], x2 = x[2], n0 = n[0], n1 = n[1], n2 = n[2];
+  const double cu = k.cu, cp = k.cp, cd = k.cu_diag, om = k.one_m_2nu;
+  for (std::size_t q0 = 0; q0 < P.n; q0 += kLanes) {
+    const double *y0 = &P.y[0][q0], *y1 = &P.y[1][q0], *y2 = &P.y[2][q0], *w = &P.w[q0];
+    alignas(64) double K[15][kLanes];
+#pragma omp simd aligned(K : 64)
+    for (int l = 0; l < kLanes; ++l) {
+      const double d0 = y0[l] - x0, d1 = y1[l] - x1, d2 = y2[l] - x2;
+      const double inv_r = 1.0 / std::sqrt(d0 * d0 + d1 * d1 + d2 * d2);
+      const double g0 = d0 * inv_r, g1 = d1 * inv_r, g2 = d2 * inv_r;
+      const double su = w[l] * cu * inv_r, sp = w[l] * cp * inv_r * inv_r;
+      const double ts = sp * (g0 * n0 + g1 * n1 + g2 * n2), ta = -sp * om;
+      K[0][l] = su * (cd + g0 * g0);
+      K[1][l] = su * (cd + g1 * g1);
+      K[2][l] = su * (cd + g2 * g2);
+      K[3][l] = su * g0 * g1;
+      K[4][l] = su * g0 * g2;
+      K[5][l] = su * g1 * g2;
+      K[6][l] = ts * (om + 3 * g0 * g0);
+      K[7][l] = ts * (om + 3 * g1 * g1);
+      K[8][l] = ts * (om + 3 * g2 * g2);
+      K[9][l] = 3 * ts * g0 * g1;
+      K[10][l] = 3 * ts * g0 * g2;
+      K[11][l] = 3 * ts * g1 * g2;
+      K[12][l] = ta * (g0 * n1 - g1 * n0);
+      K[13][l] = ta * (g0 * n2 - g2 * n0);
+      K[14][l] = ta * (g1 * n2 - g2 * n1);
+    }
+    for (int c = 0; c < 3; ++c) {
+      const double *Nu = &P.nu[c][q0], *Np = &P.np[c][q0];
+      for (int m = 0; m < 15; ++m) {
+        const double *N = m < 6 ? Nu : Np;
+#pragma omp simd aligned(K : 64)
+        for (int l = 0; l < kLanes; ++l) acc[c][m][l] += N[l] * K[m][l];
+      }
+    }
+  }
+  KernelSums sums;
+  for (int c = 0; c < 3; ++c)
+    for (int m = 0; m < 15; ++m) {
+      double t = 0;
+      for (int l = 0; l < kLanes; ++l) t += acc[c][m][l];
+      if (m < 6) sums.u[c][m] = t;
+      else if (m < 12) sums.s[c][m - 6] = t;
+      else sums.a[c][m - 12] = t;
+    }
+  return sums;
+}
 
 } // namespace
 
@@ -116,88 +199,53 @@ ElementQuadrature::ElementQuadrature(const Material &material, const QuadratureO
 }
 
 template <int NQ>
-void ElementQuadrature::apply_rule(const Vec3 &x, const Sub &s, const Vec3 &n, const double (&rule)[NQ][4], ElementIntegrals &out) const
+void ElementQuadrature::gather_rule(const Sub &s, const double (&rule)[NQ][4], PointList &P) const
 {
-  // Structure of arrays over the quadrature points so that each step vectorises.
   const double A = area_of(s.p);
-  double g[3][NQ], N[3][NQ], su[NQ], ts[NQ], ta[NQ];
   for (int q = 0; q < NQ; ++q) {
     const double *l = rule[q];
-    double d[3];
+    Vec3 y;
+    double N[3];
     for (int c = 0; c < 3; ++c) {
-      d[c] = l[0] * s.p[0][c] + l[1] * s.p[1][c] + l[2] * s.p[2][c] - x[c];
-      N[c][q] = l[0] * s.b[0][c] + l[1] * s.b[1][c] + l[2] * s.b[2][c];
+      y[c] = l[0] * s.p[0][c] + l[1] * s.p[1][c] + l[2] * s.p[2][c];
+      N[c] = l[0] * s.b[0][c] + l[1] * s.b[1][c] + l[2] * s.b[2][c];
     }
-    const double inv_r = 1.0 / std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]), w = A * l[3];
-    for (int c = 0; c < 3; ++c) g[c][q] = d[c] * inv_r;
-    const double sp = w * m_k.cp * inv_r * inv_r;
-    su[q] = w * m_k.cu * inv_r;
-    ts[q] = sp * (g[0][q] * n[0] + g[1][q] * n[1] + g[2][q] * n[2]);
-    ta[q] = -sp * m_k.one_m_2nu;
+    P.push(y, A * l[3], N, N);
   }
-  double K[15][NQ];
-  for (int q = 0; q < NQ; ++q) {
-    const double g0 = g[0][q], g1 = g[1][q], g2 = g[2][q];
-    K[0][q] = su[q] * (m_k.cu_diag + g0 * g0);
-    K[1][q] = su[q] * (m_k.cu_diag + g1 * g1);
-    K[2][q] = su[q] * (m_k.cu_diag + g2 * g2);
-    K[3][q] = su[q] * g0 * g1;
-    K[4][q] = su[q] * g0 * g2;
-    K[5][q] = su[q] * g1 * g2;
-    K[6][q] = ts[q] * (m_k.one_m_2nu + 3 * g0 * g0);
-    K[7][q] = ts[q] * (m_k.one_m_2nu + 3 * g1 * g1);
-    K[8][q] = ts[q] * (m_k.one_m_2nu + 3 * g2 * g2);
-    K[9][q] = 3 * ts[q] * g0 * g1;
-    K[10][q] = 3 * ts[q] * g0 * g2;
-    K[11][q] = 3 * ts[q] * g1 * g2;
-    K[12][q] = ta[q] * (g0 * n[1] - g1 * n[0]);
-    K[13][q] = ta[q] * (g0 * n[2] - g2 * n[0]);
-    K[14][q] = ta[q] * (g1 * n[2] - g2 * n[1]);
-  }
-  KernelSums sums;
-  for (int c = 0; c < 3; ++c)
-    for (int m = 0; m < 15; ++m) {
-      double acc = 0;
-      for (int q = 0; q < NQ; ++q) acc += N[c][q] * K[m][q];
-      if (m < 6) sums.u[c][m] = acc;
-      else if (m < 12) sums.s[c][m - 6] = acc;
-      else sums.a[c][m - 12] = acc;
-    }
-  sums.expand_into(out);
 }
 
-void ElementQuadrature::subdivide(const Vec3 &x, const Sub &s, const Vec3 &n, int depth, ElementIntegrals &out) const
+void ElementQuadrature::subdivide(const Vec3 &x, const Sub &s, int depth, PointList &P) const
 {
   const Vec3 centre = (1.0 / 3) * (s.p[0] + s.p[1] + s.p[2]);
   const double h = diameter(s.p), d = norm(x - centre);
-  if (m_opt.far_ratio > 0 && d >= m_opt.far_ratio * h) return apply_rule(x, s, n, rule3, out);
-  if (d >= m_opt.near_ratio * h || depth >= m_opt.max_depth) return apply_rule(x, s, n, rule7, out);
+  if (m_opt.far_ratio > 0 && d >= m_opt.far_ratio * h) return gather_rule(s, rule3, P);
+  if (d >= m_opt.near_ratio * h || depth >= m_opt.max_depth) return gather_rule(s, rule7, P);
   Sub mid;
   for (int k = 0; k < 3; ++k) {
     mid.p[k] = 0.5 * (s.p[(k + 1) % 3] + s.p[(k + 2) % 3]);
     for (int c = 0; c < 3; ++c) mid.b[k][c] = 0.5 * (s.b[(k + 1) % 3][c] + s.b[(k + 2) % 3][c]);
   }
-  subdivide(x, mid, n, depth + 1, out);
+  subdivide(x, mid, depth + 1, P);
   for (int k = 0; k < 3; ++k) {
     Sub child;
     child.p = {s.p[k], mid.p[(k + 2) % 3], mid.p[(k + 1) % 3]};
     child.b = {s.b[k], mid.b[(k + 2) % 3], mid.b[(k + 1) % 3]};
-    subdivide(x, child, n, depth + 1, out);
+    subdivide(x, child, depth + 1, P);
   }
 }
 
 void ElementQuadrature::regular(const Vec3 &x, const Triangle &tri, ElementIntegrals &out) const
 {
-  Sub s{tri.p, {{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}}};
-  subdivide(x, s, tri.n, 0, out);
+  PointList &P = point_list();
+  subdivide(x, Sub{tri.p, {{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}}}, 0, P);
+  sum_points(m_k, x, tri.n, P).expand_into(out);
 }
 
-void ElementQuadrature::duffy(const Vec3 &x, const std::array<double, 3> &bx, const Sub &s, const Vec3 &n, ElementIntegrals &out) const
+void ElementQuadrature::duffy(const Vec3 &x, const std::array<double, 3> &bx, const Sub &s, PointList &P) const
 {
   // s.p[0] is the singular point; y = q0 + ξ(q1 - q0) + ξη(q2 - q1), dA = 2 A ξ dξ dη.
   const double twoA = 2.0 * area_of(s.p);
   const int m = m_opt.duffy_order;
-  KernelSums sums;
   for (int i = 0; i < m; ++i) {
     const double xi = m_gl_x[i];
     for (int j = 0; j < m; ++j) {
@@ -209,43 +257,41 @@ void ElementQuadrature::duffy(const Vec3 &x, const std::array<double, 3> &bx, co
         N[c] = s.b[0][c] + xi * (s.b[1][c] - s.b[0][c]) + xi * eta * (s.b[2][c] - s.b[1][c]);
         Np[c] = N[c] - bx[c];
       }
-      sums.add(m_k, x, y, n, wt, N, Np);
+      P.push(y, wt, N, Np);
     }
   }
-  sums.expand_into(out);
 }
 
-void ElementQuadrature::duffy_split(const Vec3 &x, const std::array<double, 3> &bx, const Sub &s, const Vec3 &n, ElementIntegrals &out) const
+void ElementQuadrature::duffy_split(const Vec3 &x, const std::array<double, 3> &bx, const Sub &s, PointList &P) const
 {
   // Split at the foot of the altitude from the singular point: each half then spans at most a
   // right angle and its distance to the point is monotone along the edge, so the angular
   // integrand stays smooth even when the point is close to the opposite edge.
   const Vec3 e = s.p[2] - s.p[1];
   const double f = dot(x - s.p[1], e) / dot(e, e);
-  if (f <= 0.02 || f >= 0.98) return duffy(x, bx, s, n, out);
+  if (f <= 0.02 || f >= 0.98) return duffy(x, bx, s, P);
   const Vec3 foot = s.p[1] + f * e;
   std::array<double, 3> bf;
   for (int c = 0; c < 3; ++c) bf[c] = s.b[1][c] + f * (s.b[2][c] - s.b[1][c]);
-  duffy(x, bx, Sub{{x, s.p[1], foot}, {bx, s.b[1], bf}}, n, out);
-  duffy(x, bx, Sub{{x, foot, s.p[2]}, {bx, bf, s.b[2]}}, n, out);
+  duffy(x, bx, Sub{{x, s.p[1], foot}, {bx, s.b[1], bf}}, P);
+  duffy(x, bx, Sub{{x, foot, s.p[2]}, {bx, bf, s.b[2]}}, P);
 }
 
 void ElementQuadrature::singular(const Vec3 &x, const std::array<double, 3> &bx, const Triangle &tri, ElementIntegrals &out) const
 {
   const std::array<std::array<double, 3>, 3> id = {{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}};
+  PointList &P = point_list();
+  int corner = -1;
+  for (int k = 0; k < 3; ++k)
+    if (bx[k] > 1.0 - 1e-14) corner = k;
   for (int k = 0; k < 3; ++k) {
     const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
-    if (bx[k] > 1.0 - 1e-14) {
-      // The point is corner k: one sub-triangle, the whole triangle.
-      duffy_split(x, bx, Sub{{x, tri.p[k1], tri.p[k2]}, {bx, id[k1], id[k2]}}, tri.n, out);
-      return;
-    }
+    // The point is corner k: one sub-triangle, the whole triangle. Otherwise the sub-triangle
+    // opposite corner k, unless it collapses.
+    if (corner >= 0 ? k != corner : bx[k] < 1e-14) continue;
+    duffy_split(x, bx, Sub{{x, tri.p[k1], tri.p[k2]}, {bx, id[k1], id[k2]}}, P);
   }
-  for (int k = 0; k < 3; ++k) {
-    const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
-    if (bx[k] < 1e-14) continue; // the sub-triangle opposite corner k collapses
-    duffy_split(x, bx, Sub{{x, tri.p[k1], tri.p[k2]}, {bx, id[k1], id[k2]}}, tri.n, out);
-  }
+  sum_points(m_k, x, tri.n, P).expand_into(out);
 }
 
 } // namespace hssbem

@@ -167,7 +167,7 @@ unsigned RegularRule::regular_lanes(const double (&x)[3][lanes], int t) const
   return bits;
 }
 
-void RegularRule::lane_sums(const double (&x)[3][lanes], int t, double (&out)[3][CornerSums::size][lanes]) const
+void RegularRule::lane_kernels(const double (&x)[3][lanes], int t, double (&K)[7][CornerSums::size][lanes]) const
 {
   // As batch, with the points as lanes: the triangle's data are scalars, nothing is gathered.
   constexpr int L = lanes;
@@ -175,7 +175,6 @@ void RegularRule::lane_sums(const double (&x)[3][lanes], int t, double (&out)[3]
   const TriangleData &d = m_tri[t];
   const double nx = d.n[0], ny = d.n[1], nz = d.n[2], su0 = d.area * m_k.cu, sp0 = d.area * m_k.cp;
   const double cd = m_k.cu_diag, om = m_k.one_m_2nu;
-  alignas(64) double K[7][CornerSums::size][L];
   for (int q = 0; q < 7; ++q) {
     const double yx = d.q[0][q], yy = d.q[1][q], yz = d.q[2][q], su1 = weight[q] * su0, sp1 = weight[q] * sp0;
     alignas(64) double r2[L], ir[L];
@@ -193,9 +192,34 @@ void RegularRule::lane_sums(const double (&x)[3][lanes], int t, double (&out)[3]
       kernel_numbers(g0, g1, g2, su, sp, nx, ny, nz, cd, om, &K[q][0][k], L);
     }
   }
+}
+
+void RegularRule::lane_sums(const double (&x)[3][lanes], int t, double (&out)[3][CornerSums::size][lanes]) const
+{
+  constexpr int L = lanes;
+  alignas(64) double K[7][CornerSums::size][L];
+  lane_kernels(x, t, K);
   for (int m = 0; m < CornerSums::size; ++m) {
 #pragma omp simd
     for (int k = 0; k < L; ++k) corner_combination(&K[0][m][k], CornerSums::size * L, &out[0][m][k], CornerSums::size * L);
+  }
+}
+
+void RegularRule::add_lane_sums(const double (&x)[3][lanes], int t, double *const dest[3]) const
+{
+  constexpr int L = lanes;
+  alignas(64) double K[7][CornerSums::size][L];
+  lane_kernels(x, t, K);
+  for (int m = 0; m < CornerSums::size; ++m) {
+    alignas(64) double S[3][L];
+#pragma omp simd
+    for (int k = 0; k < L; ++k) corner_combination(&K[0][m][k], CornerSums::size * L, &S[0][k], L);
+    for (int c = 0; c < 3; ++c) {
+      if (!dest[c]) continue;
+      double *to = dest[c] + m * L;
+#pragma omp simd
+      for (int k = 0; k < L; ++k) to[k] += S[c][k];
+    }
   }
 }
 

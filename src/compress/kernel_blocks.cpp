@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 namespace hssbem {
 
@@ -17,9 +18,22 @@ void KernelBlocks::block(const std::vector<int> &rows, const std::vector<int> &c
   EntrySelection sel;
   for (std::size_t r = 0; r < rows.size(); ++r) sel.add_row(m_tree.perm()[rows[r] / 3], rows[r] % 3, static_cast<int>(r));
   select_columns(cols, sel);
-  zero(rows.size(), cols.size(), out, rs, cs);
-  m_op.add_selected(sel, out, rs, cs, ws);
-  apply_scales(rows.size(), cols, out, rs, cs);
+  if (rs == 1) {
+    m_op.selected(sel, out, rs, cs, ws);
+    apply_scales(rows.size(), cols, out, rs, cs);
+    return;
+  }
+  // Rows far apart in `out` (a sample matrix with one candidate row per column): the entries
+  // are summed into a tile whose rows are adjacent, which the evaluation's scattered additions
+  // keep in cache, then copied out scaled.
+  const std::size_t m = rows.size(), n = cols.size();
+  thread_local std::vector<double> tile;
+  tile.resize(m * n);
+  m_op.selected(sel, tile.data(), 1, static_cast<long>(m), ws);
+  std::vector<double> s(n);
+  for (std::size_t q = 0; q < n; ++q) s[q] = m_scale[cols[q] % m_w];
+  for (std::size_t r = 0; r < m; ++r)
+    for (std::size_t q = 0; q < n; ++q) out[r * rs + q * cs] = s[q] * tile[r + q * m];
 }
 
 void KernelBlocks::at_points(const std::vector<Vec3> &X, const std::vector<int> &cols, double *out, long rs, long cs, BemOperator::Workspace &ws) const
@@ -27,8 +41,7 @@ void KernelBlocks::at_points(const std::vector<Vec3> &X, const std::vector<int> 
   if (X.empty() || cols.empty()) return;
   EntrySelection sel;
   select_columns(cols, sel);
-  zero(3 * X.size(), cols.size(), out, rs, cs);
-  m_op.add_selected_at_points(X, sel, out, rs, cs, ws);
+  m_op.selected_at_points(X, sel, out, rs, cs, ws);
   apply_scales(3 * X.size(), cols, out, rs, cs);
 }
 
@@ -36,12 +49,6 @@ void KernelBlocks::select_columns(const std::vector<int> &cols, EntrySelection &
 {
   for (std::size_t q = 0; q < cols.size(); ++q) sel.add_col(m_tree.perm()[cols[q] / m_w], cols[q] % m_w, static_cast<int>(q));
   sel.finish();
-}
-
-void KernelBlocks::zero(std::size_t nrows, std::size_t ncols, double *out, long rs, long cs)
-{
-  for (std::size_t r = 0; r < nrows; ++r)
-    for (std::size_t q = 0; q < ncols; ++q) out[r * rs + q * cs] = 0.0;
 }
 
 void KernelBlocks::apply_scales(std::size_t nrows, const std::vector<int> &cols, double *out, long rs, long cs) const

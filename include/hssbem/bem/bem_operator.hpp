@@ -102,11 +102,11 @@ public:
   /// points around a cluster): 3|X| rows, no rigid-body term. Thread-safe with a workspace.
   void fill_hg_at_points(const std::vector<Vec3> &X, const std::vector<int> &J, double *H, double *G, long ld, double *Gn, long ldn,
                          Workspace &ws) const;
-  /// out[r·rs + q·cs] += the requested entries of H, G, Gn (no rigid-body terms). Thread-safe
-  /// with one workspace per thread.
-  void add_selected(const EntrySelection &sel, double *out, long rs, long cs, Workspace &ws) const;
+  /// out[r·rs + q·cs] = the requested entries of H, G, Gn (no rigid-body terms): every position
+  /// of the selection is written, nothing else. Thread-safe with one workspace per thread.
+  void selected(const EntrySelection &sel, double *out, long rs, long cs, Workspace &ws) const;
   /// The same with the points X as rows: out row 3p + c is component c at X[p] (sel's rows unused).
-  void add_selected_at_points(const std::vector<Vec3> &X, const EntrySelection &sel, double *out, long rs, long cs, Workspace &ws) const;
+  void selected_at_points(const std::vector<Vec3> &X, const EntrySelection &sel, double *out, long rs, long cs, Workspace &ws) const;
   /// Columns j of the rigid-body term of row i and their weights w_j(x_i) (one column, weight 1,
   /// for a node collocated at its vertex; the corners of its triangle for a moved node): the
   /// term adds w_j(x_i) D_i to block (i, j) of H.
@@ -133,7 +133,7 @@ private:
   void elements_touching(const std::vector<int> &J, Workspace &ws) const;
   /// ws.elem_pos for ws.elems and ws.col_pos.
   void corner_positions(Workspace &ws) const;
-  /// One row point of add_selected: x (collocation point of `row`, or any point when row < 0)
+  /// One row point of selected: x (collocation point of `row`, or any point when row < 0)
   /// and its requested components comp[0..nr) going to output rows out_row[0..nr).
   struct RowPoint {
     Vec3 x;
@@ -141,9 +141,9 @@ private:
     const int *comp, *out_row;
     int nr;
   };
-  /// add_selected for up to RegularRule::lanes row points at once (the triangles' 7-point sums
+  /// selected for up to RegularRule::lanes row points at once (the triangles' 7-point sums
   /// with the points as SIMD lanes, the other pairs one by one).
-  void add_selected_points(const RowPoint *pts, int np, const EntrySelection::Group &cols, bool gn, double *out, long rs, long cs, Workspace &ws) const;
+  void selected_points(const RowPoint *pts, int np, const EntrySelection::Group &cols, bool gn, double *out, long rs, long cs, Workspace &ws) const;
   enum class Rigid { with, without };
   void fill_rows(const std::vector<int> &I, const std::vector<int> &J, double *H, double *G, long ld, double *Gn, long ldn, Workspace &ws,
                  Rigid rigid) const;

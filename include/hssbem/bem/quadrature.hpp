@@ -18,6 +18,8 @@
 
 namespace hssbem {
 
+struct PointList; // quadrature.cpp
+
 /// Quadrature settings (options -mat_bem_*).
 struct QuadratureOptions {
   int duffy_order = 8;      ///< Gauss-Legendre points per direction on singular triangles
@@ -64,11 +66,13 @@ public:
 
 private:
   struct Sub { std::array<Vec3, 3> p; std::array<std::array<double, 3>, 3> b; };
-  void subdivide(const Vec3 &x, const Sub &s, const Vec3 &n, int depth, ElementIntegrals &out) const;
+  // The rules gather their points (position, weight, shape values) into a PointList, which one
+  // vectorised pass then sums.
+  void subdivide(const Vec3 &x, const Sub &s, int depth, PointList &P) const;
   template <int NQ>
-  void apply_rule(const Vec3 &x, const Sub &s, const Vec3 &n, const double (&rule)[NQ][4], ElementIntegrals &out) const;
-  void duffy_split(const Vec3 &x, const std::array<double, 3> &bx, const Sub &s, const Vec3 &n, ElementIntegrals &out) const;
-  void duffy(const Vec3 &x, const std::array<double, 3> &bx, const Sub &s, const Vec3 &n, ElementIntegrals &out) const;
+  void gather_rule(const Sub &s, const double (&rule)[NQ][4], PointList &P) const;
+  void duffy_split(const Vec3 &x, const std::array<double, 3> &bx, const Sub &s, PointList &P) const;
+  void duffy(const Vec3 &x, const std::array<double, 3> &bx, const Sub &s, PointList &P) const;
 
   KelvinConstants m_k;
   QuadratureOptions m_opt;

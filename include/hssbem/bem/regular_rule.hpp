@@ -10,6 +10,7 @@
 
 #include "hssbem/bem/quadrature.hpp"
 
+#include <cmath>
 #include <vector>
 
 namespace hssbem {
@@ -48,11 +49,29 @@ public:
   /// The other way round, for blocks with many rows: one triangle t at `lanes` points at once,
   /// given by coordinates x[0][k], x[1][k], x[2][k] (aligned to 64 bytes).
   static constexpr int lanes = 8;
+  /// Ask the cache for t's data ahead of its use.
+  void prefetch(int t) const
+  {
+    const char *p = reinterpret_cast<const char *>(&m_tri[t]);
+    for (std::size_t b = 0; b < sizeof(TriangleData); b += 64) __builtin_prefetch(p + b);
+  }
   /// Bit k set when t is regular at point k (is_regular for each lane).
   unsigned regular_lanes(const double (&x)[3][lanes], int t) const;
+  /// True when t is regular at every point within `radius` of `centre` (a cheap test that lets
+  /// a group of points skip regular_lanes; false says nothing).
+  bool regular_in_ball(const Vec3 &centre, double radius, int t) const
+  {
+    const TriangleData &d = m_tri[t];
+    const double d0 = centre[0] - d.centroid[0], d1 = centre[1] - d.centroid[1], d2 = centre[2] - d.centroid[2];
+    const double dist = std::sqrt(d0 * d0 + d1 * d1 + d2 * d2), lo = dist - radius, hi = dist + radius;
+    return lo > 0 && lo * lo >= d.near2 && hi * hi < d.far2;
+  }
   /// out[c][m][k]: corner c's sum m (CornerSums layout) of t at point k. Lanes at which t is not
   /// regular get meaningless (possibly infinite) numbers that the caller must not use.
   void lane_sums(const double (&x)[3][lanes], int t, double (&out)[3][CornerSums::size][lanes]) const;
+  /// dest[c][m · lanes + k] += lane_sums' out[c][m][k] for each corner c whose dest is not null
+  /// (all lanes: every one must be regular, or its lanes ignored by the caller).
+  void add_lane_sums(const double (&x)[3][lanes], int t, double *const dest[3]) const;
 
 private:
   struct TriangleData {
@@ -62,6 +81,8 @@ private:
     double centroid[3];
     double near2, far2; ///< squared distances bounding the 7-point zone
   };
+  /// The 15 kernel numbers, weights included, at the 7 points (point, number, lane).
+  void lane_kernels(const double (&x)[3][lanes], int t, double (&K)[7][CornerSums::size][lanes]) const;
   template <int B>
   void batch(const Vec3 &x, const int *tris, CornerSums *out) const;
 

@@ -30,7 +30,6 @@ public:
 
 private:
   void select_columns(const std::vector<int> &cols, EntrySelection &sel) const;
-  static void zero(std::size_t nrows, std::size_t ncols, double *out, long rs, long cs);
   void apply_scales(std::size_t nrows, const std::vector<int> &cols, double *out, long rs, long cs) const;
 
   const BemOperator &m_op;
