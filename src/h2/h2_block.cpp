@@ -7,6 +7,7 @@
 #include "mixed_blas.hpp"
 
 #include <algorithm>
+#include <limits>
 #include <stdexcept>
 
 namespace hssbem {
@@ -19,7 +20,7 @@ void widen(const std::vector<float> &f, std::vector<double> &d) { d.assign(f.beg
 
 /// The interpolation side P of a low-rank block (other × rank; see H2Block).
 struct Interp {
-  const std::vector<int> &slot;
+  const std::vector<H2Block::Slot> &slot;
   const float *T; ///< redundant rows, (other − rank) × rank
   int other, rank;
   int red() const { return other - rank; }
@@ -114,7 +115,7 @@ void H2Block::compress(double rel_tol, double row_scale, double col_scale)
     id = by_cols ? column_id(M.data(), m, n, M.ld(), IdOptions{tol, -1, true}) : row_id(M.data(), m, n, M.ld(), IdOptions{tol, -1, true});
     k = id.rank();
   }
-  if (Size(k) * Size(len + other - k) + Size(other) >= Size(m) * Size(n)) return demote();
+  if (Size(k) * Size(len + other - k) + Size(other) >= Size(m) * Size(n) || other > std::numeric_limits<Slot>::max()) return demote();
   lr_rows = !by_cols;
   rank = k;
   lr_s.assign(Size(len) * k, 0.0f);
@@ -127,10 +128,10 @@ void H2Block::compress(double rel_tol, double row_scale, double col_scale)
     for (int t = 0; t < k; ++t) {
       const int s = id.skeleton[Size(t)];
       for (int i = 0; i < len; ++i) lr_s[Size(t) * len + i] = static_cast<float>(by_cols ? M(i, s) : M(s, i));
-      lr_slot[Size(s)] = t;
+      lr_slot[Size(s)] = static_cast<Slot>(t);
     }
     for (int j = 0; j < r; ++j) {
-      lr_slot[Size(id.redundant[Size(j)])] = -1 - j;
+      lr_slot[Size(id.redundant[Size(j)])] = static_cast<Slot>(-1 - j);
       for (int t = 0; t < k; ++t) lr_t[Size(j) + Size(t) * r] = static_cast<float>(id.T[t + Size(j) * k]);
     }
   }

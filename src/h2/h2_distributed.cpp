@@ -342,7 +342,7 @@ struct Reader {
     B.rank = get<int>();
     B.lr_rows = get<int>() != 0;
     B.lr_s = get_all<float>();
-    B.lr_slot = get_all<int>();
+    B.lr_slot = get_all<H2Block::Slot>();
     B.lr_t = get_all<float>();
     return B;
   }

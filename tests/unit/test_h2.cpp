@@ -289,7 +289,7 @@ TEST(H2Block, InterpolativeFormStoresNoUnitRows)
     EXPECT_EQ(B.lr_rows, n > m);
     EXPECT_GT(k, 5);             // a real decomposition, not a tiny one
     EXPECT_LT(k, std::min(m, n)); // and it did compress
-    EXPECT_EQ(B.bytes(), sizeof(float) * static_cast<std::size_t>(k) * (m + n - k) + sizeof(int) * static_cast<std::size_t>(other));
+    EXPECT_EQ(B.bytes(), sizeof(float) * static_cast<std::size_t>(k) * (m + n - k) + sizeof(std::int16_t) * static_cast<std::size_t>(other));
     // the skeleton side holds true entries (rounded to float)
     int skeletons = 0;
     for (int p = 0; p < other; ++p) {

@@ -34,16 +34,14 @@ struct H2Options {
   /// Store far and near blocks in single precision (half the memory; each entry rounds to a
   /// relative 6e-8, harmless for rel_tol ≥ 1e-6). Bases stay in double.
   bool single_precision = false;
-  /// With single_precision: store each far block in low-rank form (an ID at rel_tol / 10, the
+  /// With single_precision: store each far block in low-rank form (an ID at rel_tol / 5, the
   /// skeleton side's entries and the interpolation weights in single precision, no unit rows;
-  /// H2Block) when that takes less memory. Measured on a 20k sphere at 1e-5: far blocks 0.44 of
-  /// their dense size, sampled error of K unchanged to 1 %.
+  /// H2Block) when that takes less memory. With either low-rank form the skeletons' IDs run at
+  /// 0.7 rel_tol: the product's error comes mostly from them (h2_compression.cpp).
   bool low_rank_far = true;
-  /// With single_precision: likewise for the near blocks between different leaves, at rel_tol / 30
+  /// With single_precision: likewise for the near blocks between different leaves, at rel_tol / 10
   /// of the larger of the block's own largest row norm and that of its row leaf's diagonal block
-  /// (those that receive rigid-body terms stay dense). Measured at 1e-5 with the far blocks'
-  /// change above (20k unknowns): near blocks 301 -> 236 MB (disk organ) and 213 -> 172 MB
-  /// (sphere), sampled error of K +0.1 % and +3 %.
+  /// (those that receive rigid-body terms stay dense).
   bool low_rank_near = true;
 };
 

@@ -19,6 +19,7 @@
 #include "hssbem/h2/block_partition.hpp"
 
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 namespace hssbem {
@@ -43,7 +44,10 @@ struct H2Block {
   int rank = -1;       ///< ≥ 0: low rank, in lr_s, lr_slot, lr_t
   bool lr_rows = false; ///< the ID is of rows (P on the row side)
   std::vector<float> lr_s, lr_t;
-  std::vector<int> lr_slot;
+  /// Slots fit 16 bits: a block whose `other` side is longer than Slot holds stays in single
+  /// precision instead (no skeleton comes near that).
+  using Slot = std::int16_t;
+  std::vector<Slot> lr_slot;
 
   bool is_single() const { return !single.empty(); }
   bool is_low_rank() const { return rank >= 0; }
@@ -61,7 +65,7 @@ struct H2Block {
   void add(int i, int j, double v);
   /// Set every stored number to zero (the block then contributes nothing).
   void clear();
-  std::size_t bytes() const { return M.bytes() + (single.size() + lr_s.size() + lr_t.size()) * sizeof(float) + lr_slot.size() * sizeof(int); }
+  std::size_t bytes() const { return M.bytes() + (single.size() + lr_s.size() + lr_t.size()) * sizeof(float) + lr_slot.size() * sizeof(Slot); }
   /// The entries in double: M's data, or the stored form expanded into buf.
   const double *data(std::vector<double> &buf) const;
   /// Y += B X for nrhs columns (X: M.n × nrhs, Y: M.m × nrhs, column-major). A single-precision
