@@ -99,7 +99,6 @@ void BemOperator::selected_points(const RowPoint *pts, int np, const EntrySelect
   const std::size_t ne = ws.elems.size();
   for (std::size_t e = 0; e < ne; ++e) {
     const int t = ws.elems[e], *p = &ws.elem_pos[3 * e];
-    if (e + 4 < ne) m_regular.prefetch(ws.elems[e + 4]); // triangles lie scattered in memory
     unsigned regular = used;
     if (!m_regular.regular_in_ball(centre, radius, t)) {
       // A point on t is within its diameter, inside the near zone: only those need the check.
@@ -159,11 +158,10 @@ void BemOperator::selected_points(const RowPoint *pts, int np, const EntrySelect
       const double *a = acc + q * acc_size * L;
       for (int e = cols.start[q]; e < cols.start[q + 1]; ++e) {
         double *o = out + cols.out[e] * cs + first;
-        const Pick *pk = nullptr;
         for (int i = 0; i < 3; ++i) {
-          pk = &pick_table[i][cols.what[e]];
-          const double *ai = a + pk->i * L, *aj = a + pk->j * L, sign = pk->sign;
-          for (int k = 0; k < np; ++k) o[(3 * k + i) * rs] = ai[k] + sign * aj[k];
+          const Pick &pk = pick_table[i][cols.what[e]];
+          const double *ai = a + pk.i * L, *aj = a + pk.j * L;
+          for (int k = 0; k < np; ++k) o[(3 * k + i) * rs] = ai[k] + pk.sign * aj[k];
         }
       }
     }

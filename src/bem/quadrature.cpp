@@ -1,17 +1,17 @@
 #include "hssbem/bem/quadrature.hpp"
+#include "kernel_numbers.hpp"
 
 #include <algorithm>
 #include <cmath>
 
 namespace hssbem {
 
-constexpr int kLanes = 8;
-
 /// The quadrature points of one (point, triangle) pair, gathered from every sub-triangle of a
 /// subdivision or a Duffy split before one pass sums them with the points as SIMD lanes:
 /// position y, weight w (area included), the corners' shape values for u* (nu) and for p* (np;
 /// nu − w_a on a singular triangle). The length is padded to whole lanes with zero weights.
 struct PointList {
+  static constexpr int lanes = 8;
   std::vector<double> y[3], w, nu[3], np[3];
   std::size_t n = 0;
 
@@ -26,11 +26,11 @@ struct PointList {
     }
     w[n++] = weight;
   }
-  /// Pad to a multiple of kLanes with points one unit away from x and no weight.
+  /// Pad to a multiple of PointList::lanes with points one unit away from x and no weight.
   void pad(const Vec3 &x)
   {
     static const double zero[3] = {0, 0, 0};
-    while (n % kLanes != 0) push(x + Vec3{1.0, 0.0, 0.0}, 0.0, zero, zero);
+    while (n % lanes != 0) push(x + Vec3{1.0, 0.0, 0.0}, 0.0, zero, zero);
   }
 
 private:
@@ -125,41 +125,26 @@ PointList &point_list()
 KernelSums sum_points(const KelvinConstants &k, const Vec3 &x, const Vec3 &n, PointList &P)
 {
   P.pad(x);
-  alignas(64) double acc[3][15][kLanes] = {};
+  alignas(64) double acc[3][15][PointList::lanes] = {};
   const double x0 = x[0], x1 = x[1], x2 = x[2], n0 = n[0], n1 = n[1], n2 = n[2];
   const double cu = k.cu, cp = k.cp, cd = k.cu_diag, om = k.one_m_2nu;
-  for (std::size_t q0 = 0; q0 < P.n; q0 += kLanes) {
+  for (std::size_t q0 = 0; q0 < P.n; q0 += PointList::lanes) {
     const double *y0 = &P.y[0][q0], *y1 = &P.y[1][q0], *y2 = &P.y[2][q0], *w = &P.w[q0];
-    alignas(64) double K[15][kLanes];
+    alignas(64) double K[15][PointList::lanes];
 #pragma omp simd aligned(K : 64)
-    for (int l = 0; l < kLanes; ++l) {
+    for (int l = 0; l < PointList::lanes; ++l) {
       const double d0 = y0[l] - x0, d1 = y1[l] - x1, d2 = y2[l] - x2;
       const double inv_r = 1.0 / std::sqrt(d0 * d0 + d1 * d1 + d2 * d2);
       const double g0 = d0 * inv_r, g1 = d1 * inv_r, g2 = d2 * inv_r;
       const double su = w[l] * cu * inv_r, sp = w[l] * cp * inv_r * inv_r;
-      const double ts = sp * (g0 * n0 + g1 * n1 + g2 * n2), ta = -sp * om;
-      K[0][l] = su * (cd + g0 * g0);
-      K[1][l] = su * (cd + g1 * g1);
-      K[2][l] = su * (cd + g2 * g2);
-      K[3][l] = su * g0 * g1;
-      K[4][l] = su * g0 * g2;
-      K[5][l] = su * g1 * g2;
-      K[6][l] = ts * (om + 3 * g0 * g0);
-      K[7][l] = ts * (om + 3 * g1 * g1);
-      K[8][l] = ts * (om + 3 * g2 * g2);
-      K[9][l] = 3 * ts * g0 * g1;
-      K[10][l] = 3 * ts * g0 * g2;
-      K[11][l] = 3 * ts * g1 * g2;
-      K[12][l] = ta * (g0 * n1 - g1 * n0);
-      K[13][l] = ta * (g0 * n2 - g2 * n0);
-      K[14][l] = ta * (g1 * n2 - g2 * n1);
+      kernel_numbers(g0, g1, g2, su, sp, n0, n1, n2, cd, om, &K[0][l], PointList::lanes);
     }
     for (int c = 0; c < 3; ++c) {
       const double *Nu = &P.nu[c][q0], *Np = &P.np[c][q0];
       for (int m = 0; m < 15; ++m) {
         const double *N = m < 6 ? Nu : Np;
 #pragma omp simd aligned(K : 64)
-        for (int l = 0; l < kLanes; ++l) acc[c][m][l] += N[l] * K[m][l];
+        for (int l = 0; l < PointList::lanes; ++l) acc[c][m][l] += N[l] * K[m][l];
       }
     }
   }
@@ -167,7 +152,7 @@ KernelSums sum_points(const KelvinConstants &k, const Vec3 &x, const Vec3 &n, Po
   for (int c = 0; c < 3; ++c)
     for (int m = 0; m < 15; ++m) {
       double t = 0;
-      for (int l = 0; l < kLanes; ++l) t += acc[c][m][l];
+      for (int l = 0; l < PointList::lanes; ++l) t += acc[c][m][l];
       if (m < 6) sums.u[c][m] = t;
       else if (m < 12) sums.s[c][m - 6] = t;
       else sums.a[c][m - 12] = t;

@@ -49,12 +49,6 @@ public:
   /// The other way round, for blocks with many rows: one triangle t at `lanes` points at once,
   /// given by coordinates x[0][k], x[1][k], x[2][k] (aligned to 64 bytes).
   static constexpr int lanes = 8;
-  /// Ask the cache for t's data ahead of its use.
-  void prefetch(int t) const
-  {
-    const char *p = reinterpret_cast<const char *>(&m_tri[t]);
-    for (std::size_t b = 0; b < sizeof(TriangleData); b += 64) __builtin_prefetch(p + b);
-  }
   /// Bit k set when t is regular at point k (is_regular for each lane).
   unsigned regular_lanes(const double (&x)[3][lanes], int t) const;
   /// True when t is regular at every point within `radius` of `centre` (a cheap test that lets
