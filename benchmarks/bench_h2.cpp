@@ -6,6 +6,8 @@
 //   bench_h2 --mesh FILE [--tol 1e-5] [--leaf 64] [--eta 0] [--single 0|1] [--dense 0|1]
 //            [--rtol 1e-8] [--max-it 1000] [--hss 0|1] [--hss-leaf 256] [--header]
 //
+// --max-it 0 skips the solve (compression, memory and the sampled error only).
+//
 // Problem (as bench_hss): the nodes below the median height clamped, the others loaded by a
 // traction (0, 0, -1); E = 1, nu = 0.3. Besides the solve, the product is checked against true
 // entries on 48 sampled rows of K (all columns, rigid-body terms included: sample_err), so the
@@ -210,7 +212,8 @@ int main(int argc, char **argv)
   std::vector<double> x;
   PetscInt its = 0;
   double t_solve = 0;
-  PetscCall(gmres_jacobi(sys, sel, b, rtol, max_it, x, its, t_solve));
+  if (max_it > 0) PetscCall(gmres_jacobi(sys, sel, b, rtol, max_it, x, its, t_solve));
+  else x.assign(b.size(), std::nan(""));
   const H2Matrix &K = sys.matrix();
   const double sample_err = probe_error(K, probe);
   const double rss = bench::peak_rss_mb();
@@ -221,6 +224,26 @@ int main(int argc, char **argv)
   std::fprintf(stderr, "compress: tree+partition %.2f s, far blocks %.2f s, near blocks %.2f s, rigid %.2f s; summed over threads: ID samples %.2f s, IDs %.2f s; %.3g entries, %ld far and %ld near blocks, %d proxy points\n",
                st.time_tree, st.time_far, st.time_near, st.time_rigid, st.time_near_field, st.time_ids, double(st.entries_evaluated), st.far_blocks,
                st.near_blocks, st.proxy_points);
+  {
+    // Where the blocks' memory goes: near blocks on the diagonal, low rank, dense; far likewise.
+    double self = 0, near_lr = 0, near_dense = 0, far_lr = 0, far_dense = 0;
+    long near_lr_n = 0, far_lr_n = 0;
+    for (int c = 0; c < K.tree().num_clusters(); ++c) {
+      for (const H2Block &B : K.near_blocks(c)) {
+        const double mb = B.bytes() / 1048576.0;
+        if (B.col_cluster == c) self += mb;
+        else if (B.is_low_rank()) near_lr += mb, ++near_lr_n;
+        else near_dense += mb;
+      }
+      for (const H2Block &B : K.far_blocks(c)) {
+        const double mb = B.bytes() / 1048576.0;
+        if (B.is_low_rank()) far_lr += mb, ++far_lr_n;
+        else far_dense += mb;
+      }
+    }
+    std::fprintf(stderr, "blocks: near %.1f MB on the diagonal, %.1f MB in %ld low-rank blocks, %.1f MB dense; far %.1f MB in %ld low-rank blocks, %.1f MB dense\n", self,
+                 near_lr, near_lr_n, near_dense, far_lr, far_lr_n, far_dense);
+  }
   std::fprintf(stderr, "solve: GMRES(100) + Jacobi, %d iterations to rtol %g, %.2f s\n", (int)its, rtol, t_solve);
 
   if (run_hss) {
