@@ -118,14 +118,61 @@ Vec3 principal_axis(const Vec3 *x, int m, const Vec3 &mean)
   return v[big] < 0 ? -1.0 * v : v;
 }
 
+/// Centroid and inertia (Σ |x − centroid|²) of the points keys[b, e) refer to.
+std::pair<Vec3, double> centroid_and_inertia(const Vec3 *x, const std::vector<Key> &keys, int b, int e)
+{
+  Vec3 mean{};
+  for (int i = b; i < e; ++i) mean = mean + x[keys[i].offset];
+  mean = (1.0 / (e - b)) * mean;
+  double sum = 0;
+  for (int i = b; i < e; ++i) sum += dot(x[keys[i].offset] - mean, x[keys[i].offset] - mean);
+  return {mean, sum};
+}
+
 /// Reorder the m points x[0, m) of a cluster, with their node indices idx[0, m), so that the first
-/// m/2 are those with the smallest projections on the principal axis (ties by node index).
-void median_split(Vec3 *x, int *idx, int m, Workspace &ws)
+/// m/2 are those with the smallest projections on the splitting axis (ties by node index).
+///
+/// With `refine` the axis starts as the principal one and is then refined as in a two-means
+/// clustering with halves of equal size: the axis through the two halves' centroids, split at its
+/// median again, kept while it lowers the halves' total inertia (at most 10 rounds; the principal
+/// split is the first candidate, so a cluster only gets more compact halves). A principal axis is
+/// a poor cut where a cluster is not one round blob: both faces of a thin body, tilted where they
+/// converge towards the rim, or a curved strip. On the (1, 0.8, 0.3) disk organ of 80k unknowns
+/// the leaves' mean radius fell by 8 % and their near blocks from 13.1 to 11.0 per leaf (sphere:
+/// 10.4 to 10.0), and the 300k disk organ's H² matrix by 5 %. Leaves that hold both faces of the
+/// thin body remain where the faces' point counts differ (equal halves cannot part them); there
+/// were 9 of 512 with 53–88 near blocks each, 4 remain.
+void median_split(Vec3 *x, int *idx, int m, bool refine, Workspace &ws)
 {
   const Vec3 mean = mean_of(x, m);
-  const Vec3 axis = principal_axis(x, m, mean);
-  for (int i = 0; i < m; ++i) ws.keys[i] = {dot(x[i] - mean, axis), idx[i], i};
-  std::nth_element(ws.keys.begin(), ws.keys.begin() + m / 2, ws.keys.begin() + m);
+  const auto split_on = [&](const Vec3 &a) {
+    for (int i = 0; i < m; ++i) ws.keys[i] = {dot(x[i] - mean, a), idx[i], i};
+    std::nth_element(ws.keys.begin(), ws.keys.begin() + m / 2, ws.keys.begin() + m);
+  };
+  // The halves' total inertia and the unit vector from the first half's centroid to the second's.
+  const auto halves = [&](Vec3 &towards) {
+    const auto [c0, i0] = centroid_and_inertia(x, ws.keys, 0, m / 2);
+    const auto [c1, i1] = centroid_and_inertia(x, ws.keys, m / 2, m);
+    const double len = norm(c1 - c0);
+    towards = len > 0 ? (1.0 / len) * (c1 - c0) : Vec3{};
+    return i0 + i1;
+  };
+  Vec3 axis = principal_axis(x, m, mean), next;
+  split_on(axis);
+  if (refine && m >= 4) {
+    double best = halves(next);
+    for (int round = 0; round < 10 && norm(next) > 0 && dot(next, axis) < 1 - 1e-12; ++round) {
+      const Vec3 tried = next;
+      split_on(tried);
+      const double h = halves(next);
+      if (!(h < best * (1 - 1e-9))) {
+        split_on(axis); // no better: back to the last axis kept
+        break;
+      }
+      best = h;
+      axis = tried;
+    }
+  }
   for (int i = 0; i < m; ++i) {
     idx[i] = ws.keys[i].node;
     ws.tmp[i] = x[ws.keys[i].offset];
@@ -176,7 +223,7 @@ void ClusterTree::build(const std::vector<Vec3> &points, const std::vector<int> 
       finish_leaf(c);
       continue;
     }
-    median_split(ws.x.data() + cl.begin, m_perm.data() + cl.begin, cl.size(), ws);
+    median_split(ws.x.data() + cl.begin, m_perm.data() + cl.begin, cl.size(), m_opts.refine_splits, ws);
     add_children(c, cl.begin + cl.size() / 2);
     parts.push_back({p0, p0});
     parts.push_back({p0, p0});

@@ -33,6 +33,10 @@ namespace hssbem {
 /// Parameters of the cluster tree (a plain struct, filled by the PETSc layer).
 struct ClusterTreeOptions {
   int leaf_size = 64; ///< a cluster with at most this many points is a leaf (>= 1)
+  /// Refine each median split's axis, starting from the principal axis, towards the axis through
+  /// the halves' centroids while that lowers their inertia (two-means with equal halves): more
+  /// compact clusters, so fewer near pairs. False: the principal axis alone.
+  bool refine_splits = true;
 };
 
 /// One node of the cluster tree: the points at positions [begin, end) of cluster order.
