@@ -61,7 +61,7 @@ hssbem::HssOptions CompressionOptions_Private(const PC_HSS *hss, const HssbemSys
   return o;
 }
 
-/* Where the PC's compression comes from, given the matrix's (null: none to reuse). */
+/* Where the PC's compression comes from; has_matrix: the matrix's own HSS compression is at hand. */
 Source ChooseSource_Private(const hssbem::HssOptions &o, const HssbemSystemContext &p, bool has_matrix)
 {
   const bool same_tree = p.type == hssbem::OperatorType::Hss && has_matrix && o.leaf_size == p.hss_options.leaf_size;
@@ -113,20 +113,22 @@ void FactorDistributed(PC_HSS *hss, const HssbemSystemContext &p)
   else if (hss->source == Source::Truncated) hss->dsys = std::make_shared<hssbem::HssDistributedSystem>(*p.op, hssbem::truncate_hss(p.hssdist->matrix(), o.rel_tol, o.max_rank, *p.comm), *p.comm);
   else hss->dsys = std::make_shared<hssbem::HssDistributedSystem>(*p.op, o, p.node_part, *p.comm);
   hss->seconds_compress = timer.seconds();
-  /* The same part, so the same points on this rank, perhaps in another order (another leaf size). */
-  const hssbem::DistributedBemSystem &A = *p.distributed();
-  const hssbem::ClusterTree          &t = hss->dsys->tree();
-  const int                           n = hss->dsys->num_points(), first = hss->dsys->first_point();
-  if (n != A.num_points() || first != A.first_point()) throw std::logic_error("PC hss: its compression's rows on this rank are not the matrix's");
-  hss->from_matrix.clear();
-  if (&t != &A.tree()) {
+  /* The same part, so the same points on this rank, perhaps in another order (another leaf size);
+     checked on every rank before the factorization's collective steps. */
+  hssbem::collectively(*p.comm, [&] {
+    const hssbem::DistributedBemSystem &A = *p.distributed();
+    const hssbem::ClusterTree          &t = hss->dsys->tree();
+    const int                           n = hss->dsys->num_points(), first = hss->dsys->first_point();
+    if (n != A.num_points() || first != A.first_point()) throw std::logic_error("PC hss: its compression's rows on this rank are not the matrix's");
+    hss->from_matrix.clear();
+    if (t.perm() == A.tree().perm()) return; /* the same order: the matrix's tree or a copy of it (truncated) */
     hss->from_matrix.resize((std::size_t)n);
     for (int k = 0; k < n; ++k) {
       const int at = A.tree().iperm()[t.perm()[first + k]] - A.first_point();
       if (at < 0 || at >= n) throw std::logic_error("PC hss: a point of its compression is another rank's in the matrix");
       hss->from_matrix[(std::size_t)k] = at;
     }
-  }
+  });
   Factor_Private(hss, p, *hss->dsys, p.comm.get());
 }
 
