@@ -87,7 +87,7 @@ static hssbem::SystemSelection ClampedBlockSelection(const hssbem::Discretizatio
 }
 
 /* max |u_z| over the nodes whose displacement is unknown: x holds (u or t) per node and component,
-   3 rows per node in node order, contiguous per rank. */
+   3 rows per node in node order, contiguous per rank (the mesh order of HssbemVecToMeshOrder()). */
 static PetscErrorCode MaxVerticalDisplacement(Vec x, const hssbem::SystemSelection &sel, PetscReal *umax)
 {
   const PetscScalar *xa;
@@ -139,7 +139,15 @@ static PetscErrorCode Solve(MPI_Comm comm, const Options &o, PetscBool *diverged
   PetscCall(KSPGetType(ksp, &ksp_type));
   PetscCall(PCGetType(pc, &pc_type));
   PetscCall(VecGetSize(b, &N));
-  PetscCall(MaxVerticalDisplacement(x, sel, &umax));
+  {
+    /* On several ranks A's rows are in cluster order (each rank a part of the surface): the
+       solution in mesh order, to read it node by node. */
+    Vec xm;
+    PetscCall(HssbemMatCreateMeshOrderVec(A, &xm));
+    PetscCall(HssbemVecToMeshOrder(A, x, xm));
+    PetscCall(MaxVerticalDisplacement(xm, sel, &umax));
+    PetscCall(VecDestroy(&xm));
+  }
   PetscCall(PetscPrintf(comm, "example: %" PetscInt_FMT " unknowns, %s/%s: %" PetscInt_FMT " iterations (%s), max |u_z| = %.6e\n", N, ksp_type, pc_type, its,
                         KSPConvergedReasons[reason], (double)umax));
   *diverged = reason < 0 ? PETSC_TRUE : PETSC_FALSE;

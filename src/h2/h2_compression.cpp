@@ -3,11 +3,13 @@
 
 #include "hssbem/compress/compression.hpp"
 #include "hssbem/compress/kernel_blocks.hpp"
+#include "hssbem/compress/share_skeletons.hpp"
 #include "hssbem/compress/skeletonizer.hpp"
 #include "hssbem/core/blas_threads.hpp"
 #include "hssbem/core/dense_ops.hpp"
 #include "hssbem/core/phase.hpp"
 #include "hssbem/core/timer.hpp"
+#include "hssbem/core/tree_ownership.hpp"
 #include "hssbem/h2/h2_distributed.hpp"
 
 #include <algorithm>
@@ -107,33 +109,6 @@ void add_rigid_body_terms(const BemOperator &op, H2Matrix &K, const RankComm &co
   });
 }
 
-/// The skeletons of the other ranks' clusters of level l (columns or rows), from all ranks.
-void share_skeletons(H2Matrix &K, const RankComm &comm, int l, bool columns)
-{
-  const ClusterTree &tree = K.tree();
-  std::vector<int> mine;
-  for (int c : tree.clusters_at_level(l)) {
-    if (!K.holds(c)) continue;
-    const NestedBasis &b = K.bases()[c];
-    const std::vector<int> &skel = columns ? b.col_skel : b.row_skel;
-    mine.push_back(c);
-    mine.push_back(columns ? b.col_forced : b.row_forced);
-    mine.push_back(static_cast<int>(skel.size()));
-    mine.insert(mine.end(), skel.begin(), skel.end());
-  }
-  std::vector<int> counts;
-  const std::vector<int> all = comm.allgather(mine, counts);
-  for (std::size_t at = 0; at < all.size();) {
-    const int c = all[at], forced = all[at + 1], k = all[at + 2];
-    if (!K.holds(c)) {
-      NestedBasis &b = K.bases()[c];
-      (columns ? b.col_skel : b.row_skel).assign(all.begin() + static_cast<long>(at) + 3, all.begin() + static_cast<long>(at) + 3 + k);
-      (columns ? b.col_forced : b.row_forced) = forced;
-    }
-    at += 3 + static_cast<std::size_t>(k);
-  }
-}
-
 /// How the tolerance is shared out when the blocks are stored in single precision (low-rank
 /// far and near blocks): the product's error comes mostly from the skeletons, so their IDs run
 /// tighter than rel_tol and the blocks' own IDs looser than they could. Measured at 80k unknowns
@@ -215,7 +190,7 @@ H2Matrix compress_bem_operator_h2(const BemOperator &op, const H2Options &option
     if (ranks > 1)
       sync = [&](int l, bool columns) {
         if (comm.any(false)) throw PeerFault();
-        share_skeletons(K, comm, l, columns);
+        share_skeletons(tree.clusters_at_level(l), bases, [&K](int c) { return K.holds(c); }, comm, columns);
       };
     // Far blocks between clusters of one level come out of the row skeletonization, which has
     // sampled their columns inside the row cluster's proxy sphere already.

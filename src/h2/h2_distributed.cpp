@@ -3,6 +3,7 @@
 
 #include "hssbem/core/blas_threads.hpp"
 #include "hssbem/core/phase.hpp"
+#include "hssbem/core/tree_ownership.hpp"
 #include "h2_transfer.hpp"
 
 #include <algorithm>
@@ -17,44 +18,6 @@ namespace hssbem {
 using transfer::CandidateRows;
 using transfer::interp_n;
 using transfer::interp_t;
-
-namespace {
-
-/// Per cluster: its part, or -1 above the parts.
-std::vector<int> cluster_parts(const ClusterTree &tree)
-{
-  std::vector<int> part(tree.num_clusters(), -1);
-  std::vector<int> root_of(tree.num_clusters(), -1);
-  for (int p = 0; p < tree.num_parts(); ++p) root_of[tree.part_cluster(p)] = p;
-  for (int c = 0; c < tree.num_clusters(); ++c) { // breadth first: a parent before its children
-    const int parent = tree.cluster(c).parent;
-    part[c] = root_of[c] >= 0 ? root_of[c] : parent >= 0 ? part[parent] : -1;
-  }
-  return part;
-}
-
-/// Lists of clusters by level: deepest first (up) or top first (down).
-std::vector<std::vector<int>> by_level(const ClusterTree &tree, const std::vector<int> &clusters, bool up)
-{
-  std::vector<std::vector<int>> out(tree.levels());
-  for (int c : clusters) out[tree.cluster(c).level].push_back(c);
-  if (up) std::reverse(out.begin(), out.end());
-  out.erase(std::remove_if(out.begin(), out.end(), [](const std::vector<int> &v) { return v.empty(); }), out.end());
-  return out;
-}
-
-} // namespace
-
-std::vector<int> cluster_owners(const ClusterTree &tree, int ranks)
-{
-  std::vector<int> owner(tree.num_clusters(), 0);
-  if (ranks == 1) return owner;
-  if (tree.num_parts() != ranks)
-    throw std::invalid_argument("H2: the tree has " + std::to_string(tree.num_parts()) + " parts for " + std::to_string(ranks) + " ranks");
-  owner = cluster_parts(tree);
-  for (int &o : owner) o = std::max(o, 0);
-  return owner;
-}
 
 H2DistributedProduct::H2DistributedProduct(const H2Matrix &K, const RankComm &comm) : m_K(K), m_comm(comm)
 {
@@ -83,10 +46,10 @@ H2DistributedProduct::H2DistributedProduct(const H2Matrix &K, const RankComm &co
       (m_above[c] ? top_up : up).push_back(c);
       if (!leaf) (m_above[c] ? top_down : down).push_back(c);
     }
-    m_up = by_level(tree, up, true);
-    m_top_up = by_level(tree, top_up, true);
-    m_top_down = by_level(tree, top_down, false);
-    m_down = by_level(tree, down, false);
+    m_up = clusters_by_level(tree, up, true);
+    m_top_up = clusters_by_level(tree, top_up, true);
+    m_top_down = clusters_by_level(tree, top_down, false);
+    m_down = clusters_by_level(tree, down, false);
     // What this rank needs from the others.
     for (int a : m_held) {
       for (int b : bp.far[a])
@@ -102,64 +65,22 @@ H2DistributedProduct::H2DistributedProduct(const H2Matrix &K, const RankComm &co
       if (parent >= 0 && !K.holds(parent)) need_pot[K.owner(parent)].push_back(a);
     }
   });
-  m_low = plan(need_low);
-  m_vals = plan(need_vals);
-  m_top = plan(need_top);
-  m_pot = plan(need_pot);
-  for (const auto &list : m_vals.send) m_boundary.insert(m_boundary.end(), list.begin(), list.end());
+  m_low = ClusterExchange(comm, std::move(need_low));
+  m_vals = ClusterExchange(comm, std::move(need_vals));
+  m_top = ClusterExchange(comm, std::move(need_top));
+  m_pot = ClusterExchange(comm, std::move(need_pot));
+  for (const auto &list : m_vals.sends()) m_boundary.insert(m_boundary.end(), list.begin(), list.end());
   std::sort(m_boundary.begin(), m_boundary.end());
   m_boundary.erase(std::unique(m_boundary.begin(), m_boundary.end()), m_boundary.end());
   // Traffic of one product with one column.
   for (int q = 0; q < P; ++q) {
     long long values = 0;
-    for (int c : m_low.send[q]) values += static_cast<long long>(K.col_skeleton(c).size());
-    for (int c : m_top.send[q]) values += static_cast<long long>(K.col_skeleton(c).size());
-    for (int c : m_vals.send[q]) values += static_cast<long long>(K.col_block()) * tree.cluster(c).size();
-    for (int c : m_pot.send[q]) values += static_cast<long long>(K.row_skeleton(c).size());
+    for (int c : m_low.sends()[q]) values += static_cast<long long>(K.col_skeleton(c).size());
+    for (int c : m_top.sends()[q]) values += static_cast<long long>(K.col_skeleton(c).size());
+    for (int c : m_vals.sends()[q]) values += static_cast<long long>(K.col_block()) * tree.cluster(c).size();
+    for (int c : m_pot.sends()[q]) values += static_cast<long long>(K.row_skeleton(c).size());
     m_values_sent += values;
-    m_messages_sent += !m_low.send[q].empty() + !m_top.send[q].empty() + !m_vals.send[q].empty() + !m_pot.send[q].empty();
-  }
-}
-
-H2DistributedProduct::Round H2DistributedProduct::plan(const std::vector<std::vector<int>> &need) const
-{
-  Round r;
-  r.recv = need;
-  for (std::vector<int> &v : r.recv) {
-    std::sort(v.begin(), v.end());
-    v.erase(std::unique(v.begin(), v.end()), v.end());
-  }
-  r.send = m_comm.exchange(r.recv);
-  return r;
-}
-
-template <class Rows>
-void H2DistributedProduct::run(const Round &r, std::vector<DenseMatrix> &blocks, int nrhs, bool add, const Rows &rows) const
-{
-  const int P = m_comm.size();
-  std::vector<std::vector<double>> send(P), recv(P);
-  for (int q = 0; q < P; ++q) {
-    for (int c : r.send[q]) {
-      if (blocks[c].m != rows(c) || blocks[c].n != nrhs) throw std::logic_error("H2 product: a block to send is missing");
-      send[q].insert(send[q].end(), blocks[c].a.begin(), blocks[c].a.end());
-    }
-    std::size_t n = 0;
-    for (int c : r.recv[q]) n += static_cast<std::size_t>(rows(c)) * nrhs;
-    recv[q].resize(n);
-  }
-  m_comm.exchange(send, recv);
-  for (int q = 0; q < P; ++q) {
-    std::size_t at = 0;
-    for (int c : r.recv[q]) {
-      const std::size_t n = static_cast<std::size_t>(rows(c)) * nrhs;
-      if (add && blocks[c].m == rows(c) && blocks[c].n == nrhs) {
-        for (std::size_t k = 0; k < n; ++k) blocks[c].a[k] += recv[q][at + k];
-      } else {
-        blocks[c] = DenseMatrix(rows(c), nrhs);
-        std::copy(recv[q].begin() + at, recv[q].begin() + at + n, blocks[c].a.begin());
-      }
-      at += n;
-    }
+    m_messages_sent += !m_low.sends()[q].empty() + !m_top.sends()[q].empty() + !m_vals.sends()[q].empty() + !m_pot.sends()[q].empty();
   }
 }
 
@@ -210,11 +131,11 @@ void H2DistributedProduct::apply(const double *X, int ldx, double *Y, int ldy, i
         std::copy_n(X + static_cast<long>(w) * (cl.begin - m_first) + static_cast<long>(k) * ldx, values(c), xv[c].data() + static_cast<long>(k) * values(c));
     }
   });
-  run(m_low, xh, nrhs, false, moments);
-  run(m_vals, xv, nrhs, false, values);
+  m_low.run(xh, nrhs, false, moments);
+  m_vals.run(xv, nrhs, false, values);
   // 3. Above the parts (rank 0), and the top moments other ranks' far blocks read.
   collectively(m_comm, [&] { upward(m_top_up); });
-  run(m_top, xh, nrhs, false, moments);
+  m_top.run(xh, nrhs, false, moments);
   // 4–5. Far blocks; downward through the top, the parts' shares to their ranks.
   collectively(m_comm, [&] {
     for (int a : m_held) yh[a] = DenseMatrix(potentials(a), nrhs);
@@ -224,7 +145,7 @@ void H2DistributedProduct::apply(const double *X, int ldx, double *Y, int ldy, i
     });
     downward(m_top_down);
   });
-  run(m_pot, yh, nrhs, true, potentials);
+  m_pot.run(yh, nrhs, true, potentials);
   // 5. Downward through the parts, then the leaves.
   collectively(m_comm, [&] {
     downward(m_down);

@@ -228,13 +228,6 @@ void H2Matrix::apply(const double *X, int ldx, double *Y, int ldy, int nrhs) con
   });
 }
 
-void H2Matrix::set_owners(std::vector<int> owner, int rank)
-{
-  if (!owner.empty() && static_cast<int>(owner.size()) != m_tree.num_clusters()) throw std::invalid_argument("H2Matrix: one owner per cluster expected");
-  m_owner = std::move(owner);
-  m_rank = rank;
-}
-
 void H2Matrix::adopt(int c, StoredInterpolation U, StoredInterpolation V, std::vector<H2Block> far, std::vector<H2Block> near)
 {
   if (!m_bases.empty()) throw std::logic_error("H2Matrix: the bases are not stored yet (store_bases)");
@@ -242,11 +235,6 @@ void H2Matrix::adopt(int c, StoredInterpolation U, StoredInterpolation V, std::v
   m_V[c] = std::move(V);
   m_far[c] = std::move(far);
   m_near[c] = std::move(near);
-}
-
-bool H2Matrix::holds_all() const
-{
-  return std::all_of(m_owner.begin(), m_owner.end(), [this](int o) { return o == m_rank; });
 }
 
 void H2Matrix::update_stats()

@@ -39,14 +39,20 @@
 // this is checked. Its rows of Ũ and E are unit rows, so its coupling entries stay exact.
 #include "hssbem/hss/truncate.hpp"
 
+#include "hssbem/compress/share_skeletons.hpp"
 #include "hssbem/core/blas_threads.hpp"
+#include "hssbem/core/cluster_exchange.hpp"
 #include "hssbem/core/dense_ops.hpp"
 #include "hssbem/core/interpolative.hpp"
 #include "hssbem/core/lapack.hpp"
+#include "hssbem/core/fault.hpp"
 #include "hssbem/core/phase.hpp"
+#include "hssbem/hss/hss_distributed.hpp"
 
 #include <algorithm>
 #include <cstddef>
+#include <functional>
+#include <numeric>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -164,38 +170,138 @@ void check_forced_nested(const HssMatrix &K)
 
 class Truncator {
 public:
-  Truncator(const HssMatrix &K, HssMatrix &out, const IdOptions &id) : m_K(K), m_out(out), m_tree(K.tree()), m_id(id)
+  Truncator(const HssMatrix &K, HssMatrix &out, const IdOptions &id, const RankComm &comm)
+    : m_K(K), m_out(out), m_tree(K.tree()), m_id(id), m_comm(comm), m_passes(K, comm)
   {
     for (auto &w : m_work) w.resize(static_cast<Size>(m_tree.num_clusters()));
   }
 
+  /// The four steps, each within the parts first and then above them (rank 0), the parts' roots'
+  /// factors crossing between (collective).
   void run()
   {
-    const int levels = m_tree.levels();
-    for (int l = levels - 1; l >= 1; --l) on_both_sides(l, &Truncator::basis_factor);
-    for (int l = 1; l < levels; ++l) on_both_sides(l, &Truncator::compact_factor);
-    for (int l = levels - 1; l >= 1; --l) on_both_sides(l, &Truncator::truncate);
-    for (int l = 0; l < levels; ++l) for_level(l, [this](int c) { couple_or_copy(c); });
+    // Step 2, bottom-up: R factors (not the root's).
+    collectively(m_comm, [&] { on_levels(m_passes.up, &Truncator::basis_factor); });
+    to_parents([this](int c, std::vector<double> &r) { append_matrix(r, work(0, c).R), append_matrix(r, work(1, c).R); },
+               [this](int c, const std::vector<double> &r, std::size_t &at) { work(0, c).R = read_matrix(r, at), work(1, c).R = read_matrix(r, at); });
+    collectively(m_comm, [&] { on_levels(m_passes.top_up, &Truncator::basis_factor); });
+    // Step 2, top-down: each parent makes its children's F.
+    collectively(m_comm, [&] { children_of(m_passes.top_down, &Truncator::compact_factor); });
+    to_children([this](int c, std::vector<double> &r) { append_matrix(r, work(0, c).F), append_matrix(r, work(1, c).F); },
+                [this](int c, const std::vector<double> &r, std::size_t &at) { work(0, c).F = read_matrix(r, at), work(1, c).F = read_matrix(r, at); });
+    collectively(m_comm, [&] { children_of(m_passes.down, &Truncator::compact_factor); });
+    // Step 3, bottom-up: new skeletons, transfers and E.
+    collectively(m_comm, [&] {
+      fault_point("HssTruncate");
+      on_levels(m_passes.up, &Truncator::truncate);
+    });
+    to_parents([this](int c, std::vector<double> &r) { pack_truncated(c, r); }, [this](int c, const std::vector<double> &r, std::size_t &at) { unpack_truncated(c, r, at); });
+    collectively(m_comm, [&] { on_levels(m_passes.top_up, &Truncator::truncate); });
+    // Step 4: couplings and leaf blocks of the clusters held here; every skeleton to every rank.
+    collectively(m_comm, [&] {
+      for (int c = 0; c < m_tree.num_clusters(); ++c)
+        if (m_K.holds(c)) m_held.push_back(c);
+      for_each_cluster(m_held, [this](int c) { couple_or_copy(c); });
+    });
+    if (m_comm.size() > 1) {
+      std::vector<int> all(static_cast<Size>(m_tree.num_clusters()));
+      std::iota(all.begin(), all.end(), 0);
+      std::vector<NestedBasis *> bases(all.size());
+      for (int c : all) bases[static_cast<Size>(c)] = &m_out.cluster(c);
+      for (bool columns : {false, true}) share_skeletons(all, bases, [this](int c) { return m_K.holds(c); }, m_comm, columns);
+    }
   }
 
 private:
   SideWork &work(int side, int c) { return m_work[side][static_cast<Size>(c)]; }
   int old_rank(int side, int c) const { return static_cast<int>((m_K.cluster(c).*k_sides[side].skel).size()); }
 
-  /// fn(c) for the clusters of level l, on parallel threads when there are enough of them.
-  template <class Fn>
-  void for_level(int l, const Fn &fn)
+  /// step(c, rows) then step(c, columns) for the clusters of each level (not the root), on
+  /// parallel threads when there are enough of them.
+  void on_levels(const std::vector<std::vector<int>> &levels, void (Truncator::*step)(int c, int side))
   {
-    for_each_cluster(m_tree.clusters_at_level(l), fn);
+    for (const std::vector<int> &level : levels)
+      for_each_cluster(level, [this, step](int c) {
+        if (c == 0) return;
+        (this->*step)(c, 0);
+        (this->*step)(c, 1);
+      });
   }
 
-  /// step(c, rows) then step(c, columns) for the clusters of level l.
-  void on_both_sides(int l, void (Truncator::*step)(int c, int side))
+  /// The same for the children of the inner clusters of each level.
+  void children_of(const std::vector<std::vector<int>> &levels, void (Truncator::*step)(int c, int side))
   {
-    for_level(l, [this, step](int c) {
-      (this->*step)(c, 0);
-      (this->*step)(c, 1);
+    for (const std::vector<int> &level : levels)
+      for_each_cluster(level, [this, step](int p) {
+        const Cluster &pc = m_tree.cluster(p);
+        if (pc.left < 0) return;
+        for (int c : {pc.left, pc.right}) {
+          (this->*step)(c, 0);
+          (this->*step)(c, 1);
+        }
+      });
+  }
+
+  using Pack = std::function<void(int c, std::vector<double> &record)>;
+  using Unpack = std::function<void(int c, const std::vector<double> &record, std::size_t &at)>;
+
+  /// Records of the clusters held here whose parents another rank holds, to that rank (collective).
+  void to_parents(const Pack &pack, const Unpack &unpack) { move_records(false, pack, unpack); }
+
+  /// Records of the children that another rank holds of the clusters held here, to that rank
+  /// (collective).
+  void to_children(const Pack &pack, const Unpack &unpack) { move_records(true, pack, unpack); }
+
+  /// For each pair (parent held here, child held elsewhere) with down, or (child held here,
+  /// parent held elsewhere) without, pack(child) goes to the other rank, which unpacks it.
+  void move_records(bool down, const Pack &pack, const Unpack &unpack)
+  {
+    const int P = m_comm.size();
+    std::vector<std::vector<double>> send(P);
+    collectively(m_comm, [&] {
+      for (int c = 1; c < m_tree.num_clusters(); ++c) {
+        const int parent = m_tree.cluster(c).parent;
+        const int here = down ? parent : c, there = down ? c : parent;
+        if (!m_K.holds(here) || m_K.holds(there)) continue;
+        std::vector<double> &r = send[m_K.owner(there)];
+        r.push_back(c);
+        pack(c, r);
+      }
     });
+    const std::vector<std::vector<double>> recv = exchange_values(m_comm, send);
+    collectively(m_comm, [&] {
+      for (const std::vector<double> &r : recv)
+        for (std::size_t at = 0; at < r.size();) {
+          const int c = static_cast<int>(r[at++]);
+          if (c < 1 || c >= m_tree.num_clusters()) throw std::logic_error("HSS truncation: a corrupt record from another rank");
+          unpack(c, r, at);
+        }
+    });
+  }
+
+  /// What the parent of a part's root needs of it after step 3: E and the new skeletons.
+  void pack_truncated(int c, std::vector<double> &r)
+  {
+    for (int side = 0; side < 2; ++side) {
+      append_matrix(r, work(side, c).E);
+      const std::vector<int> &skel = m_out.cluster(c).*k_sides[side].skel;
+      r.push_back(static_cast<double>(skel.size()));
+      r.insert(r.end(), skel.begin(), skel.end());
+    }
+  }
+
+  void unpack_truncated(int c, const std::vector<double> &r, std::size_t &at)
+  {
+    for (int side = 0; side < 2; ++side) {
+      work(side, c).E = read_matrix(r, at);
+      if (at >= r.size()) throw std::logic_error("HSS truncation: a truncated record from another rank");
+      const auto k = static_cast<Size>(r[at++]);
+      if (at + k > r.size()) throw std::logic_error("HSS truncation: a truncated record from another rank");
+      std::vector<int> &skel = m_out.cluster(c).*k_sides[side].skel;
+      skel.assign(r.begin() + static_cast<long>(at), r.begin() + static_cast<long>(at + k));
+      m_out.cluster(c).*k_sides[side].forced = m_K.cluster(c).*k_sides[side].forced;
+      at += k;
+    }
   }
 
   /// Step 2: the R factor of c's full basis (bottom-up).
@@ -273,22 +379,28 @@ private:
   HssMatrix &m_out;
   const ClusterTree &m_tree;
   IdOptions m_id;
+  const RankComm &m_comm;
+  HssPasses m_passes;
   std::vector<SideWork> m_work[2];
+  std::vector<int> m_held;
 };
 
 } // namespace
 
-HssMatrix truncate_hss(const HssMatrix &K, double rel_tol, int max_rank)
+HssMatrix truncate_hss(const HssMatrix &K, double rel_tol, int max_rank) { return truncate_hss(K, rel_tol, max_rank, SerialComm()); }
+
+HssMatrix truncate_hss(const HssMatrix &K, double rel_tol, int max_rank, const RankComm &comm)
 {
   if (!(rel_tol > 0 && rel_tol < 1)) throw std::invalid_argument("HSS truncation: the relative tolerance must lie in (0, 1)");
   if (max_rank == 0) throw std::invalid_argument("HSS truncation: the rank cap must be positive (or negative for none)");
   PhaseScope scope(Phase::Truncation);
   check_forced_nested(K);
   HssMatrix out(K.tree(), K.row_block(), K.col_block()); // copies the tree only
+  out.set_owners(K.owners());
   std::vector<double> scales(static_cast<Size>(K.col_block()));
   for (int q = 0; q < K.col_block(); ++q) scales[static_cast<Size>(q)] = K.col_scale(q);
   out.set_col_scales(std::move(scales));
-  Truncator(K, out, IdOptions{rel_tol, max_rank < 0 ? -1 : max_rank}).run();
+  Truncator(K, out, IdOptions{rel_tol, max_rank < 0 ? -1 : max_rank}, comm).run();
   out.stats() = K.stats();
   out.update_stats();
   return out;

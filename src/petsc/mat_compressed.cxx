@@ -1,7 +1,8 @@
 /* The BEM operator as a MatShell backed by a compressed K (HSS with -bem_mat_type hss, H² with
    -bem_mat_type h2): MatMult by the O(N·r) product, MatGetDiagonal from the leaves' true
    entries, MatView with ranks and memory. One shell serves both formats through
-   hssbem::CompressedBemSystem; only MatView and the construction tell them apart. */
+   hssbem::CompressedBemSystem on one rank and hssbem::DistributedBemSystem on several; only
+   MatView and the construction tell them apart. */
 #include "mat_compressed.hpp"
 
 #include "hssbem/petsc/log.h"
@@ -29,14 +30,14 @@ PetscErrorCode MatCompressedGetContext(Mat A, Mat_Compressed **ctx)
 /* Mesh-order dof of local row i of the distributed system. */
 inline std::size_t MeshDof_Private(const HssbemSystemContext &p, int i)
 {
-  const hssbem::H2DistributedSystem &s = *p.h2dist;
-  return 3 * (std::size_t)s.matrix().tree().perm()[s.first_point() + i / 3] + (std::size_t)(i % 3);
+  const hssbem::DistributedBemSystem &s = *p.distributed();
+  return 3 * (std::size_t)s.tree().perm()[s.first_point() + i / 3] + (std::size_t)(i % 3);
 }
 
 /* y += c Q (Qᵀ x) on this rank's rows of the distributed system (Qᵀ x summed over the ranks). */
 void AddDistributedRegularization_Private(const HssbemSystemContext &p, const PetscScalar *x, PetscScalar *y)
 {
-  const int n = 3 * p.h2dist->num_points();
+  const int n = 3 * p.distributed()->num_points();
   double    qx[6] = {0, 0, 0, 0, 0, 0};
   for (int i = 0; i < n; ++i) {
     const double *q = &p.modes[6 * MeshDof_Private(p, i)];
@@ -60,13 +61,13 @@ PetscErrorCode MatMult_Compressed(Mat A, Vec x, Vec y)
   PetscFunctionBegin;
   PetscCall(MatCompressedGetContext(A, &ctx));
   const HssbemSystemContext &p = *ctx->sys;
-  if (p.h2dist) {
+  if (p.distributed()) {
     PetscCall(VecGetArrayRead(x, &xa));
     PetscCall(VecGetArrayWrite(y, &ya));
     guard.Run([&] {
       /* the ranks meet in the product's exchanges: a fault here must be agreed on first */
       hssbem::collectively(*p.comm, [] { hssbem::fault_point("MatMult"); });
-      p.h2dist->apply(p.sel, xa, ya);
+      p.distributed()->apply(p.sel, xa, ya);
       if (!p.modes.empty()) AddDistributedRegularization_Private(p, xa, ya);
     });
     PetscCall(VecRestoreArrayRead(x, &xa));
@@ -97,10 +98,10 @@ PetscErrorCode MatGetDiagonal_Compressed(Mat A, Vec d)
   PetscFunctionBegin;
   PetscCall(MatCompressedGetContext(A, &ctx));
   const HssbemSystemContext &p = *ctx->sys;
-  if (p.h2dist) {
+  if (p.distributed()) {
     PetscCall(VecGetArrayWrite(d, &da));
     guard.Run("MatGetDiagonal", [&] {
-      const std::vector<double> diag = p.h2dist->diagonal(p.sel);
+      const std::vector<double> diag = p.distributed()->diagonal(p.sel);
       for (std::size_t i = 0; i < diag.size(); ++i) {
         da[i] = diag[i];
         if (p.modes.empty()) continue;
@@ -150,23 +151,31 @@ PetscErrorCode MatView_Compressed(Mat A, PetscViewer viewer)
                                      o.max_rank > 0 ? std::to_string(o.max_rank).c_str() : "none", o.proxy_ratio));
   }
   const bool pressure = p.type == hssbem::OperatorType::H2 ? p.h2_options.pressure_columns : p.hss_options.pressure_columns;
-  if (p.h2dist) {
+  if (p.distributed()) {
     const hssbem::NodePartitionStats &ps = p.partition;
-    const hssbem::H2DistributedProduct &prod = p.h2dist->product();
-    double mem[2] = {(double)p.h2dist->matrix().stats().memory_bytes, (double)p.h2dist->matrix().stats().memory_bytes}, traffic[2] = {(double)prod.values_sent(), (double)prod.messages_sent()};
+    double mem[2] = {(double)p.distributed()->memory_bytes(), (double)p.distributed()->memory_bytes()};
     p.comm->sum(&mem[0], 1);
     mem[1] = p.comm->max(mem[1]);
-    traffic[0] = p.comm->max(traffic[0]);
-    traffic[1] = p.comm->max(traffic[1]);
     PetscCall(PetscViewerASCIIPrintf(viewer, "  pattern: %s; rigid-mode regularisation: %s\n", pressure ? "K = [H, G, Gn] (pressure loads)" : "K = [H, G]", p.modes.empty() ? "no" : "yes"));
     PetscCall(PetscViewerASCIIPrintf(viewer, "  distributed over %d ranks by METIS: %d to %d nodes per rank (imbalance %.3f), edge cut %ld of %ld node-graph edges%s\n", ps.parts, ps.min_nodes, ps.max_nodes, ps.imbalance,
                                      ps.edge_cut, ps.edges, ps.disconnected_parts ? " (some parts not connected)" : ""));
-    PetscCall(PetscViewerASCIIPrintf(viewer, "  memory %.1f MB in all, %.1f MB on the largest rank; per product a rank sends at most %.0f values in %.0f messages\n", mem[0] / 1048576.0, mem[1] / 1048576.0,
-                                     traffic[0], traffic[1]));
+    if (p.h2dist) {
+      const hssbem::H2DistributedProduct &prod = p.h2dist->product();
+      const double traffic[2] = {p.comm->max((double)prod.values_sent()), p.comm->max((double)prod.messages_sent())};
+      PetscCall(PetscViewerASCIIPrintf(viewer, "  memory %.1f MB in all, %.1f MB on the largest rank; per product a rank sends at most %.0f values in %.0f messages\n", mem[0] / 1048576.0, mem[1] / 1048576.0,
+                                       traffic[0], traffic[1]));
+    } else {
+      const hssbem::HssDistributedProduct &prod = p.hssdist->product();
+      const hssbem::HssStats             &st   = p.hssdist->matrix().stats();
+      const double traffic[2] = {p.comm->max((double)prod.values_sent()), p.comm->max((double)prod.messages_sent())};
+      PetscCall(PetscViewerASCIIPrintf(viewer, "  memory %.1f MB in all, %.1f MB on the largest rank, of which the top (%d clusters above the parts, rank 0) %.2f MB; per product a rank sends at most %.0f values in %.0f messages\n",
+                                       mem[0] / 1048576.0, mem[1] / 1048576.0, st.top_clusters, st.top_bytes / 1048576.0, traffic[0], traffic[1]));
+    }
     PetscCall(PetscViewerASCIIPrintf(viewer, "  rank 0's part (ranks per level: all parts):\n"));
     PetscCall(PetscViewerASCIIPushTab(viewer));
     PetscCall(PetscViewerASCIIPushTab(viewer));
-    PetscCall(HssbemViewH2Matrix_Private(viewer, p.h2dist->matrix()));
+    if (p.h2dist) PetscCall(HssbemViewH2Matrix_Private(viewer, p.h2dist->matrix()));
+    else PetscCall(HssbemViewHssMatrix_Private(viewer, p.hssdist->matrix()));
     PetscCall(PetscViewerASCIIPopTab(viewer));
     PetscCall(PetscViewerASCIIPopTab(viewer));
     PetscFunctionReturn(PETSC_SUCCESS);
@@ -253,15 +262,15 @@ static PetscErrorCode CreateShell_Private(MPI_Comm comm, HssbemSystemContext *sy
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* The H² system on several ranks: the surface partitioned by METIS (rank 0, broadcast), each rank
-   compressing its part; rows in cluster order (sys->system_of_dof). */
-static PetscErrorCode CreateDistributedH2_Private(MPI_Comm comm, HssbemSystemContext *sys, Mat *A, Vec *b)
+/* The H² or HSS system on several ranks: the surface partitioned by METIS (rank 0, broadcast),
+   each rank compressing its part; rows in cluster order (sys->system_of_dof). */
+static PetscErrorCode CreateDistributed_Private(MPI_Comm comm, HssbemSystemContext *sys, Mat *A, Vec *b)
 {
   const hssbem::BemOperator &op = *sys->op;
   const PetscInt             nn = op.num_nodes();
+  const bool                 h2 = sys->type == hssbem::OperatorType::H2;
   PetscMPIInt                rank, size;
   HssbemGuard                guard;
-  std::vector<int>           part;
   std::vector<double>        b0;
   PetscScalar               *ba;
   double                     figures[7] = {0, 0, 0, 0, 0, 0, 0};
@@ -272,29 +281,29 @@ static PetscErrorCode CreateDistributedH2_Private(MPI_Comm comm, HssbemSystemCon
   PetscCall(PetscLogEventBegin(BEM_Partition, 0, 0, 0, 0));
   guard.Run("Partition", [&] {
     sys->comm = std::make_unique<HssbemMpiComm>(comm, true);
-    part.resize((std::size_t)nn);
+    sys->node_part.resize((std::size_t)nn);
     if (rank != 0) return;
-    part                               = hssbem::partition_nodes(op.discretization(), size, &sys->partition);
+    sys->node_part                     = hssbem::partition_nodes(op.discretization(), size, &sys->partition);
     const hssbem::NodePartitionStats &s = sys->partition;
     const double f[7] = {(double)s.parts, (double)s.edge_cut, (double)s.edges, s.imbalance, (double)s.min_nodes, (double)s.max_nodes, (double)s.disconnected_parts};
     std::copy(f, f + 7, figures);
   });
   PetscCall(guard.Check(comm, "the partition of the surface failed"));
-  PetscCallMPI(MPI_Bcast(part.data(), (PetscMPIInt)nn, MPI_INT, 0, comm));
+  PetscCallMPI(MPI_Bcast(sys->node_part.data(), (PetscMPIInt)nn, MPI_INT, 0, comm));
   PetscCallMPI(MPI_Bcast(figures, 7, MPI_DOUBLE, 0, comm));
   sys->partition = hssbem::NodePartitionStats{(int)figures[0], (long)figures[1], (long)figures[2], figures[3], (int)figures[4], (int)figures[5], (int)figures[6]};
   PetscCall(PetscLogEventEnd(BEM_Partition, 0, 0, 0, 0));
   guard.Run([&] {
     hssbem::collectively(*sys->comm, [] { hssbem::fault_point("Compression"); }); /* as in MatMult */
-    auto K       = std::make_shared<hssbem::H2DistributedSystem>(op, sys->h2_options, part, *sys->comm);
-    sys->h2dist  = K;
-    b0           = K->rhs(sys->sel);
-    const hssbem::ClusterTree &tree = K->matrix().tree();
+    if (h2) sys->h2dist = std::make_shared<hssbem::H2DistributedSystem>(op, sys->h2_options, sys->node_part, *sys->comm);
+    else sys->hssdist = std::make_shared<hssbem::HssDistributedSystem>(op, sys->hss_options, sys->node_part, *sys->comm);
+    b0                              = sys->distributed()->rhs(sys->sel);
+    const hssbem::ClusterTree &tree = sys->distributed()->tree();
     sys->system_of_dof.resize(3 * (std::size_t)nn);
     for (PetscInt d = 0; d < 3 * nn; ++d) sys->system_of_dof[d] = 3 * (PetscInt)tree.iperm()[d / 3] + d % 3;
   });
-  PetscCall(guard.Check(comm, "H2 compression failed"));
-  PetscCall(CreateShell_Private(comm, sys, sys->h2dist->num_points(), 3 * nn, A, b));
+  PetscCall(guard.Check(comm, h2 ? "H2 compression failed" : "HSS compression failed"));
+  PetscCall(CreateShell_Private(comm, sys, sys->distributed()->num_points(), 3 * nn, A, b));
   PetscCall(VecGetArrayWrite(*b, &ba));
   std::copy(b0.begin(), b0.end(), ba);
   PetscCall(VecRestoreArrayWrite(*b, &ba));
@@ -319,14 +328,14 @@ PetscErrorCode HssbemMatCreateCompressed_Private(MPI_Comm comm, HssbemSystemCont
   {
     PetscMPIInt size;
     PetscCallMPI(MPI_Comm_size(comm, &size));
-    if (h2 && size > 1) {
-      PetscCall(CreateDistributedH2_Private(comm, sys, A, b));
+    if (size > 1) {
+      PetscCall(CreateDistributed_Private(comm, sys, A, b));
       PetscCall(PetscLogEventEnd(BEM_Assembly, 0, 0, 0, 0));
       PetscFunctionReturn(PETSC_SUCCESS);
     }
   }
   guard.Run("Compression", [&] {
-      if (rank != 0) return; /* the compression lives on rank 0 */
+      if (rank != 0) return; /* one rank */
       if (h2) {
         auto K  = std::make_shared<hssbem::H2BemSystem>(op, sys->h2_options);
         b0      = K->rhs(sys->sel);

@@ -6,7 +6,8 @@
 #include <petscviewer.h>
 
 /* The MatShell of the system ctx (of type HSS or H², with its hss_options or h2_options set) and
-   its right-hand side b; compresses on rank 0. */
+   its right-hand side b; on several ranks the surface is partitioned by METIS and each rank
+   compresses its part (ctx->hssdist or ctx->h2dist), on one rank the whole (ctx->hss or ctx->h2). */
 PetscErrorCode HssbemMatCreateCompressed_Private(MPI_Comm comm, HssbemSystemContext *ctx, Mat *A, Vec *b);
 
 /* Ranks per level, memory, entries and phase times of an HSS matrix, to an ASCII viewer. */

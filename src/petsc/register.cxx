@@ -8,14 +8,14 @@
 
 PetscClassId  HSSBEM_CLASSID;
 PetscLogEvent BEM_Mesh, BEM_Assembly, BEM_Partition, BEM_Solve, BEM_Post, BEM_Interior, BEM_Output;
-PetscLogEvent HSS_Tree, HSS_Compress, HSS_NearField, HSS_Truncate, HSS_Factor, HSS_Solve, HSS_MatMult;
+PetscLogEvent HSS_Tree, HSS_Compress, HSS_NearField, HSS_Truncate, HSS_Factor, HSS_Solve, HSS_MatMult, HSS_FactorTop, HSS_SolveTop;
 PetscLogEvent H2F_Factor, H2F_Sketch, H2F_Eliminate, H2F_Merge, H2F_Top, H2F_Solve;
 PetscLogEvent SCN_Setup, SCN_Update, SCN_Apply, SCN_Refactor, SCN_Krylov, SCN_Frame;
 
 /* The engine's phases as log events (engine phases open and close on the calling thread). */
 static void PhaseHook_Private(hssbem::Phase phase, bool begin)
 {
-  static const PetscLogEvent *event[] = {&HSS_Tree, &HSS_Compress, &HSS_NearField, &HSS_Truncate, &HSS_Factor, &HSS_Solve, &HSS_MatMult,
+  static const PetscLogEvent *event[] = {&HSS_Tree, &HSS_Compress, &HSS_NearField, &HSS_Truncate, &HSS_Factor, &HSS_Solve, &HSS_MatMult, &HSS_FactorTop, &HSS_SolveTop,
                                         &H2F_Factor, &H2F_Sketch, &H2F_Eliminate, &H2F_Merge, &H2F_Top, &H2F_Solve,
                                         &SCN_Setup,  &SCN_Update, &SCN_Apply,     &SCN_Refactor, &SCN_Krylov};
   static_assert(sizeof(event) / sizeof(event[0]) == static_cast<int>(hssbem::Phase::Count), "one log event per phase");
@@ -29,7 +29,10 @@ static PetscBool HssbemPackageInitialized = PETSC_FALSE;
 /* Test-only fault injection (core/fault.hpp), from options that -help does not list:
    -hssbem_fault <site>           a fault point: MeshRead, Setup, Operator, RigidModes (the set-up,
                                   every rank), MatMult, MatGetDiagonal, PCSetUp, PCApply,
-                                  Compression, DenseAssembly, Breakdown, Gather (the solve),
+                                  Compression, HssSkeletons, HssCouplings, HssTruncate,
+                                  UlvSubtree (every rank's part of the distributed HSS steps),
+                                  UlvTop (rank 0's top of the distributed factorization),
+                                  DenseAssembly, Breakdown, Gather (the solve),
                                   Post, Write, Commit, SceneSetup, Frame (rank 0's work), Driver
                                   (unguarded: the last resort of app/main.hpp)
    -hssbem_fault_kind <kind>      error (default), oom (std::bad_alloc), pause, or unreadable
@@ -102,6 +105,8 @@ PetscErrorCode HssbemInitializePackage(void)
   PetscCall(PetscLogEventRegister("HSSFactor", HSSBEM_CLASSID, &HSS_Factor));
   PetscCall(PetscLogEventRegister("HSSSolve", HSSBEM_CLASSID, &HSS_Solve));
   PetscCall(PetscLogEventRegister("HSSMatMult", HSSBEM_CLASSID, &HSS_MatMult));
+  PetscCall(PetscLogEventRegister(" HSSFactorTop", HSSBEM_CLASSID, &HSS_FactorTop));
+  PetscCall(PetscLogEventRegister(" HSSSolveTop", HSSBEM_CLASSID, &HSS_SolveTop));
   PetscCall(PetscLogEventRegister("H2Factor", HSSBEM_CLASSID, &H2F_Factor));
   PetscCall(PetscLogEventRegister(" H2FSketch", HSSBEM_CLASSID, &H2F_Sketch));
   PetscCall(PetscLogEventRegister(" H2FEliminate", HSSBEM_CLASSID, &H2F_Eliminate));

@@ -400,8 +400,8 @@ static PetscErrorCode MeshOrderScatter_Private(Mat A, Vec x, Vec y, ScatterMode 
 /*@C
   HssbemVecToMeshOrder - Copies x, a vector of A's layout (HssbemCreateSystem()), into y, laid out
   like the dense system's vectors: mesh order (3 rows per dof node), nodes split in contiguous
-  blocks across the ranks. The H² system on several ranks orders its rows by the METIS partition
-  (cluster order); the other systems are in mesh order already (then this is a copy).
+  blocks across the ranks. The H² and HSS systems on several ranks order their rows by the METIS
+  partition (cluster order); the other systems are in mesh order already (then this is a copy).
 
   Collective
 

@@ -33,21 +33,30 @@ struct HssbemSystemContext {
   std::shared_ptr<const hssbem::H2BemSystem> h2;          /* rank 0 only, H² matrices only: the
                                                              whole matrix (gathered on demand when
                                                              it is distributed) */
-  /* H² on several ranks: the matrix distributed over them (every rank its part), the ranks'
-     communicator (a duplicate, declared first so that it outlives the system), the METIS
-     partition's figures, and the global row of each mesh-order dof (3 per node): the system's
-     rows are in cluster order, rank p's block holding part p's nodes. */
-  std::unique_ptr<HssbemMpiComm>                     comm;
-  std::shared_ptr<const hssbem::H2DistributedSystem> h2dist;
-  hssbem::NodePartitionStats                         partition;
-  std::vector<PetscInt>                              system_of_dof; /* empty: mesh order */
-  bool                                               h2_gathered = false; /* h2 holds the gathered matrix (rank 0) */
+  /* H² or HSS on several ranks: the matrix distributed over them (every rank its part), the
+     ranks' communicator (a duplicate, declared first so that it outlives the system), the METIS
+     partition (part of each dof node, on every rank) and its figures, and the global row of each
+     mesh-order dof (3 per node): the system's rows are in cluster order, rank p's block holding
+     part p's nodes. */
+  std::unique_ptr<HssbemMpiComm>                      comm;
+  std::shared_ptr<const hssbem::H2DistributedSystem>  h2dist;
+  std::shared_ptr<const hssbem::HssDistributedSystem> hssdist;
+  std::vector<int>                                    node_part;
+  hssbem::NodePartitionStats                          partition;
+  std::vector<PetscInt>                               system_of_dof; /* empty: mesh order */
+  bool                                                h2_gathered = false; /* h2 holds the gathered matrix (rank 0) */
 
   /* The compressed operator behind a MatShell (rank 0), or NULL. */
   const hssbem::CompressedBemSystem *compressed() const
   {
     if (hss) return hss.get();
     return h2.get();
+  }
+  /* The distributed operator behind a MatShell on several ranks, or NULL. */
+  const hssbem::DistributedBemSystem *distributed() const
+  {
+    if (h2dist) return h2dist.get();
+    return hssdist.get();
   }
 };
 
@@ -66,7 +75,8 @@ PetscErrorCode HssbemH2WillBeFactored(MPI_Comm comm, bool *factored);
 /* Dof nodes owned by this rank: a contiguous block [nstart, nstart + nlocal), 3 rows each. */
 PetscErrorCode HssbemOwnedNodes(MPI_Comm comm, PetscInt nnodes, PetscInt *nstart, PetscInt *nlocal);
 
-/* Vectors gathered whole on rank 0 and scattered back: the compressed engines are not distributed yet. */
+/* Vectors gathered whole on rank 0 and scattered back, for what runs on rank 0 only (PC h2, and PC hss
+   on a dense matrix or on one rank). */
 class HssbemRootExchange {
 public:
   HssbemRootExchange() = default;

@@ -834,13 +834,15 @@ class ParallelTests(CliTestCase):
 
     def test_more_ranks_than_the_surface_feeds(self):
         # The cube has 24 dof nodes (a node per face at each corner): METIS needs 4 a rank, so
-        # 7 ranks are refused with the count and the most ranks that work (h2 only: the dense
-        # and HSS paths do not partition the surface).
+        # 7 ranks are refused with the count and the most ranks that work (h2 and hss, which
+        # partition the surface; the dense path does not).
         self.write_cube()
         self.problem()
-        r = self.run_problem("problem.json", "-bem_mat_type", "h2", np=7)
-        self.assertFailsCleanly(r, r"24 dof nodes, too few for 7 MPI ranks", r"at most 6 ranks")
-        self.assertErrorLine(r)
+        for mat_type in ("h2", "hss"):
+            with self.subTest(mat_type=mat_type):
+                r = self.run_problem("problem.json", "-bem_mat_type", mat_type, np=7)
+                self.assertFailsCleanly(r, r"24 dof nodes, too few for 7 MPI ranks", r"at most 6 ranks")
+                self.assertErrorLine(r)
 
     def test_distributed_h2_agrees_across_ranks(self):
         # -bem_mat_type h2 on 2 and 4 ranks (oversubscribed) is distributed: METIS splits the
@@ -876,6 +878,47 @@ class ParallelTests(CliTestCase):
         for np_ in (2, 4):
             d = fields[("h2", np_)]["fields/displacement"]
             self.assertLess(np.linalg.norm(d - one) / np.linalg.norm(one), 1e-5)
+
+    def test_distributed_hss_agrees_across_ranks(self):
+        # -bem_mat_type hss on 2 and 4 ranks (oversubscribed) is distributed: METIS splits the
+        # surface, each rank compresses and factors its part, and the top above the parts is
+        # factored on rank 0. The answers of 1, 2 and 4 ranks (the default direct solve at the
+        # matrix's 1e-8, and GMRES with a truncated 1e-3 PC hss on 2 ranks) agree with each
+        # other and with dense LU within 100 times the tolerance (measured 4e-9 to 2e-8; the
+        # trees differ at the top);
+        # the views name the partition, each rank's memory and the top.
+        import numpy as np
+        problem = os.path.join(MESHES, "examples", "disk_organ_indent.json")
+        runs = [("dense", 1, ("-bem_mat_type", "dense"), "preonly/lu"), ("hss", 1, ("-bem_mat_type", "hss"), "preonly/hss"),
+                ("hss", 2, ("-bem_mat_type", "hss", "-bem_mat_view", "-ksp_view"), "preonly/hss"),
+                ("hss", 4, ("-bem_mat_type", "hss"), "preonly/hss"),
+                ("gmres", 2, ("-bem_mat_type", "hss", "-ksp_type", "gmres", "-ksp_rtol", "1e-10", "-pc_hss_rel_tol", "1e-3"), "gmres/hss")]
+        fields = {}
+        for name, np_, opts, solver in runs:
+            out = self.path("%s%d.h5" % (name, np_))
+            r = self.run_driver("-problem", problem, "-o", out, *opts, np=np_, timeout=TIMEOUT_RUN)
+            self.assertSucceeds(r, out)
+            self.assertIn("solved with " + solver, r.output, r.describe())
+            if "-bem_mat_view" in opts:
+                self.assertRegex(r.output, r"BEM operator in HSS form", r.describe())
+                self.assertRegex(r.output, r"distributed over 2 ranks by METIS: \d+ to \d+ nodes per rank", r.describe())
+                self.assertRegex(r.output, r"MB on the largest rank, of which the top \(1 clusters above the parts, rank 0\)", r.describe())
+                self.assertRegex(r.output, r"factors [\d.]+ MB in all, [\d.]+ MB on the largest rank", r.describe())
+                self.assertRegex(r.output, r"top \(rank 0\): 1 clusters above the parts, .* root block of [1-9]\d* unknowns", r.describe())
+            data, attrs, _ = self.read_result("%s%d.h5" % (name, np_))
+            self.assertEqual(int(attrs["ranks"]), np_)
+            fields[(name, np_)] = data
+        ref = fields[("dense", 1)]
+        for key, data in fields.items():
+            for f in ("fields/displacement", "fields/traction"):
+                with self.subTest(run=key, field=f):
+                    a, b = ref[f], data[f]
+                    self.assertGreater(np.linalg.norm(a), 0)
+                    self.assertLess(np.linalg.norm(b - a) / np.linalg.norm(a), 1e-6)
+        one = fields[("hss", 1)]["fields/displacement"]
+        for np_ in (2, 4):
+            d = fields[("hss", np_)]["fields/displacement"]
+            self.assertLess(np.linalg.norm(d - one) / np.linalg.norm(one), 1e-6)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -1020,6 +1063,14 @@ class RankFaultTests(OneCleanError, CliTestCase):
         ("Compression", "oom", ["-bem_mat_type", "h2"], r"H2 compression failed: out of memory", "any"),
         ("MatMult", "oom", ["-bem_mat_type", "h2"], r"MatMult: out of memory", "any"),
         ("PCSetUp", "error", ["-bem_mat_type", "hss"], r"PC hss set-up: injected fault", "any"),
+        # the distributed HSS steps: each rank's skeletons and couplings, its part of the
+        # factorization, the truncation of a looser PC, and rank 0's top of the factorization
+        ("HssSkeletons", "error", ["-bem_mat_type", "hss"], r"HSS compression failed: injected fault at HssSkeletons", "any"),
+        ("HssCouplings", "oom", ["-bem_mat_type", "hss"], r"HSS compression failed: out of memory", "any"),
+        ("UlvSubtree", "error", ["-bem_mat_type", "hss"], r"PC hss set-up: injected fault at UlvSubtree", "any"),
+        ("HssTruncate", "error", ["-bem_mat_type", "hss", "-ksp_type", "gmres", "-pc_hss_rel_tol", "1e-3"],
+         r"PC hss set-up: injected fault at HssTruncate", "any"),
+        ("UlvTop", "oom", ["-bem_mat_type", "hss"], r"PC hss set-up: out of memory", 0),
         ("Gather", "error", [], r"injected fault at Gather", 0),
         ("Post", "oom", [], r"out of memory", 0),
         ("Write", "error", [], r"injected fault at Write", 0),

@@ -71,17 +71,23 @@ TEST(SizeLimits, H2SuggestsSinglePrecisionThenJacobiThenALooserToleranceThenNoth
   EXPECT_LT(estimated_bytes(OperatorType::H2, 100000, jacobi), estimated_bytes(OperatorType::H2, 100000, single));
 }
 
-TEST(SizeLimits, H2SplitsOverTheRanksNodesButHssDoesNot)
+TEST(SizeLimits, H2AndHssSplitOverTheRanksNodes)
 {
   // 2 000 000 unknowns in single precision (41 GB) do not fit one 24 GiB node; the distributed
-  // H² matrix spread over 8 nodes does, but not 8 ranks on one node. HSS stays on rank 0.
+  // H² matrix spread over 8 nodes does, but not 8 ranks on one node.
   const SizeOptions jacobi{true, 1e-5, false};
   EXPECT_NE(size_refusal(OperatorType::H2, 2000000, jacobi, machine(24)), "");
   EXPECT_EQ(size_refusal(OperatorType::H2, 2000000, jacobi, machine(24, 8, 1)), "");
   EXPECT_NE(size_refusal(OperatorType::H2, 2000000, jacobi, machine(24, 8, 8)), "");
+  // HSS at 60 000 unknowns (30 GB) likewise: one node is too small, 8 nodes are not, and the
+  // node of rank 0 holds a quarter of a share more (the top above the parts).
   const double hss = estimated_bytes(OperatorType::Hss, 60000, SizeOptions{});
   EXPECT_GT(hss, 24 * 1073741824.0);
-  EXPECT_NE(size_refusal(OperatorType::Hss, 60000, SizeOptions{}, machine(24, 8, 1)), "");
+  EXPECT_NE(size_refusal(OperatorType::Hss, 60000, SizeOptions{}, machine(24)), "");
+  EXPECT_NE(size_refusal(OperatorType::Hss, 60000, SizeOptions{}, machine(24, 8, 8)), "");
+  EXPECT_EQ(size_refusal(OperatorType::Hss, 60000, SizeOptions{}, machine(24, 8, 1)), "");
+  EXPECT_EQ(size_refusal(OperatorType::Hss, 60000, SizeOptions{}, machine(hss / 2 / 1073741824.0 * 1.3, 2, 1)), "");
+  EXPECT_NE(size_refusal(OperatorType::Hss, 60000, SizeOptions{}, machine(hss / 2 / 1073741824.0 * 1.2, 2, 1)), ""); // rank 0's top does not fit
 }
 
 TEST(SizeLimits, HssGrowsFasterThanH2)

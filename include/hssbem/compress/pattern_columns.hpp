@@ -69,4 +69,46 @@ std::vector<double> pattern_diagonal(const M &K, const SystemSelection &sel, con
   return d;
 }
 
+/// K's input on this rank's points of a distributed system (positions first … first + count − 1
+/// of K's tree, cluster order): w values per point from the pattern's known values (x null, for
+/// the right-hand side) or from the unknowns x (3 per local point, for A x), divided by K's
+/// column scales (the matrix holds K S). M: HssMatrix or H2Matrix.
+template <class M>
+std::vector<double> local_k_input(const M &K, int first, int count, const SystemSelection &sel, const double *x)
+{
+  const int w = K.col_block();
+  std::vector<double> xk(static_cast<std::size_t>(w) * count);
+  for (int k = 0; k < count; ++k) {
+    const int j = K.tree().perm()[first + k];
+    double *out = &xk[static_cast<std::size_t>(w) * k];
+    if (x) pattern_product_node(sel, j, x + 3L * k, w, out);
+    else pattern_rhs_node(sel, j, w, out);
+    for (int q = 0; q < w; ++q) out[q] /= K.col_scale(q);
+  }
+  return xk;
+}
+
+/// The diagonal of A on this rank's points (3 per local point, cluster order) from the diagonal
+/// blocks of the leaves K holds here; block_entry as for pattern_diagonal.
+template <class M, class BlockEntry>
+std::vector<double> local_pattern_diagonal(const M &K, int first, int count, const SystemSelection &sel, const BlockEntry &block_entry)
+{
+  const ClusterTree &tree = K.tree();
+  const int w = K.col_block();
+  std::vector<double> d(3L * count);
+  for (int c : tree.leaves()) {
+    if (!K.holds(c)) continue;
+    const Cluster &cl = tree.cluster(c);
+    for (int k = cl.begin; k < cl.end; ++k) {
+      const int j = tree.perm()[k], local = k - cl.begin;
+      for (int r = 0; r < 3; ++r) {
+        double sign;
+        const int slot = pattern_slot(sel, j, r, &sign);
+        d[3L * (k - first) + r] = sign * block_entry(c, 3 * local + r, w * local + slot) / K.col_scale(slot);
+      }
+    }
+  }
+  return d;
+}
+
 } // namespace hssbem

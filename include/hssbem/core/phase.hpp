@@ -15,6 +15,8 @@ enum class Phase {
   Factorization, ///< ULV factorization
   Solve,         ///< ULV solve
   Matvec,        ///< HSS or H² product
+  FactorizationTop, ///< distributed ULV factorization: the parts' roots' blocks to rank 0 and the top's factorization there (inside Factorization)
+  SolveTop,         ///< distributed ULV solve: the parts' roots' right-hand sides to rank 0, the top's solve there, the unknowns back (inside Solve)
   H2Factorization, ///< H² factorization, the whole of it (the five below but the solve are inside)
   H2Sketch,        ///< H² factorization: random sketch of the far-field couplings
   H2Eliminate,     ///< H² factorization: skeletons and eliminations of the boxes, level by level

@@ -41,8 +41,9 @@ struct SizeOptions {
 double estimated_bytes(OperatorType type, long long unknowns, const SizeOptions &o);
 
 /// Why `type` cannot take `unknowns` unknowns on this machine: its entries or a rank's block
-/// exceed the index width, or it needs more memory than the nodes have (dense and H² are split
-/// over the ranks, a node holding its ranks' shares; HSS lives on rank 0); with the size, the
+/// exceed the index width, or it needs more memory than the nodes have (dense, H² and HSS are
+/// split over the ranks, a node holding its ranks' shares, HSS's rank 0 a quarter of a share more
+/// for the top above the parts); with the size, the
 /// need and the options that can take it (another operator, single precision, Jacobi instead of
 /// PC h2, a looser H² tolerance). Empty when it fits. (On several ranks, `-pc_type h2` gathers the
 /// H² matrix on rank 0, which this check does not foresee.)

@@ -22,6 +22,7 @@
 /// second half and 5's exchange carry nothing.
 #pragma once
 
+#include "hssbem/core/cluster_exchange.hpp"
 #include "hssbem/core/rank_comm.hpp"
 #include "hssbem/h2/h2_matrix.hpp"
 
@@ -29,10 +30,6 @@
 #include <vector>
 
 namespace hssbem {
-
-/// Per cluster, its owner: the rank of its part, rank 0 above the parts. On one rank every
-/// cluster is rank 0's. Throws std::invalid_argument when ranks > 1 differs from the tree's parts.
-std::vector<int> cluster_owners(const ClusterTree &tree, int ranks);
 
 class H2DistributedProduct {
 public:
@@ -53,16 +50,6 @@ public:
   long long messages_sent() const { return m_messages_sent; }
 
 private:
-  /// One exchange: per rank, the clusters whose blocks go there (send) or come from there (recv).
-  struct Round {
-    std::vector<std::vector<int>> send, recv;
-  };
-  Round plan(const std::vector<std::vector<int>> &need) const;
-  /// Send and receive blocks[c] (rows(c) × nrhs each) along r (collective); received blocks
-  /// replace the local ones, or are added to them.
-  template <class Rows>
-  void run(const Round &r, std::vector<DenseMatrix> &blocks, int nrhs, bool add, const Rows &rows) const;
-
   const H2Matrix &m_K;
   const RankComm &m_comm;
   int m_first = 0, m_count = 0;
@@ -70,7 +57,7 @@ private:
   /// parts, downward above and below.
   std::vector<std::vector<int>> m_up, m_top_up, m_top_down, m_down;
   std::vector<int> m_held, m_leaves, m_boundary; ///< this rank's clusters, leaves, and leaves other ranks read
-  Round m_low, m_vals, m_top, m_pot;                   ///< moments; leaf values; top moments; potentials down
+  ClusterExchange m_low, m_vals, m_top, m_pot;         ///< moments; leaf values; top moments; potentials down
   std::vector<char> m_above;                           ///< per cluster: above the parts
   long long m_values_sent = 0, m_messages_sent = 0;
 };

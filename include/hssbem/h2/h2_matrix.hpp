@@ -15,6 +15,7 @@
 
 #include "hssbem/compress/nested_basis.hpp"
 #include "hssbem/core/cluster_tree.hpp"
+#include "hssbem/core/tree_ownership.hpp"
 #include "hssbem/core/dense_matrix.hpp"
 #include "hssbem/h2/block_partition.hpp"
 
@@ -172,11 +173,11 @@ public:
   /// Distributed over ranks (h2_distributed.hpp): owner(c) is the rank holding cluster c's bases
   /// (U, V), its far blocks (its block row) and, for a leaf, its near blocks; every rank knows
   /// every skeleton. Without owners (the default) this rank holds everything.
-  void set_owners(std::vector<int> owner, int rank);
-  int owner(int c) const { return m_owner.empty() ? m_rank : m_owner[c]; }
-  bool holds(int c) const { return m_owner.empty() || m_owner[c] == m_rank; }
-  bool holds_all() const;
-  int rank() const { return m_rank; }
+  void set_owners(std::vector<int> owner, int rank) { m_owners.set(std::move(owner), rank, m_tree.num_clusters()); }
+  int owner(int c) const { return m_owners.owner(c); }
+  bool holds(int c) const { return m_owners.holds(c); }
+  bool holds_all() const { return m_owners.holds_all(); }
+  int rank() const { return m_owners.rank(); }
   /// Take over cluster c's stored bases and blocks (gathering a distributed matrix on one rank).
   void adopt(int c, StoredInterpolation U, StoredInterpolation V, std::vector<H2Block> far, std::vector<H2Block> near);
 
@@ -198,8 +199,7 @@ private:
   void store_basis(int c, bool single);
   void prepare_stored_bases();
   std::vector<std::vector<H2Block>> m_far, m_near;
-  std::vector<int> m_owner;
-  int m_rank = 0;
+  ClusterOwners m_owners;
   H2Stats m_stats;
 };
 

@@ -30,30 +30,25 @@ private:
   H2Matrix m_K;
 };
 
-/// The collocation system through an H² matrix distributed over ranks (h2_distributed.hpp):
-/// this rank's rows and unknowns are the 3 dofs of each of its points, in cluster order
-/// (positions first_point() … first_point() + num_points() − 1; the node of local point k is
-/// matrix().tree().perm()[first_point() + k]).
-class H2DistributedSystem {
+/// The collocation system through an H² matrix distributed over ranks (h2_distributed.hpp), rows
+/// and unknowns as DistributedBemSystem says.
+class H2DistributedSystem : public DistributedBemSystem {
 public:
   /// Collective: compress (compress_bem_operator_h2 with node_part) and plan the products.
   H2DistributedSystem(const BemOperator &op, const H2Options &options, const std::vector<int> &node_part, const RankComm &comm);
 
   const H2Matrix &matrix() const { return *m_K; }
   const H2DistributedProduct &product() const { return *m_product; }
-  int first_point() const { return m_product->first_point(); }
-  int num_points() const { return m_product->num_points(); }
+  const ClusterTree &tree() const override { return m_K->tree(); }
+  int first_point() const override { return m_product->first_point(); }
+  int num_points() const override { return m_product->num_points(); }
+  std::size_t memory_bytes() const override { return m_K->stats().memory_bytes; }
 
-  /// This rank's rows of b (3 per local point). Collective.
-  std::vector<double> rhs(const SystemSelection &sel) const;
-  /// This rank's rows of A x from this rank's unknowns x (3 per local point each). Collective.
-  void apply(const SystemSelection &sel, const double *x, double *y) const;
-  /// This rank's entries of A's diagonal.
-  std::vector<double> diagonal(const SystemSelection &sel) const;
+  std::vector<double> rhs(const SystemSelection &sel) const override;
+  void apply(const SystemSelection &sel, const double *x, double *y) const override;
+  std::vector<double> diagonal(const SystemSelection &sel) const override;
 
 private:
-  void apply_k(std::vector<double> xk, double *y) const;
-
   std::unique_ptr<H2Matrix> m_K;
   std::unique_ptr<H2DistributedProduct> m_product;
 };

@@ -24,7 +24,10 @@
 #pragma once
 
 #include "hssbem/bem/bem_operator.hpp"
+#include "hssbem/core/rank_comm.hpp"
 #include "hssbem/hss/hss_matrix.hpp"
+
+#include <vector>
 
 namespace hssbem {
 
@@ -42,5 +45,16 @@ struct HssOptions {
 /// included (computed by fast matvecs). The operator's quadrature must have far_ratio = 0.
 /// Throws std::invalid_argument for bad options.
 HssMatrix compress_bem_operator_hss(const BemOperator &op, const HssOptions &options);
+
+/// The same, distributed over the ranks of `comm` (hss_distributed.hpp): node_part[i] (dof node
+/// i) in [0, P) with P = comm.size() or, on one rank, any P (the tree then has the partition's
+/// top but one rank holds everything); empty: one part. The tree's top levels are the parts
+/// (ClusterTree's partition constructor); rank p owns part p's clusters and the levels above the
+/// parts belong to rank 0. Each rank skeletonizes its own clusters (skeleton indices cross ranks
+/// level by level), forms its inner clusters' couplings and its leaves' diagonal blocks; rank 0
+/// forms the top's couplings; the rigid-body terms come from one distributed product (a term
+/// whose coupling lies above the parts goes to rank 0). Collective; a fault on one rank throws
+/// on every rank (PeerFault on the others).
+HssMatrix compress_bem_operator_hss(const BemOperator &op, const HssOptions &options, const std::vector<int> &node_part, const RankComm &comm);
 
 } // namespace hssbem

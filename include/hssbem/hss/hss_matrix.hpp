@@ -22,6 +22,7 @@
 #include "hssbem/compress/nested_basis.hpp"
 #include "hssbem/core/cluster_tree.hpp"
 #include "hssbem/core/dense_matrix.hpp"
+#include "hssbem/core/tree_ownership.hpp"
 
 #include <cstddef>
 #include <vector>
@@ -43,7 +44,9 @@ struct HssLevelStats {
 
 struct HssStats {
   std::vector<HssLevelStats> levels; ///< index = tree level (0 = root)
-  std::size_t memory_bytes = 0;      ///< generators, skeleton lists and diagonal blocks
+  std::size_t memory_bytes = 0;      ///< generators, skeleton lists and diagonal blocks (held on this rank)
+  std::size_t top_bytes = 0;         ///< of which the generators of the clusters above the parts (a distributed matrix's top, rank 0)
+  int top_clusters = 0;              ///< clusters above the parts (0 without a partition)
   long long entries_evaluated = 0;   ///< operator entries computed (near field, proxies, couplings, leaves)
   double time_tree = 0, time_near_field = 0, time_ids = 0, time_couplings = 0, time_leaves = 0, time_rigid = 0; ///< seconds
   int proxy_points = 0;
@@ -76,7 +79,19 @@ public:
   /// leading dimension ldx, Y num_rows() × nrhs with leading dimension ldy. O(N·r) per column.
   void apply(const double *X, int ldx, double *Y, int ldy, int nrhs = 1) const;
 
-  /// Recompute rank and memory figures (levels, memory_bytes) from the generators.
+  /// Distributed over ranks (hss_distributed.hpp): owner(c) is the rank holding cluster c's
+  /// generators (U, V, and D or B12, B21); every rank knows every skeleton. Without owners (the
+  /// default) this rank holds everything.
+  void set_owners(std::vector<int> owner, int rank) { m_owners.set(std::move(owner), rank, m_tree.num_clusters()); }
+  int owner(int c) const { return m_owners.owner(c); }
+  bool holds(int c) const { return m_owners.holds(c); }
+  bool holds_all() const { return m_owners.holds_all(); }
+  int rank() const { return m_owners.rank(); }
+  const ClusterOwners &owners() const { return m_owners; }
+  void set_owners(const ClusterOwners &owners) { m_owners = owners; }
+
+  /// Recompute rank and memory figures (levels, memory_bytes, top_bytes) from the generators:
+  /// ranks of every cluster (skeletons are known everywhere), memory of the clusters held here.
   void update_stats();
   HssStats &stats() { return m_stats; }
   const HssStats &stats() const { return m_stats; }
@@ -86,6 +101,7 @@ private:
   int m_row_block, m_col_block;
   std::vector<double> m_col_scale;
   std::vector<HssCluster> m_clusters;
+  ClusterOwners m_owners;
   HssStats m_stats;
 };
 

@@ -7,6 +7,7 @@
 #include "hssbem/bem/bem_operator.hpp"
 #include "hssbem/compress/compressed_system.hpp"
 #include "hssbem/hss/hss_compression.hpp"
+#include "hssbem/hss/hss_distributed.hpp"
 #include "hssbem/hss/ulv.hpp"
 
 #include <memory>
@@ -39,6 +40,40 @@ public:
 private:
   const BemOperator &m_op;
   HssMatrix m_K;
+};
+
+/// The collocation system through an HSS matrix distributed over ranks (hss_distributed.hpp),
+/// rows and unknowns as DistributedBemSystem says, and its ULV factorization distributed likewise
+/// (ulv.hpp).
+class HssDistributedSystem : public DistributedBemSystem {
+public:
+  /// Collective: compress (compress_bem_operator_hss with node_part) and plan the products.
+  HssDistributedSystem(const BemOperator &op, const HssOptions &options, const std::vector<int> &node_part, const RankComm &comm);
+  /// Collective: adopt a distributed compression of op's K made elsewhere (truncate_hss() of
+  /// another system's, say).
+  HssDistributedSystem(const BemOperator &op, HssMatrix K, const RankComm &comm);
+
+  const HssMatrix &matrix() const { return *m_K; }
+  const HssDistributedProduct &product() const { return *m_product; }
+  const BemOperator &op() const { return m_op; }
+  const RankComm &comm() const { return m_comm; }
+  const ClusterTree &tree() const override { return m_K->tree(); }
+  int first_point() const override { return m_product->first_point(); }
+  int num_points() const override { return m_product->num_points(); }
+  std::size_t memory_bytes() const override { return m_K->stats().memory_bytes; }
+
+  std::vector<double> rhs(const SystemSelection &sel) const override;
+  void apply(const SystemSelection &sel, const double *x, double *y) const override;
+  std::vector<double> diagonal(const SystemSelection &sel) const override;
+  /// Collective: factor A (+ c Φ Φᵀ when `rigid_modes` is given, whole on every rank: row-major
+  /// 3N × 6, mesh order). Throws HssBreakdown on the rank where it broke down, PeerFault on the others.
+  std::unique_ptr<UlvFactorization> factor(const SystemSelection &sel, const std::vector<double> *rigid_modes = nullptr) const;
+
+private:
+  const BemOperator &m_op;
+  const RankComm &m_comm;
+  std::unique_ptr<HssMatrix> m_K;
+  std::unique_ptr<HssDistributedProduct> m_product;
 };
 
 } // namespace hssbem

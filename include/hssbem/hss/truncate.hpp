@@ -15,6 +15,7 @@
 /// See truncate.cpp for the formulas.
 #pragma once
 
+#include "hssbem/core/rank_comm.hpp"
 #include "hssbem/hss/hss_matrix.hpp"
 
 namespace hssbem {
@@ -32,5 +33,11 @@ namespace hssbem {
 /// Throws std::invalid_argument for bad arguments, std::logic_error if K's forced entries are
 /// not nested (a parent's forced entry missing from its child's forced entries).
 HssMatrix truncate_hss(const HssMatrix &K, double rel_tol, int max_rank = -1);
+
+/// The same for K distributed over the ranks of comm (hss_distributed.hpp; collective): the
+/// bottom-up steps run within each part and then above the parts (rank 0), the top-down step the
+/// other way round; only the parts' roots' compact factors (k × k) and new skeletons cross ranks.
+/// The result is distributed like K, and every rank knows its every new skeleton.
+HssMatrix truncate_hss(const HssMatrix &K, double rel_tol, int max_rank, const RankComm &comm);
 
 } // namespace hssbem

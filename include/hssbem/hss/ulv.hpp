@@ -13,8 +13,19 @@
 /// The small root block is factored by LU with partial pivoting. Row and column ranks may differ.
 /// Cost: about Σ_clusters m³ for the factorization and Σ m·k per solve; all transforms are
 /// orthogonal except the triangular L and the root LU.
+///
+/// Distributed over ranks (hss_distributed.hpp): the elimination of a subtree needs nothing from
+/// outside it, so each rank factors its part's subtree up to the part's root with no
+/// communication; the parts' roots' reduced blocks (their skeleton rows and columns: Dt, Ut, Vt
+/// below) then go to rank 0, which merges and factors the top levels and LU-factors the root. A
+/// solve runs the forward sweep of each part, sends the parts' reduced right-hand sides to rank
+/// 0, which solves the top, and runs each part's backward sweep from the unknowns rank 0 sends
+/// back.
 #pragma once
 
+#include "hssbem/core/cluster_exchange.hpp"
+#include "hssbem/core/rank_comm.hpp"
+#include "hssbem/hss/hss_distributed.hpp"
 #include "hssbem/hss/hss_matrix.hpp"
 
 #include <array>
@@ -44,14 +55,23 @@ public:
   /// known and t unknown (column −G), false where u is unknown (column H). K must outlive this
   /// object (its transfer matrices and couplings are used, not copied). Throws HssBreakdown.
   UlvFactorization(const HssMatrix &K, const std::vector<std::array<bool, 3>> &displacement_known, const LowRankTerm *extra = nullptr);
+  /// The same for K distributed over the ranks of comm (collective; the pattern and the low-rank
+  /// term are whole, mesh order, on every rank). Throws HssBreakdown on the rank where a pivot
+  /// broke down (the root's: rank 0) and PeerFault on the others. comm must outlive this object.
+  UlvFactorization(const HssMatrix &K, const RankComm &comm, const std::vector<std::array<bool, 3>> &displacement_known, const LowRankTerm *extra = nullptr);
 
-  /// Solve A x = b in place: b (3N values, cluster order) becomes x.
+  /// Solve A x = b in place: b (3 values per point of this rank, cluster order; on one rank all
+  /// 3N) becomes x. Collective when distributed.
   void solve(double *b) const;
 
-  /// Bytes held by the factors.
+  /// Bytes held by the factors on this rank.
   std::size_t memory_bytes() const;
-  /// Largest dense block factored (the root's or a merged cluster's).
+  /// Of which those of the top (the clusters above the parts, and the root LU: rank 0's).
+  std::size_t top_bytes() const;
+  /// Largest dense block factored on this rank (the root's or a merged cluster's).
   int max_front() const { return m_max_front; }
+  /// Unknowns of the root block factored by LU (rank 0; 0 elsewhere).
+  int root_size() const { return m_root_lu.m; }
 
 private:
   struct Node {
@@ -69,9 +89,20 @@ private:
     DenseMatrix Dt;          ///< reduced diagonal block (r × r), only until the parent merges
   };
   int reduced_size(int c) const { return m_nodes[c].eliminated ? m_nodes[c].kr : m_nodes[c].m; }
+  /// Columns of V_of(c): the column skeleton, widened by the low-rank term.
+  int col_rank(int c) const { return static_cast<int>(m_K.cluster(c).col_skel.size()) + m_p; }
+  void factor_levels(const std::vector<std::vector<int>> &levels, const std::vector<std::array<bool, 3>> &displacement_known);
+  void factor_one(int c, const std::vector<std::array<bool, 3>> &displacement_known);
+  void leaf_generators(int c, const std::vector<std::array<bool, 3>> &displacement_known, DenseMatrix &D, DenseMatrix &U, DenseMatrix &V) const;
+  void factor_root(DenseMatrix D);
   void factor_cluster(int c, DenseMatrix D, DenseMatrix U, DenseMatrix V);
   void merge_children(int c, DenseMatrix &D, DenseMatrix &U, DenseMatrix &V);
   void widen_generators(const LowRankTerm &extra);
+  /// The reduced blocks of this rank's parts' roots to the owners of their parents (collective).
+  void send_part_roots();
+  struct SolveWork;
+  void solve_up(int c, const double *b, SolveWork &w) const;
+  void solve_down(int c, double *b, SolveWork &w) const;
   /// Transfer matrices and couplings of cluster c, widened by the low-rank term if there is one.
   const DenseMatrix &U_of(int c) const { return m_p > 0 ? m_wide[c].U : m_K.cluster(c).U; }
   const DenseMatrix &V_of(int c) const { return m_p > 0 ? m_wide[c].V : m_K.cluster(c).V; }
@@ -79,6 +110,9 @@ private:
   const DenseMatrix &B21_of(int c) const { return m_p > 0 ? m_wide[c].B21 : m_K.cluster(c).B21; }
 
   const HssMatrix &m_K;
+  const RankComm &m_comm;
+  HssPasses m_passes;
+  ClusterExchange m_up, m_down;      ///< the parts' roots' reduced right-hand sides to rank 0; their unknowns back
   int m_p = 0;                       ///< width of the low-rank term
   std::vector<HssCluster> m_wide;    ///< widened generators (leaves: U and V; inner: transfers and couplings)
   std::vector<Node> m_nodes;

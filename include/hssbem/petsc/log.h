@@ -7,8 +7,9 @@
 
 PETSC_EXTERN PetscClassId  HSSBEM_CLASSID;
 PETSC_EXTERN PetscLogEvent BEM_Mesh, BEM_Assembly, BEM_Partition, BEM_Solve, BEM_Post, BEM_Interior, BEM_Output;
-/* Phases of the compression engines, HSS and H² (hssbem::Phase), reported through their phase hook. */
-PETSC_EXTERN PetscLogEvent HSS_Tree, HSS_Compress, HSS_NearField, HSS_Truncate, HSS_Factor, HSS_Solve, HSS_MatMult;
+/* Phases of the compression engines, HSS and H² (hssbem::Phase), reported through their phase hook;
+   HSS_FactorTop and HSS_SolveTop: the distributed ULV's exchanges with rank 0 and its top there. */
+PETSC_EXTERN PetscLogEvent HSS_Tree, HSS_Compress, HSS_NearField, HSS_Truncate, HSS_Factor, HSS_Solve, HSS_MatMult, HSS_FactorTop, HSS_SolveTop;
 /* Phases of the H² factorization (PC h2): the whole, its sketch, eliminations, merges and dense top; its solve. */
 PETSC_EXTERN PetscLogEvent H2F_Factor, H2F_Sketch, H2F_Eliminate, H2F_Merge, H2F_Top, H2F_Solve;
 /* Phases of a scene (frames): set-up, capacitance update, Woodbury/LU solve, refactorization, Krylov; and one whole frame. */

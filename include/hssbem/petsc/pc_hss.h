@@ -10,6 +10,11 @@
      leaf size); on the H² matrix at 1e-3 unless -pc_hss_rel_tol says otherwise.
    PCApply solves with the factors. With -ksp_type preonly it is a direct solver to about
    -pc_hss_rel_tol; with GMRES at a loose tolerance (1e-2 .. 1e-4) a preconditioner.
+   On a distributed matrix (HSS, or H² on several ranks) the compression and the factorization
+   are distributed too: each rank its part's subtree, rank 0 the parts' roots' reduced blocks
+   (the matrix's own compression, truncated on the ranks, or compressed anew on the matrix's
+   METIS partition). On the dense matrix on several ranks they live on rank 0, which gathers
+   each vector.
    A breakdown of the factorization sets PC_FACTOR_NUMERIC_ZEROPIVOT (KSP: DIVERGED_PC_FAILED). */
 #pragma once
 

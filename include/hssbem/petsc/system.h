@@ -24,8 +24,9 @@
    nodes split in contiguous blocks across the ranks, block size 3).
    - mat_type HSSBEM_MAT_HSS: a MATSHELL whose MatMult applies the HSS compression of K = [H, G]
      made at -mat_hss_rel_tol (see HssbemHssOptionsFromDatabase()); MatGetDiagonal and MatView
-     work. The compression lives on rank 0 (the tree is not distributed yet); products gather
-     and scatter the vectors.
+     work. On several ranks it is distributed like the H² matrix below (METIS parts, each rank
+     its part's subtree, rank 0 the levels above the parts; rows in cluster order), and so is
+     PC hss's factorization of it.
    - mat_type HSSBEM_MAT_H2: the same MatShell over an H² compression (strong admissibility,
      -mat_h2_* options, see HssbemH2OptionsFromDatabase()): cheaper to build and to apply at
      scale, for Krylov solvers; -pc_type hss then compresses its own HSS preconditioner. On
@@ -41,9 +42,9 @@ PetscErrorCode HssbemCreateSystem(MPI_Comm comm, const hssbem::BemOperator &op, 
                                   Vec *b);
 
 /* The rows of HssbemCreateSystem()'s A, b and solution: mesh order (3 per dof node, nodes split in
-   contiguous blocks) for the dense and HSS systems and the H² system on one rank; on several
-   ranks the H² system is distributed by a METIS partition of the surface and its rows are in
-   cluster order, rank p holding part p's nodes. These convert either way between A's layout and
+   contiguous blocks) for the dense system and the compressed ones on one rank; on several ranks
+   the H² and HSS systems are distributed by a METIS partition of the surface and their rows are
+   in cluster order, rank p holding part p's nodes. These convert either way between A's layout and
    a mesh-order vector from HssbemMatCreateMeshOrderVec() (a copy when A is in mesh order). */
 PetscErrorCode HssbemMatCreateMeshOrderVec(Mat A, Vec *y);
 PetscErrorCode HssbemVecToMeshOrder(Mat A, Vec x, Vec y);
