@@ -20,6 +20,7 @@ Usage
   scripts/gen_meshes.py --disk-triangles 20000 --out d.msh     # disk organ with ~N triangles
   scripts/gen_meshes.py --disk-size 0.02 --out d.msh            # disk organ with gmsh size h
         [--refine K]   (K nested 1:4 refinements with projection onto the ellipsoid)
+  scripts/gen_meshes.py --cardioid-triangles 20000 --out c.msh  # cardioid with exactly N triangles
   scripts/gen_meshes.py --check-examples [--out DIR]   # check meshes/examples/*.json selectors
 
 Nested refinement (sphere, cube, hollow sphere, disk organ; not the cardioid): every triangle
@@ -557,7 +558,7 @@ def cardioid_rings(target):
     assert target % 2 == 0
     want = target // 2
     best = None
-    for m in range(4, 200):
+    for m in range(4, max(200, int(2.2 * math.sqrt(target)))):
         ds = CARD_L / m
         h = ds * 2 / math.sqrt(3)
         sk = ds * np.arange(1, m)
@@ -787,7 +788,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--out", help="output directory (default: <repo>/meshes), or the output .msh "
-                    "file with --sphere-triangles/--sphere-size/--disk-triangles/--disk-size")
+                    "file with --sphere-triangles/--sphere-size/--disk-triangles/--disk-size/--cardioid-triangles")
     ap.add_argument("--only", choices=FAMILIES, action="append",
                     help="generate only this family (repeatable)")
     ap.add_argument("--sphere-triangles", type=int, metavar="N",
@@ -799,6 +800,9 @@ def main():
                     help="write one disk organ with about N triangles (gmsh size searched) to --out FILE")
     ap.add_argument("--disk-size", type=float, metavar="H",
                     help="write one disk organ meshed by gmsh with size H to --out FILE")
+    ap.add_argument("--cardioid-triangles", type=int, metavar="N",
+                    help="write one cardioid body of revolution (the source paper's heart-like organ) with "
+                    "N triangles (N even) to --out FILE")
     ap.add_argument("--refine", type=int, default=0, metavar="K",
                     help="apply K nested 1:4 refinements (single-sphere and single-disk modes)")
     ap.add_argument("--check-examples", action="store_true",
@@ -810,9 +814,21 @@ def main():
 
     single_sphere = args.sphere_triangles is not None or args.sphere_size is not None
     single_disk = args.disk_triangles is not None or args.disk_size is not None
-    if single_sphere + single_disk + (args.sphere_triangles is not None and args.sphere_size is not None) \
+    single_cardioid = args.cardioid_triangles is not None
+    if single_sphere + single_disk + single_cardioid + (args.sphere_triangles is not None and args.sphere_size is not None) \
             + (args.disk_triangles is not None and args.disk_size is not None) > 1:
-        ap.error("give only one of --sphere-triangles, --sphere-size, --disk-triangles, --disk-size")
+        ap.error("give only one of --sphere-triangles, --sphere-size, --disk-triangles, --disk-size, --cardioid-triangles")
+
+    if single_cardioid:
+        if not args.out or not args.out.endswith(".msh"):
+            ap.error("single-cardioid mode needs --out FILE.msh")
+        if args.cardioid_triangles < 8 or args.cardioid_triangles % 2:
+            ap.error("--cardioid-triangles must be even and at least 8")
+        V, T, _, _ = cardioid_rings(args.cardioid_triangles)  # oriented outward
+        d = os.path.dirname(os.path.abspath(args.out))
+        os.makedirs(d, exist_ok=True)
+        save(d, os.path.basename(args.out), V, T, cardioid_regions(V, T), ["base", "body"], [+1], [])
+        return
 
     if single_sphere:
         if not args.out or not args.out.endswith(".msh"):
