@@ -106,6 +106,28 @@ int first_level(const ClusterTree &tree, int leaf_size, double rel_tol)
   return l;
 }
 
+/// Whether factoring the remaining unknowns densely now costs less than eliminating level l
+/// first. The level's Schur complements cost at most Σ_X 2 |I_X|² |D_X| flops (I_X: X and its
+/// close neighbours, every active unknown of X redundant at worst) at the eliminations' BLAS rate;
+/// the dense top (2/3) n³, in single precision at twice that rate when n reaches
+/// mixed_top_from. At the upper levels of a tight factorization on a small surface, a box's close
+/// neighbours hold most of what is left and its skeleton most of its unknowns: at 1e-7 on a 20k
+/// sphere, the level with 16 boxes of ~600 unknowns cost 7.0 s to eliminate (7.5e11 Schur flop in
+/// all) where the 9 600-unknown dense top it left behind takes about 3 s.
+bool dense_top_is_cheaper(const h2f::Frontier &F, const std::vector<int> &boxes, int mixed_from)
+{
+  const double n = static_cast<double>(F.active_total());
+  double level = 0;
+  for (int X : boxes) {
+    const double m = static_cast<double>(F.active(X).size());
+    double around = m;
+    for (int Y : F.neighbours(X)) around += static_cast<double>(F.active(Y).size());
+    level += 2 * around * around * m;
+  }
+  const double top = 2.0 / 3.0 * n * n * n / (mixed_from > 0 && n >= mixed_from ? 2.0 : 1.0);
+  return top < level;
+}
+
 /// The boxes of one level in elimination order, each with the earlier boxes whose closed
 /// neighbourhoods meet its own (the steps that must come first; any other pair of steps touches
 /// disjoint blocks and may run at once, in either order, with the same result).
@@ -281,6 +303,12 @@ H2Factorization::H2Factorization(H2FactorCache &cache, const SystemSelection &se
   m_stats.time_init = timer.seconds();
   for (int l = l0; l >= 1; --l) {
     if (static_cast<int>(front.active_total()) <= options.top_size || !front.level_has_far_field(l)) break;
+    {
+      std::vector<int> level_boxes;
+      for (int X : tree.clusters_at_level(l))
+        if (!front.active(X).empty()) level_boxes.push_back(X);
+      if (options.top_when_cheaper && dense_top_is_cheaper(front, level_boxes, options.mixed_top_from)) break;
+    }
     H2FactorLevelStats ls;
     ls.level = l;
     timer.restart();

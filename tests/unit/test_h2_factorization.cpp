@@ -105,6 +105,7 @@ TEST_P(H2FactorAccuracy, SolveMatchesDenseLU)
   H2FactorOptions fo;
   fo.rel_tol = c.tol;
   fo.top_size = 0;       // factor every level that has a far field,
+  fo.top_when_cheaper = false;
   fo.leaf_size = c.leaf; // from the H² leaves up (by default, below 1e-5, from their parents)
   const H2Factorization F(cache, sel, fo);
   const std::vector<double> b = random_vector(3L * n, 5);
@@ -149,6 +150,7 @@ TEST(H2FactorSchedule, TwoThreadsGiveTheSameFactorsEveryTimeAndTheOneThreadOnesT
   H2FactorOptions fo;
   fo.rel_tol = 1e-6;
   fo.top_size = 0;
+  fo.top_when_cheaper = false;
   fo.leaf_size = 16;
   const std::vector<double> b = random_vector(3L * n, 11);
   const int threads = omp_get_max_threads();
@@ -183,6 +185,7 @@ TEST(H2FactorAccuracy, LooseToleranceIsApproximate)
   H2FactorOptions fo;
   fo.rel_tol = 1e-2;
   fo.top_size = 0;
+  fo.top_when_cheaper = false;
   const H2Factorization F(cache, selection(n, known), fo);
   const std::vector<double> b = random_vector(3L * n, 5);
   std::vector<double> x(b.size());
@@ -206,6 +209,7 @@ TEST(H2FactorMemory, SinglePrecisionWorkingBlocksHalveTheStore)
   H2FactorOptions fo;
   fo.rel_tol = 1e-4;
   fo.top_size = 0;
+  fo.top_when_cheaper = false;
   fo.single_panels = 0;
   const H2Factorization Fd(cache, sel, fo);
   fo.single_panels = 1;
@@ -238,6 +242,7 @@ TEST(H2FactorPatterns, TwoPatternsOneCompression)
   H2FactorOptions fo;
   fo.rel_tol = 1e-6;
   fo.top_size = 0;
+  fo.top_when_cheaper = false;
   const std::vector<double> b = random_vector(3L * n, 9);
   for (int pass = 0; pass < 2; ++pass) {
     const H2Factorization F(cache, selection(n, known), fo);
@@ -278,6 +283,7 @@ TEST(H2FactorPureTraction, RegularisedMatchesDense)
     H2FactorOptions fo;
     fo.rel_tol = tol;
     fo.top_size = 0;
+    fo.top_when_cheaper = false;
     const H2Factorization F(cache, selection(n, known), fo, &modes);
     std::vector<double> x(N);
     F.solve(b.data(), x.data());
@@ -346,6 +352,7 @@ TEST(H2FactorOptionsCheck, LeafSizeStartsHigherAndBadOptionsThrow)
   H2FactorOptions fo;
   fo.rel_tol = 1e-6;
   fo.top_size = 0;
+  fo.top_when_cheaper = false;
   fo.leaf_size = 16; // the H² leaves (14-16 nodes)
   const H2Factorization fine(cache, sel, fo);
   fo.leaf_size = 64; // boxes of up to 64 nodes: two levels above the H² leaves

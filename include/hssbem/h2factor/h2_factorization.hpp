@@ -53,6 +53,10 @@ struct H2FactorOptions {
   /// refines in double against the top block (as accurate as a double LU, which is twice the
   /// time); ≤ 0: always double.
   int mixed_top_from = 4000;
+  /// Stop at a level whose eliminations would cost more flops than factoring everything left
+  /// densely (an upper bound of the level's Schur complements against the top's LU); false: go
+  /// on while a level has a far field and more than top_size unknowns remain.
+  bool top_when_cheaper = true;
 };
 
 /// A singular pivot block (e.g. a pure-traction problem without its rigid-mode regularisation).
