@@ -71,9 +71,10 @@ DenseMatrix StoredBlock::value() const
   return out;
 }
 
-Frontier::Frontier(const H2Matrix &K, const FarFieldSketch &sketch, const Pattern &pattern, bool single)
-  : m_K(K), m_tree(K.tree()), m_part(K.partition()), m_sketch(sketch), m_pat(pattern), m_w(K.col_block()), m_single(single)
+Frontier::Frontier(const H2Matrix &K, const FarFieldSketch &sketch, const Pattern &pattern, bool single, std::vector<int> part)
+  : m_K(K), m_tree(K.tree()), m_part(K.partition()), m_sketch(sketch), m_pat(pattern), m_w(K.col_block()), m_single(single), m_box_part(std::move(part))
 {
+  if (!m_box_part.empty() && m_box_part.size() != static_cast<std::size_t>(m_tree.num_clusters())) throw std::invalid_argument("H2 factorization: a part list of the wrong length");
   const int nc = m_tree.num_clusters();
   m_in_front.assign(nc, 0);
   m_D.resize(nc);
@@ -83,6 +84,10 @@ Frontier::Frontier(const H2Matrix &K, const FarFieldSketch &sketch, const Patter
   m_Psi.resize(nc);
   m_M.resize(nc);
   m_F.resize(nc);
+  m_X.resize(nc);
+  m_G.resize(nc);
+  m_cross.resize(nc);
+  m_side.resize(nc);
   m_fill_cols.resize(nc);
   m_fill_col_blocks.resize(nc);
   m_opened.resize(nc);
@@ -111,7 +116,12 @@ Frontier::Frontier(const H2Matrix &K, const FarFieldSketch &sketch, const Patter
     for (int b : m_part.near[a]) {
       DenseMatrix B = leaf_near(a, b);
       add_regularisation(B, a, b);
-      settle(m_M[a].emplace(b, StoredBlock(std::move(B))).first->second);
+      if (!same_part(a, b)) { // a cross block, in its two copies
+        m_cross[a].push_back(b);
+        settle(m_G[a].emplace(b, StoredBlock(B)).first->second);
+        settle(m_X[a].emplace(b, StoredBlock(std::move(B))).first->second);
+      } else
+        settle(m_M[a].emplace(b, StoredBlock(std::move(B))).first->second);
     }
   note_bytes();
 }
@@ -167,7 +177,7 @@ bool Frontier::level_has_far_field(int l) const
 {
   if (m_pat.regularised()) return true;
   for (int X : m_tree.clusters_at_level(l))
-    if (m_in_front[X] && (m_Eu[X].cols() > 0 || m_Ew[X].cols() > 0 || !m_F[X].empty() || !m_fill_cols[X].empty())) return true;
+    if (steps_at(X) && (m_Eu[X].cols() > 0 || m_Ew[X].cols() > 0 || !m_F[X].empty() || !m_fill_cols[X].empty() || !m_cross[X].empty())) return true;
   return false;
 }
 
@@ -175,7 +185,7 @@ std::vector<int> Frontier::neighbours(int X) const
 {
   std::vector<int> nb;
   for (int Y : m_part.close[X])
-    if (m_in_front[Y] && Y != X) nb.push_back(Y);
+    if (m_in_front[Y] && Y != X && same_part(X, Y)) nb.push_back(Y);
   return nb;
 }
 
@@ -195,6 +205,12 @@ DenseMatrix Frontier::restricted_basis(int P, int a, bool rows) const
 void Frontier::add_far_part(int P, int Q, double *out, int ld) const
 {
   const int m = static_cast<int>(m_D[P].size()), n = static_cast<int>(m_D[Q].size());
+  if (!same_part(P, Q) && m_part.is_close(P, Q)) { // a cross block holds the whole current value
+    const DenseMatrix B = m_X[P].at(Q).value();
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < m; ++i) out[i + static_cast<std::size_t>(j) * ld] += B(i, j);
+    return;
+  }
   for (int a = P; a >= 0; a = m_tree.cluster(a).parent)
     for (int b = Q; b >= 0; b = m_tree.cluster(b).parent) {
       if (!m_part.is_far(a, b)) continue;
@@ -240,6 +256,71 @@ std::vector<int> Frontier::parts_of(int P, int l) const
   return {P};
 }
 
+DenseMatrix Frontier::assemble_cross(int P, int Q, int l, std::vector<std::map<int, StoredBlock>> &which)
+{
+  DenseMatrix B(static_cast<int>(m_D[P].size()), static_cast<int>(m_D[Q].size()));
+  int ro = 0;
+  for (int b : parts_of(P, l)) {
+    int co = 0;
+    for (int c : parts_of(Q, l)) {
+      const auto it = which[b].find(c);
+      if (it != which[b].end()) {
+        dense::put(B, ro, co, it->second.take());
+        which[b].erase(it);
+      } else if (B.m > 0)
+        add_far_part(b, c, &B(ro, co), B.ld()); // children of different parts that are not close
+      co += static_cast<int>(m_D[c].size());
+    }
+    ro += static_cast<int>(m_D[b].size());
+  }
+  return B;
+}
+
+long long Frontier::cross_pairs() const
+{
+  long long n = 0;
+  for (const auto &row : m_X) n += static_cast<long long>(row.size());
+  return n;
+}
+
+std::size_t Frontier::cross_bytes() const
+{
+  std::size_t s = 0;
+  for (const auto *store : {&m_X, &m_G})
+    for (const auto &row : *store)
+      for (const auto &e : row) s += e.second.bytes();
+  return s;
+}
+
+void Frontier::finish_level(const std::vector<int> &boxes)
+{
+  // The copies of one cross block go through the other side's step independently: rows of the
+  // copy in Y's columns (m_G[X][Y]) are kept as X kept them, columns of the copy in Z's rows
+  // (m_X[Z][X]) transformed as X transformed its own copy's.
+  for_each_cluster(boxes, [&](int X) {
+    const CrossSide &side = m_side[X];
+    if (!side.recorded) return;
+    for (int Y : m_cross[X]) {
+      DenseMatrix &B = m_G[X].at(Y).open();
+      B = dense::rows_at(B, side.kept);
+      settle(m_G[X].at(Y));
+    }
+  });
+  for_each_cluster(m_front, [&](int Z) {
+    for (int X : m_cross[Z]) {
+      const CrossSide &side = m_side[X];
+      if (!side.recorded) continue;
+      StoredBlock &stored = m_X[Z].at(X);
+      const DenseMatrix B = stored.take();
+      DenseMatrix out(B.m, side.C.n);
+      if (B.m > 0 && B.n > 0 && side.C.n > 0) lapack::gemm('N', 'N', B.m, side.C.n, B.n, 1.0, B.data(), B.ld(), side.C.data(), side.C.ld(), 0.0, out.data(), out.ld());
+      stored = StoredBlock(std::move(out));
+      settle(stored);
+    }
+  });
+  for (int X : boxes) m_side[X] = CrossSide();
+}
+
 DenseMatrix Frontier::assemble_close(int P, int Q, int l)
 {
   DenseMatrix B(static_cast<int>(m_D[P].size()), static_cast<int>(m_D[Q].size()));
@@ -262,9 +343,14 @@ DenseMatrix Frontier::assemble_close(int P, int Q, int l)
 
 void Frontier::merge(int l)
 {
-  std::vector<int> front = m_tree.clusters_at_level(l - 1);
+  std::vector<int> front;
+  for (int c : m_tree.clusters_at_level(l - 1))
+    if (m_box_part.empty() || m_box_part[c] >= 0) front.push_back(c);
   for (int c : m_tree.leaves())
     if (m_tree.cluster(c).level < l - 1) front.push_back(c);
+  if (!m_box_part.empty()) // the parts' roots (and boxes under them) that stop below level l - 1
+    for (int c : m_front)
+      if (m_tree.cluster(c).level >= l && m_box_part[m_tree.cluster(c).parent] < 0) front.push_back(c);
   // Unknowns and restricted bases of the new boxes: children's, concatenated and transferred.
   std::vector<int> parents;
   for (int P : front)
@@ -295,19 +381,31 @@ void Frontier::merge(int l)
   for (int P : front) in_front[P] = 1;
   // Blocks between close new boxes, from the children's blocks and far parts; fill-in between
   // boxes whose parents are still not close stays fill-in, on the parents.
-  std::vector<std::map<int, StoredBlock>> M(m_tree.num_clusters());
+  std::vector<std::map<int, StoredBlock>> M(m_tree.num_clusters()), X(m_tree.num_clusters()), G(m_tree.num_clusters());
+  std::vector<std::vector<int>> cross(m_tree.num_clusters());
   for_each_cluster(front, [&](int P) {
-    for (int Q : m_part.close[P])
-      if (in_front[Q]) settle(M[P].emplace(Q, StoredBlock(assemble_close(P, Q, l))).first->second);
+    for (int Q : m_part.close[P]) {
+      if (!in_front[Q]) continue;
+      if (same_part(P, Q)) {
+        settle(M[P].emplace(Q, StoredBlock(assemble_close(P, Q, l))).first->second);
+        continue;
+      }
+      cross[P].push_back(Q);
+      settle(G[P].emplace(Q, StoredBlock(assemble_cross(P, Q, l, m_G))).first->second);
+      settle(X[P].emplace(Q, StoredBlock(assemble_cross(P, Q, l, m_X))).first->second);
+    }
   });
   std::vector<std::map<int, StoredBlock>> F = merged_fill(l);
   std::size_t added = 0;
-  for (const auto *store : {&M, &F})
+  for (const auto *store : {&M, &F, &X, &G})
     for (const auto &row : *store)
       for (const auto &e : row) added += e.second.bytes();
   m_peak = std::max(m_peak, store_bytes() + added);
   m_M.swap(M);
   m_F.swap(F);
+  m_X.swap(X);
+  m_G.swap(G);
+  m_cross.swap(cross);
   for (int P : m_front) // boxes now inside a parent
     if (!in_front[P]) {
       m_D[P].clear();
@@ -383,7 +481,7 @@ void Frontier::rest(int X)
 std::size_t Frontier::store_bytes() const
 {
   std::size_t s = 0;
-  for (const auto *store : {&m_M, &m_F})
+  for (const auto *store : {&m_M, &m_F, &m_X, &m_G})
     for (const auto &row : *store)
       for (const auto &e : row) s += e.second.bytes();
   for (int X : m_front) s += m_Eu[X].bytes() + m_Ew[X].bytes();

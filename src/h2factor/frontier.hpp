@@ -89,19 +89,47 @@ struct BoxSkeleton {
   DenseMatrix T; ///< |S| × |R|
 };
 
+/// What a box's step did to the cross blocks it shares with boxes of other parts, as the other
+/// side applies it after the level: it keeps rows `kept` of a block in its rows (local indices,
+/// in the order of its new active unknowns), and a block B in its columns becomes B C with
+/// C = A_XX⁻¹(:, kept) (|D_X| × |kept|).
+struct CrossSide {
+  bool recorded = false;
+  std::vector<int> kept;
+  DenseMatrix C;
+};
+
 class Frontier {
 public:
   /// The leaves of K, with their near blocks in A-hat form; `single`: blocks rest in single
-  /// precision (StoredBlock).
-  Frontier(const H2Matrix &K, const FarFieldSketch &sketch, const Pattern &pattern, bool single);
+  /// precision (StoredBlock). `part` (per cluster: its part, −1 above the parts; empty: one part)
+  /// splits the boxes into parts that are never close to each other: a pair of boxes of
+  /// different parts that the H² partition calls close keeps a *cross block* (its full current
+  /// value) in two copies, one for each side, that enter both boxes' skeletons and never receive
+  /// a Schur complement; each box's step applies its own side to its copies, and
+  /// finish_level() the other side (CrossSide).
+  Frontier(const H2Matrix &K, const FarFieldSketch &sketch, const Pattern &pattern, bool single, std::vector<int> part = {});
 
   const std::vector<int> &boxes() const { return m_front; }
   const std::vector<int> &active(int X) const { return m_D[X]; }
   std::size_t active_total() const;
   /// Whether some box of level l has a far field or fill-in to skeletonize against.
   bool level_has_far_field(int l) const;
-  /// The close boxes of the frontier other than X.
+  /// The close boxes of the frontier other than X (of X's part).
   std::vector<int> neighbours(int X) const;
+  /// Whether X and Y lie in one part (always without parts).
+  bool same_part(int X, int Y) const { return m_box_part.empty() || m_box_part[X] == m_box_part[Y]; }
+  /// Whether level l's box X takes a step (in the frontier, below or at its part's root).
+  bool steps_at(int X) const { return m_in_front[X] && (m_box_part.empty() || m_box_part[X] >= 0); }
+  /// The boxes of other parts with which X shares cross blocks.
+  const std::vector<int> &cross_partners(int X) const { return m_cross[X]; }
+  /// Cross blocks now (pairs, each counted once) and the bytes of both copies.
+  long long cross_pairs() const;
+  std::size_t cross_bytes() const;
+  /// After a level whose boxes went through their steps: each cross block gets the other
+  /// side's part of the steps (the boxes' CrossSide, recorded by eliminate()), as if the two
+  /// copies lived on two ranks and exchanged the sides at the level's end.
+  void finish_level(const std::vector<int> &boxes);
 
   /// Before X's steps 0–3, with no step of another box adding fill-in meanwhile (add_fill()
   /// inserts into the maps of the store): the fill-in blocks in X's columns, located once, so
@@ -133,7 +161,8 @@ public:
   /// which holds both levels' blocks for a moment).
   std::size_t peak_bytes() const { return m_peak; }
   void note_bytes() { m_peak = std::max(m_peak, store_bytes()); }
-  /// The frontier of level l − 1 from that of level l.
+  /// The frontier of level l − 1 from that of level l (boxes never merge above their part's
+  /// root: a part's root stays in the frontier as it is).
   void merge(int l);
   /// All remaining unknowns as one block matrix, their dof indices in *dofs; the blocks between
   /// close boxes move out of the store (the frontier is spent).
@@ -162,6 +191,9 @@ private:
     if (m_single) b.park();
   }
   std::vector<int> parts_of(int P, int l) const;
+  /// Copy `which` (m_X or m_G) of the cross block between new boxes P and Q of level l − 1,
+  /// from the children's copies and the far parts between the children that are not close.
+  DenseMatrix assemble_cross(int P, int Q, int l, std::vector<std::map<int, StoredBlock>> &which);
 
   const H2Matrix &m_K;
   const ClusterTree &m_tree;
@@ -177,6 +209,13 @@ private:
   bool m_single;
   std::vector<std::map<int, StoredBlock>> m_M; ///< blocks between close frontier boxes (current values)
   std::vector<std::map<int, StoredBlock>> m_F; ///< fill-in between boxes that are not close (updates only)
+  std::vector<int> m_box_part;                 ///< per cluster: its part (-1 above them); empty: one part
+  /// Cross blocks between boxes of different parts that the H² partition calls close (full
+  /// values): m_X[X][Y] is the copy in X's rows (X's side applied by X's steps, Y's by
+  /// finish_level), m_G[X][Y] the copy in Y's columns (the reverse); m_cross[X] the partners.
+  std::vector<std::map<int, StoredBlock>> m_X, m_G;
+  std::vector<std::vector<int>> m_cross;
+  std::vector<CrossSide> m_side; ///< per box: its side of the current level's step
   std::vector<std::vector<StoredBlock *>> m_opened; ///< per box: blocks its step has opened
   std::size_t m_peak = 0;
   std::vector<std::vector<int>> m_fill_cols;   ///< m_fill_cols[X]: boxes Z with a block m_F[Z][X]

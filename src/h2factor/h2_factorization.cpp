@@ -10,6 +10,7 @@
 #include "hssbem/core/lapack.hpp"
 #include "hssbem/core/phase.hpp"
 #include "hssbem/core/timer.hpp"
+#include "hssbem/core/tree_ownership.hpp"
 
 #include <algorithm>
 #include <condition_variable>
@@ -275,19 +276,28 @@ H2Factorization::H2Factorization(H2FactorCache &cache, const SystemSelection &se
   Timer timer;
   // Blocks rest in single precision with the panels, unless everything goes to the dense top at
   // once: its singularity test (a pure-traction pattern without regularisation) needs them exact.
-  h2f::Frontier front(m_K, *sketch, m_f->pattern, m_stats.single_panels && m_f->pattern.dofs() > options.top_size);
+  std::vector<int> parts;
+  if (options.within_parts && tree.num_parts() > 1) {
+    parts = cluster_parts(tree);
+    m_stats.parts = tree.num_parts();
+  }
+  h2f::Frontier front(m_K, *sketch, m_f->pattern, m_stats.single_panels && m_f->pattern.dofs() > options.top_size, std::move(parts));
   const int l0 = first_level(tree, options.leaf_size, options.rel_tol);
   for (int l = tree.levels() - 1; l > l0; --l) front.merge(l);
   m_stats.time_init = timer.seconds();
   for (int l = l0; l >= 1; --l) {
     if (static_cast<int>(front.active_total()) <= options.top_size || !front.level_has_far_field(l)) break;
+    std::vector<int> boxes;
+    for (int X : tree.clusters_at_level(l))
+      if (front.steps_at(X)) boxes.push_back(X);
+    if (boxes.empty()) break; // above the parts
     H2FactorLevelStats ls;
     ls.level = l;
+    ls.cross_blocks = front.cross_pairs();
+    ls.cross_bytes = front.cross_bytes();
     timer.restart();
     {
       PhaseScope phase(Phase::H2Eliminate);
-      std::vector<int> boxes;
-      for (int X : tree.clusters_at_level(l)) boxes.push_back(X);
       std::vector<h2f::Step> steps(tree.num_clusters());
       std::vector<double> flops(tree.num_clusters(), 0.0), t_skel(tree.num_clusters(), 0.0), t_elim(tree.num_clusters(), 0.0);
       std::vector<std::vector<h2f::NewFill>> fills(tree.num_clusters());
@@ -308,6 +318,7 @@ H2Factorization::H2Factorization(H2FactorCache &cache, const SystemSelection &se
           steps[X].candidates = m;
         },
         [&](int X) { front.add_fill(std::move(fills[X])); });
+      front.finish_level(boxes); // the other sides of the cross blocks
       // The solve replays the steps in the schedule's order (dependencies come first in it).
       for (int X : schedule.order) {
         const h2f::Step &st = steps[X];
@@ -354,6 +365,24 @@ H2Factorization::H2Factorization(H2FactorCache &cache, const SystemSelection &se
 H2Factorization::~H2Factorization() = default;
 
 int H2Factorization::num_unknowns() const { return m_f->pattern.dofs(); }
+
+int H2Factorization::steps_crossing_parts() const
+{
+  const ClusterTree &tree = m_K.tree();
+  std::vector<int> part_of_dof(3 * static_cast<std::size_t>(tree.num_points()), 0);
+  for (int p = 0; p < tree.num_parts(); ++p) {
+    const Cluster &c = tree.cluster(tree.part_cluster(p));
+    std::fill(part_of_dof.begin() + 3L * c.begin, part_of_dof.begin() + 3L * c.end, p);
+  }
+  int crossing = 0;
+  for (const h2f::Step &st : m_f->steps) {
+    std::set<int> seen;
+    for (const std::vector<int> *v : {&st.box, &st.S, &st.R, &st.I})
+      for (int g : *v) seen.insert(part_of_dof[g]);
+    crossing += seen.size() > 1;
+  }
+  return crossing;
+}
 
 void H2Factorization::solve(const double *b, double *x) const
 {

@@ -25,6 +25,16 @@
 /// problem adds c Φ Φᵀ (rigid modes, rank 6): as explicit entries in close blocks and as a rank-6
 /// part of every far field.
 ///
+/// Parts. On a tree whose top levels are parts (one per rank), the parts are eliminated
+/// separately: two boxes of different parts are never close, even where the H² partition calls
+/// them close. Their coupling (a *cross block*, its full current value) is handled like fill-in:
+/// it enters both boxes' skeletons, is truncated by the sparsification and never receives a
+/// Schur complement. So every step touches only blocks of its own part, each part's subtree (its
+/// root included) is eliminated alone, and what is left (the parts' roots' skeletons) is
+/// factored densely. A step acts on a cross block from one side (rows kept, or columns
+/// transformed), so each side keeps its own copy and gets the other side's part at the level's
+/// end: within a level a box sees the other part's cross blocks as they were at the level's start.
+///
 /// What a new boundary-condition pattern redoes: the whole elimination (skeletons, LU, Schur
 /// complements), from the H² matrix's near blocks, far blocks and bases. What it does not: any
 /// kernel evaluation, and the far-field sketch (a property of K, cached in H2FactorCache).
@@ -53,6 +63,11 @@ struct H2FactorOptions {
   /// refines in double against the top block (as accurate as a double LU, which is twice the
   /// time); ≤ 0: always double.
   int mixed_top_from = 4000;
+  /// On a tree with parts (ClusterTree's partition constructor): eliminate each part's subtree
+  /// separately, as the distributed factorization does on one rank per part (boxes of different
+  /// parts are never close; their couplings stay as cross blocks, see h2_factorization.hpp's
+  /// "Parts"), with the parts simulated on this rank. Ignored on a tree without parts.
+  bool within_parts = false;
 };
 
 /// A singular pivot block (e.g. a pure-traction problem without its rigid-mode regularisation).
@@ -71,6 +86,8 @@ struct H2FactorLevelStats {
   long long eliminated = 0;    ///< unknowns eliminated at this level
   std::size_t bytes = 0;       ///< factors stored for this level
   double seconds = 0;          ///< skeletons, elimination and merge of this level
+  long long cross_blocks = 0;  ///< cross blocks between boxes of different parts at this level (pairs)
+  std::size_t cross_bytes = 0; ///< their memory (both copies)
 };
 
 struct H2FactorStats {
@@ -86,6 +103,7 @@ struct H2FactorStats {
   double flops_schur = 0;                 ///< of the Schur complement products
   int sketch_columns = 0;
   bool single_panels = false;
+  int parts = 1;                          ///< parts eliminated separately (H2FactorOptions::within_parts)
   double seconds() const { return time_sketch + time_init + time_skeleton + time_eliminate + time_merge + time_top; }
 };
 
@@ -119,6 +137,9 @@ public:
   const H2FactorStats &stats() const { return m_stats; }
   const H2FactorOptions &options() const { return m_options; }
   int num_unknowns() const;
+  /// Steps whose unknowns (the box's, its skeleton's, and those its Schur complement touched)
+  /// lie in more than one part of the tree (0 when the parts are eliminated separately).
+  int steps_crossing_parts() const;
 
   struct Factors; ///< the elimination steps (private)
 
