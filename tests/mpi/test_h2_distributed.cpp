@@ -9,11 +9,13 @@
 #include "hssbem/bem/node_partition.hpp"
 #include "hssbem/compress/pattern_columns.hpp"
 #include "hssbem/h2/h2_system.hpp"
+#include "hssbem/h2factor/far_sketch.hpp"
 #include "hssbem/petsc/mpi_comm.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <random>
 
 using namespace hssbem;
@@ -123,6 +125,43 @@ TEST_F(H2Distributed, ProductMatchesTheWholeMatrix)
     EXPECT_EQ(gathered->stats().near_blocks, whole.stats().near_blocks);
     EXPECT_EQ(gathered->stats().far_blocks, whole.stats().far_blocks);
   }
+}
+
+TEST_F(H2Distributed, FarFieldSketchMatchesTheOneRankSketch)
+{
+  // The factorization's far-field sketch through the distributed passes (potentials at the row
+  // skeletons; the transposed pass with the far blocks sent to their column clusters' owners):
+  // each rank's clusters' rows equal the one-rank sketch's of the same tree.
+  const Fixture &f = *H2Distributed::f;
+  const int p = 12;
+  const FarFieldSketch local = far_field_sketch(f.dist->product(), p), whole = far_field_sketch(*f.whole, p);
+  const H2Matrix &K = f.dist->matrix();
+  double diff[2] = {0, 0}, norm[2] = {0, 0};
+  long long held = 0, with_rows = 0;
+  for (int c = 0; c < K.tree().num_clusters(); ++c) {
+    const DenseMatrix *mine[2] = {&local.row[c], &local.col[c]}, *ref[2] = {&whole.row[c], &whole.col[c]};
+    if (!K.holds(c)) {
+      EXPECT_EQ(local.row[c].m + local.col[c].m, 0); // no other rank's rows
+      continue;
+    }
+    ++held;
+    with_rows += local.row[c].m > 0;
+    for (int s = 0; s < 2; ++s) {
+      ASSERT_EQ(mine[s]->m, ref[s]->m);
+      ASSERT_EQ(mine[s]->n, ref[s]->n);
+      for (std::size_t i = 0; i < ref[s]->a.size(); ++i) diff[s] += std::pow(mine[s]->a[i] - ref[s]->a[i], 2), norm[s] += std::pow(ref[s]->a[i], 2);
+    }
+  }
+  MPI_Allreduce(MPI_IN_PLACE, diff, 2, MPI_DOUBLE, MPI_SUM, PETSC_COMM_WORLD);
+  MPI_Allreduce(MPI_IN_PLACE, norm, 2, MPI_DOUBLE, MPI_SUM, PETSC_COMM_WORLD);
+  EXPECT_GT(held, 0);
+  EXPECT_GT(with_rows, 0);
+  EXPECT_GT(norm[0], 0.0);
+  EXPECT_GT(norm[1], 0.0);
+  const double rows = std::sqrt(diff[0] / norm[0]), cols = std::sqrt(diff[1] / norm[1]);
+  if (f.comm.rank() == 0) std::printf("sketch on %d ranks vs one rank: rows %.1e, columns %.1e\n", f.comm.size(), rows, cols);
+  EXPECT_LT(rows, 1e-12);
+  EXPECT_LT(cols, 1e-12);
 }
 
 TEST_F(H2Distributed, SystemRowsMatchTheMeshOrderSystem)
