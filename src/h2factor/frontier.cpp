@@ -5,6 +5,7 @@
 #include "hssbem/core/blas_threads.hpp"
 #include "hssbem/core/dense_ops.hpp"
 #include "hssbem/core/lapack.hpp"
+#include "hssbem/core/tree_ownership.hpp"
 
 #include "top_block.hpp"
 
@@ -71,10 +72,26 @@ DenseMatrix StoredBlock::value() const
   return out;
 }
 
-Frontier::Frontier(const H2Matrix &K, const FarFieldSketch &sketch, const Pattern &pattern, bool single, std::vector<int> part)
-  : m_K(K), m_tree(K.tree()), m_part(K.partition()), m_sketch(sketch), m_pat(pattern), m_w(K.col_block()), m_single(single), m_box_part(std::move(part))
+namespace {
+
+const RankComm &one_rank()
+{
+  static const SerialComm comm;
+  return comm;
+}
+
+} // namespace
+
+Frontier::Frontier(const H2Matrix &K, const FarFieldSketch &sketch, const Pattern &pattern, bool single, std::vector<int> part, const RankComm *comm)
+  : m_K(K), m_tree(K.tree()), m_part(K.partition()), m_sketch(sketch), m_pat(pattern), m_w(K.col_block()), m_single(single), m_box_part(std::move(part)),
+    m_comm(comm ? comm : &one_rank())
 {
   if (!m_box_part.empty() && m_box_part.size() != static_cast<std::size_t>(m_tree.num_clusters())) throw std::invalid_argument("H2 factorization: a part list of the wrong length");
+  if (m_comm->size() > 1) {
+    if (m_box_part.empty()) throw std::invalid_argument("H2 factorization: several ranks need the tree's parts");
+    m_owner = cluster_owners(m_tree, m_comm->size());
+    m_rank = m_comm->rank();
+  }
   const int nc = m_tree.num_clusters();
   m_in_front.assign(nc, 0);
   m_D.resize(nc);
@@ -92,15 +109,26 @@ Frontier::Frontier(const H2Matrix &K, const FarFieldSketch &sketch, const Patter
   m_fill_col_blocks.resize(nc);
   m_opened.resize(nc);
   m_front = m_tree.leaves();
+  for (int c : m_front) m_in_front[c] = 1;
+  collectively(*m_comm, [&] { init_leaves(); }); // this rank's; every leaf's unknowns and Φ, Ψ
+  if (!m_owner.empty()) exchange_leaf_copies();
+  note_bytes();
+}
+
+void Frontier::init_leaves()
+{
   for (int c : m_front) {
     const Cluster &cl = m_tree.cluster(c);
-    m_in_front[c] = 1;
+    for (int b : m_part.near[c])
+      if (!same_part(c, b)) m_cross[c].push_back(b);
     m_D[c].resize(3 * static_cast<std::size_t>(cl.size()));
     for (int i = 0; i < 3 * cl.size(); ++i) m_D[c][i] = 3 * cl.begin + i;
-    m_Eu[c] = StoredBlock(basis_side(K, c, true));
-    m_Ew[c] = StoredBlock(leaf_col_basis(c));
-    settle(m_Eu[c]);
-    settle(m_Ew[c]);
+    if (mine(c)) {
+      m_Eu[c] = StoredBlock(basis_side(m_K, c, true));
+      m_Ew[c] = StoredBlock(leaf_col_basis(c));
+      settle(m_Eu[c]);
+      settle(m_Ew[c]);
+    }
     if (m_pat.regularised()) {
       const std::size_t N = static_cast<std::size_t>(m_pat.dofs());
       m_Phi[c] = DenseMatrix(static_cast<int>(m_D[c].size()), 6);
@@ -114,16 +142,15 @@ Frontier::Frontier(const H2Matrix &K, const FarFieldSketch &sketch, const Patter
   }
   for (int a : m_front)
     for (int b : m_part.near[a]) {
+      if (!mine(a)) continue;
       DenseMatrix B = leaf_near(a, b);
       add_regularisation(B, a, b);
-      if (!same_part(a, b)) { // a cross block, in its two copies
-        m_cross[a].push_back(b);
-        settle(m_G[a].emplace(b, StoredBlock(B)).first->second);
+      if (!same_part(a, b)) { // a cross block, in its two copies (the other rank's: exchange_leaf_copies)
+        if (mine(b)) settle(m_G[a].emplace(b, StoredBlock(B)).first->second);
         settle(m_X[a].emplace(b, StoredBlock(std::move(B))).first->second);
       } else
         settle(m_M[a].emplace(b, StoredBlock(std::move(B))).first->second);
     }
-  note_bytes();
 }
 
 DenseMatrix Frontier::leaf_col_basis(int c) const
@@ -169,7 +196,8 @@ void Frontier::add_regularisation(int m, int n, double *out, int ld, int P, int 
 std::size_t Frontier::active_total() const
 {
   std::size_t s = 0;
-  for (int X : m_front) s += m_D[X].size();
+  for (int X : m_front)
+    if (mine(X)) s += m_D[X].size();
   return s;
 }
 
@@ -177,7 +205,7 @@ bool Frontier::level_has_far_field(int l) const
 {
   if (m_pat.regularised()) return true;
   for (int X : m_tree.clusters_at_level(l))
-    if (steps_at(X) && (m_Eu[X].cols() > 0 || m_Ew[X].cols() > 0 || !m_F[X].empty() || !m_fill_cols[X].empty() || !m_cross[X].empty())) return true;
+    if (steps_at(X) && mine(X) && (m_Eu[X].cols() > 0 || m_Ew[X].cols() > 0 || !m_F[X].empty() || !m_fill_cols[X].empty() || !m_cross[X].empty())) return true;
   return false;
 }
 
@@ -194,6 +222,7 @@ DenseMatrix Frontier::restricted_basis(int P, int a, bool rows) const
   DenseMatrix E = (rows ? m_Eu[P] : m_Ew[P]).value();
   for (int x = P; x != a;) {
     const int par = m_tree.cluster(x).parent, left = m_tree.cluster(par).left;
+    if (!m_K.holds(par)) throw std::logic_error("H2 factorization: a far block above the parts (another rank's bases) is not supported");
     const DenseMatrix B = basis_side(m_K, par, rows);
     const int kl = basis_rank(m_K, left, rows), kx = basis_rank(m_K, x, rows);
     E = multiply(E, dense::sub(B, x == left ? 0 : kl, kx, 0, B.n));
@@ -205,12 +234,13 @@ DenseMatrix Frontier::restricted_basis(int P, int a, bool rows) const
 void Frontier::add_far_part(int P, int Q, double *out, int ld) const
 {
   const int m = static_cast<int>(m_D[P].size()), n = static_cast<int>(m_D[Q].size());
-  if (!same_part(P, Q) && m_part.is_close(P, Q)) { // a cross block holds the whole current value
-    const DenseMatrix B = m_X[P].at(Q).value();
+  const auto add = [&](const DenseMatrix &B) {
     for (int j = 0; j < n; ++j)
       for (int i = 0; i < m; ++i) out[i + static_cast<std::size_t>(j) * ld] += B(i, j);
-    return;
-  }
+  };
+  if (!same_part(P, Q) && m_part.is_close(P, Q)) return add(m_X[P].at(Q).value()); // a cross block holds the whole current value
+  const auto done = m_pair_far.find({P, Q});
+  if (done != m_pair_far.end()) return add(done->second); // computed by P's rank
   for (int a = P; a >= 0; a = m_tree.cluster(a).parent)
     for (int b = Q; b >= 0; b = m_tree.cluster(b).parent) {
       if (!m_part.is_far(a, b)) continue;
@@ -220,9 +250,9 @@ void Frontier::add_far_part(int P, int Q, double *out, int ld) const
       const double *f = F.data(buf); // any stored form, in double
       // The bases as they rest when they need no carrying up, else carried to a and b.
       DenseMatrix Uc, Wc;
-      const DenseMatrix *U = a == P ? m_Eu[P].peek() : nullptr, *W = b == Q ? m_Ew[Q].peek() : nullptr;
+      const DenseMatrix *U = a == P ? m_Eu[P].peek() : nullptr, *W = b == Q && mine(Q) ? m_Ew[Q].peek() : nullptr;
       if (!U) U = &(Uc = restricted_basis(P, a, true));
-      if (!W) W = &(Wc = restricted_basis(Q, b, false));
+      if (!W) W = &(Wc = col_basis_to(Q, b));
       if (F.M.m > 0 && F.M.n > 0) {
         DenseMatrix UF(m, F.M.n);
         lapack::gemm('N', 'N', m, F.M.n, F.M.m, 1.0, U->data(), U->ld(), f, F.M.ld(), 0.0, UF.data(), UF.ld());
@@ -292,25 +322,30 @@ std::size_t Frontier::cross_bytes() const
   return s;
 }
 
-void Frontier::finish_level(const std::vector<int> &boxes)
+void Frontier::finish_level()
 {
-  // The copies of one cross block go through the other side's step independently: rows of the
-  // copy in Y's columns (m_G[X][Y]) are kept as X kept them, columns of the copy in Z's rows
-  // (m_X[Z][X]) transformed as X transformed its own copy's.
-  for_each_cluster(boxes, [&](int X) {
-    const CrossSide &side = m_side[X];
-    if (!side.recorded) return;
-    for (int Y : m_cross[X]) {
-      DenseMatrix &B = m_G[X].at(Y).open();
-      B = dense::rows_at(B, side.kept);
-      settle(m_G[X].at(Y));
-    }
-  });
-  for_each_cluster(m_front, [&](int Z) {
-    for (int X : m_cross[Z]) {
+  if (!m_owner.empty()) exchange_sides();
+  // The copies of one cross block go through the other side's step independently: for this
+  // rank's box Y and a partner X that took a step, rows of the copy in Y's columns (m_G[X][Y])
+  // are kept as X kept them, and columns of the copy in Y's rows (m_X[Y][X]) transformed as X
+  // transformed its own copy's.
+  collectively(*m_comm, [&] { apply_other_sides(); });
+}
+
+void Frontier::apply_other_sides()
+{
+  std::vector<int> here;
+  for (int Y : m_front)
+    if (mine(Y)) here.push_back(Y);
+  for_each_cluster(here, [&](int Y) {
+    for (int X : m_cross[Y]) {
       const CrossSide &side = m_side[X];
       if (!side.recorded) continue;
-      StoredBlock &stored = m_X[Z].at(X);
+      StoredBlock &ghost = m_G[X].at(Y);
+      DenseMatrix &g = ghost.open();
+      g = dense::rows_at(g, side.kept);
+      settle(ghost);
+      StoredBlock &stored = m_X[Y].at(X);
       const DenseMatrix B = stored.take();
       DenseMatrix out(B.m, side.C.n);
       if (B.m > 0 && B.n > 0 && side.C.n > 0) lapack::gemm('N', 'N', B.m, side.C.n, B.n, 1.0, B.data(), B.ld(), side.C.data(), side.C.ld(), 0.0, out.data(), out.ld());
@@ -318,7 +353,7 @@ void Frontier::finish_level(const std::vector<int> &boxes)
       settle(stored);
     }
   });
-  for (int X : boxes) m_side[X] = CrossSide();
+  for (CrossSide &side : m_side) side = CrossSide();
 }
 
 DenseMatrix Frontier::assemble_close(int P, int Q, int l)
@@ -354,7 +389,16 @@ void Frontier::merge(int l)
   // Unknowns and restricted bases of the new boxes: children's, concatenated and transferred.
   std::vector<int> parents;
   for (int P : front)
-    if (m_tree.cluster(P).level == l - 1 && m_tree.cluster(P).left >= 0) parents.push_back(P);
+    if (m_tree.cluster(P).level == l - 1 && m_tree.cluster(P).left >= 0 && mine(P)) parents.push_back(P);
+  collectively(*m_comm, [&] { merge_bases(parents); });
+  std::vector<char> in_front(m_tree.num_clusters(), 0);
+  for (int P : front) in_front[P] = 1;
+  if (!m_owner.empty()) prepare_cross_merge(l, front, in_front);
+  collectively(*m_comm, [&] { merge_blocks(l, front, in_front); });
+}
+
+void Frontier::merge_bases(const std::vector<int> &parents)
+{
   for_each_cluster(parents, [&](int P) {
     const Cluster &cp = m_tree.cluster(P);
     const int a = cp.left, b = cp.right;
@@ -377,8 +421,10 @@ void Frontier::merge(int l)
       settle(stored);
     }
   });
-  std::vector<char> in_front(m_tree.num_clusters(), 0);
-  for (int P : front) in_front[P] = 1;
+}
+
+void Frontier::merge_blocks(int l, std::vector<int> &front, std::vector<char> &in_front)
+{
   // Blocks between close new boxes, from the children's blocks and far parts; fill-in between
   // boxes whose parents are still not close stays fill-in, on the parents.
   std::vector<std::map<int, StoredBlock>> M(m_tree.num_clusters()), X(m_tree.num_clusters()), G(m_tree.num_clusters());
@@ -387,14 +433,16 @@ void Frontier::merge(int l)
     for (int Q : m_part.close[P]) {
       if (!in_front[Q]) continue;
       if (same_part(P, Q)) {
-        settle(M[P].emplace(Q, StoredBlock(assemble_close(P, Q, l))).first->second);
+        if (mine(P)) settle(M[P].emplace(Q, StoredBlock(assemble_close(P, Q, l))).first->second);
         continue;
       }
       cross[P].push_back(Q);
-      settle(G[P].emplace(Q, StoredBlock(assemble_cross(P, Q, l, m_G))).first->second);
-      settle(X[P].emplace(Q, StoredBlock(assemble_cross(P, Q, l, m_X))).first->second);
+      if (mine(Q)) settle(G[P].emplace(Q, StoredBlock(assemble_cross(P, Q, l, m_G))).first->second);
+      if (mine(P)) settle(X[P].emplace(Q, StoredBlock(assemble_cross(P, Q, l, m_X))).first->second);
     }
   });
+  m_remote_w.clear();
+  m_pair_far.clear();
   std::vector<std::map<int, StoredBlock>> F = merged_fill(l);
   std::size_t added = 0;
   for (const auto *store : {&M, &F, &X, &G})

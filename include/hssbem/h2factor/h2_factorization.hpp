@@ -41,6 +41,8 @@
 #pragma once
 
 #include "hssbem/bem/bem_operator.hpp"
+#include "hssbem/core/rank_comm.hpp"
+#include "hssbem/h2/h2_distributed.hpp"
 #include "hssbem/h2/h2_matrix.hpp"
 #include "hssbem/h2factor/far_sketch.hpp"
 
@@ -51,6 +53,10 @@
 #include <vector>
 
 namespace hssbem {
+
+namespace h2f {
+class Frontier;
+}
 
 /// Parameters of the factorization (filled from -pc_h2_* options by the PETSc layer).
 struct H2FactorOptions {
@@ -104,6 +110,9 @@ struct H2FactorStats {
   int sketch_columns = 0;
   bool single_panels = false;
   int parts = 1;                          ///< parts eliminated separately (H2FactorOptions::within_parts)
+  int top_boxes = 0;                      ///< boxes left for the top (with parts: the parts' roots, or more)
+  /// On several ranks the levels, factors, flops and times above are this rank's (its part's
+  /// subtree); the top's figures are rank 0's, top_size every rank's.
   double seconds() const { return time_sketch + time_init + time_skeleton + time_eliminate + time_merge + time_top; }
 };
 
@@ -112,12 +121,17 @@ struct H2FactorStats {
 class H2FactorCache {
 public:
   explicit H2FactorCache(const H2Matrix &K) : m_K(&K) {}
+  /// Of a distributed matrix: its sketches are made by the distributed passes (collective),
+  /// each rank keeping its clusters' rows.
+  explicit H2FactorCache(const H2DistributedProduct &K) : m_K(&K.matrix()), m_dist(&K) {}
   const H2Matrix &matrix() const { return *m_K; }
+  const H2DistributedProduct *distributed() const { return m_dist; }
   /// The sketch with p columns, made on first use (seconds spent in *made, 0 when cached).
   const FarFieldSketch &sketch(int p, double *made = nullptr);
 
 private:
   const H2Matrix *m_K;
+  const H2DistributedProduct *m_dist = nullptr;
   std::vector<std::unique_ptr<FarFieldSketch>> m_sketches;
 };
 
@@ -128,12 +142,26 @@ public:
   /// order) of a pure-traction problem's regularisation, or null. Throws H2Breakdown for a
   /// singular pivot block, std::invalid_argument for bad options.
   H2Factorization(H2FactorCache &cache, const SystemSelection &sel, const H2FactorOptions &options, const std::vector<double> *rigid_modes = nullptr);
+  /// Distributed (collective; `cache` of a distributed matrix, whose tree has one part per rank
+  /// of comm): each rank eliminates its part's subtree, its root included, as within_parts
+  /// does on one rank (no communication during a level; the cross blocks' other sides at its
+  /// end, the data of merged cross blocks at the merges), and rank 0 factors the top from the
+  /// ranks' rows of it. The same steps as one rank with within_parts on the same tree, up to
+  /// rounding. A breakdown on any rank throws H2Breakdown on every rank; another error throws on
+  /// its rank and PeerFault on the others (fault sites H2FSubtree, H2FTop). comm must outlive
+  /// this object.
+  H2Factorization(H2FactorCache &cache, const RankComm &comm, const SystemSelection &sel, const H2FactorOptions &options, const std::vector<double> *rigid_modes = nullptr);
   ~H2Factorization();
   H2Factorization(const H2Factorization &) = delete;
   H2Factorization &operator=(const H2Factorization &) = delete;
 
   /// x = A⁻¹ b, both with 3 values per node in mesh order (x may alias b).
   void solve(const double *b, double *x) const;
+  /// Of a distributed factorization (collective): x = A⁻¹ b on this rank's rows, both with 3
+  /// values per point of its part in cluster order (x may alias b). Only the top's unknowns
+  /// cross ranks (to rank 0 and back).
+  void solve_local(const double *b, double *x) const;
+  bool distributed() const { return m_comm != nullptr; }
   const H2FactorStats &stats() const { return m_stats; }
   const H2FactorOptions &options() const { return m_options; }
   int num_unknowns() const;
@@ -144,7 +172,12 @@ public:
   struct Factors; ///< the elimination steps (private)
 
 private:
+  /// The levels' eliminations and merges (collective on comm), from level l0 up.
+  void eliminate_levels(h2f::Frontier &front, const RankComm &comm, int l0);
+
   const H2Matrix &m_K;
+  const RankComm *m_comm = nullptr; ///< distributed: the ranks
+  int m_first = 0, m_count = 0;     ///< distributed: this rank's points (cluster order)
   H2FactorOptions m_options;
   std::vector<int> m_slot;      ///< per A-hat column (cluster order): K's slot
   std::unique_ptr<Factors> m_f;
