@@ -5,13 +5,18 @@
 //
 //   bench_h2_factor --mesh FILE [--tol 1e-5] [--leaf 64] [--single 1] [--ftol 3e-3] [--fleaf 0]
 //                   [--top 2000] [--mixed-top 4000] [--sketch 0] [--mode pc|direct] [--rtol 1e-8] [--refactor 1] [--ierr 3]
-//                   [--dense 0|1] [--header]
+//                   [--dense 0|1] [--parts 1] [--header]
 //
 // Problem (as bench_h2): the nodes below the median height clamped, the others loaded by a
 // traction (0, 0, -1); E = 1, nu = 0.3. The second pattern switches 30 % of the vertices (u known
 // <-> t known). GMRES is right-preconditioned: its rtol bounds the true residual ||b - A x||/||b||
-// with the H² product. Threads: OMP_NUM_THREADS (OpenMP and OpenBLAS).
+// with the H² product. Threads: OMP_NUM_THREADS (OpenMP and OpenBLAS). --parts P > 1: the tree's
+// top levels are P METIS parts, eliminated separately as P ranks would (H2FactorOptions::
+// within_parts), simulated in this one process.
+#include "hssbem/bem/node_partition.hpp"
+#include "hssbem/core/rank_comm.hpp"
 #include "hssbem/core/timer.hpp"
+#include "hssbem/h2/h2_compression.hpp"
 #include "hssbem/h2/h2_system.hpp"
 #include "hssbem/h2factor/h2_factorization.hpp"
 #include "hssbem/petsc/compat.h"
@@ -35,7 +40,7 @@ struct Args {
   H2Options h2;
   H2FactorOptions factor;
   double rtol = 1e-8;
-  int ierr = 3;
+  int ierr = 3, parts = 1;
   bool refactor = true, dense = false, header = false;
 };
 
@@ -64,6 +69,7 @@ Args parse(int argc, char **argv)
     else if (k == "--refactor") a.refactor = std::stoi(next()) != 0;
     else if (k == "--ierr") a.ierr = std::stoi(next());
     else if (k == "--dense") a.dense = std::stoi(next()) != 0;
+    else if (k == "--parts") a.parts = std::stoi(next());
     else if (k == "--header") a.header = true;
     else throw std::invalid_argument("unknown argument " + k);
   }
@@ -166,8 +172,8 @@ double residual(const H2BemSystem &sys, const SystemSelection &sel, const std::v
 void print_levels(const H2FactorStats &st)
 {
   for (const H2FactorLevelStats &l : st.levels)
-    std::fprintf(stderr, "level %d: %d boxes, %.0f unknowns per box (max %d) -> skeleton %.0f (max %d), %lld eliminated, %.1f MB, %.2f s\n", l.level, l.boxes, l.mean_candidates,
-                 l.max_candidates, l.mean_rank, l.max_rank, l.eliminated, l.bytes / 1048576.0, l.seconds);
+    std::fprintf(stderr, "level %d: %d boxes, %.0f unknowns per box (max %d) -> skeleton %.0f (max %d), %lld eliminated, %.1f MB, %.2f s; %lld cross blocks, %.1f MB\n", l.level, l.boxes,
+                 l.mean_candidates, l.max_candidates, l.mean_rank, l.max_rank, l.eliminated, l.bytes / 1048576.0, l.seconds, l.cross_blocks, l.cross_bytes / 1048576.0);
   std::fprintf(stderr, "factorization %.2f s: sketch %.2f (p = %d), first boxes %.2f, skeletons %.2f, eliminations %.2f (thread-s), merges %.2f, top %.2f (%d unknowns%s); %.3g Schur flop; %.1f MB (%s panels), working blocks at most %.1f MB\n",
                st.seconds(), st.time_sketch, st.sketch_columns, st.time_init, st.time_skeleton, st.time_eliminate, st.time_merge, st.time_top, st.top_size, st.top_mixed ? ", single-precision LU refined in double" : "", st.flops_schur, st.bytes / 1048576.0,
                st.single_panels ? "single" : "double", st.workspace_bytes / 1048576.0);
@@ -197,7 +203,8 @@ int main(int argc, char **argv)
     BemOperator op(disc, Material::from_young(1.0, 0.3));
     const SystemSelection sel = clamped_lower_half(disc, {0, 0, -1});
     Timer t;
-    const H2BemSystem sys(op, a.h2);
+    a.factor.within_parts = a.parts > 1;
+    const H2BemSystem sys = a.parts > 1 ? H2BemSystem(compress_bem_operator_h2(op, a.h2, partition_nodes(disc, a.parts), SerialComm())) : H2BemSystem(op, a.h2);
     const double t_compress = t.seconds();
     const std::vector<double> b = sys.rhs(sel);
     H2FactorCache cache(sys.matrix());

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <cstring>
+#include <functional>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -24,7 +25,7 @@ H2DistributedProduct::H2DistributedProduct(const H2Matrix &K, const RankComm &co
   const ClusterTree &tree = K.tree();
   const int nc = tree.num_clusters(), me = comm.rank(), P = comm.size();
   const BlockPartition &bp = K.partition();
-  std::vector<std::vector<int>> need_low(P), need_vals(P), need_top(P), need_pot(P);
+  std::vector<std::vector<int>> need_low(P), need_vals(P), need_top(P), need_pot(P), need_row_up(P), need_far_t(P);
   collectively(comm, [&] {
     if (K.rank() != me) throw std::logic_error("H2: the matrix belongs to rank " + std::to_string(K.rank()));
     m_above.assign(nc, 0);
@@ -63,12 +64,27 @@ H2DistributedProduct::H2DistributedProduct(const H2Matrix &K, const RankComm &co
           if (!K.holds(b)) need_vals[K.owner(b)].push_back(b);
       const int parent = ca.parent;
       if (parent >= 0 && !K.holds(parent)) need_pot[K.owner(parent)].push_back(a);
+      if (m_above[a] && ca.left >= 0 && K.row_interpolation(a).rank() > 0) // the transposed pass's row moments
+        for (int ch : {ca.left, ca.right})
+          if (!K.holds(ch)) need_row_up[K.owner(ch)].push_back(ch);
+    }
+    // The transposed far blocks of other ranks' clusters whose column clusters this rank holds.
+    for (int a = 0; a < nc; ++a) {
+      if (K.holds(a)) continue;
+      for (int b : bp.far[a])
+        if (K.holds(b)) need_far_t[K.owner(a)].push_back(b);
+    }
+    for (std::vector<int> &list : need_far_t) {
+      std::sort(list.begin(), list.end());
+      list.erase(std::unique(list.begin(), list.end()), list.end());
     }
   });
   m_low = ClusterExchange(comm, std::move(need_low));
   m_vals = ClusterExchange(comm, std::move(need_vals));
   m_top = ClusterExchange(comm, std::move(need_top));
   m_pot = ClusterExchange(comm, std::move(need_pot));
+  m_row_up = ClusterExchange(comm, std::move(need_row_up));
+  m_far_t = ClusterExchange(comm, std::move(need_far_t));
   for (const auto &list : m_vals.sends()) m_boundary.insert(m_boundary.end(), list.begin(), list.end());
   std::sort(m_boundary.begin(), m_boundary.end());
   m_boundary.erase(std::unique(m_boundary.begin(), m_boundary.end()), m_boundary.end());
@@ -84,57 +100,80 @@ H2DistributedProduct::H2DistributedProduct(const H2Matrix &K, const RankComm &co
   }
 }
 
-void H2DistributedProduct::apply(const double *X, int ldx, double *Y, int ldy, int nrhs) const
-{
-  PhaseScope phase(Phase::Matvec);
-  const H2Matrix &K = m_K;
-  const ClusterTree &tree = K.tree();
-  const int nc = tree.num_clusters(), w = K.col_block(), rb = K.row_block();
-  std::vector<DenseMatrix> xh(nc), yh(nc), xv(nc);
-  const auto moments = [&](int c) { return static_cast<int>(K.col_skeleton(c).size()); };
-  const auto potentials = [&](int c) { return static_cast<int>(K.row_skeleton(c).size()); };
-  const auto values = [&](int c) { return w * tree.cluster(c).size(); };
-  const auto upward = [&](const std::vector<std::vector<int>> &levels) {
+namespace {
+
+/// The passes over a distributed matrix's clusters that the product and the far-field passes
+/// share: upward (moments through one side's bases) and downward (potentials through them).
+struct Passes {
+  const H2Matrix &K;
+  int first, nrhs;
+  bool rows; ///< the row bases (U) and row_block(), else the column bases (V) and col_block()
+  const StoredInterpolation &basis(int c) const { return rows ? K.row_interpolation(c) : K.col_interpolation(c); }
+  int block() const { return rows ? K.row_block() : K.col_block(); }
+  /// Moments m[c] = Bᵀ x over the clusters of `levels` (deepest first), x this rank's points.
+  void upward(const std::vector<std::vector<int>> &levels, const double *X, int ldx, std::vector<DenseMatrix> &m) const
+  {
+    const ClusterTree &tree = K.tree();
     for (const std::vector<int> &level : levels)
       for_each_cluster(level, [&](int c) {
         const Cluster &cl = tree.cluster(c);
-        const StoredInterpolation &V = K.col_interpolation(c);
-        xh[c] = DenseMatrix(V.rank(), nrhs);
-        if (V.rank() == 0) return;
+        const StoredInterpolation &B = basis(c);
+        m[c] = DenseMatrix(B.rank(), nrhs);
+        if (B.rank() == 0) return;
         CandidateRows<const double> x;
-        if (cl.left < 0) x.base = X + static_cast<long>(w) * (cl.begin - m_first), x.ld = ldx;
-        else x.a = &xh[cl.left], x.b = &xh[cl.right];
+        if (cl.left < 0) x.base = X + static_cast<long>(block()) * (cl.begin - first), x.ld = ldx;
+        else x.a = &m[cl.left], x.b = &m[cl.right];
         std::vector<double> buf;
-        interp_t(V, x, nrhs, xh[c].data(), xh[c].ld(), buf);
+        interp_t(B, x, nrhs, m[c].data(), m[c].ld(), buf);
       });
-  };
-  const auto downward = [&](const std::vector<std::vector<int>> &levels) {
+  }
+  /// Potentials carried from each cluster of `levels` (top first) to its children; a child held
+  /// by another rank gets a block of its own to send there.
+  void downward(const std::vector<std::vector<int>> &levels, std::vector<DenseMatrix> &pot, const std::function<int(int)> &size) const
+  {
+    const ClusterTree &tree = K.tree();
     for (const std::vector<int> &level : levels)
       for_each_cluster(level, [&](int c) {
         const Cluster &cl = tree.cluster(c);
         for (int ch : {cl.left, cl.right})
-          if (yh[ch].m != potentials(ch) || yh[ch].n != nrhs) yh[ch] = DenseMatrix(potentials(ch), nrhs); // another rank's child
+          if (pot[ch].m != size(ch) || pot[ch].n != nrhs) pot[ch] = DenseMatrix(size(ch), nrhs); // another rank's child
         CandidateRows<double> y;
-        y.a = &yh[cl.left], y.b = &yh[cl.right];
+        y.a = &pot[cl.left], y.b = &pot[cl.right];
         std::vector<double> buf;
-        interp_n(K.row_interpolation(c), yh[c].data(), yh[c].ld(), nrhs, y, buf);
+        interp_n(basis(c), pot[c].data(), pot[c].ld(), nrhs, y, buf);
       });
-  };
+  }
+};
+
+} // namespace
+
+void H2DistributedProduct::far_potentials(const double *X, int ldx, int nrhs, std::vector<DenseMatrix> &yh, std::vector<DenseMatrix> *xv) const
+{
+  const H2Matrix &K = m_K;
+  const ClusterTree &tree = K.tree();
+  const int nc = tree.num_clusters(), w = K.col_block();
+  std::vector<DenseMatrix> xh(nc);
+  yh.assign(nc, DenseMatrix());
+  const auto moments = [&](int c) { return static_cast<int>(K.col_skeleton(c).size()); };
+  const auto potentials = [&](int c) { return static_cast<int>(K.row_skeleton(c).size()); };
+  const auto values = [&](int c) { return w * tree.cluster(c).size(); };
+  const Passes up{K, m_first, nrhs, false}, down{K, m_first, nrhs, true};
 
   // 1–2. Moments below the parts; moments and boundary values to the ranks that read them.
   collectively(m_comm, [&] {
-    upward(m_up);
+    up.upward(m_up, X, ldx, xh);
+    if (!xv) return;
     for (int c : m_boundary) {
       const Cluster &cl = tree.cluster(c);
-      xv[c] = DenseMatrix(values(c), nrhs);
+      (*xv)[c] = DenseMatrix(values(c), nrhs);
       for (int k = 0; k < nrhs; ++k)
-        std::copy_n(X + static_cast<long>(w) * (cl.begin - m_first) + static_cast<long>(k) * ldx, values(c), xv[c].data() + static_cast<long>(k) * values(c));
+        std::copy_n(X + static_cast<long>(w) * (cl.begin - m_first) + static_cast<long>(k) * ldx, values(c), (*xv)[c].data() + static_cast<long>(k) * values(c));
     }
   });
   m_low.run(xh, nrhs, false, moments);
-  m_vals.run(xv, nrhs, false, values);
+  if (xv) m_vals.run(*xv, nrhs, false, values);
   // 3. Above the parts (rank 0), and the top moments other ranks' far blocks read.
-  collectively(m_comm, [&] { upward(m_top_up); });
+  collectively(m_comm, [&] { up.upward(m_top_up, X, ldx, xh); });
   m_top.run(xh, nrhs, false, moments);
   // 4–5. Far blocks; downward through the top, the parts' shares to their ranks.
   collectively(m_comm, [&] {
@@ -143,12 +182,23 @@ void H2DistributedProduct::apply(const double *X, int ldx, double *Y, int ldy, i
       std::vector<double> buf;
       for (const H2Block &B : K.far_blocks(a)) B.multiply_add(xh[B.col_cluster].data(), xh[B.col_cluster].ld(), yh[a].data(), yh[a].ld(), nrhs, buf);
     });
-    downward(m_top_down);
+    down.downward(m_top_down, yh, potentials);
   });
   m_pot.run(yh, nrhs, true, potentials);
+}
+
+void H2DistributedProduct::apply(const double *X, int ldx, double *Y, int ldy, int nrhs) const
+{
+  PhaseScope phase(Phase::Matvec);
+  const H2Matrix &K = m_K;
+  const ClusterTree &tree = K.tree();
+  const int nc = tree.num_clusters(), w = K.col_block(), rb = K.row_block();
+  std::vector<DenseMatrix> yh, xv(nc);
+  far_potentials(X, ldx, nrhs, yh, &xv);
   // 5. Downward through the parts, then the leaves.
   collectively(m_comm, [&] {
-    downward(m_down);
+    const Passes down{K, m_first, nrhs, true};
+    down.downward(m_down, yh, [&](int c) { return static_cast<int>(K.row_skeleton(c).size()); });
     for_each_cluster(m_leaves, [&](int c) {
       const Cluster &cl = tree.cluster(c);
       double *y = Y + static_cast<long>(rb) * (cl.begin - m_first);
@@ -165,6 +215,58 @@ void H2DistributedProduct::apply(const double *X, int ldx, double *Y, int ldy, i
       interp_n(K.row_interpolation(c), yh[c].data(), yh[c].ld(), nrhs, rows, buf);
     });
   });
+}
+
+std::vector<DenseMatrix> H2DistributedProduct::skeleton_far_field(const double *X, int ldx, int nrhs) const
+{
+  std::vector<DenseMatrix> yh;
+  far_potentials(X, ldx, nrhs, yh, nullptr);
+  collectively(m_comm, [&] {
+    const Passes down{m_K, m_first, nrhs, true};
+    down.downward(m_down, yh, [&](int c) { return static_cast<int>(m_K.row_skeleton(c).size()); });
+  });
+  for (int c = 0; c < m_K.tree().num_clusters(); ++c)
+    if (!m_K.holds(c)) yh[c] = DenseMatrix();
+  return yh;
+}
+
+std::vector<DenseMatrix> H2DistributedProduct::skeleton_far_field_transposed(const double *Y, int ldy, int nrhs) const
+{
+  const H2Matrix &K = m_K;
+  const int nc = K.tree().num_clusters();
+  const auto row_moments = [&](int c) { return static_cast<int>(K.row_skeleton(c).size()); };
+  const auto col_potentials = [&](int c) { return static_cast<int>(K.col_skeleton(c).size()); };
+  const Passes up{K, m_first, nrhs, true}, down{K, m_first, nrhs, false};
+  std::vector<DenseMatrix> yh(nc), xh(nc);
+  // Row moments up through the parts, the parts' roots' to rank 0, up through the top.
+  collectively(m_comm, [&] { up.upward(m_up, Y, ldy, yh); });
+  m_row_up.run(yh, nrhs, false, row_moments);
+  // Far blocks transposed, summed per column cluster: this rank's own, and its shares of the
+  // other ranks' column clusters (sent to their owners, which add them up).
+  std::vector<int> targets;
+  collectively(m_comm, [&] {
+    up.upward(m_top_up, Y, ldy, yh);
+    std::vector<std::vector<std::pair<int, int>>> by_col(nc);
+    for (int a : m_held)
+      for (std::size_t i = 0; i < K.far_blocks(a).size(); ++i) by_col[K.far_blocks(a)[i].col_cluster].push_back({a, static_cast<int>(i)});
+    for (int b = 0; b < nc; ++b)
+      if (K.holds(b) || !by_col[b].empty()) {
+        targets.push_back(b);
+        xh[b] = DenseMatrix(col_potentials(b), nrhs);
+      }
+    for_each_cluster(targets, [&](int b) {
+      std::vector<double> buf;
+      for (const auto &[a, i] : by_col[b]) K.far_blocks(a)[i].multiply_add_transposed(yh[a].data(), yh[a].ld(), xh[b].data(), xh[b].ld(), nrhs, buf);
+    });
+  });
+  m_far_t.run(xh, nrhs, true, col_potentials);
+  // Down through the top (rank 0), the parts' shares to their ranks, down through the parts.
+  collectively(m_comm, [&] { down.downward(m_top_down, xh, col_potentials); });
+  m_pot.run(xh, nrhs, true, col_potentials);
+  collectively(m_comm, [&] { down.downward(m_down, xh, col_potentials); });
+  for (int c = 0; c < nc; ++c)
+    if (!K.holds(c)) xh[c] = DenseMatrix();
+  return xh;
 }
 
 } // namespace hssbem

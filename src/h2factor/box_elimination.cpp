@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <string>
 
 extern "C" {
@@ -101,6 +102,13 @@ DenseMatrix transposed(const DenseMatrix &B)
   for (int j = 0; j < B.n; ++j)
     for (int i = 0; i < B.m; ++i) T(j, i) = B(i, j);
   return T;
+}
+
+DenseMatrix columns_at(const DenseMatrix &M, const std::vector<int> &idx)
+{
+  DenseMatrix out(M.m, static_cast<int>(idx.size()));
+  for (std::size_t j = 0; j < idx.size(); ++j) std::copy_n(M.data() + static_cast<std::size_t>(idx[j]) * M.ld(), M.m, out.data() + j * out.ld());
+  return out;
 }
 
 void keep_columns(DenseMatrix &M, int k)
@@ -216,6 +224,11 @@ void Frontier::precondition(int X, Step *st)
   const DenseMatrix inv = inverse(st->D, st->dpiv);
   for (int Y : neighbours(X)) right_multiply(open(X, m_M[Y].at(X)), inv);
   for (StoredBlock *B : m_fill_col_blocks[X]) right_multiply(open(X, *B), inv);
+  for (int Z : m_cross[X]) right_multiply(open(X, m_G[Z].at(X)), inv); // this side's copies in X's columns
+  if (!m_cross[X].empty()) { // X's side for the other copies: eliminate() keeps the skeleton's columns
+    m_side[X].recorded = true;
+    m_side[X].C = inv;
+  }
   // X's columns as the far field sees them, K(F, C) Ŵᵀ and c Φ Ψᵀ: Ŵ ← A_XX⁻ᵀ Ŵ, Ψ likewise.
   for (DenseMatrix *W : {&open(X, m_Ew[X]), &m_Psi[X]}) {
     if (W->n == 0 || W->m == 0) continue;
@@ -241,15 +254,21 @@ BoxSkeleton Frontier::skeleton(int X, double tol) const
       parts.push_back(std::move(P));
     }
   // The Gram loses what lies below the rounding of its squared entries: below ~1e-7, the ID.
+  // Cross blocks (boxes of other parts) count as fill-in: X's rows of them, and this side's
+  // copies of those in X's columns.
   if (tol < 1e-7) {
     for (const auto &e : m_F[X]) parts.push_back(e.second.value());
     for (const StoredBlock *B : m_fill_col_blocks[X]) parts.push_back(transposed(B->value()));
+    for (int Y : m_cross[X]) parts.push_back(m_X[X].at(Y).value());
+    for (int Z : m_cross[X]) parts.push_back(transposed(m_G[Z].at(X).value()));
     return skeleton_from_features(parts, m, tol);
   }
   DenseMatrix G(m, m);
   for (const DenseMatrix &P : parts) gram_add(G, P, 'N');
   for (const auto &e : m_F[X]) gram_add(G, e.second.value(), 'N');
   for (const StoredBlock *B : m_fill_col_blocks[X]) gram_add(G, B->value(), 'T');
+  for (int Y : m_cross[X]) gram_add(G, m_X[X].at(Y).value(), 'N');
+  for (int Z : m_cross[X]) gram_add(G, m_G[Z].at(X).value(), 'T');
   return skeleton_from_gram(std::move(G), tol);
 }
 
@@ -264,6 +283,15 @@ void Frontier::eliminate(int X, const BoxSkeleton &sk, Step *out, double *flops,
   for (int i : sk.S) st.S.push_back(m_D[X][i]);
   for (int i : sk.R) st.R.push_back(m_D[X][i]);
   st.T = sk.T;
+  if (m_side[X].recorded) { // the other side's copies keep the skeleton (all of X's unknowns when none is redundant)
+    CrossSide &side = m_side[X];
+    if (r == 0) {
+      side.kept.resize(static_cast<std::size_t>(k));
+      std::iota(side.kept.begin(), side.kept.end(), 0);
+    } else
+      side.kept = sk.S;
+    side.C = columns_at(side.C, side.kept);
+  }
   if (r == 0) return;
   // Local order [S, R]; rows R -= Tᵀ rows S, columns R -= columns S T.
   std::vector<int> order = sk.S;
@@ -291,6 +319,18 @@ void Frontier::eliminate(int X, const BoxSkeleton &sk, Step *out, double *flops,
   }
   for (StoredBlock *F : m_fill_col_blocks[X]) {
     DenseMatrix &B = open(X, *F);
+    col_op(B);
+    keep_columns(B, k);
+  }
+  // This side's copies of the cross blocks: as fill-in (rows kept as they are, columns as X's
+  // change of variables makes them); no Schur complement reaches them.
+  for (int Y : m_cross[X]) {
+    DenseMatrix &B = open(X, m_X[X].at(Y));
+    row_op(B);
+    B = dense::row_block(B, 0, k);
+  }
+  for (int Z : m_cross[X]) {
+    DenseMatrix &B = open(X, m_G[Z].at(X));
     col_op(B);
     keep_columns(B, k);
   }

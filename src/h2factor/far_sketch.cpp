@@ -27,9 +27,10 @@ void put_columns(std::vector<DenseMatrix> &whole, const std::vector<DenseMatrix>
   }
 }
 
-} // namespace
-
-FarFieldSketch far_field_sketch(const H2Matrix &K, int p, unsigned seed)
+/// The sketch through a matrix's two far-field passes: far(X, ldx, q) and far_t(Y, ldy, q), fed
+/// with this rank's rows (from point `first`, `count` points) of random inputs drawn for all n.
+template <class Far, class FarT>
+FarFieldSketch sketch_passes(const H2Matrix &K, int p, unsigned seed, int first, const Far &far, const FarT &far_t)
 {
   const ClusterTree &tree = K.tree();
   const int nc = tree.num_clusters(), n = tree.num_points(), w = K.col_block(), rb = K.row_block();
@@ -56,11 +57,30 @@ FarFieldSketch far_field_sketch(const H2Matrix &K, int p, unsigned seed)
     for (int j = 0; j < q; ++j)
       for (int k = 0; k < n; ++k)
         for (int t = 0; t < std::min(w, 6); ++t) X[static_cast<std::size_t>(j) * w * n + static_cast<std::size_t>(w) * k + t] = scale * normal(gen);
-    put_columns(s.row, K.skeleton_far_field(X.data(), w * n, q), j0);
+    put_columns(s.row, far(X.data() + static_cast<std::size_t>(w) * first, w * n, q), j0);
     Y.resize(static_cast<std::size_t>(rb) * n * q);
     for (double &v : Y) v = scale * normal(gen);
-    put_columns(s.col, K.skeleton_far_field_transposed(Y.data(), rb * n, q), j0);
+    put_columns(s.col, far_t(Y.data() + static_cast<std::size_t>(rb) * first, rb * n, q), j0);
   }
+  return s;
+}
+
+} // namespace
+
+FarFieldSketch far_field_sketch(const H2Matrix &K, int p, unsigned seed)
+{
+  return sketch_passes(
+    K, p, seed, 0, [&](const double *X, int ldx, int q) { return K.skeleton_far_field(X, ldx, q); },
+    [&](const double *Y, int ldy, int q) { return K.skeleton_far_field_transposed(Y, ldy, q); });
+}
+
+FarFieldSketch far_field_sketch(const H2DistributedProduct &K, int p, unsigned seed)
+{
+  FarFieldSketch s = sketch_passes(
+    K.matrix(), p, seed, K.first_point(), [&](const double *X, int ldx, int q) { return K.skeleton_far_field(X, ldx, q); },
+    [&](const double *Y, int ldy, int q) { return K.skeleton_far_field_transposed(Y, ldy, q); });
+  for (int c = 0; c < K.matrix().tree().num_clusters(); ++c) // other ranks' clusters: no rows here
+    if (!K.matrix().holds(c)) s.row[c] = DenseMatrix(0, p), s.col[c] = DenseMatrix(0, p);
   return s;
 }
 

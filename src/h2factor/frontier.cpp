@@ -5,6 +5,7 @@
 #include "hssbem/core/blas_threads.hpp"
 #include "hssbem/core/dense_ops.hpp"
 #include "hssbem/core/lapack.hpp"
+#include "hssbem/core/tree_ownership.hpp"
 
 #include "top_block.hpp"
 
@@ -71,9 +72,26 @@ DenseMatrix StoredBlock::value() const
   return out;
 }
 
-Frontier::Frontier(const H2Matrix &K, const FarFieldSketch &sketch, const Pattern &pattern, bool single)
-  : m_K(K), m_tree(K.tree()), m_part(K.partition()), m_sketch(sketch), m_pat(pattern), m_w(K.col_block()), m_single(single)
+namespace {
+
+const RankComm &one_rank()
 {
+  static const SerialComm comm;
+  return comm;
+}
+
+} // namespace
+
+Frontier::Frontier(const H2Matrix &K, const FarFieldSketch &sketch, const Pattern &pattern, bool single, std::vector<int> part, const RankComm *comm)
+  : m_K(K), m_tree(K.tree()), m_part(K.partition()), m_sketch(sketch), m_pat(pattern), m_w(K.col_block()), m_single(single), m_box_part(std::move(part)),
+    m_comm(comm ? comm : &one_rank())
+{
+  if (!m_box_part.empty() && m_box_part.size() != static_cast<std::size_t>(m_tree.num_clusters())) throw std::invalid_argument("H2 factorization: a part list of the wrong length");
+  if (m_comm->size() > 1) {
+    if (m_box_part.empty()) throw std::invalid_argument("H2 factorization: several ranks need the tree's parts");
+    m_owner = cluster_owners(m_tree, m_comm->size());
+    m_rank = m_comm->rank();
+  }
   const int nc = m_tree.num_clusters();
   m_in_front.assign(nc, 0);
   m_D.resize(nc);
@@ -83,19 +101,34 @@ Frontier::Frontier(const H2Matrix &K, const FarFieldSketch &sketch, const Patter
   m_Psi.resize(nc);
   m_M.resize(nc);
   m_F.resize(nc);
+  m_X.resize(nc);
+  m_G.resize(nc);
+  m_cross.resize(nc);
+  m_side.resize(nc);
   m_fill_cols.resize(nc);
   m_fill_col_blocks.resize(nc);
   m_opened.resize(nc);
   m_front = m_tree.leaves();
+  for (int c : m_front) m_in_front[c] = 1;
+  collectively(*m_comm, [&] { init_leaves(); }); // this rank's; every leaf's unknowns and Φ, Ψ
+  if (!m_owner.empty()) exchange_leaf_copies();
+  note_bytes();
+}
+
+void Frontier::init_leaves()
+{
   for (int c : m_front) {
     const Cluster &cl = m_tree.cluster(c);
-    m_in_front[c] = 1;
+    for (int b : m_part.near[c])
+      if (!same_part(c, b)) m_cross[c].push_back(b);
     m_D[c].resize(3 * static_cast<std::size_t>(cl.size()));
     for (int i = 0; i < 3 * cl.size(); ++i) m_D[c][i] = 3 * cl.begin + i;
-    m_Eu[c] = StoredBlock(basis_side(K, c, true));
-    m_Ew[c] = StoredBlock(leaf_col_basis(c));
-    settle(m_Eu[c]);
-    settle(m_Ew[c]);
+    if (mine(c)) {
+      m_Eu[c] = StoredBlock(basis_side(m_K, c, true));
+      m_Ew[c] = StoredBlock(leaf_col_basis(c));
+      settle(m_Eu[c]);
+      settle(m_Ew[c]);
+    }
     if (m_pat.regularised()) {
       const std::size_t N = static_cast<std::size_t>(m_pat.dofs());
       m_Phi[c] = DenseMatrix(static_cast<int>(m_D[c].size()), 6);
@@ -109,11 +142,15 @@ Frontier::Frontier(const H2Matrix &K, const FarFieldSketch &sketch, const Patter
   }
   for (int a : m_front)
     for (int b : m_part.near[a]) {
+      if (!mine(a)) continue;
       DenseMatrix B = leaf_near(a, b);
       add_regularisation(B, a, b);
-      settle(m_M[a].emplace(b, StoredBlock(std::move(B))).first->second);
+      if (!same_part(a, b)) { // a cross block, in its two copies (the other rank's: exchange_leaf_copies)
+        if (mine(b)) settle(m_G[a].emplace(b, StoredBlock(B)).first->second);
+        settle(m_X[a].emplace(b, StoredBlock(std::move(B))).first->second);
+      } else
+        settle(m_M[a].emplace(b, StoredBlock(std::move(B))).first->second);
     }
-  note_bytes();
 }
 
 DenseMatrix Frontier::leaf_col_basis(int c) const
@@ -159,7 +196,8 @@ void Frontier::add_regularisation(int m, int n, double *out, int ld, int P, int 
 std::size_t Frontier::active_total() const
 {
   std::size_t s = 0;
-  for (int X : m_front) s += m_D[X].size();
+  for (int X : m_front)
+    if (mine(X)) s += m_D[X].size();
   return s;
 }
 
@@ -167,7 +205,7 @@ bool Frontier::level_has_far_field(int l) const
 {
   if (m_pat.regularised()) return true;
   for (int X : m_tree.clusters_at_level(l))
-    if (m_in_front[X] && (m_Eu[X].cols() > 0 || m_Ew[X].cols() > 0 || !m_F[X].empty() || !m_fill_cols[X].empty())) return true;
+    if (steps_at(X) && mine(X) && (m_Eu[X].cols() > 0 || m_Ew[X].cols() > 0 || !m_F[X].empty() || !m_fill_cols[X].empty() || !m_cross[X].empty())) return true;
   return false;
 }
 
@@ -175,7 +213,7 @@ std::vector<int> Frontier::neighbours(int X) const
 {
   std::vector<int> nb;
   for (int Y : m_part.close[X])
-    if (m_in_front[Y] && Y != X) nb.push_back(Y);
+    if (m_in_front[Y] && Y != X && same_part(X, Y)) nb.push_back(Y);
   return nb;
 }
 
@@ -184,6 +222,7 @@ DenseMatrix Frontier::restricted_basis(int P, int a, bool rows) const
   DenseMatrix E = (rows ? m_Eu[P] : m_Ew[P]).value();
   for (int x = P; x != a;) {
     const int par = m_tree.cluster(x).parent, left = m_tree.cluster(par).left;
+    if (!m_K.holds(par)) throw std::logic_error("H2 factorization: a far block above the parts (another rank's bases) is not supported");
     const DenseMatrix B = basis_side(m_K, par, rows);
     const int kl = basis_rank(m_K, left, rows), kx = basis_rank(m_K, x, rows);
     E = multiply(E, dense::sub(B, x == left ? 0 : kl, kx, 0, B.n));
@@ -195,6 +234,13 @@ DenseMatrix Frontier::restricted_basis(int P, int a, bool rows) const
 void Frontier::add_far_part(int P, int Q, double *out, int ld) const
 {
   const int m = static_cast<int>(m_D[P].size()), n = static_cast<int>(m_D[Q].size());
+  const auto add = [&](const DenseMatrix &B) {
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < m; ++i) out[i + static_cast<std::size_t>(j) * ld] += B(i, j);
+  };
+  if (!same_part(P, Q) && m_part.is_close(P, Q)) return add(m_X[P].at(Q).value()); // a cross block holds the whole current value
+  const auto done = m_pair_far.find({P, Q});
+  if (done != m_pair_far.end()) return add(done->second); // computed by P's rank
   for (int a = P; a >= 0; a = m_tree.cluster(a).parent)
     for (int b = Q; b >= 0; b = m_tree.cluster(b).parent) {
       if (!m_part.is_far(a, b)) continue;
@@ -204,9 +250,9 @@ void Frontier::add_far_part(int P, int Q, double *out, int ld) const
       const double *f = F.data(buf); // any stored form, in double
       // The bases as they rest when they need no carrying up, else carried to a and b.
       DenseMatrix Uc, Wc;
-      const DenseMatrix *U = a == P ? m_Eu[P].peek() : nullptr, *W = b == Q ? m_Ew[Q].peek() : nullptr;
+      const DenseMatrix *U = a == P ? m_Eu[P].peek() : nullptr, *W = b == Q && mine(Q) ? m_Ew[Q].peek() : nullptr;
       if (!U) U = &(Uc = restricted_basis(P, a, true));
-      if (!W) W = &(Wc = restricted_basis(Q, b, false));
+      if (!W) W = &(Wc = col_basis_to(Q, b));
       if (F.M.m > 0 && F.M.n > 0) {
         DenseMatrix UF(m, F.M.n);
         lapack::gemm('N', 'N', m, F.M.n, F.M.m, 1.0, U->data(), U->ld(), f, F.M.ld(), 0.0, UF.data(), UF.ld());
@@ -240,6 +286,76 @@ std::vector<int> Frontier::parts_of(int P, int l) const
   return {P};
 }
 
+DenseMatrix Frontier::assemble_cross(int P, int Q, int l, std::vector<std::map<int, StoredBlock>> &which)
+{
+  DenseMatrix B(static_cast<int>(m_D[P].size()), static_cast<int>(m_D[Q].size()));
+  int ro = 0;
+  for (int b : parts_of(P, l)) {
+    int co = 0;
+    for (int c : parts_of(Q, l)) {
+      const auto it = which[b].find(c);
+      if (it != which[b].end()) {
+        dense::put(B, ro, co, it->second.take());
+        which[b].erase(it);
+      } else if (B.m > 0)
+        add_far_part(b, c, &B(ro, co), B.ld()); // children of different parts that are not close
+      co += static_cast<int>(m_D[c].size());
+    }
+    ro += static_cast<int>(m_D[b].size());
+  }
+  return B;
+}
+
+long long Frontier::cross_pairs() const
+{
+  long long n = 0;
+  for (const auto &row : m_X) n += static_cast<long long>(row.size());
+  return n;
+}
+
+std::size_t Frontier::cross_bytes() const
+{
+  std::size_t s = 0;
+  for (const auto *store : {&m_X, &m_G})
+    for (const auto &row : *store)
+      for (const auto &e : row) s += e.second.bytes();
+  return s;
+}
+
+void Frontier::finish_level()
+{
+  if (!m_owner.empty()) exchange_sides();
+  // The copies of one cross block go through the other side's step independently: for this
+  // rank's box Y and a partner X that took a step, rows of the copy in Y's columns (m_G[X][Y])
+  // are kept as X kept them, and columns of the copy in Y's rows (m_X[Y][X]) transformed as X
+  // transformed its own copy's.
+  collectively(*m_comm, [&] { apply_other_sides(); });
+}
+
+void Frontier::apply_other_sides()
+{
+  std::vector<int> here;
+  for (int Y : m_front)
+    if (mine(Y)) here.push_back(Y);
+  for_each_cluster(here, [&](int Y) {
+    for (int X : m_cross[Y]) {
+      const CrossSide &side = m_side[X];
+      if (!side.recorded) continue;
+      StoredBlock &ghost = m_G[X].at(Y);
+      DenseMatrix &g = ghost.open();
+      g = dense::rows_at(g, side.kept);
+      settle(ghost);
+      StoredBlock &stored = m_X[Y].at(X);
+      const DenseMatrix B = stored.take();
+      DenseMatrix out(B.m, side.C.n);
+      if (B.m > 0 && B.n > 0 && side.C.n > 0) lapack::gemm('N', 'N', B.m, side.C.n, B.n, 1.0, B.data(), B.ld(), side.C.data(), side.C.ld(), 0.0, out.data(), out.ld());
+      stored = StoredBlock(std::move(out));
+      settle(stored);
+    }
+  });
+  for (CrossSide &side : m_side) side = CrossSide();
+}
+
 DenseMatrix Frontier::assemble_close(int P, int Q, int l)
 {
   DenseMatrix B(static_cast<int>(m_D[P].size()), static_cast<int>(m_D[Q].size()));
@@ -262,13 +378,27 @@ DenseMatrix Frontier::assemble_close(int P, int Q, int l)
 
 void Frontier::merge(int l)
 {
-  std::vector<int> front = m_tree.clusters_at_level(l - 1);
+  std::vector<int> front;
+  for (int c : m_tree.clusters_at_level(l - 1))
+    if (m_box_part.empty() || m_box_part[c] >= 0) front.push_back(c);
   for (int c : m_tree.leaves())
     if (m_tree.cluster(c).level < l - 1) front.push_back(c);
+  if (!m_box_part.empty()) // the parts' roots (and boxes under them) that stop below level l - 1
+    for (int c : m_front)
+      if (m_tree.cluster(c).level >= l && m_box_part[m_tree.cluster(c).parent] < 0) front.push_back(c);
   // Unknowns and restricted bases of the new boxes: children's, concatenated and transferred.
   std::vector<int> parents;
   for (int P : front)
-    if (m_tree.cluster(P).level == l - 1 && m_tree.cluster(P).left >= 0) parents.push_back(P);
+    if (m_tree.cluster(P).level == l - 1 && m_tree.cluster(P).left >= 0 && mine(P)) parents.push_back(P);
+  collectively(*m_comm, [&] { merge_bases(parents); });
+  std::vector<char> in_front(m_tree.num_clusters(), 0);
+  for (int P : front) in_front[P] = 1;
+  if (!m_owner.empty()) prepare_cross_merge(l, front, in_front);
+  collectively(*m_comm, [&] { merge_blocks(l, front, in_front); });
+}
+
+void Frontier::merge_bases(const std::vector<int> &parents)
+{
   for_each_cluster(parents, [&](int P) {
     const Cluster &cp = m_tree.cluster(P);
     const int a = cp.left, b = cp.right;
@@ -291,23 +421,39 @@ void Frontier::merge(int l)
       settle(stored);
     }
   });
-  std::vector<char> in_front(m_tree.num_clusters(), 0);
-  for (int P : front) in_front[P] = 1;
+}
+
+void Frontier::merge_blocks(int l, std::vector<int> &front, std::vector<char> &in_front)
+{
   // Blocks between close new boxes, from the children's blocks and far parts; fill-in between
   // boxes whose parents are still not close stays fill-in, on the parents.
-  std::vector<std::map<int, StoredBlock>> M(m_tree.num_clusters());
+  std::vector<std::map<int, StoredBlock>> M(m_tree.num_clusters()), X(m_tree.num_clusters()), G(m_tree.num_clusters());
+  std::vector<std::vector<int>> cross(m_tree.num_clusters());
   for_each_cluster(front, [&](int P) {
-    for (int Q : m_part.close[P])
-      if (in_front[Q]) settle(M[P].emplace(Q, StoredBlock(assemble_close(P, Q, l))).first->second);
+    for (int Q : m_part.close[P]) {
+      if (!in_front[Q]) continue;
+      if (same_part(P, Q)) {
+        if (mine(P)) settle(M[P].emplace(Q, StoredBlock(assemble_close(P, Q, l))).first->second);
+        continue;
+      }
+      cross[P].push_back(Q);
+      if (mine(Q)) settle(G[P].emplace(Q, StoredBlock(assemble_cross(P, Q, l, m_G))).first->second);
+      if (mine(P)) settle(X[P].emplace(Q, StoredBlock(assemble_cross(P, Q, l, m_X))).first->second);
+    }
   });
+  m_remote_w.clear();
+  m_pair_far.clear();
   std::vector<std::map<int, StoredBlock>> F = merged_fill(l);
   std::size_t added = 0;
-  for (const auto *store : {&M, &F})
+  for (const auto *store : {&M, &F, &X, &G})
     for (const auto &row : *store)
       for (const auto &e : row) added += e.second.bytes();
   m_peak = std::max(m_peak, store_bytes() + added);
   m_M.swap(M);
   m_F.swap(F);
+  m_X.swap(X);
+  m_G.swap(G);
+  m_cross.swap(cross);
   for (int P : m_front) // boxes now inside a parent
     if (!in_front[P]) {
       m_D[P].clear();
@@ -383,7 +529,7 @@ void Frontier::rest(int X)
 std::size_t Frontier::store_bytes() const
 {
   std::size_t s = 0;
-  for (const auto *store : {&m_M, &m_F})
+  for (const auto *store : {&m_M, &m_F, &m_X, &m_G})
     for (const auto &row : *store)
       for (const auto &e : row) s += e.second.bytes();
   for (int X : m_front) s += m_Eu[X].bytes() + m_Ew[X].bytes();

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "hssbem/core/dense_matrix.hpp"
+#include "hssbem/core/rank_comm.hpp"
 #include "hssbem/h2/h2_matrix.hpp"
 #include "hssbem/h2factor/far_sketch.hpp"
 
@@ -89,19 +90,57 @@ struct BoxSkeleton {
   DenseMatrix T; ///< |S| × |R|
 };
 
+/// What a box's step did to the cross blocks it shares with boxes of other parts, as the other
+/// side applies it after the level: it keeps rows `kept` of a block in its rows (local indices,
+/// in the order of its new active unknowns), and a block B in its columns becomes B C with
+/// C = A_XX⁻¹(:, kept) (|D_X| × |kept|).
+struct CrossSide {
+  bool recorded = false;
+  std::vector<int> kept;
+  DenseMatrix C;
+};
+
 class Frontier {
 public:
   /// The leaves of K, with their near blocks in A-hat form; `single`: blocks rest in single
-  /// precision (StoredBlock).
-  Frontier(const H2Matrix &K, const FarFieldSketch &sketch, const Pattern &pattern, bool single);
+  /// precision (StoredBlock). `part` (per cluster: its part, −1 above the parts; empty: one part)
+  /// splits the boxes into parts that are never close to each other: a pair of boxes of
+  /// different parts that the H² partition calls close keeps a *cross block* (its full current
+  /// value) in two copies, one for each side, that enter both boxes' skeletons and never receive
+  /// a Schur complement; each box's step applies its own side to its copies, and
+  /// finish_level() the other side (CrossSide).
+  ///
+  /// On several ranks (comm with more than one rank; `part` then required, part p on rank p) this
+  /// rank holds its boxes' unknowns, bases and blocks, its rows of the cross blocks and the copies
+  /// of those in its boxes' columns; K is this rank's part of a distributed H² matrix and the
+  /// sketch its rows. What crosses ranks: the leaves' cross blocks (the copies in the other
+  /// side's columns), the sides at a level's end, the data of merged cross blocks (the other
+  /// side's unknowns, its column basis carried to the far block and Ψ; the far parts for the
+  /// copies in the columns) and the top's rows. Every exchange is collective.
+  Frontier(const H2Matrix &K, const FarFieldSketch &sketch, const Pattern &pattern, bool single, std::vector<int> part = {}, const RankComm *comm = nullptr);
+  /// Whether this rank holds box c (always on one rank).
+  bool mine(int c) const { return m_owner.empty() || m_owner[c] == m_rank; }
 
   const std::vector<int> &boxes() const { return m_front; }
   const std::vector<int> &active(int X) const { return m_D[X]; }
   std::size_t active_total() const;
   /// Whether some box of level l has a far field or fill-in to skeletonize against.
   bool level_has_far_field(int l) const;
-  /// The close boxes of the frontier other than X.
+  /// The close boxes of the frontier other than X (of X's part).
   std::vector<int> neighbours(int X) const;
+  /// Whether X and Y lie in one part (always without parts).
+  bool same_part(int X, int Y) const { return m_box_part.empty() || m_box_part[X] == m_box_part[Y]; }
+  /// Whether level l's box X takes a step (in the frontier, below or at its part's root).
+  bool steps_at(int X) const { return m_in_front[X] && (m_box_part.empty() || m_box_part[X] >= 0); }
+  /// The boxes of other parts with which X shares cross blocks.
+  const std::vector<int> &cross_partners(int X) const { return m_cross[X]; }
+  /// Cross blocks now (pairs, each counted once) and the bytes of both copies.
+  long long cross_pairs() const;
+  std::size_t cross_bytes() const;
+  /// After a level whose boxes went through their steps: each cross block gets the other
+  /// side's part of the steps (the boxes' CrossSide, recorded by eliminate()), as if the two
+  /// copies lived on two ranks and exchanged the sides at the level's end.
+  void finish_level();
 
   /// Before X's steps 0–3, with no step of another box adding fill-in meanwhile (add_fill()
   /// inserts into the maps of the store): the fill-in blocks in X's columns, located once, so
@@ -133,11 +172,16 @@ public:
   /// which holds both levels' blocks for a moment).
   std::size_t peak_bytes() const { return m_peak; }
   void note_bytes() { m_peak = std::max(m_peak, store_bytes()); }
-  /// The frontier of level l − 1 from that of level l.
+  /// The frontier of level l − 1 from that of level l (boxes never merge above their part's
+  /// root: a part's root stays in the frontier as it is).
   void merge(int l);
   /// All remaining unknowns as one block matrix, their dof indices in *dofs; the blocks between
   /// close boxes move out of the store (the frontier is spent).
   BlockGrid take_top(std::vector<int> *dofs);
+  /// The same on several ranks (collective): each rank's rows of the top go to rank 0, which
+  /// returns the whole grid and in *dofs all its unknowns, in *from[q] the positions in *dofs of
+  /// rank q's (in the order of *own on q); every rank gets its own top unknowns in *own.
+  BlockGrid take_top_ranks(std::vector<int> *dofs, std::vector<std::vector<int>> *from, std::vector<int> *own);
 
 private:
   DenseMatrix leaf_col_basis(int c) const;
@@ -162,6 +206,35 @@ private:
     if (m_single) b.park();
   }
   std::vector<int> parts_of(int P, int l) const;
+  /// Several ranks: the boxes of other ranks whose column data (unknowns, Ψ, column basis
+  /// carried to the far block; `far`: pairs that need a far part) this rank's rows need.
+  void send_column_data(const std::vector<std::pair<int, int>> &pairs);
+  /// Several ranks: the far parts of pairs (b mine, c another rank's) for the copies in c's
+  /// columns, with b's unknowns.
+  void send_far_parts(const std::vector<std::pair<int, int>> &pairs);
+  /// The leaves' unknowns, restricted bases, Φ, Ψ and blocks (this rank's).
+  void init_leaves();
+  /// Several ranks: the leaves' cross blocks, copied to the ranks of their columns.
+  void exchange_leaf_copies();
+  /// finish_level()'s work on this rank's copies.
+  void apply_other_sides();
+  /// Several ranks: the sides of this level's steps to the ranks of the partners' copies.
+  void exchange_sides();
+  /// merge(): the new boxes' unknowns, Φ, Ψ and restricted bases (this rank's parents), then
+  /// their blocks (and the frontier becomes `front`).
+  void merge_bases(const std::vector<int> &parents);
+  void merge_blocks(int l, std::vector<int> &front, std::vector<char> &in_front);
+  /// Several ranks: the data the new level's cross blocks need, before merge() assembles them.
+  void prepare_cross_merge(int l, const std::vector<int> &front, const std::vector<char> &in_front);
+  /// The far ancestors (a, b) of boxes P and Q (a = P or above, b = Q or above).
+  std::pair<int, int> far_pair(int P, int Q) const;
+  /// Q's column basis carried to b: its own, or the one another rank sent.
+  DenseMatrix col_basis_to(int Q, int b) const;
+  /// Whether (P, Q) of the current frontier hold a cross block.
+  bool cross_close(int P, int Q) const { return m_in_front[P] && m_in_front[Q] && !same_part(P, Q) && m_part.is_close(P, Q); }
+  /// Copy `which` (m_X or m_G) of the cross block between new boxes P and Q of level l − 1,
+  /// from the children's copies and the far parts between the children that are not close.
+  DenseMatrix assemble_cross(int P, int Q, int l, std::vector<std::map<int, StoredBlock>> &which);
 
   const H2Matrix &m_K;
   const ClusterTree &m_tree;
@@ -177,6 +250,18 @@ private:
   bool m_single;
   std::vector<std::map<int, StoredBlock>> m_M; ///< blocks between close frontier boxes (current values)
   std::vector<std::map<int, StoredBlock>> m_F; ///< fill-in between boxes that are not close (updates only)
+  std::vector<int> m_box_part;                 ///< per cluster: its part (-1 above them); empty: one part
+  /// Cross blocks between boxes of different parts that the H² partition calls close (full
+  /// values): m_X[X][Y] is the copy in X's rows (X's side applied by X's steps, Y's by
+  /// finish_level), m_G[X][Y] the copy in Y's columns (the reverse); m_cross[X] the partners.
+  std::vector<std::map<int, StoredBlock>> m_X, m_G;
+  std::vector<std::vector<int>> m_cross;
+  std::vector<CrossSide> m_side; ///< per box: its side of the current level's step
+  const RankComm *m_comm;        ///< the ranks (a SerialComm on one)
+  std::vector<int> m_owner;      ///< per cluster: the rank holding it (empty on one rank)
+  int m_rank = 0;
+  std::map<std::pair<int, int>, DenseMatrix> m_remote_w; ///< (c, b): another rank's box c's column basis carried to b
+  std::map<std::pair<int, int>, DenseMatrix> m_pair_far; ///< (b, c): the far part of boxes of two ranks, from b's rank
   std::vector<std::vector<StoredBlock *>> m_opened; ///< per box: blocks its step has opened
   std::size_t m_peak = 0;
   std::vector<std::vector<int>> m_fill_cols;   ///< m_fill_cols[X]: boxes Z with a block m_F[Z][X]

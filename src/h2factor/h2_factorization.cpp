@@ -7,9 +7,11 @@
 #include "hssbem/bem/rigid_modes.hpp"
 #include "hssbem/compress/pattern_columns.hpp"
 #include "hssbem/core/blas_threads.hpp"
+#include "hssbem/core/fault.hpp"
 #include "hssbem/core/lapack.hpp"
 #include "hssbem/core/phase.hpp"
 #include "hssbem/core/timer.hpp"
+#include "hssbem/core/tree_ownership.hpp"
 
 #include <algorithm>
 #include <condition_variable>
@@ -28,6 +30,8 @@ struct H2Factorization::Factors {
   std::vector<h2f::Step> steps;
   std::vector<int> top_dofs;
   h2f::TopBlock top;
+  std::vector<int> top_own;                ///< distributed: this rank's top unknowns (its rows), in the order rank 0 expects
+  std::vector<std::vector<int>> top_from;  ///< distributed, rank 0: positions in top_dofs of rank q's top unknowns
 };
 
 int default_sketch_columns(double rel_tol)
@@ -45,7 +49,7 @@ const FarFieldSketch &H2FactorCache::sketch(int p, double *made)
   for (const auto &s : m_sketches)
     if (s->columns == p) return *s;
   Timer t;
-  m_sketches.push_back(std::make_unique<FarFieldSketch>(far_field_sketch(*m_K, p)));
+  m_sketches.push_back(std::make_unique<FarFieldSketch>(m_dist ? far_field_sketch(*m_dist, p) : far_field_sketch(*m_K, p)));
   if (made) *made = t.seconds();
   return *m_sketches.back();
 }
@@ -114,9 +118,8 @@ int first_level(const ClusterTree &tree, int leaf_size, double rel_tol)
 /// neighbours hold most of what is left and its skeleton most of its unknowns: at 1e-7 on a 20k
 /// sphere, the level with 16 boxes of ~600 unknowns cost 7.0 s to eliminate (7.5e11 Schur flop in
 /// all) where the 9 600-unknown dense top it left behind takes about 3 s.
-bool dense_top_is_cheaper(const h2f::Frontier &F, const std::vector<int> &boxes, int mixed_from)
+bool dense_top_is_cheaper(const h2f::Frontier &F, const std::vector<int> &boxes, double n, const RankComm &comm, int mixed_from)
 {
-  const double n = static_cast<double>(F.active_total());
   double level = 0;
   for (int X : boxes) {
     const double m = static_cast<double>(F.active(X).size());
@@ -124,6 +127,7 @@ bool dense_top_is_cheaper(const h2f::Frontier &F, const std::vector<int> &boxes,
     for (int Y : F.neighbours(X)) around += static_cast<double>(F.active(Y).size());
     level += 2 * around * around * m;
   }
+  comm.sum(&level, 1);
   const double top = 2.0 / 3.0 * n * n * n / (mixed_from > 0 && n >= mixed_from ? 2.0 : 1.0);
   return top < level;
 }
@@ -277,11 +281,37 @@ void run_schedule(const LevelSchedule &s, const Start &start, const Step &step, 
 
 } // namespace
 
+namespace {
+
+/// Run fn on this rank and agree with the others: a breakdown on any rank throws H2Breakdown on
+/// every rank (the PC fails everywhere); any other exception throws on its rank and PeerFault on
+/// the others (as collectively()).
+template <class Fn>
+void agreed(const RankComm &comm, Fn &&fn)
+{
+  std::string broke;
+  std::exception_ptr err;
+  try {
+    fn();
+  } catch (const H2Breakdown &e) {
+    broke = e.what();
+  } catch (...) {
+    err = std::current_exception();
+  }
+  const double worst = comm.max(err ? 2.0 : broke.empty() ? 0.0 : 1.0);
+  if (err) std::rethrow_exception(err);
+  if (worst >= 2) throw PeerFault();
+  if (worst >= 1) throw H2Breakdown(broke.empty() ? "H2 factorization broke down on another rank" : broke);
+}
+
+} // namespace
+
 H2Factorization::H2Factorization(H2FactorCache &cache, const SystemSelection &sel, const H2FactorOptions &options, const std::vector<double> *rigid_modes)
   : m_K(cache.matrix()), m_options(options), m_f(std::make_unique<Factors>())
 {
   PhaseScope whole(Phase::H2Factorization);
   check_options(options);
+  if (cache.distributed() && !cache.matrix().holds_all()) throw std::invalid_argument("H2 factorization: a distributed matrix needs the distributed constructor");
   const ClusterTree &tree = m_K.tree();
   const int p = options.sketch_columns > 0 ? options.sketch_columns : default_sketch_columns(options.rel_tol);
   const FarFieldSketch *sketch;
@@ -297,45 +327,146 @@ H2Factorization::H2Factorization(H2FactorCache &cache, const SystemSelection &se
   Timer timer;
   // Blocks rest in single precision with the panels, unless everything goes to the dense top at
   // once: its singularity test (a pure-traction pattern without regularisation) needs them exact.
-  h2f::Frontier front(m_K, *sketch, m_f->pattern, m_stats.single_panels && m_f->pattern.dofs() > options.top_size);
+  std::vector<int> parts;
+  if (options.within_parts && tree.num_parts() > 1) {
+    parts = cluster_parts(tree);
+    m_stats.parts = tree.num_parts();
+  }
+  h2f::Frontier front(m_K, *sketch, m_f->pattern, m_stats.single_panels && m_f->pattern.dofs() > options.top_size, std::move(parts));
   const int l0 = first_level(tree, options.leaf_size, options.rel_tol);
   for (int l = tree.levels() - 1; l > l0; --l) front.merge(l);
   m_stats.time_init = timer.seconds();
+  const SerialComm one;
+  eliminate_levels(front, one, l0);
+  PhaseScope phase(Phase::H2Top);
+  timer.restart();
+  m_stats.top_boxes = static_cast<int>(front.boxes().size());
+  if (!m_f->top.factor(front.take_top(&m_f->top_dofs), options.mixed_top_from))
+    throw H2Breakdown("H2 factorization broke down: the top block (" + std::to_string(m_f->top.size()) + " unknowns) is singular to working precision");
+  m_stats.time_top = timer.seconds();
+  m_stats.workspace_bytes = std::max(front.peak_bytes(), front.store_bytes() + m_f->top.bytes());
+  m_stats.top_size = m_f->top.size();
+  m_stats.top_mixed = m_f->top.mixed();
+  m_stats.top_bytes = m_f->top.bytes();
+  m_stats.bytes = m_stats.top_bytes;
+  for (const H2FactorLevelStats &ls : m_stats.levels) m_stats.bytes += ls.bytes;
+}
+
+H2Factorization::H2Factorization(H2FactorCache &cache, const RankComm &comm, const SystemSelection &sel, const H2FactorOptions &options, const std::vector<double> *rigid_modes)
+  : m_K(cache.matrix()), m_comm(&comm), m_options(options), m_f(std::make_unique<Factors>())
+{
+  PhaseScope whole(Phase::H2Factorization);
+  const ClusterTree &tree = m_K.tree();
+  const int P = comm.size(), me = comm.rank();
+  collectively(comm, [&] {
+    check_options(options);
+    if (!cache.distributed()) throw std::invalid_argument("H2 factorization: the distributed factorization needs a distributed matrix's cache");
+    if (P > 1 && tree.num_parts() != P) throw std::invalid_argument("H2 factorization: the tree has " + std::to_string(tree.num_parts()) + " parts for " + std::to_string(P) + " ranks");
+    m_first = cache.distributed()->first_point();
+    m_count = cache.distributed()->num_points();
+  });
+  m_options.within_parts = true;
+  const int p = options.sketch_columns > 0 ? options.sketch_columns : default_sketch_columns(options.rel_tol);
+  const FarFieldSketch *sketch;
+  {
+    PhaseScope phase(Phase::H2Sketch);
+    sketch = &cache.sketch(p, &m_stats.time_sketch); // collective
+  }
+  m_stats.sketch_columns = p;
+  m_stats.single_panels = options.single_panels < 0 ? options.rel_tol >= 1e-5 : options.single_panels == 1;
+  collectively(comm, [&] {
+    fault_point("H2FSubtree"); // each rank's elimination of its part starts
+    m_f->pattern = make_pattern(m_K, sel, rigid_modes);
+    m_slot = m_f->pattern.slot;
+  });
+  if (tree.num_parts() > 1) m_stats.parts = tree.num_parts();
+
+  Timer timer;
+  std::unique_ptr<h2f::Frontier> front;
+  front = std::make_unique<h2f::Frontier>(m_K, *sketch, m_f->pattern, m_stats.single_panels && m_f->pattern.dofs() > options.top_size,
+                                          tree.num_parts() > 1 ? cluster_parts(tree) : std::vector<int>{}, &comm);
+  const int l0 = first_level(tree, options.leaf_size, options.rel_tol);
+  for (int l = tree.levels() - 1; l > l0; --l) front->merge(l);
+  m_stats.time_init = timer.seconds();
+  eliminate_levels(*front, comm, l0);
+  PhaseScope phase(Phase::H2Top);
+  timer.restart();
+  m_stats.top_boxes = static_cast<int>(front->boxes().size());
+  h2f::BlockGrid top = front->take_top_ranks(&m_f->top_dofs, &m_f->top_from, &m_f->top_own);
+  agreed(comm, [&] {
+    fault_point("H2FTop");
+    if (me == 0 && !m_f->top.factor(std::move(top), options.mixed_top_from))
+      throw H2Breakdown("H2 factorization broke down: the top block (" + std::to_string(m_f->top.size()) + " unknowns) is singular to working precision");
+    // This rank's steps and top unknowns on its own rows (the steps touch no other rank's).
+    const int offset = 3 * m_first, n = 3 * m_count;
+    const auto shift = [&](std::vector<int> &v) {
+      for (int &g : v) {
+        g -= offset;
+        if (g < 0 || g >= n) throw std::logic_error("H2 factorization: a step reaches another rank's unknowns");
+      }
+    };
+    for (h2f::Step &st : m_f->steps)
+      for (std::vector<int> *v : {&st.box, &st.S, &st.R, &st.I}) shift(*v);
+    shift(m_f->top_own);
+  });
+  m_stats.time_top = timer.seconds();
+  m_stats.top_size = static_cast<int>(comm.max(m_f->top.size()));
+  m_stats.workspace_bytes = std::max(front->peak_bytes(), front->store_bytes() + m_f->top.bytes());
+  m_stats.top_mixed = m_f->top.mixed();
+  m_stats.top_bytes = m_f->top.bytes();
+  m_stats.bytes = m_stats.top_bytes;
+  for (const H2FactorLevelStats &ls : m_stats.levels) m_stats.bytes += ls.bytes;
+}
+
+void H2Factorization::eliminate_levels(h2f::Frontier &front, const RankComm &comm, int l0)
+{
+  const ClusterTree &tree = m_K.tree();
+  const H2FactorOptions &options = m_options;
+  Timer timer;
   for (int l = l0; l >= 1; --l) {
-    if (static_cast<int>(front.active_total()) <= options.top_size || !front.level_has_far_field(l)) break;
-    {
-      std::vector<int> level_boxes;
-      for (int X : tree.clusters_at_level(l))
-        if (!front.active(X).empty()) level_boxes.push_back(X);
-      if (options.top_when_cheaper && dense_top_is_cheaper(front, level_boxes, options.mixed_top_from)) break;
-    }
+    double active = static_cast<double>(front.active_total());
+    comm.sum(&active, 1);
+    if (active <= options.top_size || !comm.any(front.level_has_far_field(l))) break;
+    std::vector<int> boxes; // this rank's boxes of the level
+    bool any = false;
+    for (int X : tree.clusters_at_level(l))
+      if (front.steps_at(X)) {
+        any = true;
+        if (front.mine(X)) boxes.push_back(X);
+      }
+    if (!any) break; // above the parts
+    if (options.top_when_cheaper && dense_top_is_cheaper(front, boxes, active, comm, options.mixed_top_from)) break;
     H2FactorLevelStats ls;
     ls.level = l;
+    ls.cross_blocks = front.cross_pairs();
+    ls.cross_bytes = front.cross_bytes();
     timer.restart();
     {
       PhaseScope phase(Phase::H2Eliminate);
-      std::vector<int> boxes;
-      for (int X : tree.clusters_at_level(l)) boxes.push_back(X);
       std::vector<h2f::Step> steps(tree.num_clusters());
       std::vector<double> flops(tree.num_clusters(), 0.0), t_skel(tree.num_clusters(), 0.0), t_elim(tree.num_clusters(), 0.0);
       std::vector<std::vector<h2f::NewFill>> fills(tree.num_clusters());
-      const LevelSchedule schedule = level_schedule(front, boxes, tree.num_clusters());
-      run_schedule(
-        schedule, [&](int X) { front.claim(X); },
-        [&](int X) {
-          Timer t;
-          const int m = static_cast<int>(front.active(X).size());
-          front.precondition(X, &steps[X]);
-          const h2f::BoxSkeleton sk = front.skeleton(X, options.rel_tol);
-          t_skel[X] = t.seconds();
-          t.restart();
-          front.eliminate(X, sk, &steps[X], &flops[X], &fills[X]);
-          front.rest(X);
-          if (m_stats.single_panels) steps[X].demote();
-          t_elim[X] = t.seconds();
-          steps[X].candidates = m;
-        },
-        [&](int X) { front.add_fill(std::move(fills[X])); });
+      LevelSchedule schedule;
+      agreed(comm, [&] {
+        schedule = level_schedule(front, boxes, tree.num_clusters());
+        run_schedule(
+          schedule, [&](int X) { front.claim(X); },
+          [&](int X) {
+            Timer t;
+            const int m = static_cast<int>(front.active(X).size());
+            front.precondition(X, &steps[X]);
+            const h2f::BoxSkeleton sk = front.skeleton(X, options.rel_tol);
+            t_skel[X] = t.seconds();
+            t.restart();
+            front.eliminate(X, sk, &steps[X], &flops[X], &fills[X]);
+            front.rest(X);
+            if (m_stats.single_panels) steps[X].demote();
+            t_elim[X] = t.seconds();
+            steps[X].candidates = m;
+          },
+          [&](int X) { front.add_fill(std::move(fills[X])); });
+      });
+      front.finish_level(); // the other sides of the cross blocks
       // The solve replays the steps in the schedule's order (dependencies come first in it).
       for (int X : schedule.order) {
         const h2f::Step &st = steps[X];
@@ -366,26 +497,35 @@ H2Factorization::H2Factorization(H2FactorCache &cache, const SystemSelection &se
     ls.seconds = timer.seconds();
     m_stats.levels.push_back(ls);
   }
-  PhaseScope phase(Phase::H2Top);
-  timer.restart();
-  if (!m_f->top.factor(front.take_top(&m_f->top_dofs), options.mixed_top_from))
-    throw H2Breakdown("H2 factorization broke down: the top block (" + std::to_string(m_f->top.size()) + " unknowns) is singular to working precision");
-  m_stats.time_top = timer.seconds();
-  m_stats.workspace_bytes = std::max(front.peak_bytes(), front.store_bytes() + m_f->top.bytes());
-  m_stats.top_size = m_f->top.size();
-  m_stats.top_mixed = m_f->top.mixed();
-  m_stats.top_bytes = m_f->top.bytes();
-  m_stats.bytes = m_stats.top_bytes;
-  for (const H2FactorLevelStats &ls : m_stats.levels) m_stats.bytes += ls.bytes;
 }
 
 H2Factorization::~H2Factorization() = default;
 
 int H2Factorization::num_unknowns() const { return m_f->pattern.dofs(); }
 
+int H2Factorization::steps_crossing_parts() const
+{
+  const ClusterTree &tree = m_K.tree();
+  std::vector<int> part_of_dof(3 * static_cast<std::size_t>(tree.num_points()), 0);
+  for (int p = 0; p < tree.num_parts(); ++p) {
+    const Cluster &c = tree.cluster(tree.part_cluster(p));
+    std::fill(part_of_dof.begin() + 3L * c.begin, part_of_dof.begin() + 3L * c.end, p);
+  }
+  const int offset = m_comm ? 3 * m_first : 0; // a distributed factorization's steps hold its own rows
+  int crossing = 0;
+  for (const h2f::Step &st : m_f->steps) {
+    std::set<int> seen;
+    for (const std::vector<int> *v : {&st.box, &st.S, &st.R, &st.I})
+      for (int g : *v) seen.insert(part_of_dof[g + offset]);
+    crossing += seen.size() > 1;
+  }
+  return crossing;
+}
+
 void H2Factorization::solve(const double *b, double *x) const
 {
   PhaseScope phase(Phase::H2Solve);
+  if (m_comm) throw std::logic_error("H2 factorization: a distributed factorization solves with solve_local");
   const ClusterTree &tree = m_K.tree();
   const int n = tree.num_points();
   std::vector<double> y(3 * static_cast<std::size_t>(n)), work;
@@ -403,6 +543,52 @@ void H2Factorization::solve(const double *b, double *x) const
   // A-hat = A D: x = D y, back in mesh order.
   for (int k = 0; k < n; ++k)
     for (int a = 0; a < 3; ++a) x[3 * tree.perm()[k] + a] = y[3 * k + a] * m_K.col_scale(m_slot[3 * k + a]);
+}
+
+void H2Factorization::solve_local(const double *b, double *x) const
+{
+  PhaseScope phase(Phase::H2Solve);
+  if (!m_comm) throw std::logic_error("H2 factorization: solve_local needs a distributed factorization");
+  const RankComm &comm = *m_comm;
+  const int P = comm.size(), me = comm.rank();
+  const std::size_t n = 3 * static_cast<std::size_t>(m_count);
+  std::vector<double> y(b, b + n), work;
+  std::vector<std::vector<double>> send(P), recv(P);
+  collectively(comm, [&] {
+    for (const h2f::Step &s : m_f->steps) s.forward(y.data(), work);
+    const std::vector<int> &own = m_f->top_own;
+    if (me != 0)
+      for (int i : own) send[0].push_back(y[i]);
+    else
+      for (int q = 1; q < P; ++q) recv[q].resize(m_f->top_from[q].size());
+  });
+  comm.exchange(send, recv); // the top's right-hand side to rank 0
+  collectively(comm, [&] {
+    for (auto &v : send) v.clear();
+    if (me != 0) {
+      recv[0].assign(m_f->top_own.size(), 0.0);
+      return;
+    }
+    const std::vector<std::vector<int>> &from = m_f->top_from;
+    std::vector<double> t(m_f->top_dofs.size());
+    for (std::size_t i = 0; i < from[0].size(); ++i) t[from[0][i]] = y[m_f->top_own[i]];
+    for (int q = 1; q < P; ++q)
+      for (std::size_t i = 0; i < from[q].size(); ++i) t[from[q][i]] = recv[q][i];
+    if (!t.empty()) m_f->top.solve(t.data());
+    for (std::size_t i = 0; i < from[0].size(); ++i) y[m_f->top_own[i]] = t[from[0][i]];
+    for (int q = 1; q < P; ++q) {
+      for (int pos : from[q]) send[q].push_back(t[pos]);
+      std::vector<double>().swap(recv[q]); // nothing comes back to rank 0
+    }
+  });
+  comm.exchange(send, recv); // and its unknowns back
+  collectively(comm, [&] {
+    if (me != 0)
+      for (std::size_t i = 0; i < m_f->top_own.size(); ++i) y[m_f->top_own[i]] = recv[0][i];
+    for (auto it = m_f->steps.rbegin(); it != m_f->steps.rend(); ++it) it->backward(y.data(), work);
+    // A-hat = A D: x = D y (this rank's rows).
+    for (std::size_t i = 0; i < n; ++i) x[i] = y[i] * m_K.col_scale(m_slot[3 * static_cast<std::size_t>(m_first) + i]);
+  });
 }
 
 } // namespace hssbem

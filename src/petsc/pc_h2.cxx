@@ -1,6 +1,7 @@
 /* PC "h2": the H² factorization (strong recursive skeletonization) of the BEM system matrix, as
    a preconditioner for GMRES or, at a tight tolerance, a direct solver (see pc_h2.h). */
 #include "hssbem/petsc/pc_h2.h"
+#include "hssbem/core/fault.hpp"
 #include "hssbem/core/timer.hpp"
 #include "hssbem/h2factor/h2_factorization.hpp"
 
@@ -8,8 +9,10 @@
 
 #include <petsc/private/pcimpl.h>
 
+#include <cmath>
 #include <memory>
 #include <optional>
+#include <random>
 #include <string>
 
 namespace {
@@ -28,6 +31,7 @@ struct PC_H2 {
   Source                                       source = Source::None;
   double                                       compressed_tol = 0;
   std::shared_ptr<const hssbem::H2BemSystem>   sys;
+  std::shared_ptr<const hssbem::H2DistributedSystem> dsys; /* on the distributed H² matrix: the matrix factored (every rank its part) */
   std::shared_ptr<hssbem::H2FactorCache>       cache;
   std::unique_ptr<hssbem::H2Factorization>     factors;
   std::string                                  failure;
@@ -90,6 +94,71 @@ void FactorOnRoot(PC_H2 *h2, const HssbemSystemContext &p)
   }
 }
 
+/* ‖I − A F⁻¹‖ estimated by power iterations on the ranks (the distributed estimate_inverse_error). */
+double EstimateDistributed_Private(const PC_H2 &h2, const HssbemSystemContext &p)
+{
+  const hssbem::RankComm &comm = *p.comm;
+  const std::size_t       n    = 3 * (std::size_t)h2.dsys->num_points();
+  std::mt19937_64         gen(1 + (unsigned)comm.rank());
+  std::normal_distribution<double> normal;
+  std::vector<double>     v(n), z(n), w(n);
+  for (double &x : v) x = normal(gen);
+  const auto norm = [&](const std::vector<double> &x) {
+    double s = 0;
+    for (double e : x) s += e * e;
+    comm.sum(&s, 1);
+    return std::sqrt(s);
+  };
+  double worst = 0;
+  for (int it = 0; it < (int)h2.estimate_error; ++it) {
+    const double nv = norm(v);
+    if (!(nv > 0)) break;
+    h2.factors->solve_local(v.data(), z.data());
+    p.distributed()->apply(p.sel, z.data(), w.data()); /* the MatShell's product */
+    for (std::size_t i = 0; i < n; ++i) w[i] = v[i] - w[i];
+    const double nw = norm(w);
+    worst = std::max(worst, nw / nv);
+    for (std::size_t i = 0; i < n; ++i) v[i] = w[i] / nw;
+  }
+  return worst;
+}
+
+/* Every rank (collective), on the distributed H² matrix: its own compression (or one made anew,
+   distributed on the matrix's METIS partition, at a tolerance tighter than the matrix's), then
+   the distributed factors; a breakdown on any rank in h2->failure on every rank. */
+void FactorDistributed(PC_H2 *h2, const HssbemSystemContext &p)
+{
+  const hssbem::H2DistributedSystem *before = h2->dsys.get();
+  if (h2->rel_tol >= p.h2_options.rel_tol) {
+    h2->dsys           = p.h2dist;
+    h2->source         = Source::Matrix;
+    h2->compressed_tol = p.h2_options.rel_tol;
+  } else if (!h2->dsys || h2->source != Source::Compressed || h2->compressed_tol != h2->rel_tol) {
+    hssbem::H2Options o = p.h2_options;
+    o.rel_tol           = h2->rel_tol;
+    o.pressure_columns  = false; /* the factorization needs H and G only */
+    hssbem::Timer timer;
+    h2->dsys             = std::make_shared<hssbem::H2DistributedSystem>(*p.op, o, p.node_part, *p.comm);
+    h2->seconds_compress = timer.seconds();
+    h2->source           = Source::Compressed;
+    h2->compressed_tol   = o.rel_tol;
+    hssbem::collectively(*p.comm, [&] { /* the same tree: this rank's rows are the matrix's */
+      if (h2->dsys->first_point() != p.h2dist->first_point() || h2->dsys->num_points() != p.h2dist->num_points() || h2->dsys->tree().perm() != p.h2dist->tree().perm())
+        throw std::logic_error("PC h2: its compression's rows on this rank are not the matrix's");
+    });
+  }
+  if (!h2->cache || h2->dsys.get() != before) h2->cache = std::make_shared<hssbem::H2FactorCache>(h2->dsys->product());
+  hssbem::Timer timer;
+  try {
+    h2->factors = std::make_unique<hssbem::H2Factorization>(*h2->cache, *p.comm, p.sel, FactorOptions(*h2), p.modes.empty() ? nullptr : &p.modes);
+  } catch (const hssbem::H2Breakdown &e) { /* thrown on every rank */
+    h2->failure = e.what();
+    return;
+  }
+  h2->seconds_factor = timer.seconds();
+  if (h2->estimate_error > 0) h2->inverse_error = EstimateDistributed_Private(*h2, p);
+}
+
 PetscErrorCode PCSetUp_H2(PC pc)
 {
   PC_H2               *h2 = (PC_H2 *)pc->data;
@@ -106,15 +175,21 @@ PetscErrorCode PCSetUp_H2(PC pc)
   h2->factors.reset();
   h2->failure.clear();
   h2->inverse_error = -1;
-  if (p->h2dist && !p->h2_gathered && h2->rel_tol >= p->h2_options.rel_tol) {
-    /* The factorization runs on rank 0 (not distributed yet): the matrix's parts gathered there. */
+  if (p->h2dist) { /* distributed: each rank factors its part's subtree, rank 0 the top */
     guard.Run([&] {
-      std::optional<hssbem::H2Matrix> whole = hssbem::gather_h2_matrix(p->h2dist->matrix(), *p->comm);
-      if (whole) p->h2 = std::make_shared<const hssbem::H2BemSystem>(std::move(*whole));
+      hssbem::collectively(*p->comm, [] { hssbem::fault_point("PCSetUp"); }); /* every step is collective */
+      FactorDistributed(h2, *p);
     });
-    PetscCall(guard.Check(comm, "PC h2 set-up (gathering the H2 matrix)"));
-    p->h2_gathered = true; /* on every rank (the matrix itself is rank 0's) */
+    PetscCall(guard.Check(comm, "PC h2 set-up"));
+    breakdown = !h2->failure.empty();
+    PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &breakdown, 1, MPI_INT, MPI_MAX, comm));
+    if (breakdown) {
+      PetscCall(PetscInfo(pc, "H2 factorization broke down: %s\n", !h2->failure.empty() ? h2->failure.c_str() : "on another rank"));
+      PetscCall(PCSetFailedReason(pc, PC_FACTOR_NUMERIC_ZEROPIVOT));
+    }
+    PetscFunctionReturn(PETSC_SUCCESS);
   }
+  /* A dense or HSS matrix: the factorization runs on rank 0, on an H² compression made there. */
   guard.Run("PCSetUp", [&] {
     if (rank == 0) FactorOnRoot(h2, *p); /* the factorization runs on rank 0 */
   });
@@ -143,6 +218,20 @@ PetscErrorCode PCApply_H2(PC pc, Vec x, Vec y)
     PetscCall(VecSetInf(y));
     PetscFunctionReturn(PETSC_SUCCESS);
   }
+  if (h2->dsys) { /* distributed: this rank's rows, which are the factorization's (cluster order) */
+    PetscCall(VecGetArrayRead(x, &xa));
+    PetscCall(VecGetArrayWrite(y, &ya));
+    HssbemSystemContext *p;
+    PetscCall(HssbemMatGetSystemContext(pc->pmat, &p));
+    guard.Run([&] {
+      hssbem::collectively(*p->comm, [] { hssbem::fault_point("PCApply"); }); /* the ranks meet in the solve's exchanges */
+      h2->factors->solve_local(xa, ya);
+    });
+    PetscCall(VecRestoreArrayRead(x, &xa));
+    PetscCall(VecRestoreArrayWrite(y, &ya));
+    PetscCall(guard.Check(PetscObjectComm((PetscObject)pc), "PC h2"));
+    PetscFunctionReturn(PETSC_SUCCESS);
+  }
   PetscCall(h2->ex->SetUp(x));
   PetscCall(h2->ex->Gather(x, &xa));
   PetscCall(h2->ex->GetOut(&ya));
@@ -163,6 +252,7 @@ PetscErrorCode PCReset_H2(PC pc)
   h2->factors.reset();
   h2->cache.reset();
   h2->sys.reset();
+  h2->dsys.reset();
   h2->ex.reset();
   h2->source = Source::None;
   PetscFunctionReturn(PETSC_SUCCESS);
@@ -227,6 +317,35 @@ PetscErrorCode ViewFactorization_Private(PetscViewer viewer, const hssbem::H2Fac
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* The distributed factorization: rank 0's top, then each rank's part (collective on the viewer). */
+PetscErrorCode ViewDistributed_Private(PetscViewer viewer, const PC_H2 &h2)
+{
+  const hssbem::H2FactorStats &st = h2.factors->stats();
+  PetscMPIInt                  rank;
+  std::size_t                  cross = 0;
+  long long                    eliminated = 0;
+
+  PetscFunctionBegin;
+  PetscCallMPI(MPI_Comm_rank(PetscObjectComm((PetscObject)viewer), &rank));
+  PetscCall(PetscViewerASCIIPrintf(viewer, "distributed: each rank factors its part's subtree (%d parts, cross blocks between them), rank 0 the top\n", st.parts));
+  PetscCall(PetscViewerASCIIPrintf(viewer, "top on rank 0: %d unknowns of %d boxes, %.1f MB%s, %.2f s\n", st.top_size, st.top_boxes, st.top_bytes / 1048576.0,
+                                   st.top_mixed ? " (LU in single precision, solves refined in double)" : "", st.time_top));
+  for (const hssbem::H2FactorLevelStats &l : st.levels) {
+    cross = std::max(cross, l.cross_bytes);
+    eliminated += l.eliminated;
+  }
+  PetscCall(PetscViewerASCIIPushSynchronized(viewer));
+  PetscCall(PetscViewerASCIISynchronizedPrintf(viewer, "    rank %d: %lld unknowns eliminated, factors %.1f MB, cross blocks at most %.1f MB, working blocks peaked at %.1f MB; %.2f s (sketch %.2f, skeletons %.2f, eliminations %.2f, merges %.2f)\n",
+                                               (int)rank, eliminated, st.bytes / 1048576.0, cross / 1048576.0, st.workspace_bytes / 1048576.0, st.seconds(), st.time_sketch,
+                                               st.time_skeleton, st.time_eliminate, st.time_merge));
+  for (const hssbem::H2FactorLevelStats &l : st.levels)
+    PetscCall(PetscViewerASCIISynchronizedPrintf(viewer, "      level %d: %d boxes, %.0f unknowns per box (max %d) -> skeleton %.0f (max %d), %lld eliminated, %lld cross blocks (%.1f MB), %.2f s\n", l.level, l.boxes,
+                                                 l.mean_candidates, l.max_candidates, l.mean_rank, l.max_rank, l.eliminated, l.cross_blocks, l.cross_bytes / 1048576.0, l.seconds));
+  PetscCall(PetscViewerFlush(viewer));
+  PetscCall(PetscViewerASCIIPopSynchronized(viewer));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 PetscErrorCode PCView_H2(PC pc, PetscViewer viewer)
 {
   PC_H2   *h2 = (PC_H2 *)pc->data;
@@ -237,6 +356,18 @@ PetscErrorCode PCView_H2(PC pc, PetscViewer viewer)
   if (!ascii) PetscFunctionReturn(PETSC_SUCCESS);
   PetscCall(PetscViewerASCIIPrintf(viewer, "  H2 factorization (strong recursive skeletonization): relative tolerance %g, leaf size %s, top %d\n", (double)h2->rel_tol,
                                    h2->leaf_size > 0 ? std::to_string((int)h2->leaf_size).c_str() : "the matrix's", (int)h2->top_size));
+  if (h2->dsys) {
+    PetscCall(PetscViewerASCIIPushTab(viewer));
+    PetscCall(PetscViewerASCIIPushTab(viewer));
+    if (h2->source == Source::Matrix) PetscCall(PetscViewerASCIIPrintf(viewer, "of the matrix's distributed H2 compression (at %g; no kernel entry evaluated)\n", h2->compressed_tol));
+    else PetscCall(PetscViewerASCIIPrintf(viewer, "of a distributed H2 compression made at %g on the matrix's partition, %.2f s\n", h2->compressed_tol, h2->seconds_compress));
+    if (h2->factors) PetscCall(ViewDistributed_Private(viewer, *h2));
+    else PetscCall(PetscViewerASCIIPrintf(viewer, "factorization failed: %s\n", h2->failure.empty() ? "on another rank" : h2->failure.c_str()));
+    if (h2->factors && h2->inverse_error >= 0) PetscCall(PetscViewerASCIIPrintf(viewer, "||I - A F^-1|| estimated at %.3e (%d power iterations)\n", h2->inverse_error, (int)h2->estimate_error));
+    PetscCall(PetscViewerASCIIPopTab(viewer));
+    PetscCall(PetscViewerASCIIPopTab(viewer));
+    PetscFunctionReturn(PETSC_SUCCESS);
+  }
   if (!h2->sys) PetscFunctionReturn(PETSC_SUCCESS);
   PetscCall(PetscViewerASCIIPushTab(viewer));
   PetscCall(PetscViewerASCIIPushTab(viewer));
@@ -317,7 +448,9 @@ PetscErrorCode PCH2SetEstimateError_H2(PC pc, PetscInt n)
 
   Notes:
   On the H² MatShell the factorization reads the matrix's own compression (no kernel entry
-  evaluated); on a dense or HSS matrix, or at a tolerance tighter than the H² matrix's, it
+  evaluated); on several ranks it is distributed like the matrix (each rank factors its part's
+  subtree, rank 0 the top; a solve sends only the top's unknowns to rank 0 and back). On a dense
+  or HSS matrix (on several ranks: on rank 0), or at a tolerance tighter than the H² matrix's, it
   compresses an H² matrix at its own tolerance first. With GMRES at the default tolerance it is
   a preconditioner; with -ksp_type preonly -pc_h2_rel_tol 1e-7 a direct solver to about that
   tolerance. A pivot block singular to working precision sets PC_FACTOR_NUMERIC_ZEROPIVOT.

@@ -1071,6 +1071,9 @@ class RankFaultTests(OneCleanError, CliTestCase):
         ("HssTruncate", "error", ["-bem_mat_type", "hss", "-ksp_type", "gmres", "-pc_hss_rel_tol", "1e-3"],
          r"PC hss set-up: injected fault at HssTruncate", "any"),
         ("UlvTop", "oom", ["-bem_mat_type", "hss"], r"PC hss set-up: out of memory", 0),
+        # the distributed H² factorization: each rank's part, and rank 0's top
+        ("H2FSubtree", "error", ["-bem_mat_type", "h2", "-pc_type", "h2"], r"PC h2 set-up: injected fault at H2FSubtree", "any"),
+        ("H2FTop", "oom", ["-bem_mat_type", "h2", "-pc_type", "h2"], r"PC h2 set-up: out of memory", 0),
         ("Gather", "error", [], r"injected fault at Gather", 0),
         ("Post", "oom", [], r"out of memory", 0),
         ("Write", "error", [], r"injected fault at Write", 0),

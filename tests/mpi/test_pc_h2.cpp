@@ -169,6 +169,17 @@ TEST_F(PCH2Test, PreconditionerOnTheDenseAndHssMatrices)
   }
 }
 
+TEST_F(PCH2Test, PreconditionerOnTheDistributedH2Matrix)
+{
+  // GMRES + PC h2 at its default tolerance on the H² matrix: on several ranks the factorization
+  // is distributed like the matrix (each rank its part's subtree, rank 0 the top).
+  const Outcome o = ksp_solve(mixed->A[2], mixed->b[2], mixed->xd, "-t_ksp_type gmres -t_ksp_pc_side right -t_ksp_rtol 1e-10 -t_pc_type h2");
+  EXPECT_GT(o.reason, 0);
+  EXPECT_GE(o.its, 2); // a loose factorization, not an exact inverse
+  EXPECT_LE(o.its, 12);
+  EXPECT_LE(o.diff, 1e-7); // -mat_h2_rel_tol 1e-9 here
+}
+
 TEST(PCH2Pure, RegularisedPressureProblemMatchesDense)
 {
   Systems s(pressure_spec("sphere_l1.msh", 1000.0, 0.3, 100.0), true);

@@ -45,11 +45,27 @@ public:
   /// (cluster order, leading dimension ldx), Y receives row_block() per point (ldy).
   void apply(const double *X, int ldx, double *Y, int ldy, int nrhs = 1) const;
 
+  /// H2Matrix::skeleton_far_field on this rank's clusters (collective): out[a], for each cluster
+  /// a this rank holds, is what the far blocks of a and of its ancestors contribute to
+  /// K(S_a, :) X (the product's potentials at a's row skeleton before the leaves); the other
+  /// entries are empty. X as in apply().
+  std::vector<DenseMatrix> skeleton_far_field(const double *X, int ldx, int nrhs) const;
+  /// The same for Kᵀ (H2Matrix::skeleton_far_field_transposed): out[b] (|C_b| × nrhs) for the
+  /// clusters b this rank holds; Y holds row_block() values per point of this rank. Row moments
+  /// Uᵀ Y go up (the parts' roots' to rank 0), each far block's transposed product goes to its
+  /// column cluster's owner, and V carries the sums down.
+  std::vector<DenseMatrix> skeleton_far_field_transposed(const double *Y, int ldy, int nrhs) const;
+
   /// Per product with one column: values and messages this rank sends.
   long long values_sent() const { return m_values_sent; }
   long long messages_sent() const { return m_messages_sent; }
 
 private:
+  /// Steps 1–5 of the product up to the downward pass through the parts: potentials at the row
+  /// skeletons in *yh (far blocks, the top's share sent down); with xv, the boundary leaves'
+  /// values that the near blocks read too.
+  void far_potentials(const double *X, int ldx, int nrhs, std::vector<DenseMatrix> &yh, std::vector<DenseMatrix> *xv) const;
+
   const H2Matrix &m_K;
   const RankComm &m_comm;
   int m_first = 0, m_count = 0;
@@ -58,6 +74,9 @@ private:
   std::vector<std::vector<int>> m_up, m_top_up, m_top_down, m_down;
   std::vector<int> m_held, m_leaves, m_boundary; ///< this rank's clusters, leaves, and leaves other ranks read
   ClusterExchange m_low, m_vals, m_top, m_pot;         ///< moments; leaf values; top moments; potentials down
+  /// The transposed pass: row moments of the parts' roots to rank 0; far blocks' transposed
+  /// products to their column clusters' owners (potentials down reuse m_pot's plan).
+  ClusterExchange m_row_up, m_far_t;
   std::vector<char> m_above;                           ///< per cluster: above the parts
   long long m_values_sent = 0, m_messages_sent = 0;
 };

@@ -13,6 +13,7 @@
 #pragma once
 
 #include "hssbem/core/dense_matrix.hpp"
+#include "hssbem/h2/h2_distributed.hpp"
 #include "hssbem/h2/h2_matrix.hpp"
 
 #include <cstddef>
@@ -30,5 +31,10 @@ struct FarFieldSketch {
 /// Sketches with p columns; deterministic for a given seed. Works in chunks of columns, so the
 /// random inputs never take more than a few tens of vectors at a time.
 FarFieldSketch far_field_sketch(const H2Matrix &K, int p, unsigned seed = 20241);
+
+/// The same on a distributed H² matrix (collective): the rows of the clusters this rank holds
+/// (the others' are 0 × p), from the same random inputs (every rank draws all of them, in
+/// cluster order), so they agree with the one-rank sketch of the same tree to rounding.
+FarFieldSketch far_field_sketch(const H2DistributedProduct &K, int p, unsigned seed = 20241);
 
 } // namespace hssbem

@@ -25,12 +25,24 @@
 /// problem adds c Φ Φᵀ (rigid modes, rank 6): as explicit entries in close blocks and as a rank-6
 /// part of every far field.
 ///
+/// Parts. On a tree whose top levels are parts (one per rank), the parts are eliminated
+/// separately: two boxes of different parts are never close, even where the H² partition calls
+/// them close. Their coupling (a *cross block*, its full current value) is handled like fill-in:
+/// it enters both boxes' skeletons, is truncated by the sparsification and never receives a
+/// Schur complement. So every step touches only blocks of its own part, each part's subtree (its
+/// root included) is eliminated alone, and what is left (the parts' roots' skeletons) is
+/// factored densely. A step acts on a cross block from one side (rows kept, or columns
+/// transformed), so each side keeps its own copy and gets the other side's part at the level's
+/// end: within a level a box sees the other part's cross blocks as they were at the level's start.
+///
 /// What a new boundary-condition pattern redoes: the whole elimination (skeletons, LU, Schur
 /// complements), from the H² matrix's near blocks, far blocks and bases. What it does not: any
 /// kernel evaluation, and the far-field sketch (a property of K, cached in H2FactorCache).
 #pragma once
 
 #include "hssbem/bem/bem_operator.hpp"
+#include "hssbem/core/rank_comm.hpp"
+#include "hssbem/h2/h2_distributed.hpp"
 #include "hssbem/h2/h2_matrix.hpp"
 #include "hssbem/h2factor/far_sketch.hpp"
 
@@ -41,6 +53,10 @@
 #include <vector>
 
 namespace hssbem {
+
+namespace h2f {
+class Frontier;
+}
 
 /// Parameters of the factorization (filled from -pc_h2_* options by the PETSc layer).
 struct H2FactorOptions {
@@ -57,6 +73,11 @@ struct H2FactorOptions {
   /// densely (an upper bound of the level's Schur complements against the top's LU); false: go
   /// on while a level has a far field and more than top_size unknowns remain.
   bool top_when_cheaper = true;
+  /// On a tree with parts (ClusterTree's partition constructor): eliminate each part's subtree
+  /// separately, as the distributed factorization does on one rank per part (boxes of different
+  /// parts are never close; their couplings stay as cross blocks, see h2_factorization.hpp's
+  /// "Parts"), with the parts simulated on this rank. Ignored on a tree without parts.
+  bool within_parts = false;
 };
 
 /// A singular pivot block (e.g. a pure-traction problem without its rigid-mode regularisation).
@@ -75,6 +96,8 @@ struct H2FactorLevelStats {
   long long eliminated = 0;    ///< unknowns eliminated at this level
   std::size_t bytes = 0;       ///< factors stored for this level
   double seconds = 0;          ///< skeletons, elimination and merge of this level
+  long long cross_blocks = 0;  ///< cross blocks between boxes of different parts at this level (pairs)
+  std::size_t cross_bytes = 0; ///< their memory (both copies)
 };
 
 struct H2FactorStats {
@@ -90,6 +113,10 @@ struct H2FactorStats {
   double flops_schur = 0;                 ///< of the Schur complement products
   int sketch_columns = 0;
   bool single_panels = false;
+  int parts = 1;                          ///< parts eliminated separately (H2FactorOptions::within_parts)
+  int top_boxes = 0;                      ///< boxes left for the top (with parts: the parts' roots, or more)
+  /// On several ranks the levels, factors, flops and times above are this rank's (its part's
+  /// subtree); the top's figures are rank 0's, top_size every rank's.
   double seconds() const { return time_sketch + time_init + time_skeleton + time_eliminate + time_merge + time_top; }
 };
 
@@ -98,12 +125,17 @@ struct H2FactorStats {
 class H2FactorCache {
 public:
   explicit H2FactorCache(const H2Matrix &K) : m_K(&K) {}
+  /// Of a distributed matrix: its sketches are made by the distributed passes (collective),
+  /// each rank keeping its clusters' rows.
+  explicit H2FactorCache(const H2DistributedProduct &K) : m_K(&K.matrix()), m_dist(&K) {}
   const H2Matrix &matrix() const { return *m_K; }
+  const H2DistributedProduct *distributed() const { return m_dist; }
   /// The sketch with p columns, made on first use (seconds spent in *made, 0 when cached).
   const FarFieldSketch &sketch(int p, double *made = nullptr);
 
 private:
   const H2Matrix *m_K;
+  const H2DistributedProduct *m_dist = nullptr;
   std::vector<std::unique_ptr<FarFieldSketch>> m_sketches;
 };
 
@@ -114,20 +146,42 @@ public:
   /// order) of a pure-traction problem's regularisation, or null. Throws H2Breakdown for a
   /// singular pivot block, std::invalid_argument for bad options.
   H2Factorization(H2FactorCache &cache, const SystemSelection &sel, const H2FactorOptions &options, const std::vector<double> *rigid_modes = nullptr);
+  /// Distributed (collective; `cache` of a distributed matrix, whose tree has one part per rank
+  /// of comm): each rank eliminates its part's subtree, its root included, as within_parts
+  /// does on one rank (no communication during a level; the cross blocks' other sides at its
+  /// end, the data of merged cross blocks at the merges), and rank 0 factors the top from the
+  /// ranks' rows of it. The same steps as one rank with within_parts on the same tree, up to
+  /// rounding. A breakdown on any rank throws H2Breakdown on every rank; another error throws on
+  /// its rank and PeerFault on the others (fault sites H2FSubtree, H2FTop). comm must outlive
+  /// this object.
+  H2Factorization(H2FactorCache &cache, const RankComm &comm, const SystemSelection &sel, const H2FactorOptions &options, const std::vector<double> *rigid_modes = nullptr);
   ~H2Factorization();
   H2Factorization(const H2Factorization &) = delete;
   H2Factorization &operator=(const H2Factorization &) = delete;
 
   /// x = A⁻¹ b, both with 3 values per node in mesh order (x may alias b).
   void solve(const double *b, double *x) const;
+  /// Of a distributed factorization (collective): x = A⁻¹ b on this rank's rows, both with 3
+  /// values per point of its part in cluster order (x may alias b). Only the top's unknowns
+  /// cross ranks (to rank 0 and back).
+  void solve_local(const double *b, double *x) const;
+  bool distributed() const { return m_comm != nullptr; }
   const H2FactorStats &stats() const { return m_stats; }
   const H2FactorOptions &options() const { return m_options; }
   int num_unknowns() const;
+  /// Steps whose unknowns (the box's, its skeleton's, and those its Schur complement touched)
+  /// lie in more than one part of the tree (0 when the parts are eliminated separately).
+  int steps_crossing_parts() const;
 
   struct Factors; ///< the elimination steps (private)
 
 private:
+  /// The levels' eliminations and merges (collective on comm), from level l0 up.
+  void eliminate_levels(h2f::Frontier &front, const RankComm &comm, int l0);
+
   const H2Matrix &m_K;
+  const RankComm *m_comm = nullptr; ///< distributed: the ranks
+  int m_first = 0, m_count = 0;     ///< distributed: this rank's points (cluster order)
   H2FactorOptions m_options;
   std::vector<int> m_slot;      ///< per A-hat column (cluster order): K's slot
   std::unique_ptr<Factors> m_f;

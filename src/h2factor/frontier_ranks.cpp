@@ -1,0 +1,299 @@
+// The frontier of the H² factorization on several ranks: what its cross blocks, merges and top
+// exchange between the ranks (see frontier.hpp). Each rank holds its part's boxes; a cross block
+// lives in two copies (the rows' rank, the columns' rank), and what one side's steps do to it
+// reaches the other copy as that side's CrossSide at the level's end.
+#include "frontier.hpp"
+
+#include "hssbem/core/blas_threads.hpp"
+#include "hssbem/core/cluster_exchange.hpp"
+#include "hssbem/core/dense_ops.hpp"
+
+#include "top_block.hpp"
+
+#include <set>
+#include <tuple>
+#include <stdexcept>
+
+namespace hssbem::h2f {
+
+namespace {
+
+void append_ints(std::vector<double> &r, const std::vector<int> &v)
+{
+  r.push_back(static_cast<double>(v.size()));
+  r.insert(r.end(), v.begin(), v.end());
+}
+
+int read_int(const std::vector<double> &r, std::size_t &at)
+{
+  if (at >= r.size()) throw std::logic_error("H2 factorization: a truncated record from another rank");
+  return static_cast<int>(r[at++]);
+}
+
+std::vector<int> read_ints(const std::vector<double> &r, std::size_t &at)
+{
+  const int n = read_int(r, at);
+  if (n < 0 || at + static_cast<std::size_t>(n) > r.size()) throw std::logic_error("H2 factorization: a corrupt record from another rank");
+  std::vector<int> v(r.begin() + static_cast<long>(at), r.begin() + static_cast<long>(at) + n);
+  at += static_cast<std::size_t>(n);
+  return v;
+}
+
+/// What a record of the merges' and the top's exchanges carries.
+enum Record { BoxData = 0, ColumnBasis = 1, FarPart = 2 };
+
+} // namespace
+
+std::pair<int, int> Frontier::far_pair(int P, int Q) const
+{
+  for (int a = P; a >= 0; a = m_tree.cluster(a).parent)
+    for (int b = Q; b >= 0; b = m_tree.cluster(b).parent)
+      if (m_part.is_far(a, b)) return {a, b};
+  throw std::logic_error("H2 factorization: no far block above a pair that is not close");
+}
+
+DenseMatrix Frontier::col_basis_to(int Q, int b) const
+{
+  if (mine(Q)) return restricted_basis(Q, b, false);
+  const auto it = m_remote_w.find({Q, b});
+  if (it == m_remote_w.end()) throw std::logic_error("H2 factorization: another rank's column basis is missing");
+  return it->second;
+}
+
+void Frontier::exchange_leaf_copies()
+{
+  std::vector<std::vector<double>> send(m_comm->size());
+  collectively(*m_comm, [&] {
+    for (int a : m_front) {
+      if (!mine(a)) continue;
+      for (int b : m_cross[a]) {
+        if (mine(b)) continue;
+        std::vector<double> &r = send[m_owner[b]];
+        r.push_back(a);
+        r.push_back(b);
+        append_matrix(r, m_X[a].at(b).value());
+      }
+    }
+  });
+  const std::vector<std::vector<double>> recv = exchange_values(*m_comm, send);
+  collectively(*m_comm, [&] {
+    for (const std::vector<double> &r : recv)
+      for (std::size_t at = 0; at < r.size();) {
+        const int a = read_int(r, at), b = read_int(r, at);
+        settle(m_G[a].emplace(b, StoredBlock(read_matrix(r, at))).first->second);
+      }
+  });
+}
+
+void Frontier::exchange_sides()
+{
+  const int P = m_comm->size();
+  std::vector<std::vector<double>> send(P);
+  collectively(*m_comm, [&] {
+    for (int X : m_front) {
+      if (!mine(X) || !m_side[X].recorded) continue;
+      std::vector<char> to(P, 0);
+      for (int Y : m_cross[X])
+        if (!mine(Y)) to[m_owner[Y]] = 1;
+      for (int q = 0; q < P; ++q) {
+        if (!to[q]) continue;
+        send[q].push_back(X);
+        append_ints(send[q], m_side[X].kept);
+        append_matrix(send[q], m_side[X].C);
+      }
+    }
+  });
+  const std::vector<std::vector<double>> recv = exchange_values(*m_comm, send);
+  collectively(*m_comm, [&] {
+    for (const std::vector<double> &r : recv)
+      for (std::size_t at = 0; at < r.size();) {
+        const int X = read_int(r, at);
+        CrossSide &side = m_side[X];
+        side.recorded = true;
+        side.kept = read_ints(r, at);
+        side.C = read_matrix(r, at);
+      }
+  });
+}
+
+void Frontier::send_column_data(const std::vector<std::pair<int, int>> &pairs)
+{
+  std::vector<std::vector<double>> send(m_comm->size());
+  collectively(*m_comm, [&] {
+    std::set<std::pair<int, int>> boxes;       // (rank, c) sent
+    std::set<std::tuple<int, int, int>> bases; // (rank, c, the cluster its basis is carried to) sent
+    for (const auto &[b, c] : pairs) {
+      const int q = m_owner[b];
+      std::vector<double> &r = send[q];
+      if (boxes.insert({q, c}).second) {
+        r.push_back(BoxData);
+        r.push_back(c);
+        append_ints(r, m_D[c]);
+        append_matrix(r, m_Psi[c]);
+      }
+      if (cross_close(b, c)) continue; // the cross block holds the pair's value
+      const int bb = far_pair(b, c).second;
+      if (!bases.insert({q, c, bb}).second) continue;
+      r.push_back(ColumnBasis);
+      r.push_back(c);
+      r.push_back(bb);
+      append_matrix(r, col_basis_to(c, bb));
+    }
+  });
+  const std::vector<std::vector<double>> recv = exchange_values(*m_comm, send);
+  collectively(*m_comm, [&] {
+    for (const std::vector<double> &r : recv)
+      for (std::size_t at = 0; at < r.size();) {
+        const int kind = read_int(r, at), c = read_int(r, at);
+        if (kind == BoxData) {
+          m_D[c] = read_ints(r, at);
+          m_Psi[c] = read_matrix(r, at);
+        } else if (kind == ColumnBasis) {
+          const int bb = read_int(r, at);
+          m_remote_w[{c, bb}] = read_matrix(r, at);
+        } else
+          throw std::logic_error("H2 factorization: an unknown record from another rank");
+      }
+  });
+}
+
+void Frontier::send_far_parts(const std::vector<std::pair<int, int>> &pairs)
+{
+  std::vector<std::vector<double>> send(m_comm->size());
+  collectively(*m_comm, [&] {
+    std::vector<int> todo; // positions of the pairs that need a far part
+    for (std::size_t i = 0; i < pairs.size(); ++i)
+      if (!cross_close(pairs[i].first, pairs[i].second)) todo.push_back(static_cast<int>(i));
+    std::vector<DenseMatrix> far(pairs.size());
+    for_each_cluster(todo, [&](int i) { far[i] = far_part(pairs[i].first, pairs[i].second); });
+    std::set<std::pair<int, int>> boxes;
+    for (std::size_t i = 0; i < pairs.size(); ++i) {
+      const auto [b, c] = pairs[i];
+      const int q = m_owner[c];
+      std::vector<double> &r = send[q];
+      if (boxes.insert({q, b}).second) {
+        r.push_back(BoxData);
+        r.push_back(b);
+        append_ints(r, m_D[b]);
+        append_matrix(r, DenseMatrix());
+      }
+      if (cross_close(b, c)) continue;
+      r.push_back(FarPart);
+      r.push_back(b);
+      r.push_back(c);
+      append_matrix(r, far[i]);
+      m_pair_far[{b, c}] = std::move(far[i]); // this rank's copy (the rows) uses it too
+    }
+  });
+  const std::vector<std::vector<double>> recv = exchange_values(*m_comm, send);
+  collectively(*m_comm, [&] {
+    for (const std::vector<double> &r : recv)
+      for (std::size_t at = 0; at < r.size();) {
+        const int kind = read_int(r, at), b = read_int(r, at);
+        if (kind == BoxData) {
+          m_D[b] = read_ints(r, at);
+          read_matrix(r, at); // no Ψ: the rows' rank adds the regularisation
+        } else if (kind == FarPart) {
+          const int c = read_int(r, at);
+          m_pair_far[{b, c}] = read_matrix(r, at);
+        } else
+          throw std::logic_error("H2 factorization: an unknown record from another rank");
+      }
+  });
+}
+
+void Frontier::prepare_cross_merge(int l, const std::vector<int> &front, const std::vector<char> &in_front)
+{
+  // The new level's cross pairs between this rank's boxes and another's, as the children pairs
+  // they are assembled from: (b other, c mine) needs c's column data on b's rank; (b mine,
+  // c other) needs the far parts computed here.
+  std::vector<std::pair<int, int>> columns, rows;
+  std::vector<std::pair<int, int>> whole_rows, whole_cols; // (P, Q) of the new level, P mine / Q mine
+  for (int P : front)
+    for (int Q : m_part.close[P]) {
+      if (!in_front[Q] || same_part(P, Q) || mine(P) == mine(Q)) continue;
+      for (int b : parts_of(P, l))
+        for (int c : parts_of(Q, l)) (mine(P) ? rows : columns).push_back({b, c});
+      (mine(P) ? whole_rows : whole_cols).push_back({P, Q});
+    }
+  const auto concat = [&](int Q) {
+    const std::vector<int> kids = parts_of(Q, l);
+    if (kids.size() == 1 && kids[0] == Q) return;
+    std::vector<int> D;
+    for (int c : kids) D.insert(D.end(), m_D[c].begin(), m_D[c].end());
+    m_D[Q] = std::move(D);
+  };
+  send_column_data(columns);
+  for (const auto &pq : whole_rows) concat(pq.second);
+  send_far_parts(rows);
+  for (const auto &pq : whole_cols) concat(pq.first);
+}
+
+BlockGrid Frontier::take_top_ranks(std::vector<int> *dofs, std::vector<std::vector<int>> *from, std::vector<int> *own)
+{
+  const int nb = static_cast<int>(m_front.size()), P = m_comm->size();
+  std::vector<std::pair<int, int>> pairs; // (P other, Q mine): Q's data for P's rows
+  for (int p : m_front)
+    for (int q : m_front)
+      if (!mine(p) && mine(q)) pairs.push_back({p, q});
+  send_column_data(pairs);
+  std::vector<std::vector<double>> send(P);
+  std::vector<std::vector<double>> rows(nb); // this rank's boxes' rows: unknowns, then the blocks
+  collectively(*m_comm, [&] {
+    std::vector<int> here;
+    for (int s = 0; s < nb; ++s)
+      if (mine(m_front[s])) here.push_back(s);
+    for_each_cluster(here, [&](int s) {
+      const int X = m_front[s];
+      std::vector<double> &r = rows[s];
+      r.push_back(s);
+      append_ints(r, m_D[X]);
+      for (int t = 0; t < nb; ++t) {
+        const int Q = m_front[t];
+        const auto it = m_M[X].find(Q);
+        append_matrix(r, it != m_M[X].end() ? it->second.take() : far_part(X, Q));
+      }
+      m_M[X].clear();
+    });
+    own->clear();
+    for (int s : here) {
+      own->insert(own->end(), m_D[m_front[s]].begin(), m_D[m_front[s]].end());
+      if (m_rank != 0) send[0].insert(send[0].end(), rows[s].begin(), rows[s].end()), std::vector<double>().swap(rows[s]);
+    }
+  });
+  std::vector<std::vector<double>> recv = exchange_values(*m_comm, send);
+  BlockGrid G;
+  collectively(*m_comm, [&] {
+    dofs->clear();
+    from->assign(P, {});
+    if (m_rank != 0) return;
+    for (int s = 0; s < nb; ++s)
+      if (mine(m_front[s])) recv[0].insert(recv[0].end(), rows[s].begin(), rows[s].end());
+    std::vector<std::vector<int>> D(nb);
+    std::vector<std::size_t> start(nb, 0);
+    std::vector<const std::vector<double> *> in(nb, nullptr);
+    for (const std::vector<double> &r : recv)
+      for (std::size_t at = 0; at < r.size();) {
+        const int s = read_int(r, at);
+        D[s] = read_ints(r, at);
+        in[s] = &r, start[s] = at;
+        for (int t = 0; t < nb; ++t) read_matrix(r, at); // skip to the next box
+      }
+    G.off.assign(nb + 1, 0);
+    for (int s = 0; s < nb; ++s) {
+      if (!in[s]) throw std::logic_error("H2 factorization: a box of the top came from no rank");
+      G.off[s + 1] = G.off[s] + static_cast<int>(D[s].size());
+    }
+    G.blocks.resize(static_cast<std::size_t>(nb) * nb);
+    for (int s = 0; s < nb; ++s) {
+      std::size_t at = start[s];
+      for (int t = 0; t < nb; ++t) G.blocks[static_cast<std::size_t>(s) * nb + t] = read_matrix(*in[s], at);
+      const int q = m_owner.empty() ? 0 : m_owner[m_front[s]];
+      for (std::size_t i = 0; i < D[s].size(); ++i) (*from)[q].push_back(static_cast<int>(dofs->size() + i));
+      dofs->insert(dofs->end(), D[s].begin(), D[s].end());
+    }
+  });
+  return G;
+}
+
+} // namespace hssbem::h2f
