@@ -13,8 +13,11 @@
 
 #include <gtest/gtest.h>
 
+#include <cctype>
+#include <cmath>
 #include <cstdio>
 #include <memory>
+#include <ostream>
 #include <random>
 #include <string>
 
@@ -104,6 +107,17 @@ struct Case {
   double min_eliminated;
 };
 
+/// A readable test name: mesh stem, tolerance exponent, leaf size (e.g. sphere_l1_tol1e6_leaf16).
+std::string case_name(const std::string &mesh, double tol, int leaf)
+{
+  std::string stem = mesh.substr(0, mesh.find('.'));
+  for (char &ch : stem)
+    if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
+  return stem + "_tol1e" + std::to_string(static_cast<int>(std::lround(-std::log10(tol)))) + "_leaf" + std::to_string(leaf);
+}
+
+void PrintTo(const Case &c, std::ostream *os) { *os << case_name(c.mesh, c.tol, c.leaf) << "_parts" << c.parts; }
+
 class H2FactorParts : public ::testing::TestWithParam<Case> {};
 
 TEST_P(H2FactorParts, SolveMatchesDenseLU)
@@ -136,7 +150,8 @@ INSTANTIATE_TEST_SUITE_P(Meshes, H2FactorParts,
                          // eliminated below the top, measured: 0.69, 0.46, 0.47, 0.14, 0.75, 0.17, 0.23
                          ::testing::Values(Case{"sphere_l1.msh", 1e-3, 16, 2, 0.5}, Case{"sphere_l1.msh", 1e-6, 16, 2, 0.35}, Case{"sphere_l1.msh", 1e-3, 16, 4, 0.35},
                                            Case{"sphere_l1.msh", 1e-6, 16, 4, 0.1}, Case{"cardioid_fine.msh", 1e-3, 32, 2, 0.55}, Case{"cube_l1.msh", 1e-6, 16, 2, 0.12},
-                                           Case{"cube_l1.msh", 1e-3, 16, 4, 0.15}));
+                                           Case{"cube_l1.msh", 1e-3, 16, 4, 0.15}),
+                         [](const ::testing::TestParamInfo<Case> &info) { return case_name(info.param.mesh, info.param.tol, info.param.leaf) + "_parts" + std::to_string(info.param.parts); });
 
 TEST(H2FactorParts, WithoutTheRuleStepsCrossParts)
 {

@@ -11,8 +11,11 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <cctype>
+#include <cmath>
 #include <cstdio>
 #include <memory>
+#include <ostream>
 #include <random>
 #include <string>
 
@@ -91,6 +94,17 @@ struct Case {
   double min_eliminated; ///< fraction of the unknowns the levels must eliminate (the rest is the dense top; cube_l1: 48 % measured)
 };
 
+/// A readable test name: mesh stem, tolerance exponent, leaf size (e.g. sphere_l1_tol1e6_leaf16).
+std::string case_name(const std::string &mesh, double tol, int leaf)
+{
+  std::string stem = mesh.substr(0, mesh.find('.'));
+  for (char &ch : stem)
+    if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
+  return stem + "_tol1e" + std::to_string(static_cast<int>(std::lround(-std::log10(tol)))) + "_leaf" + std::to_string(leaf);
+}
+
+void PrintTo(const Case &c, std::ostream *os) { *os << case_name(c.mesh, c.tol, c.leaf); }
+
 class H2FactorAccuracy : public ::testing::TestWithParam<Case> {};
 
 TEST_P(H2FactorAccuracy, SolveMatchesDenseLU)
@@ -135,7 +149,8 @@ INSTANTIATE_TEST_SUITE_P(Meshes, H2FactorAccuracy,
                          ::testing::Values(Case{"sphere_l1.msh", 1e-3, 16, 0.3, 0.8}, Case{"sphere_l1.msh", 1e-6, 16, 0.3, 0.6},
                                            Case{"sphere_l1.msh", 1e-9, 16, 0.3, 0.5}, Case{"sphere_l1.msh", 1e-6, 32, 0.7, 0.6},
                                            Case{"cardioid_fine.msh", 1e-3, 32, 0.5, 0.5}, Case{"cardioid_fine.msh", 1e-6, 32, 0.5, 0.3},
-                                           Case{"cube_l1.msh", 1e-6, 16, 0.3, 0.45}, Case{"hollow_sphere_l0.msh", 1e-6, 16, 0.3, 0.05}));
+                                           Case{"cube_l1.msh", 1e-6, 16, 0.3, 0.45}, Case{"hollow_sphere_l0.msh", 1e-6, 16, 0.3, 0.05}),
+                         [](const ::testing::TestParamInfo<Case> &info) { return case_name(info.param.mesh, info.param.tol, info.param.leaf); });
 
 TEST(H2FactorSchedule, TwoThreadsGiveTheSameFactorsEveryTimeAndTheOneThreadOnesToTheTolerance)
 {
