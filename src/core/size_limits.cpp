@@ -55,8 +55,9 @@ std::string why_not(OperatorType type, long long unknowns, const SizeOptions &o,
 /// added, as long as it is a change.
 std::string alternative(OperatorType type, long long unknowns, const SizeOptions &o, const MachineLimits &m)
 {
-  // Another operator: H² at the driver's defaults (single precision, 1e-5, PC h2 on one rank).
-  SizeOptions h = type == OperatorType::H2 ? o : SizeOptions{true, 1e-5, m.ranks == 1};
+  // Another operator: H² at the driver's defaults (single precision, 1e-5, PC h2 on any number of
+  // ranks, distributed like the matrix).
+  SizeOptions h = type == OperatorType::H2 ? o : SizeOptions{true, 1e-5, true};
   std::string opts = type == OperatorType::H2 ? "" : "-bem_mat_type h2";
   if (type != OperatorType::H2 && why_not(OperatorType::H2, unknowns, h, m).empty()) return opts;
   const auto add = [&](const char *opt) { opts += opts.empty() ? opt : std::string(" ") + opt; };

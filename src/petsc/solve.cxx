@@ -81,11 +81,9 @@ static PetscErrorCode KSPSolveInLayout_Private(KSP ksp, Mat op, Vec b, Vec x, Pe
 
 PetscErrorCode HssbemDefaultPCType(MPI_Comm comm, hssbem::OperatorType type, const char **pc_type)
 {
-  PetscMPIInt size;
-
   PetscFunctionBegin;
-  PetscCallMPI(MPI_Comm_size(comm, &size));
-  *pc_type = type == hssbem::OperatorType::Hss ? PCHSS : type == hssbem::OperatorType::H2 ? (size > 1 ? PCJACOBI : PCH2) : PCLU;
+  (void)comm;
+  *pc_type = type == hssbem::OperatorType::Hss ? PCHSS : type == hssbem::OperatorType::H2 ? PCH2 : PCLU;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -106,10 +104,9 @@ PetscErrorCode HssbemH2WillBeFactored(MPI_Comm comm, bool *factored)
   HssbemKSPCreate - Creates the main solver (no prefix) with the defaults of the matrix type
   (-ksp_type preonly with -pc_type hss on the HSS matrix; GMRES(100), right-preconditioned so that
   -ksp_rtol 1e-8 bounds the true residual, on the H² one, with -pc_type h2 (the H² factorization
-  at its default tolerance) on one rank and -pc_type jacobi on several: PC h2 gathers the
-  distributed matrix on rank 0 and factors it there, which made it the slower choice on 2 ranks
-  (80k sphere: 53.8 s against 34.1 s; 20k disk organ with nu = 0.49: 15.9 s against 9.3 s);
-  -pc_type lu on the dense one) and applies
+  at its default tolerance, distributed like the matrix: on 2 ranks 22.3 s against 24.9 s with
+  Jacobi on an 80k sphere, 6.2-6.3 s against 6.3 s on a 20k disk organ with nu = 0.49, and 6
+  iterations against 52-71); -pc_type lu on the dense one) and applies
   the options database, before there is a matrix, so that option errors surface before the
   expensive assembly.
 

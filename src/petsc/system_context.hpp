@@ -66,8 +66,8 @@ PetscErrorCode HssbemMatGetSystemContext(Mat A, HssbemSystemContext **ctx);
 /* The operator type named mat_type (HSSBEM_MAT_*); an error on comm for any other name. */
 PetscErrorCode HssbemOperatorTypeFromName(MPI_Comm comm, const char *mat_type, hssbem::OperatorType *type);
 
-/* The main solver's default PC for an operator type on comm (PCHSS, PCH2 on one rank and PCJACOBI
-   on several for H², PCLU for dense), and whether the H² operator will be factored by PC h2 (the
+/* The main solver's default PC for an operator type on comm (PCHSS, PCH2 for H² on any number of
+   ranks, PCLU for dense), and whether the H² operator will be factored by PC h2 (the
    -pc_type of the options database, else that default). */
 PetscErrorCode HssbemDefaultPCType(MPI_Comm comm, hssbem::OperatorType type, const char **pc_type);
 PetscErrorCode HssbemH2WillBeFactored(MPI_Comm comm, bool *factored);
