@@ -24,6 +24,7 @@ struct PC_H2 {
   PetscReal rel_tol        = HSSBEM_PC_H2_DEFAULT_REL_TOL;
   PetscInt  leaf_size      = 0;    /* 0: the H² matrix's leaves */
   PetscInt  top_size       = 2000; /* unknowns factored densely at the top */
+  PetscBool top_cheaper    = PETSC_TRUE; /* stop at a level that costs more than the dense top */
   PetscInt  mixed_top      = 4000; /* from this top size on, its LU in single precision refined in double (<= 0: never) */
   PetscInt  sketch_size    = 0;    /* 0: from the tolerance */
   PetscInt  estimate_error = 0;    /* power iterations of the ‖I − A F⁻¹‖ estimate (0: none) */
@@ -45,6 +46,7 @@ hssbem::H2FactorOptions FactorOptions(const PC_H2 &h2)
   o.rel_tol        = h2.rel_tol;
   o.leaf_size      = (int)h2.leaf_size;
   o.top_size       = (int)h2.top_size;
+  o.top_when_cheaper = h2.top_cheaper == PETSC_TRUE;
   o.mixed_top_from = (int)h2.mixed_top;
   o.sketch_columns = (int)h2.sketch_size;
   return o;
@@ -267,6 +269,7 @@ PetscErrorCode PCDestroy_H2(PC pc)
   PetscCall(PetscObjectComposeFunction((PetscObject)pc, "PCH2SetRelTol_C", NULL));
   PetscCall(PetscObjectComposeFunction((PetscObject)pc, "PCH2SetLeafSize_C", NULL));
   PetscCall(PetscObjectComposeFunction((PetscObject)pc, "PCH2SetTopSize_C", NULL));
+  PetscCall(PetscObjectComposeFunction((PetscObject)pc, "PCH2SetTopWhenCheaper_C", NULL));
   PetscCall(PetscObjectComposeFunction((PetscObject)pc, "PCH2SetMixedTop_C", NULL));
   PetscCall(PetscObjectComposeFunction((PetscObject)pc, "PCH2SetSketchSize_C", NULL));
   PetscCall(PetscObjectComposeFunction((PetscObject)pc, "PCH2SetEstimateError_C", NULL));
@@ -295,6 +298,7 @@ PetscErrorCode PCSetFromOptions_H2(PC pc, PetscOptionItems *PetscOptionsObject)
   PetscCall(PetscOptionsReal("-pc_h2_rel_tol", "Relative tolerance of the factorization (of each skeleton)", "PCH2SetRelTol", h2->rel_tol, &h2->rel_tol, NULL));
   PetscCall(PetscOptionsInt("-pc_h2_leaf_size", "Dof nodes per box at the first level factored (0: the H2 matrix's leaves, below tolerance 1e-5 their parents)", "PCH2SetLeafSize", h2->leaf_size, &h2->leaf_size, NULL));
   PetscCall(PetscOptionsInt("-pc_h2_top_size", "Unknowns factored densely at the top", "PCH2SetTopSize", h2->top_size, &h2->top_size, NULL));
+  PetscCall(PetscOptionsBool("-pc_h2_top_when_cheaper", "Factor the rest densely from a level whose eliminations would cost more flops than that", "PCH2SetTopWhenCheaper", h2->top_cheaper, &h2->top_cheaper, NULL));
   PetscCall(PetscOptionsInt("-pc_h2_mixed_top", "From this many unknowns on, the dense top's LU in single precision, each solve refined in double (0: always double)", "PCH2SetMixedTop", h2->mixed_top, &h2->mixed_top, NULL));
   PetscCall(PetscOptionsInt("-pc_h2_sketch_size", "Random vectors of the far-field sketch (0: from the tolerance)", "PCH2SetSketchSize", h2->sketch_size, &h2->sketch_size, NULL));
   PetscCall(PetscOptionsInt("-pc_h2_estimate_error", "Power iterations of the ||I - A F^-1|| estimate shown by -ksp_view (0: none)", "PCH2SetEstimateError", h2->estimate_error, &h2->estimate_error, NULL));
@@ -410,6 +414,13 @@ PetscErrorCode PCH2SetTopSize_H2(PC pc, PetscInt n)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+PetscErrorCode PCH2SetTopWhenCheaper_H2(PC pc, PetscBool flg)
+{
+  PetscFunctionBegin;
+  ((PC_H2 *)pc->data)->top_cheaper = flg;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 PetscErrorCode PCH2SetMixedTop_H2(PC pc, PetscInt n)
 {
   PetscFunctionBegin;
@@ -439,9 +450,10 @@ PetscErrorCode PCH2SetEstimateError_H2(PC pc, PetscInt n)
   PCH2 - H² factorization of the BEM system matrix by strong recursive skeletonization (hssbem).
 
   Options Database Keys:
-+ -pc_h2_rel_tol <tol>        - relative tolerance of each skeleton (default 3e-3: a preconditioner)
++ -pc_h2_rel_tol <tol>        - relative tolerance of each skeleton (default 2e-3: a preconditioner)
 . -pc_h2_leaf_size <n>        - dof nodes per box at the first level factored (0: the H² leaves; below 1e-5 their parents)
 . -pc_h2_top_size <n>         - unknowns factored densely at the top (default 2000)
+. -pc_h2_top_when_cheaper <b> - also stop at a level whose eliminations would cost more flops than the dense top (default true)
 . -pc_h2_mixed_top <n>        - from this top size on (default 4000), its LU in single precision, solves refined in double (0: never)
 . -pc_h2_sketch_size <p>      - random vectors of the far-field sketch (0: from the tolerance)
 - -pc_h2_estimate_error <k>   - power iterations of the ||I - A F^-1|| estimate in -ksp_view (0: none)
@@ -470,6 +482,7 @@ PETSC_EXTERN PetscErrorCode PCCreate_H2(PC pc)
   PetscCall(PetscObjectComposeFunction((PetscObject)pc, "PCH2SetRelTol_C", PCH2SetRelTol_H2));
   PetscCall(PetscObjectComposeFunction((PetscObject)pc, "PCH2SetLeafSize_C", PCH2SetLeafSize_H2));
   PetscCall(PetscObjectComposeFunction((PetscObject)pc, "PCH2SetTopSize_C", PCH2SetTopSize_H2));
+  PetscCall(PetscObjectComposeFunction((PetscObject)pc, "PCH2SetTopWhenCheaper_C", PCH2SetTopWhenCheaper_H2));
   PetscCall(PetscObjectComposeFunction((PetscObject)pc, "PCH2SetMixedTop_C", PCH2SetMixedTop_H2));
   PetscCall(PetscObjectComposeFunction((PetscObject)pc, "PCH2SetSketchSize_C", PCH2SetSketchSize_H2));
   PetscCall(PetscObjectComposeFunction((PetscObject)pc, "PCH2SetEstimateError_C", PCH2SetEstimateError_H2));
@@ -516,6 +529,23 @@ PetscErrorCode PCH2SetTopSize(PC pc, PetscInt n)
 {
   PetscFunctionBegin;
   PetscTryMethod(pc, "PCH2SetTopSize_C", (PC, PetscInt), (pc, n));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/*@
+  PCH2SetTopWhenCheaper - Sets whether the factorization stops at a level whose eliminations would
+  cost more flops (an upper bound of its Schur complements) than factoring every unknown left
+  densely; the rest becomes the top. PETSC_FALSE: go on while a level has a far field and more
+  than the top size of unknowns remain.
+
+  Logically Collective
+
+  Level: advanced
+@*/
+PetscErrorCode PCH2SetTopWhenCheaper(PC pc, PetscBool flg)
+{
+  PetscFunctionBegin;
+  PetscTryMethod(pc, "PCH2SetTopWhenCheaper_C", (PC, PetscBool), (pc, flg));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

@@ -60,7 +60,7 @@ class Frontier;
 
 /// Parameters of the factorization (filled from -pc_h2_* options by the PETSc layer).
 struct H2FactorOptions {
-  double rel_tol = 3e-3;   ///< relative tolerance of each skeleton (joint row/column ID)
+  double rel_tol = 2e-3;   ///< relative tolerance of each skeleton (joint row/column ID)
   int leaf_size = 0;       ///< dof nodes per box at the first level factored (≥ the H² leaves); 0: the H² leaves
   int sketch_columns = 0;  ///< random vectors of the far-field sketch; 0: chosen from rel_tol
   int top_size = 2000;     ///< factor the rest densely once at most this many unknowns remain

@@ -23,18 +23,20 @@
 
 /* The PC's default factorization tolerance: a preconditioner for GMRES around the H² product
    (chosen by measurement, see the README's "H² factorization" section). */
-#define HSSBEM_PC_H2_DEFAULT_REL_TOL 3e-3
+#define HSSBEM_PC_H2_DEFAULT_REL_TOL 2e-3
 
 PETSC_EXTERN PetscErrorCode PCCreate_H2(PC);
 
 /* Setters for the options (before PCSetUp): the factorization's relative tolerance; dof nodes
    per box at the first level factored (0: the H² matrix's leaves, their parents below tolerance
-   1e-5); unknowns factored densely at the top; the top size from which the top's LU runs in
+   1e-5); unknowns factored densely at the top; whether a level that would cost more than the
+   dense top of what is left ends the levels too; the top size from which the top's LU runs in
    single precision with each solve refined in double (≤ 0: never); random vectors of the far-field sketch (0: from the tolerance); power iterations of
    the ‖I − A F⁻¹‖ estimate that -ksp_view reports (0: none). */
 PETSC_EXTERN PetscErrorCode PCH2SetRelTol(PC, PetscReal);
 PETSC_EXTERN PetscErrorCode PCH2SetLeafSize(PC, PetscInt);
 PETSC_EXTERN PetscErrorCode PCH2SetTopSize(PC, PetscInt);
+PETSC_EXTERN PetscErrorCode PCH2SetTopWhenCheaper(PC, PetscBool);
 PETSC_EXTERN PetscErrorCode PCH2SetMixedTop(PC, PetscInt);
 PETSC_EXTERN PetscErrorCode PCH2SetSketchSize(PC, PetscInt);
 PETSC_EXTERN PetscErrorCode PCH2SetEstimateError(PC, PetscInt);
