@@ -7,12 +7,23 @@
 
 #include <array>
 
+#include <cctype>
 #include <cmath>
 #include <numeric>
 #include <random>
+#include <string>
 #include <vector>
 
 namespace hssbem::test {
+
+/// A readable test name: mesh stem, tolerance exponent, leaf size (e.g. sphere_l1_tol1e6_leaf16).
+inline std::string case_name(const std::string &mesh, double tol, int leaf)
+{
+  std::string stem = mesh.substr(0, mesh.find('.'));
+  for (char &ch : stem)
+    if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
+  return stem + "_tol1e" + std::to_string(static_cast<int>(std::lround(-std::log10(tol)))) + "_leaf" + std::to_string(leaf);
+}
 
 /// ‖a − b‖ / ‖b‖.
 inline double rel(const std::vector<double> &a, const std::vector<double> &b)

@@ -13,7 +13,6 @@
 
 #include <gtest/gtest.h>
 
-#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -22,7 +21,7 @@
 #include <string>
 
 using namespace hssbem;
-using namespace hssbem::test; // dense_k, dense_a, random_pattern, rel
+using namespace hssbem::test; // dense_k, dense_a, random_pattern, rel, case_name
 
 namespace {
 
@@ -106,15 +105,6 @@ struct Case {
   int parts;
   double min_eliminated;
 };
-
-/// A readable test name: mesh stem, tolerance exponent, leaf size (e.g. sphere_l1_tol1e6_leaf16).
-std::string case_name(const std::string &mesh, double tol, int leaf)
-{
-  std::string stem = mesh.substr(0, mesh.find('.'));
-  for (char &ch : stem)
-    if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
-  return stem + "_tol1e" + std::to_string(static_cast<int>(std::lround(-std::log10(tol)))) + "_leaf" + std::to_string(leaf);
-}
 
 void PrintTo(const Case &c, std::ostream *os) { *os << case_name(c.mesh, c.tol, c.leaf) << "_parts" << c.parts; }
 

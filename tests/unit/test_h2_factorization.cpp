@@ -11,7 +11,6 @@
 #include <omp.h>
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -20,7 +19,7 @@
 #include <string>
 
 using namespace hssbem;
-using namespace hssbem::test; // dense_k, dense_a, random_pattern, rel
+using namespace hssbem::test; // dense_k, dense_a, random_pattern, rel, case_name
 
 namespace {
 
@@ -93,15 +92,6 @@ struct Case {
   double p_known;        ///< probability that a component's displacement is known (traction unknown)
   double min_eliminated; ///< fraction of the unknowns the levels must eliminate (the rest is the dense top; cube_l1: 48 % measured)
 };
-
-/// A readable test name: mesh stem, tolerance exponent, leaf size (e.g. sphere_l1_tol1e6_leaf16).
-std::string case_name(const std::string &mesh, double tol, int leaf)
-{
-  std::string stem = mesh.substr(0, mesh.find('.'));
-  for (char &ch : stem)
-    if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
-  return stem + "_tol1e" + std::to_string(static_cast<int>(std::lround(-std::log10(tol)))) + "_leaf" + std::to_string(leaf);
-}
 
 void PrintTo(const Case &c, std::ostream *os) { *os << case_name(c.mesh, c.tol, c.leaf); }
 
