@@ -175,7 +175,7 @@ void print_levels(const H2FactorStats &st)
     std::fprintf(stderr, "level %d: %d boxes, %.0f unknowns per box (max %d) -> skeleton %.0f (max %d), %lld eliminated, %.1f MB, %.2f s; %lld cross blocks, %.1f MB\n", l.level, l.boxes,
                  l.mean_candidates, l.max_candidates, l.mean_rank, l.max_rank, l.eliminated, l.bytes / 1048576.0, l.seconds, l.cross_blocks, l.cross_bytes / 1048576.0);
   std::fprintf(stderr, "factorization %.2f s: sketch %.2f (p = %d), first boxes %.2f, skeletons %.2f, eliminations %.2f (thread-s), merges %.2f, top %.2f (%d unknowns%s); %.3g Schur flop; %.1f MB (%s panels), working blocks at most %.1f MB\n",
-               st.seconds(), st.time_sketch, st.sketch_columns, st.time_init, st.time_skeleton, st.time_eliminate, st.time_merge, st.time_top, st.top_size, st.top_mixed ? ", single-precision LU refined in double" : "", st.flops_schur, st.bytes / 1048576.0,
+               st.seconds(), st.time_sketch, st.sketch_columns, st.time_init, st.time_skeleton, st.time_eliminate, st.time_merge, st.time_top, st.top_size, st.top_mixed ? ", single-precision LU refined in double" : st.top_single ? ", single-precision LU" : "", st.flops_schur, st.bytes / 1048576.0,
                st.single_panels ? "single" : "double", st.workspace_bytes / 1048576.0);
 }
 

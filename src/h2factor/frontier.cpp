@@ -536,27 +536,39 @@ std::size_t Frontier::store_bytes() const
   return s;
 }
 
-BlockGrid Frontier::take_top(std::vector<int> *dofs)
+void Frontier::take_top(std::vector<int> *dofs, TopSink &sink)
 {
-  BlockGrid G;
   const int nb = static_cast<int>(m_front.size());
-  G.off.assign(nb + 1, 0);
-  for (int t = 0; t < nb; ++t) G.off[t + 1] = G.off[t] + static_cast<int>(m_D[m_front[t]].size());
-  G.blocks.resize(static_cast<std::size_t>(nb) * nb);
+  std::vector<int> off(nb + 1, 0);
+  for (int t = 0; t < nb; ++t) off[t + 1] = off[t] + static_cast<int>(m_D[m_front[t]].size());
+  sink.begin(off);
   std::vector<int> block_rows(nb);
   std::iota(block_rows.begin(), block_rows.end(), 0);
-  for_each_cluster(block_rows, [&](int s) {
-    const int P = m_front[s];
-    for (int t = 0; t < nb; ++t) {
-      const int Q = m_front[t];
-      const auto it = m_M[P].find(Q);
-      G.blocks[static_cast<std::size_t>(s) * nb + t] = it != m_M[P].end() ? it->second.take() : far_part(P, Q);
-    }
-    m_M[P].clear();
-  });
+  for_each_cluster(block_rows, [&](int s) { take_row(s, sink); });
+  release_stores();
   dofs->clear();
   for (int P : m_front) dofs->insert(dofs->end(), m_D[P].begin(), m_D[P].end());
-  return G;
+}
+
+void Frontier::release_stores()
+{
+  for (auto *store : {&m_M, &m_F, &m_X, &m_G})
+    for (auto &row : *store) std::map<int, StoredBlock>().swap(row);
+  for (int X : m_front) m_Eu[X] = StoredBlock(), m_Ew[X] = StoredBlock();
+  std::map<std::pair<int, int>, DenseMatrix>().swap(m_remote_w);
+  std::map<std::pair<int, int>, DenseMatrix>().swap(m_pair_far);
+  m_fill_col_blocks.clear();
+}
+
+void Frontier::take_row(int s, TopSink &sink)
+{
+  const int P = m_front[s], nb = static_cast<int>(m_front.size());
+  for (int t = 0; t < nb; ++t) {
+    const int Q = m_front[t];
+    const auto it = m_M[P].find(Q);
+    sink.put(s, t, it != m_M[P].end() ? it->second.take() : far_part(P, Q));
+  }
+  m_M[P].clear();
 }
 
 } // namespace hssbem::h2f

@@ -14,6 +14,7 @@
 namespace hssbem::h2f {
 
 struct BlockGrid;
+class TopSink;
 
 /// The columns of A-hat on K: column g (dof 3k + c of cluster order) is sign[g] × (K S)(:, w k +
 /// slot[g]); with a regularisation, A-hat also holds c Φ Ψᵀ (Φ: N × 6 column-major, Ψ = D Φ).
@@ -175,15 +176,20 @@ public:
   /// The frontier of level l − 1 from that of level l (boxes never merge above their part's
   /// root: a part's root stays in the frontier as it is).
   void merge(int l);
-  /// All remaining unknowns as one block matrix, their dof indices in *dofs; the blocks between
-  /// close boxes move out of the store (the frontier is spent).
-  BlockGrid take_top(std::vector<int> *dofs);
-  /// The same on several ranks (collective): each rank's rows of the top go to rank 0, which
-  /// returns the whole grid and in *dofs all its unknowns, in *from[q] the positions in *dofs of
-  /// rank q's (in the order of *own on q); every rank gets its own top unknowns in *own.
-  BlockGrid take_top_ranks(std::vector<int> *dofs, std::vector<std::vector<int>> *from, std::vector<int> *own);
+  /// All remaining unknowns as one block matrix into `sink`, their dof indices in *dofs; the
+  /// blocks between close boxes move out of the store (the frontier is spent).
+  void take_top(std::vector<int> *dofs, TopSink &sink);
+  /// The same on several ranks (collective): rank 0's own rows go straight into its sink, the
+  /// other ranks' rows are sent to rank 0 and go there as they are read; rank 0 gets in *dofs all
+  /// the top's unknowns, in *from[q] the positions in *dofs of rank q's (in the order of *own on
+  /// q); every rank gets its own top unknowns in *own. The sink is used on rank 0 alone.
+  void take_top_ranks(std::vector<int> *dofs, std::vector<std::vector<int>> *from, std::vector<int> *own, TopSink &sink);
 
 private:
+  /// Box row s of the top (position s of the frontier) into the sink; its blocks move out.
+  void take_row(int s, TopSink &sink);
+  /// Once the top's rows are out: every block, basis and copy goes (the unknowns stay).
+  void release_stores();
   DenseMatrix leaf_col_basis(int c) const;
   DenseMatrix leaf_near(int a, int b) const;
   void add_regularisation(DenseMatrix &B, int P, int Q) const;

@@ -4,12 +4,16 @@
 // reaches the other copy as that side's CrossSide at the level's end.
 #include "frontier.hpp"
 
+#include "hssbem/core/allocator.hpp"
 #include "hssbem/core/blas_threads.hpp"
 #include "hssbem/core/cluster_exchange.hpp"
 #include "hssbem/core/dense_ops.hpp"
 
 #include "top_block.hpp"
 
+#include <algorithm>
+#include <cstring>
+#include <numeric>
 #include <set>
 #include <tuple>
 #include <stdexcept>
@@ -229,71 +233,113 @@ void Frontier::prepare_cross_merge(int l, const std::vector<int> &front, const s
   for (const auto &pq : whole_cols) concat(pq.first);
 }
 
-BlockGrid Frontier::take_top_ranks(std::vector<int> *dofs, std::vector<std::vector<int>> *from, std::vector<int> *own)
+void Frontier::take_top_ranks(std::vector<int> *dofs, std::vector<std::vector<int>> *from, std::vector<int> *own, TopSink &sink)
 {
   const int nb = static_cast<int>(m_front.size()), P = m_comm->size();
   std::vector<std::pair<int, int>> pairs; // (P other, Q mine): Q's data for P's rows
   for (int p : m_front)
     for (int q : m_front)
       if (!mine(p) && mine(q)) pairs.push_back({p, q});
-  send_column_data(pairs);
+  send_column_data(pairs); // and every box's unknowns to every rank
+  // Blocks travel rounded to single precision, two to a value, when the sink rounds them anyway.
+  const bool halves = sink.single();
+  const auto values = [&](std::size_t count) { return halves ? (count + 1) / 2 : count; };
   std::vector<std::vector<double>> send(P);
-  std::vector<std::vector<double>> rows(nb); // this rank's boxes' rows: unknowns, then the blocks
-  collectively(*m_comm, [&] {
-    std::vector<int> here;
-    for (int s = 0; s < nb; ++s)
-      if (mine(m_front[s])) here.push_back(s);
-    for_each_cluster(here, [&](int s) {
-      const int X = m_front[s];
-      std::vector<double> &r = rows[s];
-      r.push_back(s);
-      append_ints(r, m_D[X]);
-      for (int t = 0; t < nb; ++t) {
-        const int Q = m_front[t];
-        const auto it = m_M[X].find(Q);
-        append_matrix(r, it != m_M[X].end() ? it->second.take() : far_part(X, Q));
-      }
-      m_M[X].clear();
-    });
-    own->clear();
-    for (int s : here) {
-      own->insert(own->end(), m_D[m_front[s]].begin(), m_D[m_front[s]].end());
-      if (m_rank != 0) send[0].insert(send[0].end(), rows[s].begin(), rows[s].end()), std::vector<double>().swap(rows[s]);
-    }
-  });
-  std::vector<std::vector<double>> recv = exchange_values(*m_comm, send);
-  BlockGrid G;
+  std::vector<int> here; // positions of this rank's boxes
   collectively(*m_comm, [&] {
     dofs->clear();
     from->assign(P, {});
-    if (m_rank != 0) return;
+    own->clear();
     for (int s = 0; s < nb; ++s)
-      if (mine(m_front[s])) recv[0].insert(recv[0].end(), rows[s].begin(), rows[s].end());
-    std::vector<std::vector<int>> D(nb);
-    std::vector<std::size_t> start(nb, 0);
-    std::vector<const std::vector<double> *> in(nb, nullptr);
-    for (const std::vector<double> &r : recv)
+      if (mine(m_front[s])) here.push_back(s);
+    for (int s : here) own->insert(own->end(), m_D[m_front[s]].begin(), m_D[m_front[s]].end());
+    if (m_rank == 0) { // its own rows straight into the sink
+      std::vector<int> off(nb + 1, 0);
+      for (int s = 0; s < nb; ++s) {
+        off[s + 1] = off[s] + static_cast<int>(m_D[m_front[s]].size());
+        const int q = m_owner.empty() ? 0 : m_owner[m_front[s]];
+        for (int i = off[s]; i < off[s + 1]; ++i) (*from)[q].push_back(i);
+        dofs->insert(dofs->end(), m_D[m_front[s]].begin(), m_D[m_front[s]].end());
+      }
+      sink.begin(off);
+      for_each_cluster(here, [&](int s) { take_row(s, sink); });
+      release_stores();
+      return_free_memory();
+      return;
+    }
+    // Box row s: its position, its unknowns (for a check), then its blocks. The rows are written
+    // in place into one message sized beforehand, so that it is never copied as it grows.
+    std::vector<std::size_t> start(here.size() + 1, 0);
+    for (std::size_t i = 0; i < here.size(); ++i) {
+      const std::size_t m = m_D[m_front[here[i]]].size();
+      std::size_t size = 2 + m;
+      for (int t = 0; t < nb; ++t) size += 2 + values(m * m_D[m_front[t]].size());
+      start[i + 1] = start[i] + size;
+    }
+    std::vector<double> &r = send[0];
+    r.resize(start.back());
+    std::vector<int> rows(here.size());
+    std::iota(rows.begin(), rows.end(), 0);
+    for_each_cluster(rows, [&](int i) {
+      const int X = m_front[here[i]];
+      double *out = r.data() + start[i];
+      *out++ = here[i];
+      *out++ = static_cast<double>(m_D[X].size());
+      out = std::copy(m_D[X].begin(), m_D[X].end(), out);
+      std::vector<float> rounded;
+      for (int t = 0; t < nb; ++t) {
+        const int Q = m_front[t];
+        const auto it = m_M[X].find(Q);
+        const DenseMatrix B = it != m_M[X].end() ? it->second.take() : far_part(X, Q);
+        if (B.m != static_cast<int>(m_D[X].size()) || B.n != static_cast<int>(m_D[Q].size())) throw std::logic_error("H2 factorization: a top block of unexpected size");
+        *out++ = B.m;
+        *out++ = B.n;
+        if (!halves) {
+          out = std::copy(B.a.begin(), B.a.end(), out);
+          continue;
+        }
+        rounded.assign(values(B.a.size()) * 2, 0.0f);
+        std::copy(B.a.begin(), B.a.end(), rounded.begin());
+        std::memcpy(out, rounded.data(), rounded.size() * sizeof(float));
+        out += rounded.size() / 2;
+      }
+      m_M[X].clear();
+      if (out != r.data() + start[i + 1]) throw std::logic_error("H2 factorization: a top row of unexpected length");
+    });
+    release_stores();
+    return_free_memory();
+  });
+  std::vector<std::vector<double>> recv = exchange_values(*m_comm, send);
+  std::vector<std::vector<double>>().swap(send);
+  collectively(*m_comm, [&] {
+    if (m_rank != 0) return;
+    std::vector<char> seen(nb, 0);
+    for (int s : here) seen[s] = 1;
+    for (std::vector<double> &r : recv) {
       for (std::size_t at = 0; at < r.size();) {
         const int s = read_int(r, at);
-        D[s] = read_ints(r, at);
-        in[s] = &r, start[s] = at;
-        for (int t = 0; t < nb; ++t) read_matrix(r, at); // skip to the next box
+        if (s < 0 || s >= nb || seen[s] || read_ints(r, at) != m_D[m_front[s]]) throw std::logic_error("H2 factorization: a box row of the top came twice or does not match");
+        seen[s] = 1;
+        for (int t = 0; t < nb; ++t) {
+          if (!halves) {
+            sink.put(s, t, read_matrix(r, at));
+            continue;
+          }
+          const int m = read_int(r, at), n = read_int(r, at);
+          const std::size_t count = static_cast<std::size_t>(m) * static_cast<std::size_t>(n);
+          if (m != static_cast<int>(m_D[m_front[s]].size()) || n != static_cast<int>(m_D[m_front[t]].size()) || at + values(count) > r.size())
+            throw std::logic_error("H2 factorization: a corrupt top block from another rank");
+          const float *in = reinterpret_cast<const float *>(r.data() + at);
+          DenseMatrix B(m, n);
+          std::copy(in, in + count, B.a.begin());
+          at += values(count);
+          sink.put(s, t, std::move(B));
+        }
       }
-    G.off.assign(nb + 1, 0);
-    for (int s = 0; s < nb; ++s) {
-      if (!in[s]) throw std::logic_error("H2 factorization: a box of the top came from no rank");
-      G.off[s + 1] = G.off[s] + static_cast<int>(D[s].size());
+      std::vector<double>().swap(r);
     }
-    G.blocks.resize(static_cast<std::size_t>(nb) * nb);
-    for (int s = 0; s < nb; ++s) {
-      std::size_t at = start[s];
-      for (int t = 0; t < nb; ++t) G.blocks[static_cast<std::size_t>(s) * nb + t] = read_matrix(*in[s], at);
-      const int q = m_owner.empty() ? 0 : m_owner[m_front[s]];
-      for (std::size_t i = 0; i < D[s].size(); ++i) (*from)[q].push_back(static_cast<int>(dofs->size() + i));
-      dofs->insert(dofs->end(), D[s].begin(), D[s].end());
-    }
+    if (std::find(seen.begin(), seen.end(), 0) != seen.end()) throw std::logic_error("H2 factorization: a box of the top came from no rank");
   });
-  return G;
 }
 
 } // namespace hssbem::h2f

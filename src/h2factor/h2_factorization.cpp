@@ -6,6 +6,7 @@
 
 #include "hssbem/bem/rigid_modes.hpp"
 #include "hssbem/compress/pattern_columns.hpp"
+#include "hssbem/core/allocator.hpp"
 #include "hssbem/core/blas_threads.hpp"
 #include "hssbem/core/fault.hpp"
 #include "hssbem/core/lapack.hpp"
@@ -14,6 +15,7 @@
 #include "hssbem/core/tree_ownership.hpp"
 
 #include <algorithm>
+#include <cstdio>
 #include <condition_variable>
 #include <cstdint>
 #include <mutex>
@@ -108,6 +110,27 @@ int first_level(const ClusterTree &tree, int leaf_size, double rel_tol)
     --l;
   }
   return l;
+}
+
+/// Whether the top's LU runs in single precision alone (TopBlock::factor_single): when the
+/// panels rest in single precision (the factorization is a preconditioner) and the top is large
+/// enough for the mixed LU. The mixed LU would refine each of its solves to double against a
+/// copy of the top in double that the single-precision steps below it cannot use, and it takes
+/// three times the memory: on 2 ranks of an 80k sphere at 2e-3, rank 0's 5 174-unknown top took
+/// 306 MB, the single LU 102 MB.
+bool top_in_single(double n, const H2FactorOptions &o) { return o.mixed_top_from > 0 && n >= o.mixed_top_from; }
+
+/// The trial solve's bound for a single-precision top: the factorization's own tolerance (at
+/// most 1e-3, so that the top never adds more than the steps).
+double single_trial_tol(const H2FactorOptions &o) { return std::min(o.rel_tol, 1e-3); }
+
+std::string top_breakdown(const h2f::TopBlock &top)
+{
+  std::string what = "H2 factorization broke down: the top block (" + std::to_string(top.size()) + " unknowns) is singular to ";
+  if (!top.single()) return what + "working precision";
+  char trial[64];
+  std::snprintf(trial, sizeof trial, "%.1e", top.trial_error());
+  return what + "single precision (a trial solve is off by " + trial + "; a tolerance below 1e-5 factors it in double)";
 }
 
 /// Whether factoring the remaining unknowns densely now costs less than eliminating level l
@@ -332,21 +355,32 @@ H2Factorization::H2Factorization(H2FactorCache &cache, const SystemSelection &se
     parts = cluster_parts(tree);
     m_stats.parts = tree.num_parts();
   }
-  h2f::Frontier front(m_K, *sketch, m_f->pattern, m_stats.single_panels && m_f->pattern.dofs() > options.top_size, std::move(parts));
+  const bool single_store = m_stats.single_panels && m_f->pattern.dofs() > options.top_size;
+  auto front = std::make_unique<h2f::Frontier>(m_K, *sketch, m_f->pattern, single_store, std::move(parts));
   const int l0 = first_level(tree, options.leaf_size, options.rel_tol);
-  for (int l = tree.levels() - 1; l > l0; --l) front.merge(l);
+  for (int l = tree.levels() - 1; l > l0; --l) front->merge(l);
   m_stats.time_init = timer.seconds();
   const SerialComm one;
-  eliminate_levels(front, one, l0);
+  eliminate_levels(*front, one, l0);
   PhaseScope phase(Phase::H2Top);
   timer.restart();
-  m_stats.top_boxes = static_cast<int>(front.boxes().size());
-  if (!m_f->top.factor(front.take_top(&m_f->top_dofs), options.mixed_top_from))
-    throw H2Breakdown("H2 factorization broke down: the top block (" + std::to_string(m_f->top.size()) + " unknowns) is singular to working precision");
+  m_stats.top_boxes = static_cast<int>(front->boxes().size());
+  const bool single_top = single_store && top_in_single(static_cast<double>(front->active_total()), options);
+  h2f::BlockGrid grid;
+  h2f::SingleTop lone;
+  h2f::GridSink to_grid(grid);
+  h2f::SingleSink to_single(lone);
+  front->take_top(&m_f->top_dofs, single_top ? static_cast<h2f::TopSink &>(to_single) : to_grid);
+  const std::size_t front_peak = front->peak_bytes(), front_left = front->store_bytes();
+  front.reset(); // spent: its memory goes before the top's LU
+  return_free_memory();
+  const bool ok = single_top ? m_f->top.factor_single(std::move(lone), single_trial_tol(options)) : m_f->top.factor(std::move(grid), options.mixed_top_from);
+  if (!ok) throw H2Breakdown(top_breakdown(m_f->top));
   m_stats.time_top = timer.seconds();
-  m_stats.workspace_bytes = std::max(front.peak_bytes(), front.store_bytes() + m_f->top.bytes());
+  m_stats.workspace_bytes = std::max(front_peak, front_left + m_f->top.bytes());
   m_stats.top_size = m_f->top.size();
   m_stats.top_mixed = m_f->top.mixed();
+  m_stats.top_single = m_f->top.single();
   m_stats.top_bytes = m_f->top.bytes();
   m_stats.bytes = m_stats.top_bytes;
   for (const H2FactorLevelStats &ls : m_stats.levels) m_stats.bytes += ls.bytes;
@@ -382,9 +416,8 @@ H2Factorization::H2Factorization(H2FactorCache &cache, const RankComm &comm, con
   if (tree.num_parts() > 1) m_stats.parts = tree.num_parts();
 
   Timer timer;
-  std::unique_ptr<h2f::Frontier> front;
-  front = std::make_unique<h2f::Frontier>(m_K, *sketch, m_f->pattern, m_stats.single_panels && m_f->pattern.dofs() > options.top_size,
-                                          tree.num_parts() > 1 ? cluster_parts(tree) : std::vector<int>{}, &comm);
+  const bool single_store = m_stats.single_panels && m_f->pattern.dofs() > options.top_size;
+  auto front = std::make_unique<h2f::Frontier>(m_K, *sketch, m_f->pattern, single_store, tree.num_parts() > 1 ? cluster_parts(tree) : std::vector<int>{}, &comm);
   const int l0 = first_level(tree, options.leaf_size, options.rel_tol);
   for (int l = tree.levels() - 1; l > l0; --l) front->merge(l);
   m_stats.time_init = timer.seconds();
@@ -392,11 +425,21 @@ H2Factorization::H2Factorization(H2FactorCache &cache, const RankComm &comm, con
   PhaseScope phase(Phase::H2Top);
   timer.restart();
   m_stats.top_boxes = static_cast<int>(front->boxes().size());
-  h2f::BlockGrid top = front->take_top_ranks(&m_f->top_dofs, &m_f->top_from, &m_f->top_own);
+  double top_n = static_cast<double>(front->active_total());
+  comm.sum(&top_n, 1);
+  const bool single_top = single_store && top_in_single(top_n, options);
+  h2f::BlockGrid grid;
+  h2f::SingleTop lone;
+  h2f::GridSink to_grid(grid);
+  h2f::SingleSink to_single(lone);
+  front->take_top_ranks(&m_f->top_dofs, &m_f->top_from, &m_f->top_own, single_top ? static_cast<h2f::TopSink &>(to_single) : to_grid);
+  const std::size_t front_peak = front->peak_bytes(), front_left = front->store_bytes();
+  front.reset(); // spent: its memory goes before the top's LU
+  return_free_memory();
   agreed(comm, [&] {
     fault_point("H2FTop");
-    if (me == 0 && !m_f->top.factor(std::move(top), options.mixed_top_from))
-      throw H2Breakdown("H2 factorization broke down: the top block (" + std::to_string(m_f->top.size()) + " unknowns) is singular to working precision");
+    if (me == 0 && !(single_top ? m_f->top.factor_single(std::move(lone), single_trial_tol(options)) : m_f->top.factor(std::move(grid), options.mixed_top_from)))
+      throw H2Breakdown(top_breakdown(m_f->top));
     // This rank's steps and top unknowns on its own rows (the steps touch no other rank's).
     const int offset = 3 * m_first, n = 3 * m_count;
     const auto shift = [&](std::vector<int> &v) {
@@ -411,8 +454,9 @@ H2Factorization::H2Factorization(H2FactorCache &cache, const RankComm &comm, con
   });
   m_stats.time_top = timer.seconds();
   m_stats.top_size = static_cast<int>(comm.max(m_f->top.size()));
-  m_stats.workspace_bytes = std::max(front->peak_bytes(), front->store_bytes() + m_f->top.bytes());
+  m_stats.workspace_bytes = std::max(front_peak, front_left + m_f->top.bytes());
   m_stats.top_mixed = m_f->top.mixed();
+  m_stats.top_single = m_f->top.single();
   m_stats.top_bytes = m_f->top.bytes();
   m_stats.bytes = m_stats.top_bytes;
   for (const H2FactorLevelStats &ls : m_stats.levels) m_stats.bytes += ls.bytes;
@@ -500,6 +544,8 @@ void H2Factorization::eliminate_levels(h2f::Frontier &front, const RankComm &com
 }
 
 H2Factorization::~H2Factorization() = default;
+
+double H2Factorization::top_trial() const { return m_f->top.trial_error(); }
 
 int H2Factorization::num_unknowns() const { return m_f->pattern.dofs(); }
 

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <stdexcept>
 
 namespace hssbem::h2f {
 
@@ -23,6 +24,31 @@ double inf_norm(const double *v, int n)
   double s = 0;
   for (int i = 0; i < n; ++i) s = std::max(s, std::abs(v[i]));
   return s;
+}
+
+/// x ← (L U)⁻¹ P x with the single-precision factors of getrf, in double arithmetic. A solve
+/// that rounded x itself to single precision (sgetrs) would not be a linear operator: GMRES with
+/// it as the preconditioner stalled at a true residual of 1.9e-6 (80k sphere on 2 ranks, its
+/// recurrence at 6e-8). Rounding only the factors keeps the operator fixed, as the steps' panels
+/// do. Column by column, so that each factor is streamed once.
+void solve_with_single_lu(int n, const float *lu, const int *piv, double *x)
+{
+  const std::size_t ld = static_cast<std::size_t>(n);
+  for (int i = 0; i < n; ++i)
+    if (piv[i] - 1 != i) std::swap(x[i], x[piv[i] - 1]);
+  for (int j = 0; j < n; ++j) { // L, unit lower triangular
+    const double xj = x[j];
+    if (xj == 0) continue;
+    const float *col = lu + j * ld;
+    for (int i = j + 1; i < n; ++i) x[i] -= static_cast<double>(col[i]) * xj;
+  }
+  for (int j = n - 1; j >= 0; --j) { // U
+    const float *col = lu + j * ld;
+    x[j] /= static_cast<double>(col[j]);
+    const double xj = x[j];
+    if (xj == 0) continue;
+    for (int i = 0; i < j; ++i) x[i] -= static_cast<double>(col[i]) * xj;
+  }
 }
 
 std::vector<int> box_rows(const BlockGrid &G)
@@ -90,13 +116,71 @@ void BlockGrid::gemv(double alpha, const double *x, double *y) const
 }
 
 // ---------------------------------------------------------------------------------------------
+// The sinks.
+
+void GridSink::begin(const std::vector<int> &off)
+{
+  m_G.off = off;
+  const std::size_t nb = off.size() - 1;
+  m_G.blocks.assign(nb * nb, DenseMatrix());
+}
+
+void GridSink::put(int s, int t, DenseMatrix B) { m_G.blocks[static_cast<std::size_t>(s) * m_G.boxes() + t] = std::move(B); }
+
+void SingleSink::begin(const std::vector<int> &off)
+{
+  m_off = off;
+  m_A.n = off.back();
+  // Not cleared first: every entry is written once, by the thread that owns its box row.
+  m_A.a.reset(new float[static_cast<std::size_t>(m_A.n) * m_A.n]);
+  m_A.row_sums.assign(m_A.n, 0.0);
+}
+
+void SingleSink::put(int s, int t, DenseMatrix B)
+{
+  const std::size_t n = static_cast<std::size_t>(m_A.n);
+  if (B.m != m_off[s + 1] - m_off[s] || B.n != m_off[t + 1] - m_off[t]) throw std::logic_error("H2 factorization: a top block of the wrong size");
+  double *sums = m_A.row_sums.data() + m_off[s];
+  for (int j = 0; j < B.n; ++j) {
+    const double *src = B.data() + static_cast<std::size_t>(j) * B.ld();
+    float *dst = m_A.a.get() + (m_off[t] + j) * n + m_off[s];
+    for (int i = 0; i < B.m; ++i) {
+      dst[i] = static_cast<float>(src[i]);
+      sums[i] += src[i];
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
 // The factorization and the solve.
+
+bool TopBlock::factor_single(SingleTop A, double trial_tol)
+{
+  const int n = A.n;
+  m_n = n;
+  m_mixed = false;
+  m_single = true;
+  m_steps = 0;
+  m_A = DenseMatrix();
+  m_grid = BlockGrid();
+  m_lu = std::move(A.a);
+  m_piv.resize(n);
+  if (n == 0) return true;
+  if (lapack::getrf(n, m_lu.get(), n, m_piv.data()) != 0) return false;
+  // The trial: x = A⁻¹ (A·1) should be 1 to the accuracy a preconditioner needs.
+  std::vector<double> x = std::move(A.row_sums);
+  solve_with_single_lu(n, m_lu.get(), m_piv.data(), x.data());
+  m_trial = 0;
+  for (double v : x) m_trial = std::max(m_trial, std::abs(v - 1.0));
+  return m_trial <= trial_tol; // false for NaN too
+}
 
 bool TopBlock::factor(BlockGrid A, int mixed_from)
 {
   const int n = A.size();
   m_n = n;
   m_mixed = false;
+  m_single = false;
   m_lu.reset();
   m_steps = 0;
   if (mixed_from > 0 && n >= mixed_from) {
@@ -152,6 +236,10 @@ void TopBlock::solve(double *x) const
 {
   const int n = m_n;
   if (n == 0) return;
+  if (m_single) {
+    solve_with_single_lu(n, m_lu.get(), m_piv.data(), x);
+    return;
+  }
   if (!m_mixed) {
     m_steps = 0;
     lapack::getrs('N', n, 1, m_A.data(), m_A.ld(), m_piv.data(), x, n);

@@ -27,6 +27,51 @@ struct BlockGrid {
   void gemv(double alpha, const double *x, double *y) const;
 };
 
+/// Where the frontier's top goes, box block by box block: begin() once with the boxes' row
+/// offsets (box s holds rows off[s] .. off[s + 1] − 1), then put() for every block (s, t);
+/// concurrent put() calls have different s.
+class TopSink {
+public:
+  virtual ~TopSink() = default;
+  virtual void begin(const std::vector<int> &off) = 0;
+  virtual void put(int s, int t, DenseMatrix B) = 0;
+  /// Whether the sink rounds to single precision (so another rank may send it rounded blocks).
+  virtual bool single() const { return false; }
+};
+
+/// Into a BlockGrid (the double and the mixed LU, which keeps the blocks for its refinement).
+class GridSink : public TopSink {
+public:
+  explicit GridSink(BlockGrid &G) : m_G(G) {}
+  void begin(const std::vector<int> &off) override;
+  void put(int s, int t, DenseMatrix B) override;
+
+private:
+  BlockGrid &m_G;
+};
+
+/// The top as one dense matrix in single precision, n × n column-major, and in double the sums
+/// of its rows (A·1, the right-hand side of a trial solve).
+struct SingleTop {
+  int n = 0;
+  std::unique_ptr<float[]> a;
+  std::vector<double> row_sums;
+};
+
+/// Into a SingleTop: each block is rounded as it comes, and no copy of the top in double is
+/// ever whole.
+class SingleSink : public TopSink {
+public:
+  explicit SingleSink(SingleTop &A) : m_A(A) {}
+  void begin(const std::vector<int> &off) override;
+  void put(int s, int t, DenseMatrix B) override;
+  bool single() const override { return true; }
+
+private:
+  SingleTop &m_A;
+  std::vector<int> m_off;
+};
+
 /// The top block A (n × n) factored once and solved many times. Below `mixed_from` unknowns (or
 /// with mixed_from ≤ 0) it is an LU in double. From there on the LU runs in single precision,
 /// twice the speed of dgetrf, and each solve refines its result in double against A itself
@@ -39,10 +84,18 @@ class TopBlock {
 public:
   /// Factor A. False when A is singular to working precision (the double LU's test).
   bool factor(BlockGrid A, int mixed_from);
+  /// Factor A in single precision alone, for a factorization whose panels are in single
+  /// precision too (a preconditioner): no copy of A is kept and solves are not refined, so the
+  /// top takes n² floats where the mixed LU takes three times that. False when A is singular to
+  /// single precision: a zero pivot, or a trial solve (A x = A·1) off by more than `trial_tol`.
+  bool factor_single(SingleTop A, double trial_tol);
   /// x ← A⁻¹ x (n entries).
   void solve(double *x) const;
   int size() const { return m_n; }
   bool mixed() const { return m_mixed; }
+  bool single() const { return m_single; }
+  /// The trial solve's error (factor_single), ‖x − 1‖∞.
+  double trial_error() const { return m_trial; }
   std::size_t bytes() const { return m_A.bytes() + m_grid.bytes() + (m_lu ? static_cast<std::size_t>(m_n) * m_n * sizeof(float) : 0) + m_piv.size() * sizeof(int); }
   /// Refinement steps of the last solve (0 with the double LU).
   int last_steps() const { return m_steps; }
@@ -58,6 +111,8 @@ private:
   std::vector<int> m_piv;
   double m_norm = 0; ///< ‖A‖_∞ (mixed)
   bool m_mixed = false;
+  bool m_single = false;
+  double m_trial = 0;
   mutable int m_steps = 0;
 };
 

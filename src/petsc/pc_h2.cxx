@@ -10,6 +10,7 @@
 #include <petsc/private/pcimpl.h>
 
 #include <cmath>
+#include <cstdio>
 #include <memory>
 #include <optional>
 #include <random>
@@ -307,14 +308,27 @@ PetscErrorCode PCSetFromOptions_H2(PC pc, PetscOptionItems *PetscOptionsObject)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-PetscErrorCode ViewFactorization_Private(PetscViewer viewer, const hssbem::H2FactorStats &st)
+/* How the top's LU runs, between open and close; empty for the double LU. */
+std::string TopLU_Private(const hssbem::H2Factorization &F, const char *open, const char *close)
 {
+  const hssbem::H2FactorStats &st = F.stats();
+  if (st.top_mixed) return std::string(open) + "LU in single precision, solves refined in double" + close;
+  if (!st.top_single) return "";
+  char trial[96];
+  std::snprintf(trial, sizeof trial, "LU in single precision like the panels, a trial solve off by %.1e", F.top_trial());
+  return std::string(open) + trial + close;
+}
+
+PetscErrorCode ViewFactorization_Private(PetscViewer viewer, const hssbem::H2Factorization &F)
+{
+  const hssbem::H2FactorStats &st = F.stats();
+
   PetscFunctionBegin;
   PetscCall(PetscViewerASCIIPrintf(viewer, "factorization: %.2f s (sketch %.2f, first boxes %.2f, skeletons %.2f, eliminations %.2f, merges %.2f, top %.2f; thread-seconds for skeletons and eliminations)\n",
                                    st.seconds(), st.time_sketch, st.time_init, st.time_skeleton, st.time_eliminate, st.time_merge, st.time_top));
   PetscCall(PetscViewerASCIIPrintf(viewer, "factors: %.1f MB (%s panels and working blocks; those peaked at %.1f MB), dense top %d unknowns (%.1f MB%s), sketch of %d vectors\n", st.bytes / 1048576.0,
                                    st.single_panels ? "single-precision" : "double-precision", st.workspace_bytes / 1048576.0, st.top_size, st.top_bytes / 1048576.0,
-                                   st.top_mixed ? "; LU in single precision, solves refined in double" : "", st.sketch_columns));
+                                   TopLU_Private(F, "; ", "").c_str(), st.sketch_columns));
   for (const hssbem::H2FactorLevelStats &l : st.levels)
     PetscCall(PetscViewerASCIIPrintf(viewer, "level %d: %d boxes, %.0f unknowns per box (max %d) -> skeleton %.0f (max %d), %lld eliminated, %.1f MB, %.2f s\n", l.level, l.boxes, l.mean_candidates,
                                      l.max_candidates, l.mean_rank, l.max_rank, l.eliminated, l.bytes / 1048576.0, l.seconds));
@@ -333,7 +347,7 @@ PetscErrorCode ViewDistributed_Private(PetscViewer viewer, const PC_H2 &h2)
   PetscCallMPI(MPI_Comm_rank(PetscObjectComm((PetscObject)viewer), &rank));
   PetscCall(PetscViewerASCIIPrintf(viewer, "distributed: each rank factors its part's subtree (%d parts, cross blocks between them), rank 0 the top\n", st.parts));
   PetscCall(PetscViewerASCIIPrintf(viewer, "top on rank 0: %d unknowns of %d boxes, %.1f MB%s, %.2f s\n", st.top_size, st.top_boxes, st.top_bytes / 1048576.0,
-                                   st.top_mixed ? " (LU in single precision, solves refined in double)" : "", st.time_top));
+                                   TopLU_Private(*h2.factors, " (", ")").c_str(), st.time_top));
   for (const hssbem::H2FactorLevelStats &l : st.levels) {
     cross = std::max(cross, l.cross_bytes);
     eliminated += l.eliminated;
@@ -381,7 +395,7 @@ PetscErrorCode PCView_H2(PC pc, PetscViewer viewer)
     PetscCall(HssbemViewH2Matrix_Private(viewer, h2->sys->matrix()));
   }
   if (h2->factors) {
-    PetscCall(ViewFactorization_Private(viewer, h2->factors->stats()));
+    PetscCall(ViewFactorization_Private(viewer, *h2->factors));
     if (h2->inverse_error >= 0) PetscCall(PetscViewerASCIIPrintf(viewer, "||I - A F^-1|| estimated at %.3e (%d power iterations)\n", h2->inverse_error, (int)h2->estimate_error));
   } else PetscCall(PetscViewerASCIIPrintf(viewer, "factorization failed: %s\n", h2->failure.c_str()));
   PetscCall(PetscViewerASCIIPopTab(viewer));

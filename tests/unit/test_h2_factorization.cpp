@@ -347,6 +347,49 @@ TEST(H2FactorTop, MixedPrecisionTopSolvesLikeTheDoubleLU)
   EXPECT_FALSE(H2Factorization(cache, sel, fo).stats().top_mixed);
 }
 
+TEST(H2FactorTop, SinglePanelsTopIsALinearOperatorInAThirdOfTheMemory)
+{
+  // Panels in single precision (the default tolerance): a top of mixed_top_from unknowns or more
+  // is factored in single precision alone, n² floats where the mixed LU keeps n² floats and the
+  // n² doubles of the block. Its solves run in double arithmetic on the rounded factors, so the
+  // preconditioner stays one fixed linear operator: rounding the right-hand side to single
+  // precision instead (sgetrs) breaks linearity at ~1e-7, and GMRES then stalls there.
+  auto L = load("cardioid_fine.msh");
+  const int n = L->op->num_nodes();
+  const H2Matrix K = compress(*L, 1e-8, 32);
+  H2FactorCache cache(K);
+  const SystemSelection sel = selection(n, random_pattern(n, 0.5, 9));
+  H2FactorOptions fo;
+  fo.top_size = 0;
+  fo.top_when_cheaper = false; // the same levels whatever the top's LU
+  fo.mixed_top_from = 1;
+  const H2Factorization single(cache, sel, fo);
+  fo.mixed_top_from = 0;
+  const H2Factorization plain(cache, sel, fo);
+  ASSERT_TRUE(single.stats().single_panels);
+  ASSERT_TRUE(single.stats().top_single);
+  EXPECT_FALSE(single.stats().top_mixed);
+  EXPECT_FALSE(plain.stats().top_single);
+  ASSERT_EQ(single.stats().top_size, plain.stats().top_size);
+  ASSERT_GT(single.stats().top_size, 100);
+  EXPECT_NEAR(static_cast<double>(single.stats().top_bytes) / plain.stats().top_bytes, 0.5, 0.01);
+  EXPECT_LT(single.top_trial(), fo.rel_tol);
+  const std::vector<double> b1 = random_vector(3L * n, 3), b2 = random_vector(3L * n, 4);
+  std::vector<double> b3(b1.size()), x1(b1.size()), x2(b1.size()), x3(b1.size()), xp(b1.size()), sum(b1.size());
+  for (std::size_t i = 0; i < b1.size(); ++i) b3[i] = b1[i] + 3 * b2[i];
+  single.solve(b1.data(), x1.data());
+  single.solve(b2.data(), x2.data());
+  single.solve(b3.data(), x3.data());
+  for (std::size_t i = 0; i < b1.size(); ++i) sum[i] = x1[i] + 3 * x2[i];
+  const double nonlinear = rel(x3, sum);
+  plain.solve(b1.data(), xp.data());
+  const double against_double = rel(x1, xp);
+  std::printf("cardioid, top %d: trial %.1e, linearity %.1e, against the double top %.1e\n", single.stats().top_size, single.top_trial(), nonlinear, against_double);
+  EXPECT_LT(nonlinear, 1e-13);
+  EXPECT_LT(against_double, 1e-4); // the single LU's error through the steps
+  EXPECT_GT(against_double, 0.0);  // and not the double LU itself
+}
+
 TEST(H2FactorOptionsCheck, LeafSizeStartsHigherAndBadOptionsThrow)
 {
   auto L = load("sphere_l1.msh");

@@ -65,9 +65,10 @@ struct H2FactorOptions {
   int sketch_columns = 0;  ///< random vectors of the far-field sketch; 0: chosen from rel_tol
   int top_size = 2000;     ///< factor the rest densely once at most this many unknowns remain
   int single_panels = -1;  ///< elimination panels and the working blocks at rest in single precision: 1, 0, or -1 (when rel_tol ≥ 1e-5)
-  /// From this many unknowns on, the dense top is factored in single precision and every solve
-  /// refines in double against the top block (as accurate as a double LU, which is twice the
-  /// time); ≤ 0: always double.
+  /// From this many unknowns on, the dense top is factored in single precision: with panels in
+  /// double, every solve refines in double against the top block (as accurate as a double LU,
+  /// which is twice the time); with panels in single precision (a preconditioner), the single
+  /// LU alone, a third of the memory, its accuracy checked by a trial solve. ≤ 0: always double.
   int mixed_top_from = 4000;
   /// Stop at a level whose eliminations would cost more flops than factoring everything left
   /// densely (an upper bound of the level's Schur complements against the top's LU); false: go
@@ -104,6 +105,7 @@ struct H2FactorStats {
   std::vector<H2FactorLevelStats> levels; ///< from the finest level factored up
   int top_size = 0;                       ///< unknowns of the dense top block
   bool top_mixed = false;                 ///< the top's LU in single precision, refined in double (H2FactorOptions::mixed_top_from)
+  bool top_single = false;                ///< the top's LU in single precision alone, not refined (single panels and a top of mixed_top_from or more)
   std::size_t bytes = 0, top_bytes = 0;   ///< all factors; the top's LU (and, mixed, the top block in double)
   /// The largest working store of the factorization (blocks between active boxes, fill-in,
   /// restricted bases), which is freed when it ends.
@@ -168,6 +170,8 @@ public:
   bool distributed() const { return m_comm != nullptr; }
   const H2FactorStats &stats() const { return m_stats; }
   const H2FactorOptions &options() const { return m_options; }
+  /// A single-precision top's trial solve error (H2FactorStats::top_single), else 0.
+  double top_trial() const;
   int num_unknowns() const;
   /// Steps whose unknowns (the box's, its skeleton's, and those its Schur complement touched)
   /// lie in more than one part of the tree (0 when the parts are eliminated separately).

@@ -1,0 +1,17 @@
+/// \file allocator.hpp
+/// Give freed memory back to the system between phases.
+///
+/// SuperLU_DIST, which PETSc links, turns off glibc's returning of memory when it is loaded,
+/// before main() runs: large blocks are no longer mapped on their own (mallopt(M_MMAP_MAX, 0)) and
+/// the heap is never trimmed. Freed memory then stays resident, and a phase that frees much before
+/// allocating anew adds to the process's peak what it freed. return_free_memory() gives the free
+/// pages back wherever they lie in the heap (malloc_trim). The H² factorization calls it once its
+/// frontier is spent, before the top's LU: on 2 ranks of an 80k sphere the peak went from 1 570
+/// to 1 512 MB on the largest rank. Does nothing off glibc.
+#pragma once
+
+namespace hssbem {
+
+void return_free_memory();
+
+} // namespace hssbem
