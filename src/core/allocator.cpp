@@ -1,6 +1,8 @@
 // Give freed memory back to the system (see allocator.hpp).
 #include "hssbem/core/allocator.hpp"
 
+#include <cstdlib> // defines __GLIBC__ on glibc
+
 #if defined(__GLIBC__)
 #include <malloc.h>
 #endif

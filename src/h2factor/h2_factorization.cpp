@@ -366,6 +366,7 @@ H2Factorization::H2Factorization(H2FactorCache &cache, const SystemSelection &se
   timer.restart();
   m_stats.top_boxes = static_cast<int>(front->boxes().size());
   const bool single_top = single_store && top_in_single(static_cast<double>(front->active_total()), options);
+  return_free_memory(); // what the levels freed, before the top is allocated
   h2f::BlockGrid grid;
   h2f::SingleTop lone;
   h2f::GridSink to_grid(grid);
@@ -428,6 +429,7 @@ H2Factorization::H2Factorization(H2FactorCache &cache, const RankComm &comm, con
   double top_n = static_cast<double>(front->active_total());
   comm.sum(&top_n, 1);
   const bool single_top = single_store && top_in_single(top_n, options);
+  return_free_memory(); // what the levels freed, before the top is allocated
   h2f::BlockGrid grid;
   h2f::SingleTop lone;
   h2f::GridSink to_grid(grid);
