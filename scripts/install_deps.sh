@@ -10,6 +10,7 @@ packages=(
   build-essential cmake pkg-config          # compilers, build system
   petsc-dev libopenmpi-dev openmpi-bin      # PETSc 3.18 on Open MPI, mpiexec
   libopenblas-dev libmetis-dev              # BLAS/LAPACK (OpenBLAS), METIS
+  libscalapack-openmpi-dev                  # ScaLAPACK (PETSc's): the H² top spread over the ranks
   libhdf5-openmpi-dev                       # HDF5 headers PETSc was built with
   libgtest-dev nlohmann-json3-dev           # unit tests, problem-file parser
   python3 python3-numpy python3-h5py        # CLI tests, benchmark scripts

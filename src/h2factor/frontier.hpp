@@ -184,6 +184,12 @@ public:
   /// the top's unknowns, in *from[q] the positions in *dofs of rank q's (in the order of *own on
   /// q); every rank gets its own top unknowns in *own. The sink is used on rank 0 alone.
   void take_top_ranks(std::vector<int> *dofs, std::vector<std::vector<int>> *from, std::vector<int> *own, TopSink &sink);
+  /// The top spread over the ranks by blocks of nb columns (block j on rank j mod P; see
+  /// SpreadTop), in single precision (collective): each rank's rows go to the ranks of their
+  /// columns. *local gets this rank's columns (n × spread_columns(n, nb, rank, P)), *row_sums
+  /// A·1 on this rank's rows (zero elsewhere), *own this rank's top unknowns and *pos their
+  /// positions in the top (boxes in frontier order); returns n.
+  int take_top_spread(int nb, std::vector<float> *local, std::vector<double> *row_sums, std::vector<int> *own, std::vector<int> *pos);
 
 private:
   /// Box row s of the top (position s of the frontier) into the sink; its blocks move out.

@@ -342,4 +342,89 @@ void Frontier::take_top_ranks(std::vector<int> *dofs, std::vector<std::vector<in
   });
 }
 
+int Frontier::take_top_spread(int nb, std::vector<float> *local, std::vector<double> *row_sums, std::vector<int> *own, std::vector<int> *pos)
+{
+  const int nb_boxes = static_cast<int>(m_front.size()), P = m_comm->size();
+  std::vector<std::pair<int, int>> pairs; // (P other, Q mine): Q's data for P's rows
+  for (int p : m_front)
+    for (int q : m_front)
+      if (!mine(p) && mine(q)) pairs.push_back({p, q});
+  send_column_data(pairs); // and every box's unknowns to every rank
+  std::vector<int> off(nb_boxes + 1, 0);
+  for (int s = 0; s < nb_boxes; ++s) off[s + 1] = off[s] + static_cast<int>(m_D[m_front[s]].size());
+  const int n = off.back();
+  // Column c: its rank and its place among that rank's columns.
+  const auto rank_of = [&](int c) { return (c / nb) % P; };
+  const auto place = [&](int c) { return (c / nb / P) * nb + c % nb; };
+  std::vector<int> columns(P);
+  for (int r = 0; r < P; ++r) columns[r] = spread_columns(n, nb, r, P);
+  std::vector<int> here; // positions of this rank's boxes
+  std::vector<std::vector<std::size_t>> base(P, std::vector<std::size_t>(nb_boxes, 0)); // floats before box s in the message to r
+  std::vector<std::vector<float>> out(P);
+  collectively(*m_comm, [&] {
+    own->clear();
+    pos->clear();
+    for (int s = 0; s < nb_boxes; ++s)
+      if (mine(m_front[s])) {
+        here.push_back(s);
+        own->insert(own->end(), m_D[m_front[s]].begin(), m_D[m_front[s]].end());
+        for (int i = off[s]; i < off[s + 1]; ++i) pos->push_back(i);
+      }
+    for (int r = 0; r < P; ++r) {
+      std::size_t at = 0;
+      for (int s : here) base[r][s] = at, at += static_cast<std::size_t>(off[s + 1] - off[s]) * columns[r];
+      if (r != m_rank) out[r].assign(at + (at % 2), 0.0f); // an even count: two floats to a value
+    }
+    local->assign(static_cast<std::size_t>(n) * columns[m_rank], 0.0f);
+    row_sums->assign(n, 0.0);
+    for_each_cluster(here, [&](int s) {
+      const int X = m_front[s], m = off[s + 1] - off[s];
+      for (int t = 0; t < nb_boxes; ++t) {
+        const int Q = m_front[t];
+        const auto it = m_M[X].find(Q);
+        const DenseMatrix B = it != m_M[X].end() ? it->second.take() : far_part(X, Q);
+        if (B.m != m || B.n != off[t + 1] - off[t]) throw std::logic_error("H2 factorization: a top block of unexpected size");
+        for (int j = 0; j < B.n; ++j) {
+          const int c = off[t] + j, r = rank_of(c);
+          const double *src = B.data() + static_cast<std::size_t>(j) * B.ld();
+          float *dst = r == m_rank ? local->data() + static_cast<std::size_t>(place(c)) * n + off[s] : out[r].data() + base[r][s] + static_cast<std::size_t>(place(c)) * m;
+          for (int i = 0; i < m; ++i) {
+            dst[i] = static_cast<float>(src[i]);
+            (*row_sums)[off[s] + i] += src[i];
+          }
+        }
+      }
+      m_M[X].clear();
+    });
+    release_stores();
+    return_free_memory();
+  });
+  std::vector<std::vector<double>> send(P);
+  for (int r = 0; r < P; ++r) {
+    send[r].resize(out[r].size() / 2);
+    if (!out[r].empty()) std::memcpy(send[r].data(), out[r].data(), out[r].size() * sizeof(float));
+    std::vector<float>().swap(out[r]);
+  }
+  std::vector<std::vector<double>> recv = exchange_values(*m_comm, send);
+  std::vector<std::vector<double>>().swap(send);
+  collectively(*m_comm, [&] {
+    const int mine_cols = columns[m_rank];
+    for (int q = 0; q < P; ++q) {
+      if (q == m_rank) continue;
+      std::size_t at = 0, need = 0;
+      for (int s = 0; s < nb_boxes; ++s)
+        if (m_owner[m_front[s]] == q) need += static_cast<std::size_t>(off[s + 1] - off[s]) * mine_cols;
+      if ((need + need % 2) / 2 != recv[q].size()) throw std::logic_error("H2 factorization: a spread top message of unexpected length");
+      const float *in = reinterpret_cast<const float *>(recv[q].data());
+      for (int s = 0; s < nb_boxes; ++s) {
+        if (m_owner[m_front[s]] != q) continue;
+        const int m = off[s + 1] - off[s];
+        for (int lc = 0; lc < mine_cols; ++lc, at += m) std::copy(in + at, in + at + m, local->data() + static_cast<std::size_t>(lc) * n + off[s]);
+      }
+      std::vector<double>().swap(recv[q]);
+    }
+  });
+  return n;
+}
+
 } // namespace hssbem::h2f

@@ -34,6 +34,8 @@ struct H2Factorization::Factors {
   h2f::TopBlock top;
   std::vector<int> top_own;                ///< distributed: this rank's top unknowns (its rows), in the order rank 0 expects
   std::vector<std::vector<int>> top_from;  ///< distributed, rank 0: positions in top_dofs of rank q's top unknowns
+  std::unique_ptr<h2f::SpreadTop> spread;  ///< distributed: the top spread over the ranks (else rank 0's `top`)
+  std::vector<int> top_pos;                ///< with `spread`: the positions of top_own in the top
 };
 
 int default_sketch_columns(double rel_tol)
@@ -430,17 +432,25 @@ H2Factorization::H2Factorization(H2FactorCache &cache, const RankComm &comm, con
   comm.sum(&top_n, 1);
   const bool single_top = single_store && top_in_single(top_n, options);
   return_free_memory(); // what the levels freed, before the top is allocated
+  // The top spread over the ranks (single precision, several ranks), or on rank 0.
+  const bool spread = single_top && P > 1 && options.spread_top;
   h2f::BlockGrid grid;
   h2f::SingleTop lone;
   h2f::GridSink to_grid(grid);
   h2f::SingleSink to_single(lone);
-  front->take_top_ranks(&m_f->top_dofs, &m_f->top_from, &m_f->top_own, single_top ? static_cast<h2f::TopSink &>(to_single) : to_grid);
+  std::vector<float> columns;
+  std::vector<double> row_sums;
+  int spread_n = 0;
+  if (spread)
+    spread_n = front->take_top_spread(h2f::SpreadTop::kBlock, &columns, &row_sums, &m_f->top_own, &m_f->top_pos);
+  else
+    front->take_top_ranks(&m_f->top_dofs, &m_f->top_from, &m_f->top_own, single_top ? static_cast<h2f::TopSink &>(to_single) : to_grid);
   const std::size_t front_peak = front->peak_bytes(), front_left = front->store_bytes();
   front.reset(); // spent: its memory goes before the top's LU
   return_free_memory();
   agreed(comm, [&] {
     fault_point("H2FTop");
-    if (me == 0 && !(single_top ? m_f->top.factor_single(std::move(lone), single_trial_tol(options)) : m_f->top.factor(std::move(grid), options.mixed_top_from)))
+    if (!spread && me == 0 && !(single_top ? m_f->top.factor_single(std::move(lone), single_trial_tol(options)) : m_f->top.factor(std::move(grid), options.mixed_top_from)))
       throw H2Breakdown(top_breakdown(m_f->top));
     // This rank's steps and top unknowns on its own rows (the steps touch no other rank's).
     const int offset = 3 * m_first, n = 3 * m_count;
@@ -454,12 +464,22 @@ H2Factorization::H2Factorization(H2FactorCache &cache, const RankComm &comm, con
       for (std::vector<int> *v : {&st.box, &st.S, &st.R, &st.I}) shift(*v);
     shift(m_f->top_own);
   });
+  if (spread) { // collective, after the agreement: every rank reaches it
+    m_f->spread = std::make_unique<h2f::SpreadTop>();
+    if (!m_f->spread->factor(comm, spread_n, std::move(columns), std::move(row_sums), single_trial_tol(options))) {
+      char trial[32];
+      std::snprintf(trial, sizeof trial, "%.1e", m_f->spread->trial_error());
+      throw H2Breakdown("H2 factorization broke down: the top block (" + std::to_string(spread_n) + " unknowns, spread over the ranks) is singular to single precision (a trial solve is off by " +
+                        trial + "; a tolerance below 1e-5 factors it in double)");
+    }
+  }
   m_stats.time_top = timer.seconds();
-  m_stats.top_size = static_cast<int>(comm.max(m_f->top.size()));
-  m_stats.workspace_bytes = std::max(front_peak, front_left + m_f->top.bytes());
+  m_stats.top_size = static_cast<int>(comm.max(spread ? spread_n : m_f->top.size()));
+  m_stats.top_spread = spread ? P : 0;
+  m_stats.top_bytes = spread ? m_f->spread->bytes() : m_f->top.bytes();
+  m_stats.workspace_bytes = std::max(front_peak, front_left + m_stats.top_bytes);
   m_stats.top_mixed = m_f->top.mixed();
-  m_stats.top_single = m_f->top.single();
-  m_stats.top_bytes = m_f->top.bytes();
+  m_stats.top_single = spread || m_f->top.single();
   m_stats.bytes = m_stats.top_bytes;
   for (const H2FactorLevelStats &ls : m_stats.levels) m_stats.bytes += ls.bytes;
 }
@@ -547,7 +567,7 @@ void H2Factorization::eliminate_levels(h2f::Frontier &front, const RankComm &com
 
 H2Factorization::~H2Factorization() = default;
 
-double H2Factorization::top_trial() const { return m_f->top.trial_error(); }
+double H2Factorization::top_trial() const { return m_f->spread ? m_f->spread->trial_error() : m_f->top.trial_error(); }
 
 int H2Factorization::num_unknowns() const { return m_f->pattern.dofs(); }
 
@@ -601,6 +621,21 @@ void H2Factorization::solve_local(const double *b, double *x) const
   const int P = comm.size(), me = comm.rank();
   const std::size_t n = 3 * static_cast<std::size_t>(m_count);
   std::vector<double> y(b, b + n), work;
+  if (m_f->spread) { // every rank holds the top's right-hand side whole, and solves its part
+    std::vector<double> t(static_cast<std::size_t>(m_f->spread->size()), 0.0);
+    collectively(comm, [&] {
+      for (const h2f::Step &s : m_f->steps) s.forward(y.data(), work);
+      for (std::size_t i = 0; i < m_f->top_own.size(); ++i) t[m_f->top_pos[i]] = y[m_f->top_own[i]];
+    });
+    comm.sum(t.data(), static_cast<int>(t.size()));
+    m_f->spread->solve(t.data());
+    collectively(comm, [&] {
+      for (std::size_t i = 0; i < m_f->top_own.size(); ++i) y[m_f->top_own[i]] = t[m_f->top_pos[i]];
+      for (auto it = m_f->steps.rbegin(); it != m_f->steps.rend(); ++it) it->backward(y.data(), work);
+      for (std::size_t i = 0; i < n; ++i) x[i] = y[i] * m_K.col_scale(m_slot[3 * static_cast<std::size_t>(m_first) + i]);
+    });
+    return;
+  }
   std::vector<std::vector<double>> send(P), recv(P);
   collectively(comm, [&] {
     for (const h2f::Step &s : m_f->steps) s.forward(y.data(), work);

@@ -249,4 +249,80 @@ void TopBlock::solve(double *x) const
   refine(b.data(), x); // should it stall (the trial solve did not), x is its better last iterate
 }
 
+// ---------------------------------------------------------------------------------------------
+// The top spread over the ranks.
+
+int SpreadTop::local_column(int c) const
+{
+  const int j = c / kBlock;
+  if (j % m_ranks != m_rank) return -1;
+  return (j / m_ranks) * kBlock + c % kBlock;
+}
+
+bool SpreadTop::factor(const RankComm &comm, int n, std::vector<float> local, std::vector<double> row_sums, double trial_tol)
+{
+  m_comm = &comm;
+  m_n = n;
+  m_ranks = comm.size();
+  m_rank = comm.rank();
+  if (local.size() != static_cast<std::size_t>(n) * spread_columns(n, kBlock, m_rank, m_ranks) || row_sums.size() != static_cast<std::size_t>(n))
+    throw std::logic_error("H2 factorization: a spread top of the wrong size");
+  m_lu = std::move(local);
+  m_piv.assign(n, 0);
+  if (n == 0) return true;
+  if (comm.spread_getrf(n, kBlock, m_lu.data(), m_piv.data()) != 0) return false;
+  comm.sum(row_sums.data(), n); // b = A·1
+  solve(row_sums.data());
+  m_trial = 0;
+  for (double v : row_sums) m_trial = std::max(m_trial, std::abs(v - 1.0));
+  return m_trial <= trial_tol; // the same on every rank (x is); false for NaN too
+}
+
+void SpreadTop::solve(double *x) const
+{
+  const int n = m_n, blocks = (n + kBlock - 1) / kBlock;
+  if (n == 0) return;
+  const std::size_t ld = static_cast<std::size_t>(n);
+  const RankComm &comm = *m_comm;
+  for (int i = 0; i < n; ++i)
+    if (m_piv[i] - 1 != i) std::swap(x[i], x[m_piv[i] - 1]);
+  // Forward, L unit lower: u gathers this rank's columns' updates; the owner of block k takes
+  // the sum of every rank's to its rows, and solves.
+  std::vector<double> u(n, 0.0), y(n, 0.0), part(kBlock);
+  for (int k = 0; k < blocks; ++k) {
+    const int c0 = k * kBlock, c1 = std::min(n, c0 + kBlock), w = c1 - c0;
+    std::copy(u.begin() + c0, u.begin() + c1, part.begin());
+    comm.sum(part.data(), w);
+    if (k % m_ranks != m_rank) continue;
+    const float *col0 = m_lu.data() + static_cast<std::size_t>(local_column(c0)) * ld;
+    for (int i = 0; i < w; ++i) y[c0 + i] = x[c0 + i] - part[i];
+    for (int j = 0; j < w; ++j) {
+      const float *col = col0 + j * ld;
+      const double yj = y[c0 + j];
+      for (int i = j + 1; i < w; ++i) y[c0 + i] -= static_cast<double>(col[c0 + i]) * yj;
+      for (int i = c1; i < n; ++i) u[i] += static_cast<double>(col[i]) * yj;
+    }
+  }
+  // Backward, U: v gathers the updates from the right; the result goes to x, zero where other
+  // ranks solve, and one sum makes it whole everywhere.
+  std::vector<double> v(n, 0.0);
+  std::fill(x, x + n, 0.0);
+  for (int k = blocks - 1; k >= 0; --k) {
+    const int c0 = k * kBlock, c1 = std::min(n, c0 + kBlock), w = c1 - c0;
+    std::copy(v.begin() + c0, v.begin() + c1, part.begin());
+    comm.sum(part.data(), w);
+    if (k % m_ranks != m_rank) continue;
+    const float *col0 = m_lu.data() + static_cast<std::size_t>(local_column(c0)) * ld;
+    for (int i = 0; i < w; ++i) x[c0 + i] = y[c0 + i] - part[i];
+    for (int j = w - 1; j >= 0; --j) {
+      const float *col = col0 + j * ld;
+      x[c0 + j] /= static_cast<double>(col[c0 + j]);
+      const double xj = x[c0 + j];
+      for (int i = 0; i < j; ++i) x[c0 + i] -= static_cast<double>(col[c0 + i]) * xj;
+      for (int i = 0; i < c0; ++i) v[i] += static_cast<double>(col[i]) * xj;
+    }
+  }
+  comm.sum(x, n);
+}
+
 } // namespace hssbem::h2f

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "hssbem/core/dense_matrix.hpp"
+#include "hssbem/core/rank_comm.hpp"
 
 #include <cstddef>
 #include <memory>
@@ -114,6 +115,37 @@ private:
   bool m_single = false;
   double m_trial = 0;
   mutable int m_steps = 0;
+};
+
+/// The top of a distributed factorization spread over its ranks, in single precision (panels in
+/// single precision, a top of mixed_top_from or more): rank r holds the columns of the blocks
+/// j ≡ r (mod P), kBlock wide, of the LU (RankComm::spread_getrf, ScaLAPACK), so that the ranks
+/// share the top's flops and memory instead of rank 0 holding and factoring it alone. The solves
+/// run in double arithmetic on the rounded factors, block column by block column: the owner of a
+/// block solves its diagonal block once the others' updates to its rows are summed (one sum of
+/// kBlock values over the ranks per block and triangle).
+class SpreadTop {
+public:
+  static constexpr int kBlock = 128;
+  /// Factor (collective). `local`: this rank's columns (n × spread_columns(n, kBlock, rank, P)),
+  /// `row_sums`: A·1 on this rank's rows of A, zero elsewhere (n entries). False on every rank
+  /// when the LU meets a zero pivot or its trial solve (A x = A·1) is off by more than trial_tol.
+  bool factor(const RankComm &comm, int n, std::vector<float> local, std::vector<double> row_sums, double trial_tol);
+  /// x ← A⁻¹ x, all n entries on every rank, in and out (collective).
+  void solve(double *x) const;
+  int size() const { return m_n; }
+  std::size_t bytes() const { return m_lu.size() * sizeof(float) + m_piv.size() * sizeof(int); }
+  double trial_error() const { return m_trial; }
+
+private:
+  /// Column c's position among this rank's columns, or -1 when another rank holds it.
+  int local_column(int c) const;
+
+  const RankComm *m_comm = nullptr;
+  int m_n = 0, m_ranks = 1, m_rank = 0;
+  std::vector<float> m_lu;
+  std::vector<int> m_piv;
+  double m_trial = 0;
 };
 
 } // namespace hssbem::h2f

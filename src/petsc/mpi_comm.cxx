@@ -1,9 +1,11 @@
 /* hssbem::RankComm on MPI (see mpi_comm.h). */
 #include "hssbem/petsc/mpi_comm.h"
 
+#include <algorithm>
 #include <numeric>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace {
 
@@ -19,6 +21,17 @@ void Check(int err, const char *what)
 const int tag_ints = 7101, tag_doubles = 7102;
 
 } // namespace
+
+/* BLACS and ScaLAPACK (libscalapack-openmpi), single precision LU. */
+extern "C" {
+int  Csys2blacs_handle(MPI_Comm comm);
+void Cfree_blacs_system_handle(int handle);
+void Cblacs_gridinit(int *context, const char *order, int rows, int cols);
+void Cblacs_gridinfo(int context, int *rows, int *cols, int *row, int *col);
+void Cblacs_gridexit(int context);
+void descinit_(int *desc, const int *m, const int *n, const int *mb, const int *nb, const int *irsrc, const int *icsrc, const int *context, const int *lld, int *info);
+void psgetrf_(const int *m, const int *n, float *a, const int *ia, const int *ja, const int *desc, int *ipiv, int *info);
+}
 
 HssbemMpiComm::HssbemMpiComm(MPI_Comm comm, bool duplicate) : m_comm(comm)
 {
@@ -96,6 +109,35 @@ bool HssbemMpiComm::any(bool mine) const
 }
 
 void HssbemMpiComm::sum(double *v, int n) const { Check(MPI_Allreduce(MPI_IN_PLACE, v, n, MPI_DOUBLE, MPI_SUM, m_comm), "MPI_Allreduce"); }
+
+int HssbemMpiComm::spread_getrf(int n, int nb, float *local, int *ipiv) const
+{
+  if (n == 0) return 0;
+  const int handle = Csys2blacs_handle(m_comm);
+  int       context = handle, rows = 0, cols = 0, row = -1, col = -1;
+  Cblacs_gridinit(&context, "Row", 1, m_size);
+  Cblacs_gridinfo(context, &rows, &cols, &row, &col);
+  if (rows != 1 || cols != m_size || col != m_rank) {
+    if (row >= 0) Cblacs_gridexit(context);
+    Cfree_blacs_system_handle(handle);
+    throw std::runtime_error("spread LU: the BLACS grid does not follow the ranks");
+  }
+  int       desc[9], info = 0;
+  const int zero = 0, one = 1, lld = n;
+  // Square blocks (psgetrf needs MB = NB); with one process row every row is local.
+  descinit_(desc, &n, &n, &nb, &nb, &zero, &zero, &context, &lld, &info);
+  if (info == 0) {
+    std::vector<int> piv(static_cast<std::size_t>(n) + nb); // LOCr(n) + MB
+
+    psgetrf_(&n, &n, local, &one, &one, desc, piv.data(), &info);
+    std::copy(piv.begin(), piv.begin() + n, ipiv);
+  }
+  Cblacs_gridexit(context);
+  Cfree_blacs_system_handle(handle);
+  int worst = info;
+  Check(MPI_Allreduce(&info, &worst, 1, MPI_INT, MPI_MAX, m_comm), "MPI_Allreduce");
+  return worst != 0 ? (info != 0 ? info : worst) : 0;
+}
 
 double HssbemMpiComm::max(double v) const
 {

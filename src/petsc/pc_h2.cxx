@@ -27,6 +27,7 @@ struct PC_H2 {
   PetscInt  top_size       = 2000; /* unknowns factored densely at the top */
   PetscBool top_cheaper    = PETSC_TRUE; /* stop at a level that costs more than the dense top */
   PetscInt  mixed_top      = 4000; /* from this top size on, its LU in single precision refined in double (<= 0: never) */
+  PetscBool spread_top     = PETSC_TRUE; /* distributed, single-precision top: spread over the ranks (ScaLAPACK) */
   PetscInt  sketch_size    = 0;    /* 0: from the tolerance */
   PetscInt  estimate_error = 0;    /* power iterations of the ‖I − A F⁻¹‖ estimate (0: none) */
   /* set up (rank 0) */
@@ -49,6 +50,7 @@ hssbem::H2FactorOptions FactorOptions(const PC_H2 &h2)
   o.top_size       = (int)h2.top_size;
   o.top_when_cheaper = h2.top_cheaper == PETSC_TRUE;
   o.mixed_top_from = (int)h2.mixed_top;
+  o.spread_top     = h2.spread_top == PETSC_TRUE;
   o.sketch_columns = (int)h2.sketch_size;
   return o;
 }
@@ -301,6 +303,7 @@ PetscErrorCode PCSetFromOptions_H2(PC pc, PetscOptionItems *PetscOptionsObject)
   PetscCall(PetscOptionsInt("-pc_h2_top_size", "Unknowns factored densely at the top", "PCH2SetTopSize", h2->top_size, &h2->top_size, NULL));
   PetscCall(PetscOptionsBool("-pc_h2_top_when_cheaper", "Factor the rest densely from a level whose eliminations would cost more flops than that", "PCH2SetTopWhenCheaper", h2->top_cheaper, &h2->top_cheaper, NULL));
   PetscCall(PetscOptionsInt("-pc_h2_mixed_top", "From this many unknowns on, the dense top's LU in single precision, each solve refined in double (0: always double)", "PCH2SetMixedTop", h2->mixed_top, &h2->mixed_top, NULL));
+  PetscCall(PetscOptionsBool("-pc_h2_spread_top", "On several ranks, spread a single-precision top's LU over the ranks (ScaLAPACK) instead of factoring it on rank 0", "", h2->spread_top, &h2->spread_top, NULL));
   PetscCall(PetscOptionsInt("-pc_h2_sketch_size", "Random vectors of the far-field sketch (0: from the tolerance)", "PCH2SetSketchSize", h2->sketch_size, &h2->sketch_size, NULL));
   PetscCall(PetscOptionsInt("-pc_h2_estimate_error", "Power iterations of the ||I - A F^-1|| estimate shown by -ksp_view (0: none)", "PCH2SetEstimateError", h2->estimate_error, &h2->estimate_error, NULL));
   PetscOptionsHeadEnd();
@@ -345,9 +348,13 @@ PetscErrorCode ViewDistributed_Private(PetscViewer viewer, const PC_H2 &h2)
 
   PetscFunctionBegin;
   PetscCallMPI(MPI_Comm_rank(PetscObjectComm((PetscObject)viewer), &rank));
-  PetscCall(PetscViewerASCIIPrintf(viewer, "distributed: each rank factors its part's subtree (%d parts, cross blocks between them), rank 0 the top\n", st.parts));
-  PetscCall(PetscViewerASCIIPrintf(viewer, "top on rank 0: %d unknowns of %d boxes, %.1f MB%s, %.2f s\n", st.top_size, st.top_boxes, st.top_bytes / 1048576.0,
-                                   TopLU_Private(*h2.factors, " (", ")").c_str(), st.time_top));
+  PetscCall(PetscViewerASCIIPrintf(viewer, "distributed: each rank factors its part's subtree (%d parts, cross blocks between them), %s\n", st.parts, st.top_spread > 0 ? "all ranks the top" : "rank 0 the top"));
+  if (st.top_spread > 0)
+    PetscCall(PetscViewerASCIIPrintf(viewer, "top spread over %d ranks (ScaLAPACK): %d unknowns of %d boxes, %.1f MB on rank 0%s, %.2f s\n", st.top_spread, st.top_size,
+                                     st.top_boxes, st.top_bytes / 1048576.0, TopLU_Private(*h2.factors, " (", ")").c_str(), st.time_top));
+  else
+    PetscCall(PetscViewerASCIIPrintf(viewer, "top on rank 0: %d unknowns of %d boxes, %.1f MB%s, %.2f s\n", st.top_size, st.top_boxes, st.top_bytes / 1048576.0,
+                                     TopLU_Private(*h2.factors, " (", ")").c_str(), st.time_top));
   for (const hssbem::H2FactorLevelStats &l : st.levels) {
     cross = std::max(cross, l.cross_bytes);
     eliminated += l.eliminated;
@@ -469,6 +476,7 @@ PetscErrorCode PCH2SetEstimateError_H2(PC pc, PetscInt n)
 . -pc_h2_top_size <n>         - unknowns factored densely at the top (default 2000)
 . -pc_h2_top_when_cheaper <b> - also stop at a level whose eliminations would cost more flops than the dense top (default true)
 . -pc_h2_mixed_top <n>        - from this top size on (default 4000), its LU in single precision, solves refined in double (0: never)
+. -pc_h2_spread_top <b>       - on several ranks, spread a single-precision top's LU over the ranks, ScaLAPACK (default true; false: rank 0)
 . -pc_h2_sketch_size <p>      - random vectors of the far-field sketch (0: from the tolerance)
 - -pc_h2_estimate_error <k>   - power iterations of the ||I - A F^-1|| estimate in -ksp_view (0: none)
 

@@ -210,16 +210,23 @@ TEST_F(H2Distributed, FactorizationEqualsTheOneRankOneWithParts)
   // Each rank eliminates its part's subtree, rank 0 the top: the same steps as one rank that
   // simulates the parts on the same tree, up to rounding (the sketches agree to 2e-16).
   const Fixture &f = *H2Distributed::f;
-  // At 1e-3 twice: the top's LU mixed (refined in double, the default below 4 000 unknowns) and
-  // in single precision alone (mixed_top_from 1: each rank sends its rows rounded, two floats to
-  // a value, and rank 0 factors them in single precision).
-  for (const auto [tol, mixed_from] : {std::pair{1e-3, 4000}, std::pair{1e-3, 1}, std::pair{1e-6, 4000}}) {
+  // At 1e-3 three times: the top's LU in double (below mixed_top_from, 4 000 by default), and in
+  // single precision alone (mixed_top_from 1) spread over the ranks (ScaLAPACK) or on rank 0
+  // (each rank sends its rows rounded, two floats to a value).
+  struct Case {
+    double tol;
+    int mixed_from;
+    bool spread;
+  };
+  for (const Case c : {Case{1e-3, 4000, true}, Case{1e-3, 1, true}, Case{1e-3, 1, false}, Case{1e-6, 4000, true}}) {
+    const double tol = c.tol;
     H2FactorOptions fo;
     fo.rel_tol = tol;
     fo.top_size = 0;
     fo.top_when_cheaper = false; // eliminate every level the parts allow (a 3k-unknown top is cheaper)
     fo.leaf_size = 16;
-    fo.mixed_top_from = mixed_from;
+    fo.mixed_top_from = c.mixed_from;
+    fo.spread_top = c.spread;
     double diff = 1, residual = 1;
     H2FactorStats st;
     bool same_ranks = false;
@@ -228,11 +235,15 @@ TEST_F(H2Distributed, FactorizationEqualsTheOneRankOneWithParts)
     for (const H2FactorLevelStats &l : st.levels) eliminated += l.eliminated;
     MPI_Allreduce(MPI_IN_PLACE, &eliminated, 1, MPI_LONG_LONG, MPI_SUM, PETSC_COMM_WORLD);
     if (f.comm.rank() == 0)
-      std::printf("factorization at %.0e on %d ranks (top %s): against one rank with the parts %.1e (%s), residual %.1e, top %d, %lld eliminated below it\n", tol, f.comm.size(),
-                  st.top_single ? "single" : st.top_mixed ? "mixed" : "double", diff, same_ranks ? "same skeleton sizes" : "a skeleton's rank differs", residual, st.top_size, eliminated);
-    if (f.comm.rank() == 0) EXPECT_EQ(st.top_single, mixed_from == 1); // single panels and a top of at least mixed_from
+      std::printf("factorization at %.0e on %d ranks (top %s%s): against one rank with the parts %.1e (%s), residual %.1e, top %d, %lld eliminated below it\n", tol, f.comm.size(),
+                  st.top_single ? "single" : st.top_mixed ? "mixed" : "double", st.top_spread ? ", spread" : "", diff, same_ranks ? "same skeleton sizes" : "a skeleton's rank differs", residual,
+                  st.top_size, eliminated);
+    if (f.comm.rank() == 0) EXPECT_EQ(st.top_single, c.mixed_from == 1); // single panels and a top of at least mixed_from
+    EXPECT_EQ(st.top_spread, c.mixed_from == 1 && c.spread && f.comm.size() > 1 ? f.comm.size() : 0);
     // At 1e-3 the working blocks rest in single precision: the sketches' 2e-16 differences flip
     // a few roundings to float (6e-8), measured 8e-8 / 5e-8 at 2 / 4 ranks; in double 3e-10 / 0.
+    // The spread top's LU (ScaLAPACK, another order of the same single-precision arithmetic)
+    // measured 1.8e-7 / 1.7e-7.
     // They may also move a skeleton's rank across the tolerance (measured at 1e-6 on 2 ranks:
     // 388 instead of 387 unknowns eliminated at level 2, difference 2.4e-7): then both are
     // factorizations to tol of the same matrix and differ by at most about tol.

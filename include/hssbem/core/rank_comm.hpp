@@ -44,12 +44,21 @@ public:
   /// Element-wise sum (in place) and maximum over the ranks.
   virtual void sum(double *v, int n) const = 0;
   virtual double max(double v) const = 0;
+  /// LU with partial pivoting (getrf) of an n × n single-precision matrix spread over the ranks
+  /// by blocks of nb columns, block j on rank j mod size() (ScaLAPACK's 1 × P process grid):
+  /// `local` holds this rank's columns in order, n × spread_columns(n, nb) column-major. On
+  /// return it holds their part of the factors, and ipiv (n entries, 1-based) the row
+  /// interchanges, the same on every rank. Returns getrf's info, the same on every rank.
+  virtual int spread_getrf(int n, int nb, float *local, int *ipiv) const;
 
   const CommTraffic &traffic() const { return m_traffic; }
 
 protected:
   mutable CommTraffic m_traffic;
 };
+
+/// How many of n columns in blocks of nb fall to `rank` of `ranks` (block j on rank j mod ranks).
+int spread_columns(int n, int nb, int rank, int ranks);
 
 /// One rank: every collective is the identity.
 class SerialComm : public RankComm {

@@ -79,6 +79,10 @@ struct H2FactorOptions {
   /// parts are never close; their couplings stay as cross blocks, see h2_factorization.hpp's
   /// "Parts"), with the parts simulated on this rank. Ignored on a tree without parts.
   bool within_parts = false;
+  /// Distributed, with a single-precision top (single panels, mixed_top_from or more
+  /// unknowns): spread the top's LU over the ranks (ScaLAPACK, blocks of 128 columns) instead of
+  /// factoring it on rank 0.
+  bool spread_top = true;
 };
 
 /// A singular pivot block (e.g. a pure-traction problem without its rigid-mode regularisation).
@@ -106,6 +110,7 @@ struct H2FactorStats {
   int top_size = 0;                       ///< unknowns of the dense top block
   bool top_mixed = false;                 ///< the top's LU in single precision, refined in double (H2FactorOptions::mixed_top_from)
   bool top_single = false;                ///< the top's LU in single precision alone, not refined (single panels and a top of mixed_top_from or more)
+  int top_spread = 0;                     ///< ranks the top is spread over (H2FactorOptions::spread_top; 0: on rank 0 or one rank)
   std::size_t bytes = 0, top_bytes = 0;   ///< all factors; the top's LU (and, mixed, the top block in double)
   /// The largest working store of the factorization (blocks between active boxes, fill-in,
   /// restricted bases), which is freed when it ends.
@@ -118,7 +123,7 @@ struct H2FactorStats {
   int parts = 1;                          ///< parts eliminated separately (H2FactorOptions::within_parts)
   int top_boxes = 0;                      ///< boxes left for the top (with parts: the parts' roots, or more)
   /// On several ranks the levels, factors, flops and times above are this rank's (its part's
-  /// subtree); the top's figures are rank 0's, top_size every rank's.
+  /// subtree); the top's figures are rank 0's (spread: this rank's share), top_size every rank's.
   double seconds() const { return time_sketch + time_init + time_skeleton + time_eliminate + time_merge + time_top; }
 };
 

@@ -24,6 +24,8 @@ public:
   bool any(bool mine) const override;
   void sum(double *v, int n) const override;
   double max(double v) const override;
+  /* ScaLAPACK's psgetrf on a 1 x size() BLACS grid of this communicator. */
+  int spread_getrf(int n, int nb, float *local, int *ipiv) const override;
 
 private:
   MPI_Comm m_comm;
