@@ -855,7 +855,9 @@ class ParallelTests(CliTestCase):
         runs = [("dense", 1, ("-bem_mat_type", "dense"), "preonly/lu"), ("h2", 1, ("-bem_mat_type", "h2"), "gmres/h2"),
                 ("h2", 2, ("-bem_mat_type", "h2", "-bem_mat_view"), "gmres/h2"),
                 ("h2", 4, ("-bem_mat_type", "h2"), "gmres/h2"),
-                ("jacobi", 2, ("-bem_mat_type", "h2", "-pc_type", "jacobi"), "gmres/jacobi")]
+                ("jacobi", 2, ("-bem_mat_type", "h2", "-pc_type", "jacobi"), "gmres/jacobi"),
+                # a single-precision top from any size on: spread over the ranks (ScaLAPACK)
+                ("spread", 2, ("-bem_mat_type", "h2", "-pc_h2_mixed_top", "1", "-pc_h2_top_size", "0", "-ksp_view"), "gmres/h2")]
         fields = {}
         for name, np_, opts, solver in runs:
             out = self.path("%s%d.h5" % (name, np_))
@@ -864,6 +866,8 @@ class ParallelTests(CliTestCase):
             self.assertIn("solved with " + solver, r.output, r.describe())
             if "-bem_mat_view" in opts:
                 self.assertRegex(r.output, r"distributed over 2 ranks by METIS: \d+ to \d+ nodes per rank", r.describe())
+            if name == "spread":
+                self.assertRegex(r.output, r"top spread over 2 ranks \(ScaLAPACK\): \d+ unknowns", r.describe())
             data, attrs, _ = self.read_result("%s%d.h5" % (name, np_))
             self.assertEqual(int(attrs["ranks"]), np_)
             fields[(name, np_)] = data
@@ -875,8 +879,8 @@ class ParallelTests(CliTestCase):
                     self.assertGreater(np.linalg.norm(a), 0)
                     self.assertLess(np.linalg.norm(b - a) / np.linalg.norm(a), 1e-5)
         one = fields[("h2", 1)]["fields/displacement"]
-        for np_ in (2, 4):
-            d = fields[("h2", np_)]["fields/displacement"]
+        for key in (("h2", 2), ("h2", 4), ("spread", 2)):
+            d = fields[key]["fields/displacement"]
             self.assertLess(np.linalg.norm(d - one) / np.linalg.norm(one), 1e-5)
 
     def test_distributed_hss_agrees_across_ranks(self):
@@ -1074,6 +1078,8 @@ class RankFaultTests(OneCleanError, CliTestCase):
         # the distributed H² factorization: each rank's part, and rank 0's top
         ("H2FSubtree", "error", ["-bem_mat_type", "h2", "-pc_type", "h2"], r"PC h2 set-up: injected fault at H2FSubtree", "any"),
         ("H2FTop", "oom", ["-bem_mat_type", "h2", "-pc_type", "h2"], r"PC h2 set-up: out of memory", 0),
+        # the top spread over the ranks (ScaLAPACK): the fault comes before its collective LU
+        ("H2FTop", "error", ["-bem_mat_type", "h2", "-pc_type", "h2", "-pc_h2_mixed_top", "1", "-pc_h2_top_size", "0"], r"PC h2 set-up: injected fault at H2FTop", "any"),
         ("Gather", "error", [], r"injected fault at Gather", 0),
         ("Post", "oom", [], r"out of memory", 0),
         ("Write", "error", [], r"injected fault at Write", 0),
