@@ -539,9 +539,7 @@ std::size_t Frontier::store_bytes() const
 void Frontier::take_top(std::vector<int> *dofs, TopSink &sink)
 {
   const int nb = static_cast<int>(m_front.size());
-  std::vector<int> off(nb + 1, 0);
-  for (int t = 0; t < nb; ++t) off[t + 1] = off[t] + static_cast<int>(m_D[m_front[t]].size());
-  sink.begin(off);
+  sink.begin(top_offsets());
   std::vector<int> block_rows(nb);
   std::iota(block_rows.begin(), block_rows.end(), 0);
   for_each_cluster(block_rows, [&](int s) { take_row(s, sink); });

@@ -196,6 +196,11 @@ private:
   void take_row(int s, TopSink &sink);
   /// Once the top's rows are out: every block, basis and copy goes (the unknowns stay).
   void release_stores();
+  /// Several ranks, before the top: every box's unknowns to every rank, and the column data
+  /// (Ψ, bases) that the other ranks' rows of the top need from this rank's boxes.
+  void share_top_columns();
+  /// The top's row offsets: box s of the frontier holds rows off[s] .. off[s + 1] − 1.
+  std::vector<int> top_offsets() const;
   DenseMatrix leaf_col_basis(int c) const;
   DenseMatrix leaf_near(int a, int b) const;
   void add_regularisation(DenseMatrix &B, int P, int Q) const;

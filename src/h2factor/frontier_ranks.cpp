@@ -43,6 +43,83 @@ std::vector<int> read_ints(const std::vector<double> &r, std::size_t &at)
   return v;
 }
 
+/// The top's rows of this rank into the column blocks of a spread LU (SpreadTop): its own
+/// columns into `local` (n × its count), the others' into one message per rank, rounded to
+/// single precision (two floats to a value), box row by box row: for each of this rank's boxes
+/// s in frontier order, for each of the destination's columns in order, box s's rows.
+class SpreadSink : public TopSink {
+public:
+  SpreadSink(int nb, int rank, int ranks, const std::vector<int> &mine, std::vector<float> *local, std::vector<double> *row_sums)
+    : m_nb(nb), m_rank(rank), m_ranks(ranks), m_mine(mine), m_local(local), m_sums(row_sums)
+  {
+  }
+  void begin(const std::vector<int> &off) override
+  {
+    m_off = off;
+    const int n = off.back();
+    m_cols.resize(m_ranks);
+    for (int r = 0; r < m_ranks; ++r) m_cols[r] = spread_columns(n, m_nb, r, m_ranks);
+    m_base.assign(m_ranks, std::vector<std::size_t>(off.size() - 1, 0));
+    m_out.assign(m_ranks, {});
+    for (int r = 0; r < m_ranks; ++r) {
+      std::size_t at = 0;
+      for (int s : m_mine) m_base[r][s] = at, at += static_cast<std::size_t>(off[s + 1] - off[s]) * m_cols[r];
+      if (r != m_rank) m_out[r].assign(at + at % 2, 0.0f); // an even count: two floats to a value
+    }
+    m_local->assign(static_cast<std::size_t>(n) * m_cols[m_rank], 0.0f);
+    m_sums->assign(n, 0.0);
+  }
+  void put(int s, int t, DenseMatrix B) override
+  {
+    const int n = m_off.back(), m = m_off[s + 1] - m_off[s];
+    if (B.m != m || B.n != m_off[t + 1] - m_off[t]) throw std::logic_error("H2 factorization: a top block of unexpected size");
+    for (int j = 0; j < B.n; ++j) {
+      const int c = m_off[t] + j, r = (c / m_nb) % m_ranks, place = (c / m_nb / m_ranks) * m_nb + c % m_nb;
+      const double *src = B.data() + static_cast<std::size_t>(j) * B.ld();
+      float *dst = r == m_rank ? m_local->data() + static_cast<std::size_t>(place) * n + m_off[s] : m_out[r].data() + m_base[r][s] + static_cast<std::size_t>(place) * m;
+      double *sums = m_sums->data() + m_off[s];
+      for (int i = 0; i < m; ++i) {
+        dst[i] = static_cast<float>(src[i]);
+        sums[i] += src[i];
+      }
+    }
+  }
+  bool single() const override { return true; }
+  /// The messages to the other ranks (this sink's buffers go).
+  std::vector<std::vector<double>> messages()
+  {
+    std::vector<std::vector<double>> send(m_ranks);
+    for (int r = 0; r < m_ranks; ++r) {
+      send[r].resize(m_out[r].size() / 2);
+      if (!m_out[r].empty()) std::memcpy(send[r].data(), m_out[r].data(), m_out[r].size() * sizeof(float));
+      std::vector<float>().swap(m_out[r]);
+    }
+    return send;
+  }
+  /// Another rank's message: the rows of its boxes `from` (positions, in frontier order).
+  void receive(const std::vector<int> &from, const std::vector<double> &message)
+  {
+    const int n = m_off.back(), mine_cols = m_cols[m_rank];
+    std::size_t need = 0, at = 0;
+    for (int s : from) need += static_cast<std::size_t>(m_off[s + 1] - m_off[s]) * mine_cols;
+    if ((need + need % 2) / 2 != message.size()) throw std::logic_error("H2 factorization: a spread top message of unexpected length");
+    const float *in = reinterpret_cast<const float *>(message.data());
+    for (int s : from) {
+      const int m = m_off[s + 1] - m_off[s];
+      for (int lc = 0; lc < mine_cols; ++lc, at += m) std::copy(in + at, in + at + m, m_local->data() + static_cast<std::size_t>(lc) * n + m_off[s]);
+    }
+  }
+
+private:
+  int m_nb, m_rank, m_ranks;
+  std::vector<int> m_mine;
+  std::vector<float> *m_local;
+  std::vector<double> *m_sums;
+  std::vector<int> m_off, m_cols;
+  std::vector<std::vector<std::size_t>> m_base; ///< per destination rank, per box of this rank: floats before its rows
+  std::vector<std::vector<float>> m_out;
+};
+
 /// What a record of the merges' and the top's exchanges carries.
 enum Record { BoxData = 0, ColumnBasis = 1, FarPart = 2 };
 
@@ -233,14 +310,26 @@ void Frontier::prepare_cross_merge(int l, const std::vector<int> &front, const s
   for (const auto &pq : whole_cols) concat(pq.first);
 }
 
-void Frontier::take_top_ranks(std::vector<int> *dofs, std::vector<std::vector<int>> *from, std::vector<int> *own, TopSink &sink)
+void Frontier::share_top_columns()
 {
-  const int nb = static_cast<int>(m_front.size()), P = m_comm->size();
   std::vector<std::pair<int, int>> pairs; // (P other, Q mine): Q's data for P's rows
   for (int p : m_front)
     for (int q : m_front)
       if (!mine(p) && mine(q)) pairs.push_back({p, q});
   send_column_data(pairs); // and every box's unknowns to every rank
+}
+
+std::vector<int> Frontier::top_offsets() const
+{
+  std::vector<int> off(m_front.size() + 1, 0);
+  for (std::size_t s = 0; s < m_front.size(); ++s) off[s + 1] = off[s] + static_cast<int>(m_D[m_front[s]].size());
+  return off;
+}
+
+void Frontier::take_top_ranks(std::vector<int> *dofs, std::vector<std::vector<int>> *from, std::vector<int> *own, TopSink &sink)
+{
+  const int nb = static_cast<int>(m_front.size()), P = m_comm->size();
+  share_top_columns();
   // Blocks travel rounded to single precision, two to a value, when the sink rounds them anyway.
   const bool halves = sink.single();
   const auto values = [&](std::size_t count) { return halves ? (count + 1) / 2 : count; };
@@ -254,9 +343,8 @@ void Frontier::take_top_ranks(std::vector<int> *dofs, std::vector<std::vector<in
       if (mine(m_front[s])) here.push_back(s);
     for (int s : here) own->insert(own->end(), m_D[m_front[s]].begin(), m_D[m_front[s]].end());
     if (m_rank == 0) { // its own rows straight into the sink
-      std::vector<int> off(nb + 1, 0);
+      const std::vector<int> off = top_offsets();
       for (int s = 0; s < nb; ++s) {
-        off[s + 1] = off[s] + static_cast<int>(m_D[m_front[s]].size());
         const int q = m_owner.empty() ? 0 : m_owner[m_front[s]];
         for (int i = off[s]; i < off[s + 1]; ++i) (*from)[q].push_back(i);
         dofs->insert(dofs->end(), m_D[m_front[s]].begin(), m_D[m_front[s]].end());
@@ -345,86 +433,36 @@ void Frontier::take_top_ranks(std::vector<int> *dofs, std::vector<std::vector<in
 int Frontier::take_top_spread(int nb, std::vector<float> *local, std::vector<double> *row_sums, std::vector<int> *own, std::vector<int> *pos)
 {
   const int nb_boxes = static_cast<int>(m_front.size()), P = m_comm->size();
-  std::vector<std::pair<int, int>> pairs; // (P other, Q mine): Q's data for P's rows
-  for (int p : m_front)
-    for (int q : m_front)
-      if (!mine(p) && mine(q)) pairs.push_back({p, q});
-  send_column_data(pairs); // and every box's unknowns to every rank
-  std::vector<int> off(nb_boxes + 1, 0);
-  for (int s = 0; s < nb_boxes; ++s) off[s + 1] = off[s] + static_cast<int>(m_D[m_front[s]].size());
-  const int n = off.back();
-  // Column c: its rank and its place among that rank's columns.
-  const auto rank_of = [&](int c) { return (c / nb) % P; };
-  const auto place = [&](int c) { return (c / nb / P) * nb + c % nb; };
-  std::vector<int> columns(P);
-  for (int r = 0; r < P; ++r) columns[r] = spread_columns(n, nb, r, P);
+  share_top_columns();
+  const std::vector<int> off = top_offsets();
   std::vector<int> here; // positions of this rank's boxes
-  std::vector<std::vector<std::size_t>> base(P, std::vector<std::size_t>(nb_boxes, 0)); // floats before box s in the message to r
-  std::vector<std::vector<float>> out(P);
+  for (int s = 0; s < nb_boxes; ++s)
+    if (mine(m_front[s])) here.push_back(s);
+  SpreadSink sink(nb, m_rank, P, here, local, row_sums);
   collectively(*m_comm, [&] {
     own->clear();
     pos->clear();
-    for (int s = 0; s < nb_boxes; ++s)
-      if (mine(m_front[s])) {
-        here.push_back(s);
-        own->insert(own->end(), m_D[m_front[s]].begin(), m_D[m_front[s]].end());
-        for (int i = off[s]; i < off[s + 1]; ++i) pos->push_back(i);
-      }
-    for (int r = 0; r < P; ++r) {
-      std::size_t at = 0;
-      for (int s : here) base[r][s] = at, at += static_cast<std::size_t>(off[s + 1] - off[s]) * columns[r];
-      if (r != m_rank) out[r].assign(at + (at % 2), 0.0f); // an even count: two floats to a value
+    for (int s : here) {
+      own->insert(own->end(), m_D[m_front[s]].begin(), m_D[m_front[s]].end());
+      for (int i = off[s]; i < off[s + 1]; ++i) pos->push_back(i);
     }
-    local->assign(static_cast<std::size_t>(n) * columns[m_rank], 0.0f);
-    row_sums->assign(n, 0.0);
-    for_each_cluster(here, [&](int s) {
-      const int X = m_front[s], m = off[s + 1] - off[s];
-      for (int t = 0; t < nb_boxes; ++t) {
-        const int Q = m_front[t];
-        const auto it = m_M[X].find(Q);
-        const DenseMatrix B = it != m_M[X].end() ? it->second.take() : far_part(X, Q);
-        if (B.m != m || B.n != off[t + 1] - off[t]) throw std::logic_error("H2 factorization: a top block of unexpected size");
-        for (int j = 0; j < B.n; ++j) {
-          const int c = off[t] + j, r = rank_of(c);
-          const double *src = B.data() + static_cast<std::size_t>(j) * B.ld();
-          float *dst = r == m_rank ? local->data() + static_cast<std::size_t>(place(c)) * n + off[s] : out[r].data() + base[r][s] + static_cast<std::size_t>(place(c)) * m;
-          for (int i = 0; i < m; ++i) {
-            dst[i] = static_cast<float>(src[i]);
-            (*row_sums)[off[s] + i] += src[i];
-          }
-        }
-      }
-      m_M[X].clear();
-    });
+    sink.begin(off);
+    for_each_cluster(here, [&](int s) { take_row(s, sink); });
     release_stores();
     return_free_memory();
   });
-  std::vector<std::vector<double>> send(P);
-  for (int r = 0; r < P; ++r) {
-    send[r].resize(out[r].size() / 2);
-    if (!out[r].empty()) std::memcpy(send[r].data(), out[r].data(), out[r].size() * sizeof(float));
-    std::vector<float>().swap(out[r]);
-  }
-  std::vector<std::vector<double>> recv = exchange_values(*m_comm, send);
-  std::vector<std::vector<double>>().swap(send);
+  std::vector<std::vector<double>> recv = exchange_values(*m_comm, sink.messages());
   collectively(*m_comm, [&] {
-    const int mine_cols = columns[m_rank];
     for (int q = 0; q < P; ++q) {
       if (q == m_rank) continue;
-      std::size_t at = 0, need = 0;
+      std::vector<int> from; // rank q's boxes
       for (int s = 0; s < nb_boxes; ++s)
-        if (m_owner[m_front[s]] == q) need += static_cast<std::size_t>(off[s + 1] - off[s]) * mine_cols;
-      if ((need + need % 2) / 2 != recv[q].size()) throw std::logic_error("H2 factorization: a spread top message of unexpected length");
-      const float *in = reinterpret_cast<const float *>(recv[q].data());
-      for (int s = 0; s < nb_boxes; ++s) {
-        if (m_owner[m_front[s]] != q) continue;
-        const int m = off[s + 1] - off[s];
-        for (int lc = 0; lc < mine_cols; ++lc, at += m) std::copy(in + at, in + at + m, local->data() + static_cast<std::size_t>(lc) * n + off[s]);
-      }
+        if (m_owner[m_front[s]] == q) from.push_back(s);
+      sink.receive(from, recv[q]);
       std::vector<double>().swap(recv[q]);
     }
   });
-  return n;
+  return off.back();
 }
 
 } // namespace hssbem::h2f
