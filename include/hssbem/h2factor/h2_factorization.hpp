@@ -156,8 +156,9 @@ public:
   /// Distributed (collective; `cache` of a distributed matrix, whose tree has one part per rank
   /// of comm): each rank eliminates its part's subtree, its root included, as within_parts
   /// does on one rank (no communication during a level; the cross blocks' other sides at its
-  /// end, the data of merged cross blocks at the merges), and rank 0 factors the top from the
-  /// ranks' rows of it. The same steps as one rank with within_parts on the same tree, up to
+  /// end, the data of merged cross blocks at the merges), and the top is factored from the
+  /// ranks' rows of it: spread over all ranks when it is a single-precision top (spread_top),
+  /// else on rank 0. The same steps as one rank with within_parts on the same tree, up to
   /// rounding. A breakdown on any rank throws H2Breakdown on every rank; another error throws on
   /// its rank and PeerFault on the others (fault sites H2FSubtree, H2FTop). comm must outlive
   /// this object.
@@ -170,7 +171,8 @@ public:
   void solve(const double *b, double *x) const;
   /// Of a distributed factorization (collective): x = A⁻¹ b on this rank's rows, both with 3
   /// values per point of its part in cluster order (x may alias b). Only the top's unknowns
-  /// cross ranks (to rank 0 and back).
+  /// cross ranks (to rank 0 and back; spread: summed over the ranks, then one sum per block
+  /// column and triangle).
   void solve_local(const double *b, double *x) const;
   bool distributed() const { return m_comm != nullptr; }
   const H2FactorStats &stats() const { return m_stats; }
