@@ -103,10 +103,10 @@ public:
     std::size_t need = 0, at = 0;
     for (int s : from) need += static_cast<std::size_t>(m_off[s + 1] - m_off[s]) * mine_cols;
     if ((need + need % 2) / 2 != message.size()) throw std::logic_error("H2 factorization: a spread top message of unexpected length");
-    const float *in = reinterpret_cast<const float *>(message.data());
+    const char *in = reinterpret_cast<const char *>(message.data()); // the floats' bytes (copied, never read as floats in place)
     for (int s : from) {
       const int m = m_off[s + 1] - m_off[s];
-      for (int lc = 0; lc < mine_cols; ++lc, at += m) std::copy(in + at, in + at + m, m_local->data() + static_cast<std::size_t>(lc) * n + m_off[s]);
+      for (int lc = 0; lc < mine_cols; ++lc, at += m) std::memcpy(m_local->data() + static_cast<std::size_t>(lc) * n + m_off[s], in + at * sizeof(float), m * sizeof(float));
     }
   }
 
@@ -402,6 +402,7 @@ void Frontier::take_top_ranks(std::vector<int> *dofs, std::vector<std::vector<in
   collectively(*m_comm, [&] {
     if (m_rank != 0) return;
     std::vector<char> seen(nb, 0);
+    std::vector<float> rounded; // a block as it came (rounded), copied out of the message
     for (int s : here) seen[s] = 1;
     for (std::vector<double> &r : recv) {
       for (std::size_t at = 0; at < r.size();) {
@@ -417,9 +418,10 @@ void Frontier::take_top_ranks(std::vector<int> *dofs, std::vector<std::vector<in
           const std::size_t count = static_cast<std::size_t>(m) * static_cast<std::size_t>(n);
           if (m != static_cast<int>(m_D[m_front[s]].size()) || n != static_cast<int>(m_D[m_front[t]].size()) || at + values(count) > r.size())
             throw std::logic_error("H2 factorization: a corrupt top block from another rank");
-          const float *in = reinterpret_cast<const float *>(r.data() + at);
+          rounded.resize(count);
+          std::memcpy(rounded.data(), r.data() + at, count * sizeof(float));
           DenseMatrix B(m, n);
-          std::copy(in, in + count, B.a.begin());
+          std::copy(rounded.begin(), rounded.end(), B.a.begin());
           at += values(count);
           sink.put(s, t, std::move(B));
         }
