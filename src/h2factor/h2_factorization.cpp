@@ -114,6 +114,19 @@ int first_level(const ClusterTree &tree, int leaf_size, double rel_tol)
   return l;
 }
 
+/// The finest level the factorization may merge up to: with parts eliminated separately, the
+/// deepest part root's. Above the parts a part's root never merges, so a tree whose parts' roots
+/// lie on different levels (a number of parts that is not a power of two: 3 parts sit at levels
+/// 1, 2, 2) would otherwise put a part's root of level 1 into one frontier with boxes of level 2,
+/// a pair that the H² partition never met and that no far block lies above. 1 without parts.
+int last_level(const ClusterTree &tree, bool parts)
+{
+  int l = 1;
+  if (parts)
+    for (int p = 0; p < tree.num_parts(); ++p) l = std::max(l, tree.cluster(tree.part_cluster(p)).level);
+  return l;
+}
+
 /// Whether the top's LU runs in single precision alone (TopBlock::factor_single): when the
 /// panels rest in single precision (the factorization is a preconditioner) and the top is large
 /// enough for the mixed LU. The mixed LU would refine each of its solves to double against a
@@ -358,12 +371,13 @@ H2Factorization::H2Factorization(H2FactorCache &cache, const SystemSelection &se
     m_stats.parts = tree.num_parts();
   }
   const bool single_store = m_stats.single_panels && m_f->pattern.dofs() > options.top_size;
+  const int last = last_level(tree, !parts.empty());
   auto front = std::make_unique<h2f::Frontier>(m_K, *sketch, m_f->pattern, single_store, std::move(parts));
-  const int l0 = first_level(tree, options.leaf_size, options.rel_tol);
+  const int l0 = std::max(first_level(tree, options.leaf_size, options.rel_tol), last);
   for (int l = tree.levels() - 1; l > l0; --l) front->merge(l);
   m_stats.time_init = timer.seconds();
   const SerialComm one;
-  eliminate_levels(*front, one, l0);
+  eliminate_levels(*front, one, l0, last);
   PhaseScope phase(Phase::H2Top);
   timer.restart();
   m_stats.top_boxes = static_cast<int>(front->boxes().size());
@@ -421,10 +435,11 @@ H2Factorization::H2Factorization(H2FactorCache &cache, const RankComm &comm, con
   Timer timer;
   const bool single_store = m_stats.single_panels && m_f->pattern.dofs() > options.top_size;
   auto front = std::make_unique<h2f::Frontier>(m_K, *sketch, m_f->pattern, single_store, tree.num_parts() > 1 ? cluster_parts(tree) : std::vector<int>{}, &comm);
-  const int l0 = first_level(tree, options.leaf_size, options.rel_tol);
+  const int last = last_level(tree, tree.num_parts() > 1);
+  const int l0 = std::max(first_level(tree, options.leaf_size, options.rel_tol), last);
   for (int l = tree.levels() - 1; l > l0; --l) front->merge(l);
   m_stats.time_init = timer.seconds();
-  eliminate_levels(*front, comm, l0);
+  eliminate_levels(*front, comm, l0, last);
   PhaseScope phase(Phase::H2Top);
   timer.restart();
   m_stats.top_boxes = static_cast<int>(front->boxes().size());
@@ -484,12 +499,12 @@ H2Factorization::H2Factorization(H2FactorCache &cache, const RankComm &comm, con
   for (const H2FactorLevelStats &ls : m_stats.levels) m_stats.bytes += ls.bytes;
 }
 
-void H2Factorization::eliminate_levels(h2f::Frontier &front, const RankComm &comm, int l0)
+void H2Factorization::eliminate_levels(h2f::Frontier &front, const RankComm &comm, int l0, int last)
 {
   const ClusterTree &tree = m_K.tree();
   const H2FactorOptions &options = m_options;
   Timer timer;
-  for (int l = l0; l >= 1; --l) {
+  for (int l = l0; l >= last; --l) {
     double active = static_cast<double>(front.active_total());
     comm.sum(&active, 1);
     if (active <= options.top_size || !comm.any(front.level_has_far_field(l))) break;
@@ -554,7 +569,7 @@ void H2Factorization::eliminate_levels(h2f::Frontier &front, const RankComm &com
       ls.mean_rank /= ls.boxes;
     }
     front.note_bytes();
-    {
+    if (l > last) {
       PhaseScope phase(Phase::H2Merge);
       Timer t;
       front.merge(l);

@@ -845,7 +845,7 @@ class ParallelTests(CliTestCase):
                 self.assertErrorLine(r)
 
     def test_distributed_h2_agrees_across_ranks(self):
-        # -bem_mat_type h2 on 2 and 4 ranks (oversubscribed) is distributed: METIS splits the
+        # -bem_mat_type h2 on 2, 3, 4 and 6 ranks (oversubscribed) is distributed: METIS splits the
         # surface, each rank compresses and applies its part. The answers agree with the 1-rank
         # run and with dense LU within the compression tolerance (1e-5), with the default solver
         # (GMRES + PC h2, distributed like the matrix) and with Jacobi on 2 ranks; the matrix view
@@ -855,6 +855,10 @@ class ParallelTests(CliTestCase):
         runs = [("dense", 1, ("-bem_mat_type", "dense"), "preonly/lu"), ("h2", 1, ("-bem_mat_type", "h2"), "gmres/h2"),
                 ("h2", 2, ("-bem_mat_type", "h2", "-bem_mat_view"), "gmres/h2"),
                 ("h2", 4, ("-bem_mat_type", "h2"), "gmres/h2"),
+                # 3 and 6 parts: the parts' roots lie on two levels of the tree; every level
+                # factored (top size 0), so the steps meet them
+                ("h2", 3, ("-bem_mat_type", "h2", "-pc_h2_top_size", "0"), "gmres/h2"),
+                ("h2", 6, ("-bem_mat_type", "h2", "-pc_h2_top_size", "0"), "gmres/h2"),
                 ("jacobi", 2, ("-bem_mat_type", "h2", "-pc_type", "jacobi"), "gmres/jacobi"),
                 # a single-precision top from any size on: spread over the ranks (ScaLAPACK)
                 ("spread", 2, ("-bem_mat_type", "h2", "-pc_h2_mixed_top", "1", "-pc_h2_top_size", "0", "-ksp_view"), "gmres/h2")]
@@ -879,7 +883,7 @@ class ParallelTests(CliTestCase):
                     self.assertGreater(np.linalg.norm(a), 0)
                     self.assertLess(np.linalg.norm(b - a) / np.linalg.norm(a), 1e-5)
         one = fields[("h2", 1)]["fields/displacement"]
-        for key in (("h2", 2), ("h2", 4), ("spread", 2)):
+        for key in (("h2", 2), ("h2", 3), ("h2", 4), ("h2", 6), ("spread", 2)):
             d = fields[key]["fields/displacement"]
             self.assertLess(np.linalg.norm(d - one) / np.linalg.norm(one), 1e-5)
 

@@ -133,14 +133,17 @@ TEST_P(H2FactorParts, SolveMatchesDenseLU)
   const double err = rel(x, dense_solve(dense_a(dense_k(*L->op, 6), n, 6, known), b));
   std::printf("%s, %d parts, tol %.0e: error vs dense LU %.2e\n", c.mesh, c.parts, c.tol, err);
   expect_parts_structure(F, c.parts, n, c.min_eliminated);
-  EXPECT_LE(err, 10 * c.tol);
+  EXPECT_LE(err, 3 * c.tol); // measured up to 1.56 tol (cardioid_fine, 1e-3, 2 parts)
 }
 
 INSTANTIATE_TEST_SUITE_P(Meshes, H2FactorParts,
-                         // eliminated below the top, measured: 0.69, 0.46, 0.47, 0.14, 0.75, 0.17, 0.23
+                         // eliminated below the top, measured: 0.69, 0.46, 0.47, 0.14, 0.75, 0.17, 0.23; 0.53, 0.04, 0.34, 0.31, 0.62, 0.30
                          ::testing::Values(Case{"sphere_l1.msh", 1e-3, 16, 2, 0.5}, Case{"sphere_l1.msh", 1e-6, 16, 2, 0.35}, Case{"sphere_l1.msh", 1e-3, 16, 4, 0.35},
                                            Case{"sphere_l1.msh", 1e-6, 16, 4, 0.1}, Case{"cardioid_fine.msh", 1e-3, 32, 2, 0.55}, Case{"cube_l1.msh", 1e-6, 16, 2, 0.12},
-                                           Case{"cube_l1.msh", 1e-3, 16, 4, 0.15}),
+                                           Case{"cube_l1.msh", 1e-3, 16, 4, 0.15},
+                                           // part counts that are no power of two: the parts' roots lie on two levels
+                                           Case{"sphere_l1.msh", 1e-3, 16, 3, 0.3}, Case{"sphere_l1.msh", 1e-6, 16, 5, 0.03}, Case{"sphere_l1.msh", 1e-3, 16, 6, 0.2},
+                                           Case{"sphere_l1.msh", 1e-3, 16, 7, 0.2}, Case{"cardioid_fine.msh", 1e-3, 32, 3, 0.3}, Case{"cube_l1.msh", 1e-3, 16, 3, 0.1}),
                          [](const ::testing::TestParamInfo<Case> &info) { return case_name(info.param.mesh, info.param.tol, info.param.leaf) + "_parts" + std::to_string(info.param.parts); });
 
 TEST(H2FactorParts, WithoutTheRuleStepsCrossParts)
@@ -191,7 +194,7 @@ TEST(H2FactorParts, PureTractionRegularisedMatchesDense)
     const double err = rel(x, xd);
     std::printf("pure traction, 2 parts, tol %.0e: error %.2e\n", tol, err);
     expect_parts_structure(F, 2, n, 0.5); // measured 0.78
-    EXPECT_LE(err, 10 * tol);
+    EXPECT_LE(err, 3 * tol); // measured 0.95 tol
   }
 }
 

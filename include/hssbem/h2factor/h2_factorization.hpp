@@ -187,8 +187,8 @@ public:
   struct Factors; ///< the elimination steps (private)
 
 private:
-  /// The levels' eliminations and merges (collective on comm), from level l0 up.
-  void eliminate_levels(h2f::Frontier &front, const RankComm &comm, int l0);
+  /// The levels' eliminations and merges (collective on comm), from level l0 up to level last.
+  void eliminate_levels(h2f::Frontier &front, const RankComm &comm, int l0, int last);
 
   const H2Matrix &m_K;
   const RankComm *m_comm = nullptr; ///< distributed: the ranks
