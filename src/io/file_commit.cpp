@@ -4,11 +4,13 @@
 
 #include "hssbem/core/fault.hpp"
 #include "hssbem/io/hdf5_output.hpp"
+#include "hssbem/io/temp_files.hpp"
 
 #include <cerrno>
 #include <csignal>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <system_error>
 
 #include <fcntl.h>
@@ -65,8 +67,6 @@ void install_handlers()
   throw OutputError("cannot write output '" + label + "': " + what + ": " + std::system_category().message(err));
 }
 
-std::string pid_suffix() { return std::to_string(static_cast<long long>(::getpid())); }
-
 } // namespace
 
 FileSetCommit::FileSetCommit(std::string label) : m_label(std::move(label))
@@ -94,29 +94,44 @@ FileSetCommit::~FileSetCommit()
 
 std::string FileSetCommit::add(const std::string &final_path)
 {
-  Entry e;
-  e.final_path  = final_path;
-  e.temp_path   = final_path + ".tmp." + pid_suffix();
-  e.backup_path = final_path + ".bak." + pid_suffix();
-  if (g_ntemp >= k_max_files || e.temp_path.size() >= static_cast<std::size_t>(k_max_path))
+  if (g_ntemp >= k_max_files || final_path.size() + 64 >= static_cast<std::size_t>(k_max_path))
     throw OutputError("cannot write output '" + m_label + "': path too long or too many files");
-  std::memcpy(g_temp[g_ntemp], e.temp_path.c_str(), e.temp_path.size() + 1);
-  g_ntemp = g_ntemp + 1; // registered before creation: a create that fails halfway may leave a file
+  sweep_stale_temporaries(final_path); // leftovers of runs killed on this host
+  // Signals wait while the file is created and registered: a handler must find every one.
+  sigset_t block, previous;
+  sigemptyset(&block);
+  for (int sig : k_signals) sigaddset(&block, sig);
+  sigprocmask(SIG_BLOCK, &block, &previous);
+  Entry e;
+  try {
+    e.temp = create_exclusive(final_path, "tmp", m_label);
+  } catch (...) {
+    sigprocmask(SIG_SETMASK, &previous, nullptr);
+    throw;
+  }
+  std::memcpy(g_temp[g_ntemp], e.temp.path.c_str(), e.temp.path.size() + 1);
+  g_ntemp = g_ntemp + 1;
+  sigprocmask(SIG_SETMASK, &previous, nullptr);
+  e.final_path = final_path;
   m_entries.push_back(std::move(e));
-  return m_entries.back().temp_path;
+  return m_entries.back().temp.path;
 }
 
-/// A hard link keeps the predecessor under its backup name while the final name is replaced.
+/// A hard link keeps the predecessor under a fresh backup name while the final name is replaced
+/// (link(2) never follows or replaces what is at the new name: a name taken is skipped).
 void FileSetCommit::keep_predecessor(Entry &e)
 {
-  ::unlink(e.backup_path.c_str());
-  if (::link(e.final_path.c_str(), e.backup_path.c_str()) == 0) {
-    e.had_predecessor = true;
-    return;
+  for (int attempt = 0; attempt < 16; ++attempt) {
+    e.backup_path = exclusive_name(e.final_path, "bak");
+    if (::link(e.final_path.c_str(), e.backup_path.c_str()) == 0) {
+      e.had_predecessor = true;
+      return;
+    }
+    const int err = errno;
+    if (err == ENOENT) return; // nothing to keep
+    if (err != EEXIST) fail_sys(m_label, err, "cannot keep the earlier '" + e.final_path + "' under '" + e.backup_path + "'");
   }
-  const int err = errno;
-  if (err == ENOENT) return; // nothing to keep
-  fail_sys(m_label, err, "cannot keep the earlier '" + e.final_path + "' under '" + e.backup_path + "'");
+  fail_sys(m_label, EEXIST, "cannot keep the earlier '" + e.final_path + "' under a backup name");
 }
 
 /// Put back what the failed commit replaced: each final name gets its predecessor again, or
@@ -141,12 +156,17 @@ void FileSetCommit::commit()
     for (std::size_t i = 0; i < m_entries.size(); ++i) {
       Entry &e = m_entries[i];
       if (i > 0) fault_point("Commit"); // tests: a failure between two renames
-      if (std::rename(e.temp_path.c_str(), e.final_path.c_str()) != 0) {
+      if (!still_the_same_file(e.temp)) // replaced behind our back: never publish a stranger's file
+        fail_sys(m_label, EEXIST, "the temporary file '" + e.temp.path + "' was replaced by another file or link");
+      if (std::rename(e.temp.path.c_str(), e.final_path.c_str()) != 0) {
         const int err = errno;
-        fail_sys(m_label, err, "cannot rename '" + e.temp_path + "' to '" + e.final_path + "'");
+        fail_sys(m_label, err, "cannot rename '" + e.temp.path + "' to '" + e.final_path + "'");
       }
       e.renamed = true;
     }
+    for (std::size_t i = 0; i < m_entries.size(); ++i) // once per directory: the renames survive a power loss
+      if (i == 0 || std::filesystem::path(m_entries[i].final_path).parent_path() != std::filesystem::path(m_entries[i - 1].final_path).parent_path())
+        sync_directory(m_entries[i].final_path, m_label);
   } catch (...) {
     roll_back();
     throw; // the destructor removes the temporary files left
@@ -182,7 +202,7 @@ void write_all(int fd, const std::string &text, const std::string &file, const s
 
 void sync_file(const std::string &file, const std::string &label)
 {
-  const int fd = ::open(file.c_str(), O_RDONLY | O_CLOEXEC);
+  const int fd = ::open(file.c_str(), O_RDONLY | O_NOFOLLOW | O_CLOEXEC);
   if (fd < 0) {
     const int err = errno;
     fail_sys(label, err, "cannot open '" + file + "' to sync it");
@@ -196,7 +216,7 @@ void sync_file(const std::string &file, const std::string &label)
 
 void write_text_file(const std::string &file, const std::string &text, const std::string &label)
 {
-  const int fd = ::open(file.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+  const int fd = ::open(file.c_str(), O_WRONLY | O_TRUNC | O_NOFOLLOW | O_CLOEXEC); // created exclusively by FileSetCommit::add
   if (fd < 0) {
     const int err = errno;
     fail_sys(label, err, "cannot create '" + file + "'");

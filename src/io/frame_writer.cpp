@@ -34,6 +34,8 @@ void check_frame(const std::string &path, std::size_t expected, std::size_t i, c
   detail::check_size(path, g + "/traction", f.traction.size(), nv, "vertex", true);
   detail::check_size(path, g + "/displacement_prescribed", f.displacement_prescribed.size(), nv,
                      "vertex", false);
+  detail::check_finite(path, g + "/displacement", f.displacement);
+  detail::check_finite(path, g + "/traction", f.traction);
 }
 
 void write_frame(H5Writer &w, std::size_t i, const FrameData &f)
@@ -116,7 +118,7 @@ std::string FrameWriter::Impl::sidecar() const
 
 FrameWriter::FrameWriter(const std::string &path, const ResultData &base)
 {
-  check_output_path(path);
+  check_output_path(path, base.input_files);
   detail::validate_result(path, base);
   const detail::H5ErrorSilencer quiet;
   m_impl = std::make_unique<Impl>(path, base);
@@ -144,7 +146,8 @@ std::size_t FrameWriter::num_frames() const { return m_impl->has_mask.size(); }
 
 void FrameWriter::commit(const std::map<std::string, double> &timings,
                          const std::map<std::string, long long> &attributes_int,
-                         const std::map<std::string, double> &attributes_real)
+                         const std::map<std::string, double> &attributes_real,
+                         const std::map<std::string, std::string> &attributes_str)
 {
   Impl &m = *m_impl;
   H5Writer &w = m.live("commit");
@@ -153,8 +156,7 @@ void FrameWriter::commit(const std::map<std::string, double> &timings,
   std::map<std::string, double> all = timings;
   all.insert(m.base_timings.begin(), m.base_timings.end()); // keeps the values given here
   detail::write_timings(w, all);
-  const std::map<std::string, std::string> no_text;
-  detail::write_attributes(w, w.root(), "/", {attributes_real, attributes_int, no_text});
+  detail::write_attributes(w, w.root(), "/", {attributes_real, attributes_int, attributes_str});
   w.close();
   detail::sync_file(m.h5_tmp, m.path);
   detail::write_text_file(m.xdmf_tmp, m.sidecar(), m.path);

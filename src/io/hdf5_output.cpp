@@ -9,8 +9,10 @@
 #include "result_layout.hpp"
 
 #include "hssbem/core/fault.hpp"
+#include "hssbem/io/temp_files.hpp"
 
 #include <cerrno>
+#include <cmath>
 #include <filesystem>
 #include <optional>
 #include <system_error>
@@ -158,6 +160,14 @@ void check_size(const std::string &path, const std::string &dataset, std::size_t
                           std::to_string(expected) + " (one per " + per + ")");
 }
 
+void check_finite(const std::string &path, const std::string &dataset, const std::vector<Vec3> &rows)
+{
+  for (std::size_t i = 0; i < rows.size(); ++i)
+    for (double x : rows[i])
+      if (!std::isfinite(x))
+        fail_output(path, dataset + " row " + std::to_string(i) + " holds a non-finite value (" + std::to_string(x) + "); a failed solve is not written");
+}
+
 namespace {
 
 void check_mesh(const std::string &path, const ResultData &d)
@@ -190,6 +200,18 @@ void check_sizes(const std::string &path, const ResultData &d)
              d.interior_points.size(), "interior point", false);
 }
 
+void check_values(const std::string &path, const ResultData &d)
+{
+  check_finite(path, "/mesh/vertices", d.vertices);
+  check_finite(path, "/fields/displacement", d.displacement);
+  check_finite(path, "/fields/traction", d.traction);
+  for (std::size_t t = 0; t < d.traction_corner.size(); ++t)
+    check_finite(path, "/fields/traction_corner[" + std::to_string(t) + "]", {d.traction_corner[t].begin(), d.traction_corner[t].end()});
+  check_finite(path, "/interior/displacement", d.interior_displacement);
+  for (const auto &[region, force] : d.reactions)
+    check_finite(path, "/reactions/" + region, {force});
+}
+
 /// A region name becomes an HDF5 link name, where '/' would nest and "." means the group.
 void check_region_names(const std::string &path, const ResultData &d)
 {
@@ -206,6 +228,7 @@ void validate_result(const std::string &path, const ResultData &d)
 {
   check_mesh(path, d);
   check_sizes(path, d);
+  check_values(path, d);
   check_region_names(path, d);
 }
 
@@ -260,16 +283,16 @@ void write_h5(const std::string &tmp_path, const std::string &path, const Result
   w.close();
 }
 
-/// Rank 0 registers the temporary names (its process id in them) and owns their removal and
-/// the renaming; every rank learns the HDF5 file's temporary name.
-std::string register_files(MPI_Comm comm, const std::string &path,
+/// Rank 0 creates the temporary files (its host and process id in their names) and owns their
+/// removal and the renaming; every rank learns the HDF5 file's temporary name.
+std::string register_files(MPI_Comm comm, const std::string &path, const ResultData &d,
                            std::optional<FileSetCommit> &files, std::string &xdmf_tmp)
 {
   std::string h5_tmp;
   run_agreed(comm, [&] {
     if (comm_rank(comm) != 0)
       return;
-    check_output_path(path);
+    check_output_path(path, d.input_files);
     files.emplace(path); // removes the temporary files on error and on SIGINT/SIGTERM/SIGHUP
     h5_tmp = files->add(path);
     xdmf_tmp = files->add(xdmf_path(path));
@@ -287,7 +310,7 @@ void write_result_collectively(MPI_Comm comm, const std::string &path, const Res
   const H5ErrorSilencer quiet;
   std::optional<FileSetCommit> files; // rank 0's
   std::string xdmf_tmp;
-  const std::string h5_tmp = register_files(comm, path, files, xdmf_tmp);
+  const std::string h5_tmp = register_files(comm, path, d, files, xdmf_tmp);
   write_h5(h5_tmp, path, d, meta, comm); // every rank has closed the file on return
   run_agreed(comm, [&] {
     if (root) {
@@ -306,16 +329,17 @@ void write_result_collectively(MPI_Comm comm, const std::string &path, const Res
 
 } // namespace detail
 
-void check_output_path(const std::string &path)
+void check_output_path(const std::string &path, const std::vector<std::string> &inputs)
 {
   detail::check_target_names(path);
   detail::check_parent_directory(path);
+  check_not_an_input(path, inputs);
 }
 
 void write_result(const std::string &path, const ResultData &data)
 {
   using namespace detail;
-  check_output_path(path);
+  check_output_path(path, data.input_files);
   validate_result(path, data);
   const H5ErrorSilencer quiet;
   FileSetCommit files(path); // removes the temporary files on error and on SIGINT/SIGTERM/SIGHUP

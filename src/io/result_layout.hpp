@@ -23,8 +23,12 @@ std::string xdmf_path(const std::string &path);
 void check_size(const std::string &path, const std::string &dataset, std::size_t size,
                 std::size_t expected, const char *per, bool required);
 
-/// Refuses inconsistent data (empty mesh, bad indices, incomplete arrays, unusable region
-/// names) before any file is created. Throws OutputError naming `path`.
+/// Every value of `rows` must be finite (a NaN or an infinity is a failed solve, never written);
+/// throws OutputError naming `path`, `dataset` and the row otherwise.
+void check_finite(const std::string &path, const std::string &dataset, const std::vector<Vec3> &rows);
+
+/// Refuses inconsistent data (empty mesh, bad indices, incomplete arrays, non-finite values,
+/// unusable region names) before any file is created. Throws OutputError naming `path`.
 void validate_result(const std::string &path, const ResultData &d);
 
 /// The attributes, timings and reactions of `d`.

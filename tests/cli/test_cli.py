@@ -1144,9 +1144,10 @@ class OutputAtomicityTests(CliTestCase):
                "-hssbem_fault_kind", "pause", "-hssbem_fault_seconds", "100"] + list(args)
         proc = subprocess.Popen(cmd, cwd=self.tmp, env=ENV, stdout=subprocess.PIPE,
                                 stderr=subprocess.PIPE, universal_newlines=True)
-        temps = [self.path("out.h5.tmp.%d" % proc.pid), self.path("out.xdmf.tmp.%d" % proc.pid)]
+        # The temporary names are <final>.tmp.<host>.<pid>.<random> (io/temp_files.hpp).
+        temps = [self.path("out.h5.tmp.*.%d.*" % proc.pid), self.path("out.xdmf.tmp.*.%d.*" % proc.pid)]
         deadline = time.time() + TIMEOUT_RUN
-        while not all(os.path.exists(t) for t in temps):
+        while not all(glob.glob(t) for t in temps):
             if proc.poll() is not None or time.time() > deadline:
                 proc.kill()
                 out, err = proc.communicate()

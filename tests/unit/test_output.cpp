@@ -3,11 +3,13 @@
 /// sidecar, atomic replacement and the clean-up after errors; the same for FrameWriter's frames.
 #include "hssbem/core/fault.hpp"
 #include "hssbem/io/hdf5_output.hpp"
+#include "hssbem/io/temp_files.hpp"
 
 #include <gtest/gtest.h>
 #include <hdf5.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <cstdlib>
 #include <filesystem>
@@ -16,6 +18,7 @@
 #include <sstream>
 
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 namespace fs = std::filesystem;
@@ -180,9 +183,33 @@ protected:
     std::sort(names.begin(), names.end());
     return names;
   }
+  /// The temporary file of `file` (`<file>.tmp.<host>.<pid>.<random>`); empty if there is none.
   std::string temp_of(const std::string &file) const
   {
-    return file + ".tmp." + std::to_string(static_cast<long long>(::getpid()));
+    const std::string head = fs::path(file).filename().string() + ".tmp.";
+    for (const std::string &name : listing())
+      if (name.rfind(head, 0) == 0) return (dir_ / name).string();
+    return "";
+  }
+  /// Names in the test directory with the random part of temporary names cut off.
+  std::vector<std::string> stems() const
+  {
+    std::vector<std::string> names = listing();
+    for (std::string &n : names)
+      if (n.find(".tmp.") != std::string::npos || n.find(".bak.") != std::string::npos) n = n.substr(0, n.rfind('.'));
+    return names;
+  }
+  /// A name with this process's host and id: what exclusive_name() makes with `suffix`.
+  static std::string planted_name(const std::string &final_path, const std::string &kind, const std::string &suffix)
+  {
+    const detail::TemporarySuffixForTests fixed([suffix] { return suffix; });
+    return exclusive_name(final_path, kind);
+  }
+  /// `<host>.<pid>` of this process as the temporary names hold it.
+  static std::string host_and_pid()
+  {
+    const std::string n = planted_name("f", "k", "s"); // f.k.<host>.<pid>.s
+    return n.substr(4, n.size() - 6);
   }
 
   fs::path dir_;
@@ -443,18 +470,102 @@ TEST_F(OutputTest, WriteIntoAReadOnlyDirectoryThrowsAndLeavesNothing)
   EXPECT_TRUE(listing().empty());
 }
 
-TEST_F(OutputTest, FailedCreateNamesThePathAndKeepsForeignEntries)
+TEST_F(OutputTest, PlantedEntriesOnTheTemporaryNamesAreSkippedAndKept)
 {
-  // A directory on the temporary name makes H5Fcreate fail even for root.
-  fs::create_directory(temp_of(h5_));
+  // Before: the temporary name was <final>.tmp.<pid>, opened without O_EXCL: a symlink planted
+  // there had its target overwritten. Now every name is created exclusively and a taken one
+  // is skipped for the next random one, whatever is on it (a symlink, a directory, a file).
+  const std::string victim = (dir_ / "victim").string();
+  std::ofstream(victim) << "precious";
+  fs::create_symlink(victim, planted_name(h5_, "tmp", "s0"));
+  fs::create_directory(planted_name(xdmf_, "tmp", "s1"));
+  fs::create_symlink(victim, planted_name(h5_, "bak", "s2"));
+  std::ofstream(planted_name(xdmf_, "bak", "s3")) << "someone's";
+  const std::size_t before = listing().size();
+  for (int round = 0; round < 2; ++round) { // the second round keeps a predecessor under .bak
+    int                                   next = 0;
+    const detail::TemporarySuffixForTests sequence([&next] { return "s" + std::to_string(next++ % 4); });
+    write_result(h5_, tetrahedron());
+  }
+  EXPECT_EQ(slurp(victim), "precious");
+  EXPECT_EQ(listing().size(), before + 2) << "the planted entries stay, the result appears";
+  EXPECT_TRUE(fs::is_symlink(planted_name(h5_, "tmp", "s0")));
+  EXPECT_TRUE(fs::is_directory(planted_name(xdmf_, "tmp", "s1")));
+  Id file{H5Fopen(h5_.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose};
+  EXPECT_GE(file.id, 0);
+}
+
+TEST_F(OutputTest, EveryTemporaryNameTakenIsAnErrorThatTouchesNothing)
+{
+  const std::string victim = (dir_ / "victim").string();
+  std::ofstream(victim) << "precious";
+  fs::create_symlink(victim, planted_name(h5_, "tmp", "same"));
+  const detail::TemporarySuffixForTests same([] { return std::string("same"); });
   try {
     write_result(h5_, tetrahedron());
     FAIL() << "no exception";
   } catch (const OutputError &e) {
-    EXPECT_NE(std::string(e.what()).find("'" + h5_ + "'"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("H5Fcreate"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("cannot create a temporary file beside '" + h5_ + "'"), std::string::npos) << e.what();
   }
-  EXPECT_EQ(listing(), (Strings{"out.h5.tmp." + std::to_string(::getpid())}));
+  EXPECT_EQ(slurp(victim), "precious");
+  EXPECT_EQ(listing().size(), 2u);
+}
+
+TEST_F(OutputTest, StaleTemporariesOfDeadProcessesAreSwept)
+{
+  // Before: a run killed during the write left <final>.tmp.<pid> for ever.
+  pid_t child = ::fork();
+  if (child == 0) ::_exit(0);
+  ASSERT_GT(child, 0);
+  ::waitpid(child, nullptr, 0); // dead now
+  const std::string own  = planted_name(h5_, "tmp", "abc"); // a live process's (this one's)
+  const std::string host = host_and_pid().substr(0, host_and_pid().rfind('.'));
+  const std::string dead = "." + host + "." + std::to_string(child) + ".abc";
+  for (const std::string &name : {h5_ + ".tmp" + dead, xdmf_ + ".tmp" + dead, h5_ + ".bak" + dead, own, h5_ + ".tmp.elsewhere." + std::to_string(child) + ".abc",
+                                  (dir_ / "other.h5.tmp").string() + dead})
+    std::ofstream(name) << "partial";
+  write_result(h5_, tetrahedron());
+  const std::string keep_other = "other.h5.tmp" + dead, keep_elsewhere = "out.h5.tmp.elsewhere." + std::to_string(child) + ".abc";
+  Strings expected{keep_other, "out.h5", keep_elsewhere, fs::path(own).filename().string(), "out.xdmf"};
+  std::sort(expected.begin(), expected.end());
+  EXPECT_EQ(listing(), expected);
+}
+
+TEST_F(OutputTest, AnOutputThatIsAnInputIsRefused)
+{
+  const std::string mesh = (dir_ / "mesh.off").string(), problem = (dir_ / "p.json").string();
+  std::ofstream(mesh) << "OFF";
+  std::ofstream(problem) << "{}";
+  const std::vector<std::string> inputs{problem, mesh};
+  EXPECT_NO_THROW(check_output_path(h5_, inputs));
+  EXPECT_THROW(check_output_path(mesh, inputs), OutputError);
+  EXPECT_THROW(check_output_path((dir_ / "." / "p.json").string(), inputs), OutputError);
+  fs::create_hard_link(mesh, dir_ / "same.h5");
+  EXPECT_THROW(check_output_path((dir_ / "same.h5").string(), inputs), OutputError);
+  fs::create_symlink(mesh, dir_ / "link.off");
+  EXPECT_THROW(check_output_path(mesh, {(dir_ / "link.off").string()}), OutputError) << "the file the link leads to";
+  EXPECT_THROW(check_output_path((dir_ / "link.off").string(), {(dir_ / "link.off").string()}), OutputError) << "the link itself";
+  std::ofstream(dir_ / "run.xdmf") << "x";
+  EXPECT_THROW(check_output_path((dir_ / "run.h5").string(), {(dir_ / "run.xdmf").string()}), OutputError) << "its sidecar";
+  ResultData d = tetrahedron();
+  d.input_files = inputs;
+  EXPECT_THROW(write_result(mesh, d), OutputError);
+  EXPECT_EQ(slurp(mesh), "OFF");
+}
+
+TEST_F(OutputTest, NonFiniteFieldsAreRefused)
+{
+  for (double bad : {std::nan(""), HUGE_VAL}) {
+    ResultData d = tetrahedron();
+    d.traction[2][1] = bad;
+    try {
+      write_result(h5_, d);
+      FAIL() << "no exception";
+    } catch (const OutputError &e) {
+      EXPECT_NE(std::string(e.what()).find("/fields/traction row 2 holds a non-finite value"), std::string::npos) << e.what();
+    }
+    EXPECT_TRUE(listing().empty());
+  }
 }
 
 TEST_F(OutputTest, FailureInsideTheFileRemovesTheTemporaries)
@@ -656,12 +767,12 @@ TEST_F(OutputTest, FramesAreReadBackWithShapesValuesAndAttributes)
 TEST_F(OutputTest, FramesAreOnlyInTheTemporaryFileBeforeCommit)
 {
   FrameWriter w(h5_, tetrahedron());
-  const Strings only_temp{"out.h5.tmp." + std::to_string(::getpid())};
-  EXPECT_EQ(listing(), only_temp);
+  const Strings only_temp{"out.h5.tmp." + host_and_pid(), "out.xdmf.tmp." + host_and_pid()};
+  EXPECT_EQ(stems(), only_temp);
   const auto before = fs::file_size(temp_of(h5_));
   w.append(0, frame(0, true));
   w.append(1, frame(1, true));
-  EXPECT_EQ(listing(), only_temp);
+  EXPECT_EQ(stems(), only_temp);
   EXPECT_GT(fs::file_size(temp_of(h5_)), before + 2 * 2 * 4 * 3 * sizeof(double)) << "not flushed";
   w.commit({});
   EXPECT_EQ(listing(), (Strings{"out.h5", "out.xdmf"}));

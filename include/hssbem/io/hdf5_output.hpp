@@ -40,16 +40,20 @@ struct ResultData {
   std::map<std::string, long long> attributes_int;  ///< root attributes (iterations, ranks, ...)
   std::map<std::string, std::string> attributes_str;///< root attributes (solver, version, ...)
   std::map<std::string, double> timings;            ///< /timings attributes, seconds per phase
+  std::vector<std::string> input_files;             ///< not written: the run's inputs, which the result may not replace
 };
 
 /// Check that `path` can be written (directory exists and is writable) before any work is done.
 /// Also refused: a path that is a directory, or whose sidecar name is one; a `.xdmf` path (it
-/// would be its own sidecar); a file name containing ':' (XDMF cannot refer to it).
+/// would be its own sidecar); a file name containing ':' (XDMF cannot refer to it); a path (or
+/// sidecar) that is one of the `inputs` (check_not_an_input(): by device and inode).
 /// Throws OutputError "cannot write output '<path>': <reason>".
-void check_output_path(const std::string &path);
+void check_output_path(const std::string &path, const std::vector<std::string> &inputs = {});
 
-/// Write `path` (HDF5) and `path` with extension .xdmf beside it. Both are written under temporary
-/// names (`<name>.tmp.<pid>`) and renamed into place together when complete: the earlier pair is
+/// Write `path` (HDF5) and `path` with extension .xdmf beside it (refused when either names one of
+/// data.input_files). Both are written under temporary names created exclusively
+/// (`<name>.tmp.<host>.<pid>.<random>`, temp_files.hpp; stale ones of dead processes are swept
+/// first) and renamed into place together when complete, the directory then synced: the earlier pair is
 /// replaced whole or not at all (a failed second rename puts the first back), a crash never
 /// leaves a file that looks complete, and SIGINT/SIGTERM/SIGHUP during the write remove the
 /// temporary files before the signal takes its course.
@@ -64,8 +68,8 @@ void write_result(const std::string &path, const ResultData &data);
 /// sizes on all ranks) and the file is written once, with HDF5's MPI-IO driver: each rank writes
 /// its own contiguous block of rows of every dataset (the rows split evenly in rank order), the
 /// ranks create groups, datasets and attributes together, and the attributes, timings and
-/// reactions written are rank 0's. Rank 0 checks `path`, owns the temporary names (its process
-/// id in them) and the signal handling, and renames the pair into place once every rank has
+/// reactions written are rank 0's. Rank 0 checks `path`, creates the temporary files (its host
+/// and process id in their names) and the signal handling, and renames the pair into place once every rank has
 /// closed the file and agreed that the write succeeded. Any failure, on any rank, throws the same
 /// OutputError on every rank and leaves no file behind; an existing result stays untouched. With
 /// one rank it is the serial write_result.
@@ -101,7 +105,7 @@ struct FrameData {
 /// the domain at every time step, so a static base grid would hide the frames it overlaps; they
 /// stay in the HDF5 file. Committed without any frame, the sidecar is write_result's.
 ///
-/// The temporary files are those of write_result (`<name>.tmp.<pid>`), removed on an error, by
+/// The temporary files are those of write_result (`<name>.tmp.<host>.<pid>.<random>`), removed on an error, by
 /// the destructor when commit() was not reached, and on SIGINT/SIGTERM/SIGHUP meanwhile (the
 /// handlers are installed for the writer's whole life). One writer (or write_result) at a time
 /// per process. Errors throw OutputError naming `path`; after one that struck inside the file,
@@ -127,7 +131,8 @@ public:
   /// the sidecar, and renames both files into place together. Throws OutputError.
   void commit(const std::map<std::string, double> &timings,
               const std::map<std::string, long long> &attributes_int = {},
-              const std::map<std::string, double> &attributes_real = {});
+              const std::map<std::string, double> &attributes_real = {},
+              const std::map<std::string, std::string> &attributes_str = {});
 
 private:
   struct Impl;
