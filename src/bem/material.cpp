@@ -28,6 +28,10 @@ Material Material::from_young(double E, double nu)
 {
   if (!(E > 0) || !std::isfinite(E))
     refuse("E = " + shortest(E) + " must be positive and finite");
+  // With lengths and loads within 1e±30 too (mesh and problem checks), every entry and product
+  // of the system stays a normal double (E = 1e-300 gave a NaN residual).
+  if (E < 1e-30 || E > 1e30)
+    refuse("E = " + shortest(E) + " lies outside [1e-30, 1e30], where the solve overflows or underflows double precision; use other units");
   if (!(nu > -1 && nu < 0.5))
     refuse("nu = " + shortest(nu) + " must satisfy -1 < nu < 0.5" +
            (nu == 0.5 ? " (nu = 0.5 is incompressible, not supported)" : ""));

@@ -2,11 +2,13 @@
 /// Topology checks of a closed triangulated surface and outward orientation of its components.
 
 #include "hssbem/bem/mesh.hpp"
+#include "hssbem/bem/surface_intersection.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <sstream>
 #include <unordered_map>
 
@@ -16,6 +18,12 @@ namespace {
 constexpr double k_pi = 3.14159265358979323846;
 /// Relative size below which an area (times diag^2) or a volume (times diag^3) counts as zero.
 constexpr double k_degenerate = 1e-12;
+/// The sizes (bounding-box diagonals) a mesh may have: physical bodies from nanometres to planets
+/// in any unit lie far inside, and the sixth power of either bound is a normal double.
+constexpr double k_min_extent = 1e-30, k_max_extent = 1e30;
+/// Significant digits that the coordinates must keep of the shortest edge (UTM coordinates of
+/// about 1e6 m with millimetre edges keep 6.6).
+constexpr double k_min_digits = 5;
 
 /// Undirected edge as one 64-bit key: lower index in the high half.
 std::uint64_t edge_key(int a, int b)
@@ -96,6 +104,7 @@ public:
   void run()
   {
     check_indices();
+    check_scale();
     check_degenerate();
     check_duplicates();
     build_edges();
@@ -104,6 +113,7 @@ public:
     check_vertex_fans();
     check_orientation();
     find_components();
+    check_intersections();
     orient_components();
     report_unused_vertices();
   }
@@ -124,6 +134,7 @@ private:
   const Vec3 &corner(int t, int k) const { return m_mesh.vertices[m_mesh.triangles[t][k]]; }
 
   void check_indices();
+  void check_scale();
   void check_degenerate();
   void check_duplicates();
   void build_edges();
@@ -133,6 +144,7 @@ private:
   int fan_size(int v, int start) const;
   void check_orientation();
   void find_components();
+  void check_intersections();
   void orient_components();
   double signed_volume(int c, const Vec3 &origin) const;
   int nesting_depth(int c) const;
@@ -145,6 +157,7 @@ private:
   std::vector<int> m_degree;                 ///< triangles per vertex
   std::vector<int> m_first_triangle;         ///< some triangle of each vertex, -1 if unused
   std::vector<std::vector<int>> m_components; ///< triangles of each component
+  std::vector<int> m_component_of;            ///< component of each triangle
   std::vector<Box> m_component_box;
 };
 
@@ -161,6 +174,40 @@ void MeshValidator::check_indices()
              std::to_string(v) + ", but the mesh has " + std::to_string(n) + " vertices");
     if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2])
       fail("triangle " + std::to_string(t) + " " + triple(tri) + " has a repeated vertex");
+  }
+}
+
+/// Coordinates the solver can compute with: the kernels raise distances to powers up to about 6
+/// and the quadrature multiplies areas by them, so a size far from 1 overflows or underflows
+/// double precision (a sphere of radius 1e120 gave NaN entries); and coordinates far from the
+/// origin beside the triangles' size keep too few digits of their shape (shifted by 1e15, a
+/// sphere of edges 0.06 kept none, and gave NaN entries too). Refused with the cure.
+void MeshValidator::check_scale()
+{
+  Box    box;
+  double largest = 0, edges = 0;
+  for (const auto &tri : m_mesh.triangles)
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 &x = m_mesh.vertices[tri[k]];
+      box.add(x);
+      largest = std::max({largest, std::abs(x[0]), std::abs(x[1]), std::abs(x[2])});
+      edges += norm(m_mesh.vertices[tri[(k + 1) % 3]] - x);
+    }
+  std::ostringstream msg;
+  const double       diag = box.diagonal();
+  if (!(diag >= k_min_extent && diag <= k_max_extent)) {
+    msg << "its size (bounding-box diagonal " << diag << ") lies outside [" << k_min_extent << ", " << k_max_extent
+        << "], where the kernels' powers of distances overflow or underflow double precision; rescale the coordinates (another length unit)";
+    fail(msg.str());
+  }
+  // The mean edge, not the shortest: a single tiny edge is the degenerate check's to name.
+  const double mean_edge = edges / (3.0 * static_cast<double>(m_mesh.triangles.size()));
+  const double digits    = std::log10(mean_edge / (largest * std::numeric_limits<double>::epsilon()));
+  if (digits < k_min_digits) {
+    msg.precision(2);
+    msg << "the coordinates (up to " << largest << " from the origin) keep only " << std::max(digits, 0.0) << " significant digits of the mean edge length (" << mean_edge
+        << "), fewer than " << k_min_digits << ": the triangles' shape is lost to rounding (precision); translate the mesh near the origin";
+    fail(msg.str());
   }
 }
 
@@ -303,7 +350,8 @@ void MeshValidator::check_orientation()
 
 void MeshValidator::find_components()
 {
-  std::vector<int> component(m_mesh.triangles.size(), -1);
+  std::vector<int> &component = m_component_of;
+  component.assign(m_mesh.triangles.size(), -1);
   std::vector<int> stack;
   for (int seed = 0; seed < m_mesh.num_triangles(); ++seed) {
     if (component[seed] >= 0)
@@ -329,6 +377,19 @@ void MeshValidator::find_components()
     }
     std::sort(m_components[c].begin(), m_components[c].end());
   }
+}
+
+/// A closed surface that passes through itself, or two that pass through each other (bodies that
+/// overlap, a cavity that crosses its body's boundary), bound no body: refused, naming the pair.
+void MeshValidator::check_intersections()
+{
+  const std::optional<TrianglePair> hit = find_intersection(m_mesh);
+  if (!hit) return;
+  const int a = hit->first, b = hit->second, ca = m_component_of[a], cb = m_component_of[b];
+  const std::string pair = "triangles " + std::to_string(a) + " " + triple(m_mesh.triangles[a]) + " and " + std::to_string(b) + " " + triple(m_mesh.triangles[b]) + " intersect";
+  if (ca == cb) fail(pair + ": the surface (component " + std::to_string(ca) + ") passes through itself");
+  fail(pair + ": the surfaces of components " + std::to_string(ca) + " and " + std::to_string(cb) +
+       " pass through each other (two bodies overlap, or a cavity crosses its body's boundary)");
 }
 
 void MeshValidator::orient_components()

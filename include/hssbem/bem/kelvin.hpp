@@ -13,7 +13,7 @@ struct Material {
   double E = 0, nu = 0;
   double mu() const { return E / (2.0 * (1.0 + nu)); }
   double lambda() const { return E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)); }
-  /// Throws std::invalid_argument unless E > 0 and -1 < nu < 0.5.
+  /// Throws std::invalid_argument unless 1e-30 <= E <= 1e30 and -1 < nu < 0.5.
   static Material from_young(double E, double nu);
   /// Throws std::invalid_argument unless mu > 0 and the implied nu lies in (-1, 0.5).
   static Material from_lame(double lambda, double mu);
