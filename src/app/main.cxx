@@ -1,6 +1,7 @@
 // The driver's one error path (see main.hpp).
 #include "hssbem/app/main.hpp"
 
+#include "hssbem/app/options.hpp"
 #include "hssbem/app/petsc_call.hpp"
 #include "hssbem/app/run.hpp"
 #include "hssbem/petsc/log.h"
@@ -131,17 +132,22 @@ std::string name_the_option(const std::string &message)
 int driver_main(MPI_Comm comm)
 {
   PetscBool traceback = PETSC_FALSE;
-  PetscReal timeout   = 10;
+  double    timeout   = k_default_error_timeout; // a bad value is reported with the default
   MPI_Comm  agree;
   int       failed = 0;
 
   if (MPI_Comm_dup(comm, &agree) != MPI_SUCCESS) return 1;
   (void)PetscOptionsGetBool(NULL, NULL, "-hssbem_traceback", &traceback, NULL);
-  (void)PetscOptionsGetReal(NULL, NULL, "-hssbem_error_timeout", &timeout, NULL);
   std::string message;
   try {
     const QuietPetscErrors quiet(!traceback);
-    message = run_and_catch(comm, &failed);
+    try { // every rank reads the same value, so every rank fails here or none
+      timeout = read_error_timeout();
+      message = run_and_catch(comm, &failed);
+    } catch (const std::exception &e) {
+      failed  = 1;
+      message = name_the_option(e.what());
+    }
   } catch (const std::exception &e) { // the error handler itself could not be set
     failed  = 1;
     message = e.what();

@@ -8,8 +8,10 @@
 #include "hssbem/petsc/system.h"
 
 #include <climits>
+#include <cstdio>
 #include <cstring>
 #include <optional>
+#include <stdexcept>
 #include <string>
 
 namespace hssbem {
@@ -47,7 +49,9 @@ PetscErrorCode OptionString_Private(const char *key, const char *text, std::stri
 . -scene_refresh <n>          - incremental capacitance updates before a rebuild
 . -scene_single_from <n>      - single-precision capacitance inverse from this many switched unknowns (-1: never)
 . -scene_krylov_rtol <r>      - GMRES tolerance of the krylov strategy
-- -scene_monitor              - print one line per frame
+. -scene_monitor              - print one line per frame
+. -scene_keep_partial         - when a frame fails, keep the frames solved before it in the result file (the run still fails)
+- -hssbem_error_timeout <s>   - seconds the ranks wait for a rank whose error they have not joined before aborting (default 10)
 */
 PetscErrorCode ProcessOptions_Private(MPI_Comm comm, AppOptions *opts)
 {
@@ -58,7 +62,8 @@ PetscErrorCode ProcessOptions_Private(MPI_Comm comm, AppOptions *opts)
   QuadratureOptions &quad = opts->quad;
   std::string strategy = scene_strategy_name(opts->scene.strategy);
   PetscInt    refresh  = opts->scene.refresh_every, single_from = opts->scene.single_from;
-  PetscBool   monitor  = opts->scene.monitor ? PETSC_TRUE : PETSC_FALSE;
+  PetscBool   monitor  = opts->scene.monitor ? PETSC_TRUE : PETSC_FALSE, keep_partial = opts->scene.keep_partial ? PETSC_TRUE : PETSC_FALSE;
+  PetscReal   error_timeout = k_default_error_timeout; /* -hssbem_error_timeout: acted on by app/main.cxx (read_error_timeout); listed here for -help */
 
   PetscFunctionBegin;
   PetscCall(PetscOptionsHasHelp(NULL, &help));
@@ -82,14 +87,17 @@ PetscErrorCode ProcessOptions_Private(MPI_Comm comm, AppOptions *opts)
   PetscCall(PetscOptionsInt("-scene_single_from", "Scenes: switched sets of at least this size keep the capacitance inverse in single precision, refined in double (-1: never)", "", single_from, &single_from, NULL));
   PetscCall(PetscOptionsReal("-scene_krylov_rtol", "Scenes: GMRES relative tolerance (true residual) of the krylov strategy", "", opts->scene.krylov_rtol, &opts->scene.krylov_rtol, NULL));
   PetscCall(PetscOptionsBool("-scene_monitor", "Scenes: print one line per frame (strategy, switched unknowns, time)", "", monitor, &monitor, NULL));
+  PetscCall(PetscOptionsBool("-scene_keep_partial", "Scenes: when a frame fails, commit the frames solved before it (the run still fails)", "", keep_partial, &keep_partial, NULL));
+  PetscCall(PetscOptionsReal("-hssbem_error_timeout", "Seconds the ranks wait for a rank whose error they have not joined before aborting the job", "", error_timeout, &error_timeout, NULL));
   PetscOptionsEnd();
-  opts->scene.monitor = monitor == PETSC_TRUE;
+  opts->scene.monitor      = monitor == PETSC_TRUE;
+  opts->scene.keep_partial = keep_partial == PETSC_TRUE;
   {
     const std::optional<SceneStrategy> st = parse_scene_strategy(strategy);
     PetscCheck(st, comm, PETSC_ERR_ARG_UNKNOWN_TYPE, "-scene_strategy %s is not available; use auto, solve, update, refactor or krylov", strategy.c_str());
     opts->scene.strategy = *st;
   }
-  PetscCheck(refresh >= 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-scene_refresh must be at least 1");
+  PetscCheck(refresh >= 1 && refresh <= 1000000, comm, PETSC_ERR_ARG_OUTOFRANGE, "-scene_refresh must lie in [1, 1000000]");
   opts->scene.refresh_every = (int)refresh;
   PetscCheck(single_from >= -1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-scene_single_from must be -1 (never) or a number of switched unknowns");
   opts->scene.single_from = single_from < 0 ? INT_MAX : (int)single_from;
@@ -114,10 +122,10 @@ PetscErrorCode ProcessOptions_Private(MPI_Comm comm, AppOptions *opts)
   }
   PetscCheck(quad.far_ratio == 0 || (type && !is_compressed(*type)), comm, PETSC_ERR_ARG_INCOMP,
              "-mat_bem_far_ratio must be 0 with -bem_mat_type %s: the 3-point far rule breaks the smooth far field the compression relies on (use -bem_mat_type dense)", mat_type.c_str());
-  PetscCheck(memory_limit >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-hssbem_memory_limit must be >= 0 (0: the machine's memory)");
+  PetscCheck(memory_limit >= 0 && memory_limit < 1e18, comm, PETSC_ERR_ARG_OUTOFRANGE, "-hssbem_memory_limit must lie in [0, 1e18) bytes (0: the machine's memory)");
   PetscCheck(quad.duffy_order >= 2 && quad.duffy_order <= 64, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_bem_quad_order must lie in [2, 64]");
-  PetscCheck(quad.near_ratio > 0 && (quad.far_ratio == 0 || quad.far_ratio >= quad.near_ratio), comm, PETSC_ERR_ARG_OUTOFRANGE,
-             "need -mat_bem_near_ratio > 0 and -mat_bem_far_ratio either 0 (off) or at least -mat_bem_near_ratio");
+  PetscCheck(quad.near_ratio > 0 && quad.near_ratio <= 100 && (quad.far_ratio == 0 || (quad.far_ratio >= quad.near_ratio && quad.far_ratio <= 1e6)), comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "need -mat_bem_near_ratio in (0, 100] and -mat_bem_far_ratio either 0 (off) or in [-mat_bem_near_ratio, 1e6]");
   PetscCheck(quad.max_depth >= 0 && quad.max_depth <= 20, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_bem_max_depth must lie in [0, 20]");
   PetscCheck(feature_angle > 0 && feature_angle < 180, comm, PETSC_ERR_ARG_OUTOFRANGE, "-bem_feature_angle must lie in (0, 180)");
   PetscFunctionReturn(PETSC_SUCCESS);
@@ -182,6 +190,18 @@ OperatorType choose_operator(long long unknowns, const MachineLimits &limits)
 {
   if (unknowns < k_auto_dense_max_unknowns && size_refusal(OperatorType::Dense, unknowns, SizeOptions{}, limits).empty()) return OperatorType::Dense;
   return OperatorType::H2;
+}
+
+double read_error_timeout()
+{
+  PetscReal seconds = k_default_error_timeout;
+  HssbemCallThrow(PetscOptionsGetReal(NULL, NULL, "-hssbem_error_timeout", &seconds, NULL));
+  if (!(seconds > 0 && seconds <= k_max_error_timeout)) { /* NaN fails too */
+    char text[160];
+    std::snprintf(text, sizeof(text), "option -hssbem_error_timeout %g: must lie in (0, %g] seconds", (double)seconds, k_max_error_timeout);
+    throw std::invalid_argument(text);
+  }
+  return seconds;
 }
 
 void check_unused_options(MPI_Comm comm, bool before_solve) { HssbemCallThrow(CheckUnusedOptions_Private(comm, before_solve)); }

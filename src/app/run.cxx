@@ -34,7 +34,7 @@ ProblemSetup set_up(MPI_Comm comm, const std::string &file, const ProblemOverrid
   HssbemCallMPIThrow(MPI_Comm_rank(comm, &rank));
   run_collectively(comm, [&] {
     s.emplace(setup_problem(file, ov));
-    if (rank == 0 && !s->output.empty()) check_output_path(s->output);
+    if (rank == 0 && !s->output.empty()) check_output_path(s->output, s->input_files);
   });
   return std::move(*s);
 }
@@ -49,6 +49,17 @@ void check_interior_points(const BemOperator &op, const ProblemSpec &spec)
                          ") is not inside the body (or too close to its surface)");
     }
   }
+}
+
+/// No result without a solution: a NaN or an infinity in it is an error, named before anything is
+/// written (the result writer refuses non-finite fields too). The bound on the true residual
+/// ‖b − A x‖/‖b‖, for any KSP, is HssbemSolveSystem's (-hssbem_residual_max, petsc/solve.cxx).
+void check_solution(const std::vector<double> &x, const HssbemSolveInfo &info)
+{
+  for (std::size_t i = 0; i < x.size(); ++i)
+    if (!std::isfinite(x[i]))
+      throw std::runtime_error("the solution is not finite (unknown " + std::to_string(i) + " is " + std::to_string(x[i]) + ", relative residual " +
+                               std::to_string((double)info.residual) + " with " + info.ksp_type + "/" + info.pc_type + "); nothing was written");
 }
 
 /// The whole solution vector on rank 0 (empty elsewhere), or on every rank.
@@ -148,6 +159,7 @@ ResultData result_base(const ProblemSetup &s, PetscMPIInt size)
   char petsc_version[128];
   HssbemCallThrow(PetscGetVersion(petsc_version, sizeof(petsc_version)));
   r.attributes_str = {{"version", HSSBEM_VERSION}, {"petsc_version", petsc_version}, {"problem_file", s.spec.file}, {"mesh_file", s.spec.mesh_path}};
+  r.input_files    = s.input_files;
   return r;
 }
 
@@ -238,6 +250,7 @@ void run_problem(MPI_Comm comm, const std::string &problem_file, const ProblemOv
                               operator_type_name(type), why.c_str()));
   fault_point("Driver"); /* tests: an error no guard makes collective (the last resort of app/main.hpp) */
   const std::vector<double> xall = solve_problem(comm, s, op, type, true, &info, &seconds);
+  check_solution(xall, info); // every rank holds the whole solution: they all agree
   HssbemCallThrow(PetscPrintf(comm, "hssbem: solved with %s/%s%s%s: %" PetscInt_FMT " iterations, relative residual %.3e\n", info.ksp_type.c_str(), info.pc_type.c_str(),
                               info.solver_type.empty() ? "" : "/", info.solver_type.c_str(), info.iterations, (double)info.residual));
   check_unused_options(comm, false);

@@ -14,6 +14,7 @@
 #include "hssbem/scene/dense_scene.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 #include <memory>
 #include <optional>
@@ -42,6 +43,120 @@ ResultData scene_base(const ProblemSetup &s, PetscMPIInt size, const SceneRunOpt
   return r;
 }
 
+/// The frame loop on rank 0: each frame solved by the scene engine, checked (a frame that fails or
+/// whose solution is not finite is an error), and streamed into the writer.
+class FrameLoop {
+public:
+  FrameLoop(const ProblemSetup &s, const SceneRunOptions &o, DenseScene &scene, FrameWriter *writer) : m_s(s), m_o(o), m_scene(scene), m_writer(writer) {}
+
+  /// Solves frame i; throws "frames[i]: <what>" when it fails.
+  void frame(std::size_t i)
+  {
+    const NodeConditions  nc  = frame_conditions(m_s.spec, i, *m_s.disc); // checked by setup_problem (check_every_frame)
+    const SystemSelection sel = selection_of(nc);
+    SceneFrameReport      rep;
+    try {
+      fault_point("Frame");
+      const EventScope event(SCN_Frame);
+      rep = m_scene.solve(sel, m_x);
+      for (double v : m_x)
+        if (!std::isfinite(v)) throw std::runtime_error("the solution is not finite (the frame's system is singular or overflows)");
+    } catch (const std::exception &e) {
+      throw std::runtime_error(m_s.spec.file + ": frames[" + std::to_string(i) + "]: " + e.what());
+    }
+    m_frame_seconds += rep.seconds;
+    m_slowest = std::max(m_slowest, rep.seconds);
+    m_used[scene_strategy_name(rep.strategy)]++;
+    if (m_o.monitor)
+      HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF, "hssbem: frame %zu: %s, %lld switched, %lld changed, %lld iterations, %.3f ms (predicted %.3f ms)\n", i, scene_strategy_name(rep.strategy),
+                                  rep.switched, rep.changed, rep.iterations, 1e3 * rep.seconds, 1e3 * rep.predicted));
+    if (m_writer) write(i, nc, sel, rep);
+  }
+
+  double                                  frame_seconds() const { return m_frame_seconds; }
+  double                                  slowest() const { return m_slowest; }
+  double                                  output_seconds() const { return m_output_seconds; }
+  const std::map<std::string, long long> &used() const { return m_used; }
+
+private:
+  void write(std::size_t i, const NodeConditions &nc, const SystemSelection &sel, const SceneFrameReport &rep)
+  {
+    const Timer   post;
+    NodalSolution sol = split_unknowns(sel, m_x);
+    FrameData     f;
+    f.displacement            = vertex_average(*m_s.disc, sol.u);
+    f.traction                = vertex_average(*m_s.disc, sol.t);
+    f.displacement_prescribed = vertex_displacement_prescribed(*m_s.disc, nc);
+    f.attributes_real         = {{"seconds", rep.seconds}, {"predicted_seconds", rep.predicted}};
+    f.attributes_int          = {{"switched_unknowns", rep.switched}, {"changed_unknowns", rep.changed}, {"iterations", rep.iterations}, {"capacitance_rebuilt", rep.rebuilt}};
+    f.attributes_str          = {{"strategy", scene_strategy_name(rep.strategy)}};
+    {
+      const EventScope event(BEM_Output);
+      m_writer->append(i, f);
+    }
+    m_output_seconds += post.seconds();
+  }
+
+  const ProblemSetup              &m_s;
+  const SceneRunOptions           &m_o;
+  DenseScene                      &m_scene;
+  FrameWriter                     *m_writer;
+  std::vector<double>              m_x;
+  std::map<std::string, long long> m_used;
+  double                           m_frame_seconds = 0, m_slowest = 0, m_output_seconds = 0;
+};
+
+/// The scene engine set up on the reference pattern: the base rules where they hold the body,
+/// else frame 0's.
+std::unique_ptr<DenseScene> set_up_scene(const ProblemSetup &s, const BemOperator &op, const SceneRunOptions &o, std::map<std::string, double> &seconds)
+{
+  NodeConditions ref_nc   = apply_rules(s.spec.rules, *s.disc, s.spec.file);
+  std::string    ref_name = "the base rules";
+  if (analyse_constraints(*s.disc, ref_nc.displacement_prescribed).rank != 6) ref_nc = frame_conditions(s.spec, 0, *s.disc), ref_name = "frame 0";
+  SceneOptions so;
+  so.strategy      = o.strategy;
+  so.with_pressure = uses_pressure(s.spec);
+  so.refresh_every = o.refresh_every;
+  so.single_from   = o.single_from;
+  so.krylov_rtol   = o.krylov_rtol;
+  const Timer timer;
+  fault_point("SceneSetup");
+  auto scene = std::make_unique<DenseScene>(op, selection_of(ref_nc), so, HssbemSceneKrylovCreate());
+  seconds["scene_setup"] += timer.seconds();
+  HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF, "hssbem: scene: set up in %.2f s (reference pattern: %s; %.0f MB)\n", scene->setup_seconds(), ref_name.c_str(), scene->memory_bytes() / 1e6));
+  return scene;
+}
+
+/// The dense scene's memory: W, the reference LU, H and G (and the pressure columns).
+void check_scene_size(MPI_Comm comm, const ProblemSetup &s, const SceneRunOptions &o)
+{
+  const long long N = 3LL * s.disc->num_nodes();
+  MachineLimits   limits;
+  HssbemCallThrow(HssbemMachineLimits(comm, &limits));
+  const double need = 8.0 * N * N * (uses_pressure(s.spec) ? 6.7 : 6.0) * (o.strategy == SceneStrategy::Refactor || o.strategy == SceneStrategy::Auto ? 1.0 : 5.0 / 6.0);
+  if (need > 0.9 * static_cast<double>(limits.node_memory_bytes))
+    throw std::runtime_error("the scene needs about " + std::to_string(static_cast<long long>(need / 1e9 + 0.5)) + " GB for " + std::to_string(N) +
+                             " unknowns (dense reference factorization, W = A0^-1 K0', H and G), more than this node's " +
+                             std::to_string(static_cast<long long>(limits.node_memory_bytes / 1e9)) + " GB");
+}
+
+/// Solves every frame; a frame that fails ends the scene with its error, after the frames solved
+/// so far are committed when -scene_keep_partial asks for them (the error then says so).
+void solve_frames(const ProblemSetup &s, FrameLoop &loop, FrameWriter *writer, const SceneRunOptions &o, std::map<std::string, double> &seconds)
+{
+  const std::size_t nframes = s.spec.frames.size();
+  for (std::size_t i = 0; i < nframes; ++i) {
+    try {
+      loop.frame(i);
+    } catch (const std::exception &e) {
+      if (!o.keep_partial || !writer) throw;
+      seconds["frames"] += loop.frame_seconds();
+      writer->commit(seconds, {{"num_frames", static_cast<long long>(i)}, {"complete", 0}, {"failed_frame", static_cast<long long>(i)}}, {}, {{"failure", e.what()}});
+      throw std::runtime_error(std::string(e.what()) + " (-scene_keep_partial: the " + std::to_string(i) + " frames solved before it are in " + s.output + ")");
+    }
+  }
+}
+
 } // namespace
 
 void run_scene(MPI_Comm comm, const ProblemSetup &s, const BemOperator &op, std::optional<OperatorType> asked, const SceneRunOptions &o, std::map<std::string, double> seconds)
@@ -51,79 +166,24 @@ void run_scene(MPI_Comm comm, const ProblemSetup &s, const BemOperator &op, std:
   HssbemCallMPIThrow(MPI_Comm_size(comm, &size));
   if (asked && *asked != OperatorType::Dense)
     throw std::runtime_error(std::string("-bem_mat_type ") + operator_type_name(*asked) + ": scenes (problem files with \"frames\") run on the dense scene engine; use -bem_mat_type dense or auto");
-  const long long N = 3LL * s.disc->num_nodes();
-  MachineLimits limits;
-  HssbemCallThrow(HssbemMachineLimits(comm, &limits));
-  const double need = 8.0 * N * N * (uses_pressure(s.spec) ? 6.7 : 6.0) * (o.strategy == SceneStrategy::Refactor || o.strategy == SceneStrategy::Auto ? 1.0 : 5.0 / 6.0);
-  if (need > 0.9 * static_cast<double>(limits.node_memory_bytes))
-    throw std::runtime_error("the scene needs about " + std::to_string(static_cast<long long>(need / 1e9 + 0.5)) + " GB for " + std::to_string(N) +
-                             " unknowns (dense reference factorization, W = A0^-1 K0', H and G), more than this node's " +
-                             std::to_string(static_cast<long long>(limits.node_memory_bytes / 1e9)) + " GB");
+  check_scene_size(comm, s, o);
   const std::size_t nframes = s.spec.frames.size();
   HssbemCallThrow(PetscPrintf(comm, "hssbem: scene: %zu frames on the dense scene engine (rank 0), strategy %s\n", nframes, scene_strategy_name(o.strategy)));
   run_collectively(comm, [&] {
     if (rank != 0) return;
-    // The reference pattern: the base rules where they hold the body, else frame 0's.
-    NodeConditions ref_nc = apply_rules(s.spec.rules, *s.disc, s.spec.file);
-    std::string ref_name = "the base rules";
-    if (analyse_constraints(*s.disc, ref_nc.displacement_prescribed).rank != 6) ref_nc = frame_conditions(s.spec, 0, *s.disc), ref_name = "frame 0";
-    check_frame_constraints(s, ref_nc.displacement_prescribed, "frames[0]");
-    SceneOptions so;
-    so.strategy      = o.strategy;
-    so.with_pressure = uses_pressure(s.spec);
-    so.refresh_every = o.refresh_every;
-    so.single_from   = o.single_from;
-    so.krylov_rtol   = o.krylov_rtol;
-    const Timer      timer;
-    fault_point("SceneSetup");
-    DenseScene       scene(op, selection_of(ref_nc), so, HssbemSceneKrylovCreate());
-    seconds["scene_setup"] += timer.seconds();
-    HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF, "hssbem: scene: set up in %.2f s (reference pattern: %s; %.0f MB)\n", scene.setup_seconds(), ref_name.c_str(), scene.memory_bytes() / 1e6));
-    std::unique_ptr<FrameWriter> writer;
+    const std::unique_ptr<DenseScene> scene = set_up_scene(s, op, o, seconds);
+    std::unique_ptr<FrameWriter>      writer;
     if (!s.output.empty()) writer = std::make_unique<FrameWriter>(s.output, scene_base(s, size, o));
-    std::map<std::string, long long> used;
-    double                            frame_seconds = 0, slowest = 0;
-    std::vector<double>               x;
-    for (std::size_t i = 0; i < nframes; ++i) {
-      const std::string    what = "frames[" + std::to_string(i) + "]";
-      const NodeConditions nc   = frame_conditions(s.spec, i, *s.disc);
-      check_frame_constraints(s, nc.displacement_prescribed, what);
-      fault_point("Frame");
-      const SystemSelection  sel = selection_of(nc);
-      SceneFrameReport       rep;
-      {
-        const EventScope event(SCN_Frame);
-        rep = scene.solve(sel, x);
-      }
-      frame_seconds += rep.seconds;
-      slowest = std::max(slowest, rep.seconds);
-      used[scene_strategy_name(rep.strategy)]++;
-      if (o.monitor)
-        HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF, "hssbem: frame %zu: %s, %lld switched, %lld changed, %lld iterations, %.3f ms (predicted %.3f ms)\n", i, scene_strategy_name(rep.strategy),
-                                    rep.switched, rep.changed, rep.iterations, 1e3 * rep.seconds, 1e3 * rep.predicted));
-      if (!writer) continue;
-      const Timer   post;
-      NodalSolution sol = split_unknowns(sel, x);
-      FrameData     f;
-      f.displacement            = vertex_average(*s.disc, sol.u);
-      f.traction                = vertex_average(*s.disc, sol.t);
-      f.displacement_prescribed = vertex_displacement_prescribed(*s.disc, nc);
-      f.attributes_real         = {{"seconds", rep.seconds}, {"predicted_seconds", rep.predicted}};
-      f.attributes_int          = {{"switched_unknowns", rep.switched}, {"changed_unknowns", rep.changed}, {"iterations", rep.iterations}, {"capacitance_rebuilt", rep.rebuilt}};
-      f.attributes_str          = {{"strategy", scene_strategy_name(rep.strategy)}};
-      {
-        const EventScope event(BEM_Output);
-        writer->append(i, f);
-      }
-      seconds["output"] += post.seconds();
-    }
-    seconds["frames"] += frame_seconds;
+    FrameLoop loop(s, o, *scene, writer.get());
+    solve_frames(s, loop, writer.get(), o, seconds);
+    seconds["frames"] += loop.frame_seconds();
+    seconds["output"] += loop.output_seconds();
     std::string summary;
-    for (const auto &[k, n] : used) summary += (summary.empty() ? "" : ", ") + k + " " + std::to_string(n);
-    HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF, "hssbem: scene: %zu frames in %.3f s (%.2f ms per frame, %.0f Hz; slowest %.2f ms); %s\n", nframes, frame_seconds,
-                                1e3 * frame_seconds / nframes, nframes / std::max(frame_seconds, 1e-12), 1e3 * slowest, summary.c_str()));
+    for (const auto &[k, n] : loop.used()) summary += (summary.empty() ? "" : ", ") + k + " " + std::to_string(n);
+    HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF, "hssbem: scene: %zu frames in %.3f s (%.2f ms per frame, %.0f Hz; slowest %.2f ms); %s\n", nframes, loop.frame_seconds(),
+                                1e3 * loop.frame_seconds() / nframes, nframes / std::max(loop.frame_seconds(), 1e-12), 1e3 * loop.slowest(), summary.c_str()));
     if (!writer) return;
-    writer->commit(seconds, {{"num_frames", static_cast<long long>(nframes)}}, {{"frame_seconds_mean", frame_seconds / nframes}});
+    writer->commit(seconds, {{"num_frames", static_cast<long long>(nframes)}, {"complete", 1}}, {{"frame_seconds_mean", loop.frame_seconds() / nframes}});
     HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF, "hssbem: wrote %s\n", s.output.c_str()));
   });
 }

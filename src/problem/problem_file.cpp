@@ -241,6 +241,26 @@ Selector read_selector(const json &j, const Where &w)
   return s;
 }
 
+/// Values whose magnitude the solve can carry: with lengths and moduli within 1e±30 as well
+/// (mesh and material checks), every entry and product of the system stays a normal double.
+constexpr double k_max_value = 1e30;
+
+void check_magnitude(double x, const Where &w)
+{
+  if (std::abs(x) > k_max_value) {
+    std::ostringstream msg;
+    msg << "value " << x << " exceeds " << k_max_value << " in magnitude, where the solve overflows double precision; rescale the units";
+    w.fail(msg.str());
+  }
+}
+
+void check_magnitudes(const BoundaryRule &rule, const Where &w)
+{
+  for (std::size_t i = 0; i < rule.pressure.size(); ++i) check_magnitude(rule.pressure[i], w);
+  for (std::size_t i = 0; i < rule.rows.size(); ++i)
+    for (double x : rule.rows[i]) check_magnitude(x, w);
+}
+
 BoundaryRule read_rule(const json &j, const Where &w)
 {
   check_keys(j, w, {"where", "displacement", "traction", "pressure"});
@@ -255,12 +275,14 @@ BoundaryRule read_rule(const json &j, const Where &w)
   if (j.contains("pressure")) {
     rule.kind = BoundaryRule::Kind::Pressure;
     rule.pressure = read_pressure(j["pressure"], w.at("pressure"));
+    check_magnitudes(rule, w.at("pressure"));
     return rule;
   }
   const bool disp = j.contains("displacement");
   rule.kind = disp ? BoundaryRule::Kind::Displacement : BoundaryRule::Kind::Traction;
   const char *key = disp ? "displacement" : "traction";
   rule.rows = read_rows(j[key], w.at(key));
+  check_magnitudes(rule, w.at(key));
   return rule;
 }
 

@@ -60,6 +60,14 @@ void handle_rigid_modes(ProblemSetup &s)
 
 } // namespace
 
+void check_every_frame(const ProblemSetup &s)
+{
+  for (std::size_t i = 0; i < s.spec.frames.size(); ++i) {
+    const NodeConditions nc = frame_conditions(s.spec, i, *s.disc);
+    check_frame_constraints(s, nc.displacement_prescribed, "frames[" + std::to_string(i) + "]");
+  }
+}
+
 SystemSelection selection_of(const NodeConditions &nc)
 {
   return SystemSelection{nc.displacement_prescribed, nc.value, nc.pressure};
@@ -80,6 +88,7 @@ ProblemSetup setup_problem(ProblemSpec spec, const ProblemOverrides &o)
   s.spec = std::move(spec);
   if (o.mesh) s.spec.mesh_path = *o.mesh;
   s.output = o.output ? *o.output : s.spec.output;
+  s.input_files = {s.spec.file, s.spec.mesh_path};
   s.material = material_of(s.spec, o);
   fault_point("MeshRead"); // tests: a mesh seen by some ranks only (kind unreadable: fault_path)
   s.mesh = std::make_unique<SurfaceMesh>(read_mesh(fault_path("MeshRead", s.spec.mesh_path)));
@@ -89,7 +98,8 @@ ProblemSetup setup_problem(ProblemSpec spec, const ProblemOverrides &o)
   s.selection = selection_of(nc);
   s.vertex_displacement_prescribed = vertex_displacement_prescribed(*s.disc, nc);
   fault_point("Setup");
-  if (s.spec.frames.empty()) handle_rigid_modes(s); // a scene checks each frame (check_frame_constraints)
+  if (s.spec.frames.empty()) handle_rigid_modes(s);
+  else check_every_frame(s);
   return s;
 }
 

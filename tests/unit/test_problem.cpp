@@ -1,11 +1,14 @@
 /// \file test_problem.cpp
 /// Problem file parsing, boundary rules, node conditions and material validation.
 #include "hssbem/problem/problem.hpp"
+#include "hssbem/bem/rigid_modes.hpp"
+#include "hssbem/problem/setup.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <functional>
 #include <initializer_list>
@@ -447,6 +450,15 @@ TEST(ProblemErrors, MissingAndMaterial)
                      {"material.E", "expected a number, got string"});
 }
 
+TEST(ProblemErrors, ValuesBeyondWhatTheSolveCarries)
+{
+  // A pressure of 1e300 gave a NaN residual: values beyond 1e30 are refused naming the rule.
+  expect_parse_error(with_rules(R"([{"where": "all", "pressure": 1e300}])"), {"problem.json: boundary[0].pressure: value 1e+300 exceeds 1e+30"});
+  expect_parse_error(with_rules(R"([{"where": "all", "traction": [0, -2e31, 0]}])"), {"boundary[0].traction: value -2e+31 exceeds"});
+  expect_parse_error(with_rules(R"([{"where": "all", "displacement": [[0, 0, 1e40]]}])"), {"boundary[0].displacement: value 1e+40"});
+  EXPECT_NO_THROW(rules_of(R"([{"where": "all", "pressure": 1e30}, {"where": {"box": [[-1e300, -1e300, -1e300], [1e300, 1e300, 1e300]]}, "traction": [0, 0, 0]}])"));
+}
+
 TEST(ProblemErrors, MalformedJsonAndNonFinite)
 {
   expect_parse_error("{\"mesh\": \"m\",\n \"material\": }", {"problem.json", "malformed JSON", "line 2"});
@@ -616,6 +628,11 @@ TEST(Material, YoungValidation)
   EXPECT_NE(message(0, 0.3).find("E = 0 must be positive"), std::string::npos);
   EXPECT_NE(message(-5, 0.3).find("E = -5"), std::string::npos);
   EXPECT_NE(message(1, NAN).find("nu = nan"), std::string::npos);
+  // Moduli the arithmetic carries (E = 1e-300 gave a NaN residual): within 1e-30 .. 1e30.
+  EXPECT_NE(message(1e-300, 0.3).find("E = 1e-300 lies outside [1e-30, 1e30]"), std::string::npos);
+  EXPECT_NE(message(1e31, 0.3).find("lies outside"), std::string::npos);
+  EXPECT_EQ(message(1e-30, 0.3), "accepted");
+  EXPECT_EQ(message(1e30, 0.3), "accepted");
 }
 
 TEST(Material, LameRoundTrip)
@@ -630,4 +647,50 @@ TEST(Material, LameRoundTrip)
   EXPECT_THROW(Material::from_lame(1, 0), std::invalid_argument);
   EXPECT_THROW(Material::from_lame(-1, 1), std::invalid_argument); // nu = -1
   EXPECT_THROW(Material::from_lame(1e20, 1), std::invalid_argument); // nu rounds to 0.5
+}
+
+// ---- a scene validated whole before its first frame ------------------------------------------
+
+namespace {
+
+/// The unit cube written as an OFF file in the temporary directory; returns its path.
+std::string cube_file()
+{
+  const std::string path = (std::getenv("TMPDIR") ? std::string(std::getenv("TMPDIR")) : std::string("/tmp")) + "/hssbem_test_problem_cube.off";
+  const SurfaceMesh m    = unit_cube();
+  std::ofstream     f(path);
+  f << "OFF\n" << m.num_vertices() << " " << m.num_triangles() << " 0\n";
+  for (const Vec3 &x : m.vertices) f << x[0] << " " << x[1] << " " << x[2] << "\n";
+  for (const auto &t : m.triangles) f << "3 " << t[0] << " " << t[1] << " " << t[2] << "\n";
+  return path;
+}
+
+/// A scene on the cube: 40 frames pushing vertex 7 (the base clamped), frame `bad` replaced.
+ProblemSpec forty_frames(int bad, const std::string &bad_frame)
+{
+  std::string frames = "[";
+  for (int i = 0; i < 40; ++i)
+    frames += std::string(i ? ", " : "") + (i == bad ? bad_frame : R"({"boundary": [{"where": {"vertices": [7]}, "displacement": [0, 0, -0.01]}]})");
+  const std::string base = R"([{"where": {"box": [[0, 0, 0], [1, 1, 0]]}, "displacement": [0, 0, 0]}])"; // the OFF file has no regions
+  ProblemSpec       spec = parse_problem(k_head + "\"boundary\": " + base + ", \"frames\": " + frames + "]}", "problem.json");
+  spec.mesh_path         = cube_file();
+  return spec;
+}
+
+} // namespace
+
+TEST(SceneSetup, EveryFrameIsCheckedBeforeTheFirstIsSolved)
+{
+  // Before: frames[39]'s vertex out of range was found after 39 frames had been solved.
+  expect_error([] { setup_problem(forty_frames(39, R"({"boundary": [{"where": {"vertices": [100]}, "displacement": [0, 0, 0]}]})"), {}); },
+               {"problem.json: frames[39].boundary[0]", "100"});
+  try { // a frame that frees the body: the base's clamp replaced by tractions
+    setup_problem(forty_frames(12, R"({"boundary": [{"where": {"box": [[0, 0, 0], [1, 1, 0]]}, "traction": [0, 0, 0]}]})"), {});
+    ADD_FAILURE() << "no ConstraintError";
+  } catch (const ConstraintError &e) {
+    EXPECT_NE(std::string(e.what()).find("frames[12]: the prescribed displacements leave the body free to move"), std::string::npos) << e.what();
+  }
+  const ProblemSetup s = setup_problem(forty_frames(-1, ""), {});
+  EXPECT_EQ(s.spec.frames.size(), 40u);
+  EXPECT_EQ(s.input_files, (std::vector<std::string>{"problem.json", cube_file()}));
 }

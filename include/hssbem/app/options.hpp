@@ -24,6 +24,7 @@ struct SceneRunOptions {
   double krylov_rtol = 1e-10;                   ///< -scene_krylov_rtol
   int single_from = 1024;                       ///< -scene_single_from: single-precision capacitance from this many switched unknowns
   bool monitor = false;                         ///< -scene_monitor: one line per frame
+  bool keep_partial = false;                    ///< -scene_keep_partial: a failed frame commits the frames solved before it (still an error)
 };
 
 /// Everything the command line can set besides the solver's options.
@@ -53,6 +54,16 @@ OperatorType choose_operator(long long unknowns, const MachineLimits &limits);
 /// again. Throws PetscFailure (app/petsc_call.hpp) for a value out of range, with PETSc's
 /// message printed.
 AppOptions read_app_options(MPI_Comm comm);
+
+/// -hssbem_error_timeout: seconds the ranks wait for a rank whose error they have not joined
+/// before the job is aborted (app/main.hpp); at most a day (a longer wait is a hang).
+inline constexpr double k_default_error_timeout = 10, k_max_error_timeout = 86400;
+
+/// The value of -hssbem_error_timeout (k_default_error_timeout when not given). Throws
+/// PetscFailure for a value PETSc cannot parse and std::invalid_argument for one outside
+/// (0, k_max_error_timeout] (NaN included): 0 or less would abort successful runs, NaN and
+/// infinity would wait forever.
+double read_error_timeout();
 
 /// Error out on options nobody used, naming them: typos must not pass silently. With
 /// before_solve, options that are read only during or after the solve (viewers, converged

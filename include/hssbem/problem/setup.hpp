@@ -32,10 +32,14 @@ struct ProblemSetup {
   bool pure_traction = false;
   std::vector<std::string> notices;
   std::string output;
+  /// The files the run reads (the problem file, the mesh): the result may not replace any of them.
+  std::vector<std::string> input_files;
 };
 
-/// Read, validate and prepare. Throws MeshError, ProblemError, ConstraintError or
-/// std::invalid_argument (material), each naming the file and the item at fault.
+/// Read, validate and prepare. A scene (frames) is validated whole here, before any frame is
+/// solved: every frame's rules applied and its constraints checked (check_every_frame). Throws
+/// MeshError, ProblemError, ConstraintError or std::invalid_argument (material), each naming the
+/// file and the item at fault.
 ProblemSetup setup_problem(const std::string &problem_file, const ProblemOverrides &overrides);
 
 /// Same, from a parsed specification (tests build one in code).
@@ -45,6 +49,11 @@ ProblemSetup setup_problem(ProblemSpec spec, const ProblemOverrides &overrides);
 /// each frame's pattern goes through this one instead: true when the prescribed displacements
 /// fix all six rigid motions, else ConstraintError naming `what` (e.g. "frames[3]").
 bool check_frame_constraints(const ProblemSetup &s, const std::vector<std::array<bool, 3>> &displacement_known, const std::string &what);
+
+/// Every frame of the scene `s`, in order: its rules applied (frame_conditions) and its
+/// constraints checked (check_frame_constraints), so that a bad frame is refused before frame 0
+/// is solved. Throws the first frame's error (ProblemError, ConstraintError).
+void check_every_frame(const ProblemSetup &s);
 
 /// The system's selection (what the BEM system builder takes) of a set of node conditions.
 SystemSelection selection_of(const NodeConditions &nc);
