@@ -5,7 +5,8 @@
 
 writes OUT_DIR/{msh,stl,off,obj,problem}/: the small shipped .msh files (Gmsh 2.2 and 4.1), the
 box with a spherical cavity (tests/data) converted to ASCII STL, binary STL, OFF and OBJ (polygons and the OBJ
-corner forms included), and the shipped example problems."""
+corner forms included), a unit cube alone, with a cavity and overlapping another in every format
+(small: under the harnesses' 4 kB input limit), and the shipped example problems (.json)."""
 import os
 import shutil
 import struct
@@ -40,6 +41,33 @@ def write(path, data):
         f.write(data)
 
 
+# A unit cube (8 vertices, 12 outward triangles) and a second one inside it (a cavity) or
+# overlapping it: small valid inputs (under the harnesses' 4 kB limit) that reach validation,
+# orientation and the intersection check.
+CUBE_V = [(float(i & 1), float((i >> 1) & 1), float((i >> 2) & 1)) for i in range(8)]
+CUBE_T = [(0, 2, 3), (0, 3, 1), (4, 5, 7), (4, 7, 6), (0, 1, 5), (0, 5, 4), (2, 6, 7), (2, 7, 3), (0, 4, 6), (0, 6, 2), (1, 3, 7), (1, 7, 5)]
+
+
+def two_cubes(scale, shift):
+    v = CUBE_V + [tuple(scale * c + shift for c in p) for p in CUBE_V]
+    return v, CUBE_T + [tuple(8 + i for i in t) for t in CUBE_T]
+
+
+def small_seeds(out):
+    shapes = {"cube": (CUBE_V, CUBE_T), "cavity": two_cubes(0.5, 0.25), "overlap": two_cubes(1.0, 0.5)}
+    for name, (v, t) in shapes.items():
+        write(os.path.join(out, "off", name + ".off"), "OFF\n%d %d 0\n" % (len(v), len(t)) + "".join("%g %g %g\n" % p for p in v) + "".join("3 %d %d %d\n" % f for f in t))
+        write(os.path.join(out, "obj", name + ".obj"), "".join("v %g %g %g\n" % p for p in v) + "".join("f %d %d %d\n" % (a + 1, b + 1, c + 1) for a, b, c in t))
+        write(os.path.join(out, "stl", name + ".stl"), "solid s\n" + "".join("facet normal 0 0 0\nouter loop\n" + "".join("vertex %g %g %g\n" % v[c] for c in f) + "endloop\nendfacet\n" for f in t) + "endsolid s\n")
+        nodes22 = "".join("%d %g %g %g\n" % ((i + 1,) + p) for i, p in enumerate(v))
+        elems22 = "".join("%d 2 2 1 1 %d %d %d\n" % (k + 1, a + 1, b + 1, c + 1) for k, (a, b, c) in enumerate(t))
+        write(os.path.join(out, "msh", name + "_v22.msh"), "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$PhysicalNames\n1\n2 1 \"body\"\n$EndPhysicalNames\n"
+              "$Nodes\n%d\n%s$EndNodes\n$Elements\n%d\n%s$EndElements\n" % (len(v), nodes22, len(t), elems22))
+        nodes41 = "1 %d 1 %d\n2 1 0 %d\n" % (len(v), len(v), len(v)) + "".join("%d\n" % (i + 1) for i in range(len(v))) + "".join("%g %g %g\n" % p for p in v)
+        elems41 = "1 %d 1 %d\n2 1 2 %d\n" % (len(t), len(t), len(t)) + "".join("%d %d %d %d\n" % (k + 1, a + 1, b + 1, c + 1) for k, (a, b, c) in enumerate(t))
+        write(os.path.join(out, "msh", name + "_v41.msh"), "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n%s$EndNodes\n$Elements\n%s$EndElements\n" % (nodes41, elems41))
+
+
 def main():
     out = sys.argv[1]
     os.makedirs(os.path.join(out, "msh"), exist_ok=True)
@@ -67,10 +95,12 @@ def main():
         obj.append("f " + " ".join(forms[(k + j) % 4] % (c + 1) for j, c in enumerate(tri)))
     obj.append("f -1 -2 -3")
     write(os.path.join(out, "obj", "cube.obj"), "\n".join(obj) + "\n")
+    small_seeds(out)
     os.makedirs(os.path.join(out, "problem"), exist_ok=True)
     examples = os.path.join(ROOT, "meshes", "examples")
     for name in sorted(os.listdir(examples)):
-        shutil.copy(os.path.join(examples, name), os.path.join(out, "problem", name))
+        if name.endswith(".json"):
+            shutil.copy(os.path.join(examples, name), os.path.join(out, "problem", name))
 
 
 if __name__ == "__main__":

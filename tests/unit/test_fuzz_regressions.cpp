@@ -1,7 +1,8 @@
 /// \file test_fuzz_regressions.cpp
 /// Replays every input kept in tests/fuzz/regressions/<harness>/ (crashes the fuzzers found,
-/// fixed) and the shipped meshes and examples through the fuzzers' entry points
-/// (tests/fuzz/fuzz_targets.hpp): each may fail only with the reader's own error.
+/// fixed), the committed corpora (tests/fuzz/corpus/<harness>/) and the shipped meshes and
+/// examples through the fuzzers' entry points (tests/fuzz/fuzz_targets.hpp): each may fail only
+/// with the reader's own error.
 #include "fuzz_targets.hpp"
 
 #include <gtest/gtest.h>
@@ -37,6 +38,11 @@ int replay(const fs::path &dir, void (*entry)(const std::string &))
 }
 
 const fs::path regressions = fs::path(HSSBEM_FUZZ_DIR) / "regressions";
+const fs::path corpus      = fs::path(HSSBEM_FUZZ_DIR) / "corpus";
+
+/// The committed corpora hold a few hundred inputs each (tests/fuzz/run_fuzzers.sh --grow):
+/// fewer would mean a corpus lost.
+constexpr int k_min_corpus = 100;
 
 TEST(FuzzRegressions, MeshInputs)
 {
@@ -46,6 +52,16 @@ TEST(FuzzRegressions, MeshInputs)
   replay(regressions / "off", fuzz_off);
   replay(regressions / "obj", fuzz_obj);
   EXPECT_GE(replay(HSSBEM_MESHES, fuzz_msh), 10); // the shipped meshes, as seeds are
+}
+
+TEST(FuzzRegressions, Corpora)
+{
+  using namespace hssbem::fuzz;
+  EXPECT_GE(replay(corpus / "msh", fuzz_msh), k_min_corpus);
+  EXPECT_GE(replay(corpus / "stl", fuzz_stl), k_min_corpus);
+  EXPECT_GE(replay(corpus / "off", fuzz_off), k_min_corpus);
+  EXPECT_GE(replay(corpus / "obj", fuzz_obj), k_min_corpus);
+  EXPECT_GE(replay(corpus / "problem", fuzz_problem), k_min_corpus);
 }
 
 TEST(FuzzRegressions, ProblemInputs)

@@ -2,7 +2,6 @@
 /// Mesh readers (.msh 2.2/4.1, STL, OFF, OBJ) and topology validation / orientation.
 
 #include "hssbem/bem/mesh.hpp"
-#include "hssbem/core/timer.hpp"
 
 #include <gtest/gtest.h>
 
@@ -774,12 +773,9 @@ TEST_F(MeshFiles, HundredThousandTriangles)
 {
   const Shape s = lattice_cube(91); // 99 372 triangles
   const std::string path = write("big.obj", obj_text(flipped(s)));
-  const Timer timer;
-  SurfaceMesh m = read_mesh(path);
+  SurfaceMesh m = read_mesh(path); // its time is a benchmark's (no timed unit tests)
   const auto notices = validate(m);
-  const double seconds = timer.seconds();
   EXPECT_EQ(m.num_triangles(), 6 * 2 * 91 * 91);
   ASSERT_EQ(notices.size(), 1u);
   EXPECT_NEAR(signed_volume(m, range(0, m.num_triangles())), 91.0 * 91.0 * 91.0, 1e-3);
-  EXPECT_LT(seconds, 20.0); // well under a second when optimised; generous for debug builds
 }
