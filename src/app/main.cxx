@@ -7,6 +7,7 @@
 #include "hssbem/petsc/log.h"
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <exception>
 #include <new>

@@ -56,7 +56,7 @@ PetscErrorCode OptionString_Private(const char *key, const char *text, std::stri
 PetscErrorCode ProcessOptions_Private(MPI_Comm comm, AppOptions *opts)
 {
   PetscBool   help, has_E, has_nu, traceback = PETSC_FALSE; /* -hssbem_traceback is acted on by app/main.cxx; listed here for -help */
-  PetscReal   memory_limit = 0;                               /* -hssbem_memory_limit: read by HssbemMachineLimits() */
+  PetscReal   memory_limit = 0;                               /* -hssbem_memory_limit: read and checked by HssbemMachineLimits() */
   PetscReal   E = 0, nu = 0, feature_angle = opts->overrides.feature_angle_deg;
   std::string mesh = opts->overrides.mesh.value_or(""), output = opts->overrides.output.value_or(""), mat_type = opts->operator_type ? operator_type_name(*opts->operator_type) : "auto";
   QuadratureOptions &quad = opts->quad;
@@ -122,7 +122,6 @@ PetscErrorCode ProcessOptions_Private(MPI_Comm comm, AppOptions *opts)
   }
   PetscCheck(quad.far_ratio == 0 || (type && !is_compressed(*type)), comm, PETSC_ERR_ARG_INCOMP,
              "-mat_bem_far_ratio must be 0 with -bem_mat_type %s: the 3-point far rule breaks the smooth far field the compression relies on (use -bem_mat_type dense)", mat_type.c_str());
-  PetscCheck(memory_limit >= 0 && memory_limit < 1e18, comm, PETSC_ERR_ARG_OUTOFRANGE, "-hssbem_memory_limit must lie in [0, 1e18) bytes (0: the machine's memory)");
   PetscCheck(quad.duffy_order >= 2 && quad.duffy_order <= 64, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_bem_quad_order must lie in [2, 64]");
   PetscCheck(quad.near_ratio > 0 && quad.near_ratio <= 100 && (quad.far_ratio == 0 || (quad.far_ratio >= quad.near_ratio && quad.far_ratio <= 1e6)), comm, PETSC_ERR_ARG_OUTOFRANGE,
              "need -mat_bem_near_ratio in (0, 100] and -mat_bem_far_ratio either 0 (off) or in [-mat_bem_near_ratio, 1e6]");
@@ -198,7 +197,8 @@ double read_error_timeout()
   HssbemCallThrow(PetscOptionsGetReal(NULL, NULL, "-hssbem_error_timeout", &seconds, NULL));
   if (!(seconds > 0 && seconds <= k_max_error_timeout)) { /* NaN fails too */
     char text[160];
-    std::snprintf(text, sizeof(text), "option -hssbem_error_timeout %g: must lie in (0, %g] seconds", (double)seconds, k_max_error_timeout);
+    std::snprintf(text, sizeof(text), "option -hssbem_error_timeout %g: the time-out must be positive and finite, at most %g seconds (default %g)", (double)seconds, k_max_error_timeout,
+                  k_default_error_timeout);
     throw std::invalid_argument(text);
   }
   return seconds;
