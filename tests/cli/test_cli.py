@@ -203,6 +203,15 @@ class CliTestCase(unittest.TestCase):
         self.assertNotRegex(result.output, r"Segmentation|Caught signal|core dumped",
                             "the driver crashed\n" + result.describe())
 
+    def assertBelow(self, value, bound, what):
+        """value < bound. With HSSBEM_CLI_MEASURE=FILE every measured value is appended to FILE
+        (how the bounds, each a few times its measurement, were set)."""
+        path = os.environ.get("HSSBEM_CLI_MEASURE")
+        if path:
+            with open(path, "a") as f:
+                f.write("%s | %s | %.3e | bound %.1e\n" % (self.id(), what, value, bound))
+        self.assertLess(value, bound, "%s: %.3e, bound %.1e" % (what, value, bound))
+
     def assertErrorLine(self, result):
         """The driver's own error line (not a PETSc error block) is present."""
         self.assertRegex(result.output, r"hssbem: error: ",
@@ -821,12 +830,13 @@ class ParallelTests(CliTestCase):
                     b = data[name]
                     self.assertEqual((b.shape, b.dtype), (a.shape, a.dtype), name)
                     scale = force if name.startswith("reactions/") else np.max(np.abs(a))
-                    self.assertLessEqual(np.max(np.abs(b - a)) / scale, 1e-10, name)
+                    # measured up to 5.5e-15 (traction_corner, 2 and 4 ranks)
+                    self.assertBelow(np.max(np.abs(b - a)) / scale, 1.5e-14, "%d ranks %s" % (np_, name))
                 self.assertEqual(sorted(attrs), sorted(ref_attrs))
                 self.assertEqual(int(attrs["ranks"]), np_)
                 for key in ("E", "nu", "solver", "mat_type", "num_dofs", "version"):
                     self.assertEqual(attrs[key], ref_attrs[key], key)
-                self.assertLess(float(attrs["residual"]), 1e-10)
+                self.assertBelow(float(attrs["residual"]), 1.5e-15, "%d ranks residual" % np_)  # measured 4.9e-16, 5.1e-16
                 self.assertEqual(sorted(timings), sorted(ref_timings))
                 self.assertTrue(all(t >= 0 for t in timings.values()), timings)
                 with open(self.path("r%d.xdmf" % np_)) as f:
@@ -881,19 +891,20 @@ class ParallelTests(CliTestCase):
                 with self.subTest(run=key, field=f):
                     a, b = ref[f], data[f]
                     self.assertGreater(np.linalg.norm(a), 0)
-                    self.assertLess(np.linalg.norm(b - a) / np.linalg.norm(a), 1e-5)
+                    # measured 9.6e-7 to 2.7e-6 (the traction on 3 ranks)
+                    self.assertBelow(np.linalg.norm(b - a) / np.linalg.norm(a), 8e-6, "%s %d vs dense %s" % (key[0], key[1], f))
         one = fields[("h2", 1)]["fields/displacement"]
         for key in (("h2", 2), ("h2", 3), ("h2", 4), ("h2", 6), ("spread", 2)):
             d = fields[key]["fields/displacement"]
-            self.assertLess(np.linalg.norm(d - one) / np.linalg.norm(one), 1e-5)
+            # measured 1.6e-6 to 2.2e-6 (3 ranks)
+            self.assertBelow(np.linalg.norm(d - one) / np.linalg.norm(one), 6e-6, "%s %d vs 1 rank" % key)
 
     def test_distributed_hss_agrees_across_ranks(self):
         # -bem_mat_type hss on 2 and 4 ranks (oversubscribed) is distributed: METIS splits the
         # surface, each rank compresses and factors its part, and the top above the parts is
         # factored on rank 0. The answers of 1, 2 and 4 ranks (the default direct solve at the
         # matrix's 1e-8, and GMRES with a truncated 1e-3 PC hss on 2 ranks) agree with each
-        # other and with dense LU within 100 times the tolerance (measured 4e-9 to 2e-8; the
-        # trees differ at the top);
+        # other and with dense LU within a few times the tolerance (the trees differ at the top);
         # the views name the partition, each rank's memory and the top.
         import numpy as np
         problem = os.path.join(MESHES, "examples", "disk_organ_indent.json")
@@ -922,11 +933,13 @@ class ParallelTests(CliTestCase):
                 with self.subTest(run=key, field=f):
                     a, b = ref[f], data[f]
                     self.assertGreater(np.linalg.norm(a), 0)
-                    self.assertLess(np.linalg.norm(b - a) / np.linalg.norm(a), 1e-6)
+                    # measured 3.8e-9 to 1.5e-8 (the traction on 4 ranks)
+                    self.assertBelow(np.linalg.norm(b - a) / np.linalg.norm(a), 4.5e-8, "%s %d vs dense %s" % (key[0], key[1], f))
         one = fields[("hss", 1)]["fields/displacement"]
         for np_ in (2, 4):
             d = fields[("hss", np_)]["fields/displacement"]
-            self.assertLess(np.linalg.norm(d - one) / np.linalg.norm(one), 1e-6)
+            # measured 5.5e-9 (2 ranks) and 7.6e-9 (4 ranks)
+            self.assertBelow(np.linalg.norm(d - one) / np.linalg.norm(one), 2e-8, "hss %d vs 1 rank" % np_)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -1225,7 +1238,7 @@ class HssOptionTests(CliTestCase):
         self.assertEqual(a["mat_type"], mat_type)
         self.assertEqual(ad["mat_type"], "dense")
         diff = np.linalg.norm(u - ud) / np.linalg.norm(ud)
-        self.assertLess(diff, bound)
+        self.assertBelow(diff, bound, mat_type + " vs dense")
         self.assertGreater(np.linalg.norm(ud), 0)
 
     def test_help_lists_the_hss_options(self):
@@ -1245,8 +1258,9 @@ class HssOptionTests(CliTestCase):
         self.assertRegex(r.output, r"hss operator", r.describe())
         self.assertRegex(r.output, r"preonly/hss", r.describe())
         self.assertNoUnusedOptions(r)
-        # -mat_hss_rel_tol 1e-8 by default: the answers agree far below the discretisation error.
-        self.assertAgreesWithDense("hss.h5", "hss", 1e-6)
+        # -mat_hss_rel_tol 1e-8 by default: the answers agree far below the discretisation error;
+        # on this 450-unknown cube the HSS matrix keeps every block whole (measured 1.2e-15).
+        self.assertAgreesWithDense("hss.h5", "hss", 4e-15)
 
     def test_h2_matrix_matches_dense(self):
         self.cube()
@@ -1258,8 +1272,8 @@ class HssOptionTests(CliTestCase):
         self.assertRegex(r.output, r"BEM operator in H² form", r.describe())
         self.assertNotRegex(r.output, r" 0 far blocks", r.describe())
         self.assertNoUnusedOptions(r)
-        # -mat_h2_rel_tol 1e-5 (single-precision blocks) and -ksp_rtol 1e-8 by default.
-        self.assertAgreesWithDense("h2.h5", "h2", 1e-5)
+        # -mat_h2_rel_tol 1e-5 (single-precision blocks) and -ksp_rtol 1e-8 by default: measured 4.9e-8.
+        self.assertAgreesWithDense("h2.h5", "h2", 1.5e-7)
 
     def test_bad_h2_options(self):
         self.cube()
@@ -1344,7 +1358,8 @@ class HssOptionTests(CliTestCase):
     def test_kelvin_problem_script_measures_the_driver_error(self):
         # scripts/kelvin_problem.py writes Kelvin's mixed problem on a sphere and checks a result
         # against the exact field; on sphere_l1 with dense LU its displacement error is the
-        # verification suite's (5.92e-4, tests/verification), through H² at 1e-5 the same to 1 %.
+        # verification suite's (5.92e-4, tests/verification), through H² at 1e-5 the same to 1.4e-4
+        # (measured 4.6e-5); its traction error measured 1.61e-2.
         script = os.path.join(os.path.dirname(MESHES), "scripts", "kelvin_problem.py")
         mesh = self.path(self.copy_mesh("sphere_l1.msh"))
         w = subprocess.run([sys.executable, script, "write", "--mesh", mesh, "--out", self.path("kelvin.json")],
@@ -1360,10 +1375,10 @@ class HssOptionTests(CliTestCase):
             errors[name] = json.loads(c.stdout)
         self.assertEqual(errors["dense"]["vertices"], 998)
         self.assertGreater(errors["dense"]["displacement_error"], 5.8e-4)
-        self.assertLess(errors["dense"]["displacement_error"], 6.0e-4)
-        self.assertGreater(errors["dense"]["traction_error"], 1e-3)  # the traction converges slower
-        self.assertLess(errors["dense"]["traction_error"], 5e-2)
-        self.assertLess(abs(errors["h2"]["displacement_error"] / errors["dense"]["displacement_error"] - 1), 0.01)
+        self.assertBelow(errors["dense"]["displacement_error"], 6.0e-4, "dense displacement error")
+        self.assertGreater(errors["dense"]["traction_error"], 5e-3)  # the traction converges slower
+        self.assertBelow(errors["dense"]["traction_error"], 4.5e-2, "dense traction error")
+        self.assertBelow(abs(errors["h2"]["displacement_error"] / errors["dense"]["displacement_error"] - 1), 1.4e-4, "h2 / dense error - 1")
         # a source inside the sphere is refused
         bad = subprocess.run([sys.executable, script, "write", "--mesh", mesh, "--out", self.path("bad.json"), "--source", "0,0,0.5"],
                              capture_output=True, text=True, timeout=TIMEOUT_RUN)
@@ -1436,18 +1451,18 @@ class DefaultExampleTests(CliTestCase):
             self.assertAlmostEqual(float(f.attrs["E"]), 1000.0)
             self.assertAlmostEqual(float(f.attrs["nu"]), 0.3)
             self.assertEqual(int(f.attrs["ranks"]), 1)
-            self.assertLess(float(f.attrs["residual"]), 1e-6)
+            self.assertBelow(float(f.attrs["residual"]), 5e-15, "residual")  # measured 1.5e-15 (dense LU)
             self.assertIn("/timings", f)
             self.assertGreater(len(f["/timings"].attrs), 0, "/timings has no attributes")
 
             # Uniform compression u = -0.04 x (meshes/README.md), exact on the faceted sphere:
             # the error modulo a rigid motion (a pure-traction answer is defined up to one) is
-            # the quadrature's, measured 1.9e-8 (relative L2).
+            # the quadrature's, measured 1.92e-8 (relative L2).
             x = f["/mesh/vertices"][()]
             u = f["/fields/displacement"][()]
             self.assertTrue(np.all(np.isfinite(u)))
             err = relative_error_modulo_rigid(u, -0.04 * x, x)
-            self.assertLess(err, 1e-7, "error %.2e" % err)
+            self.assertBelow(err, 6e-8, "error modulo rigid")
             self.assertGreater(np.linalg.norm(u), 0)
             self.assertFalse(np.any(f["/bc/displacement_prescribed"][()]))
 
@@ -1508,7 +1523,7 @@ class SceneTests(CliTestCase):
     def assertClose(self, a, b, tol, what):
         import numpy as np
         err = np.linalg.norm(a - b) / np.linalg.norm(b)
-        self.assertLess(err, tol, "%s: relative difference %.2e" % (what, err))
+        self.assertBelow(err, tol, what)
 
     def test_every_frame_matches_a_single_solve_of_its_conditions(self):
         import h5py
@@ -1521,7 +1536,7 @@ class SceneTests(CliTestCase):
         self.assertEqual(len(frames), 5)
         for i, (u, attrs) in enumerate(frames):
             ref = self.single(self.FRAMES[i], "single%d" % i)
-            self.assertClose(u, ref, 1e-8, "frame %d" % i)
+            self.assertClose(u, ref, 2e-15, "frame %d" % i)  # measured 4.5e-16 to 6.2e-16
             self.assertGreater(np.linalg.norm(u), 1e-3)
             strategy = attrs["strategy"].decode() if isinstance(attrs["strategy"], bytes) else attrs["strategy"]
             self.assertIn(strategy, ("update", "solve", "refactor", "krylov"))
@@ -1546,7 +1561,10 @@ class SceneTests(CliTestCase):
             results[strategy] = self.frames_of(out)
         for strategy in ("update", "refactor", "krylov"):
             for i in range(4):
-                self.assertClose(results[strategy][i][0], results["auto"][i][0], 1e-8, "%s frame %d" % (strategy, i))
+                # measured: update 0 (auto's choice), refactor up to 5.8e-16, krylov (GMRES to
+                # -scene_krylov_rtol 1e-10) up to 9.9e-12
+                bound = 3e-11 if strategy == "krylov" else 2e-15
+                self.assertClose(results[strategy][i][0], results["auto"][i][0], bound, "%s frame %d" % (strategy, i))
                 got = results[strategy][i][1]["strategy"]
                 got = got.decode() if isinstance(got, bytes) else got
                 if i > 0 or strategy != "krylov":
@@ -1573,7 +1591,7 @@ class SceneTests(CliTestCase):
         r2 = self.run_driver("-problem", "scene.json", "-o", out2, np=2, timeout=TIMEOUT_RUN)
         self.assertSucceeds(r2, out2)
         for (a, _), (b, _) in zip(one, self.frames_of(out2)):
-            self.assertClose(b, a, 1e-12, "2 ranks")
+            self.assertClose(b, a, 1e-14, "2 ranks")  # measured 0: rank 0 runs the scene either way
 
     def test_a_frame_that_frees_the_body_is_an_error(self):
         # base: traction-free; frame 0 clamps the base, frame 1 only pushes the patch
@@ -1601,17 +1619,18 @@ class SceneTests(CliTestCase):
 
 class ExampleTests(CliTestCase):
     # Each example's answer is checked: the solve's relative residual (dense LU at these sizes:
-    # measured 1e-15), and the balance of the reactions (no body force: the traction integrates
-    # to zero over the whole surface), relative to the largest region's reaction, with a bound a
-    # few times the value measured on each (the traction's discretisation error).
-    BALANCE = {"cube_tension": 2e-6, "disk_organ_indent": 1e-2, "cardioid_contact": 5e-3,
+    # measured 7.3e-16 to 2.7e-15), and the balance of the reactions (no body force: the traction
+    # integrates to zero over the whole surface), relative to the largest region's reaction, with
+    # a bound under 3 times the value measured on each (the traction's discretisation error):
+    # cube_tension 4.4e-7, disk_organ_indent 3.0e-3, cardioid_contact 1.5e-3, sphere_pressure 1.9e-4.
+    BALANCE = {"cube_tension": 1.3e-6, "disk_organ_indent": 9e-3, "cardioid_contact": 4.5e-3,
                "sphere_pressure": 5e-4}
 
     def assertAccurate(self, h5, stem):
         import h5py
         import numpy as np
         with h5py.File(h5, "r") as f:
-            self.assertLess(float(f.attrs["residual"]), 1e-12)
+            self.assertBelow(float(f.attrs["residual"]), 8e-15, stem + " residual")
             u = f["/fields/displacement"][()]
             self.assertTrue(np.all(np.isfinite(u)) and np.linalg.norm(u) > 0)
             if stem == "hollow_sphere_pressure":
@@ -1624,12 +1643,12 @@ class ExampleTests(CliTestCase):
                 # Faceting error of hollow_sphere_l1, measured 2.5e-2 (inner) and 4.4e-2 (outer).
                 for sel, rr, bound in ((r < 0.75, a, 5e-2), (r > 0.75, b, 8e-2)):
                     err = np.max(np.abs(ur[sel] - lame(rr))) / abs(lame(rr))
-                    self.assertLess(err, bound, "radial error %.2e at r = %g" % (err, rr))
+                    self.assertBelow(err, bound, "radial error at r = %g" % rr)
                 return
             reactions = {k: f["/reactions"][k][()] for k in f["/reactions"]}
             largest = max(np.linalg.norm(v) for k, v in reactions.items() if k != "total")
             balance = np.linalg.norm(reactions["total"]) / largest
-            self.assertLess(balance, self.BALANCE[stem], "reaction balance %.2e" % balance)
+            self.assertBelow(balance, self.BALANCE[stem], stem + " reaction balance")
 
 
 def check_scene_example(self, problem):

@@ -50,12 +50,12 @@ TEST(Verification, KelvinMixedConvergesAtSecondOrder)
   std::vector<double> interior;
   const double e0 = kelvin_mixed_error("sphere_l0.msh"), e1 = kelvin_mixed_error("sphere_l1.msh", &interior), e2 = kelvin_mixed_error("sphere_l2.msh");
   std::printf("kelvin mixed: interior displacement errors at l1: %.2e %.2e %.2e %.2e\n", interior[0], interior[1], interior[2], interior[3]);
-  for (double e : interior) EXPECT_LE(e, 2e-3);
+  for (double e : interior) EXPECT_LE(e, 2e-3); // measured 1.9e-4 to 7.2e-4
   const double order = 0.5 * std::log2(e0 / e2);
   std::printf("kelvin mixed: u error %.3e %.3e %.3e (498, 1992, 7968 triangles), observed order %.2f\n", e0, e1, e2, order);
-  EXPECT_LE(e1, 1e-3);
-  EXPECT_GE(order, 1.8);
-  EXPECT_GT(e2, 1e-8); // a solve that did nothing would not reach here with these values
+  EXPECT_LE(e1, 1e-3);  // measured 5.92e-4
+  EXPECT_GE(order, 1.8); // measured 1.97
+  EXPECT_GT(e2, 5e-5);   // measured 1.52e-4: the discretisation error is real (a solve that did nothing would not reach here)
 }
 
 class SpherePressure : public ::testing::TestWithParam<double> {};
@@ -68,9 +68,9 @@ TEST_P(SpherePressure, UniformCompressionToQuadratureAccuracy)
   for (int i = 0; i < s.setup.disc->num_nodes(); ++i) exact.push_back((-p * (1 - 2 * nu) / E) * s.setup.disc->node_position(i));
   const double err = rel_error_modulo_rigid(*s.setup.disc, s.sol.u, exact);
   std::printf("sphere pressure nu=%.2f: relative error %.3e\n", nu, err);
-  // Pressure is exact on the faceted sphere, so the error is the quadrature's: measured 1.9e-8
-  // (nu 0.3) and 2.4e-7 (nu 0.49); a few times that.
-  EXPECT_LE(err, nu < 0.4 ? 1e-7 : 1e-6);
+  // Pressure is exact on the faceted sphere, so the error is the quadrature's: measured 1.92e-8
+  // (nu 0.3) and 2.41e-7 (nu 0.49); under 3 times that.
+  EXPECT_LE(err, nu < 0.4 ? 5.5e-8 : 7e-7);
   EXPECT_TRUE(s.setup.pure_traction);
 }
 
@@ -102,8 +102,8 @@ TEST(Verification, HollowSphereMatchesLame)
     worst[inner] = std::max(worst[inner], std::abs(dr) / lame(rr));
   }
   std::printf("hollow sphere: max relative radial error outer %.3e inner %.3e\n", worst[0], worst[1]);
-  EXPECT_LE(worst[0], 1e-2);
-  EXPECT_LE(worst[1], 1e-2);
+  EXPECT_LE(worst[0], 1e-2); // measured 7.1e-3
+  EXPECT_LE(worst[1], 1e-2); // measured 7.4e-3
 }
 
 class RigidMotion : public ::testing::TestWithParam<const char *> {};
@@ -122,9 +122,9 @@ TEST_P(RigidMotion, GivesNoTraction)
   for (const auto &t : s.sol.t) tmax = std::max(tmax, norm(t));
   const double rel = tmax / (E * norm(w));
   std::printf("rigid motion on %s: max |t| / (E |w|) = %.3e\n", GetParam(), rel);
-  // Measured 8.9e-8 (sphere_l1), 5.2e-5 (cube_l1), 3.4e-5 (cardioid_832): a few times that.
+  // Measured 8.9e-8 (sphere_l1), 5.2e-5 (cube_l1), 3.4e-5 (cardioid_832): under 3 times that.
   const std::string mesh = GetParam();
-  EXPECT_LE(rel, mesh == "sphere_l1.msh" ? 5e-7 : 2e-4);
+  EXPECT_LE(rel, mesh == "sphere_l1.msh" ? 2.5e-7 : mesh == "cube_l1.msh" ? 1.5e-4 : 1e-4);
 }
 
 INSTANTIATE_TEST_SUITE_P(Verification, RigidMotion, ::testing::Values("sphere_l1.msh", "cube_l1.msh", "cardioid_832.msh"));
@@ -169,7 +169,7 @@ TEST_P(CubePatch, LinearDisplacementGivesExactTractionOnFacesEdgesAndCorners)
   }
   std::printf("cube patch %s: max traction error / max traction = %.3e (%d sharp vertices)\n", GetParam(), err / scale, s.setup.disc->num_sharp_vertices());
   EXPECT_EQ(s.setup.disc->num_sharp_vertices(), 8 + 12 * (m.num_vertices() == 98 ? 3 : 7));
-  EXPECT_LE(err / scale, 3e-4); // measured 8.2e-5 on both levels
+  EXPECT_LE(err / scale, 2.4e-4); // measured 8.2e-5 on both levels
 }
 
 INSTANTIATE_TEST_SUITE_P(Verification, CubePatch, ::testing::Values("cube_l0.msh", "cube_l1.msh"));
@@ -197,9 +197,10 @@ TEST(Verification, CubeUniaxialTensionExactFieldAndReaction)
     err = std::max(err, norm(s.sol.u[i] - exact) / (s0 / E));
   }
   const auto R = reactions(*s.setup.disc, s.sol.t);
-  std::printf("cube tension: max displacement error %.3e (relative to s0/E), reaction on z0 (%.4f, %.4f, %.4f)\n", err, R.at("z0")[0], R.at("z0")[1], R.at("z0")[2]);
-  EXPECT_LE(err, 1e-4);                               // measured 2.3e-5
-  EXPECT_NEAR(R.at("z0")[2], -s0, 5e-5 * s0);          // measured -10.0001
-  EXPECT_NEAR(R.at("z0")[0], 0.0, 5e-5 * s0);
-  EXPECT_NEAR(R.at("z1")[2], s0, 1e-9 * s0);
+  std::printf("cube tension: max displacement error %.3e (relative to s0/E), reaction on z0 (%.3e, %.3e, %.6f), on z1 %.12f\n", err, R.at("z0")[0], R.at("z0")[1], R.at("z0")[2],
+              R.at("z1")[2]);
+  EXPECT_LE(err, 6.5e-5);                              // measured 2.27e-5
+  EXPECT_NEAR(R.at("z0")[2], -s0, 2e-5 * s0);          // measured -10.000071 (7.1e-6 s0)
+  EXPECT_NEAR(R.at("z0")[0], 0.0, 1e-5 * s0);          // measured -3.4e-6 s0
+  EXPECT_NEAR(R.at("z1")[2], s0, 1e-9 * s0);           // the prescribed traction, integrated exactly
 }
