@@ -219,6 +219,31 @@ PetscErrorCode HssbemMachineLimits(MPI_Comm comm, hssbem::MachineLimits *limits)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* What else the size model needs of a factored H² system: PC h2's options (read, not listed:
+   PCSetFromOptions_H2 lists and checks them) and the Krylov method's vectors. */
+static PetscErrorCode H2SolverSizeOptions_Private(hssbem::SizeOptions *o)
+{
+  char      ksp[64] = "gmres";
+  PetscInt  restart = 100, top = o->pc_h2_top_size, mixed = o->pc_h2_mixed_top;
+  PetscReal tol = o->pc_h2_rel_tol;
+  PetscBool spread = o->pc_h2_spread_top ? PETSC_TRUE : PETSC_FALSE;
+
+  PetscFunctionBegin;
+  PetscCall(PetscOptionsGetString(NULL, NULL, "-ksp_type", ksp, sizeof(ksp), NULL));
+  PetscCall(PetscOptionsGetInt(NULL, NULL, "-ksp_gmres_restart", &restart, NULL));
+  o->krylov_vectors = std::string(ksp) == KSPPREONLY ? 0 : (int)restart + 1;
+  if (!o->h2_factored) PetscFunctionReturn(PETSC_SUCCESS);
+  PetscCall(PetscOptionsGetReal(NULL, NULL, "-pc_h2_rel_tol", &tol, NULL));
+  PetscCall(PetscOptionsGetInt(NULL, NULL, "-pc_h2_top_size", &top, NULL));
+  PetscCall(PetscOptionsGetInt(NULL, NULL, "-pc_h2_mixed_top", &mixed, NULL));
+  PetscCall(PetscOptionsGetBool(NULL, NULL, "-pc_h2_spread_top", &spread, NULL));
+  o->pc_h2_rel_tol    = (double)tol;
+  o->pc_h2_top_size   = top;
+  o->pc_h2_mixed_top  = mixed;
+  o->pc_h2_spread_top = spread == PETSC_TRUE;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 /* Refuses (on comm) a system of `type` that does not fit this machine, before it is allocated. */
 static PetscErrorCode CheckSize_Private(MPI_Comm comm, hssbem::OperatorType type, PetscInt nnodes, const hssbem::SizeOptions &o)
 {
@@ -268,8 +293,11 @@ PetscErrorCode HssbemCreateSystem(MPI_Comm comm, const hssbem::BemOperator &op, 
     ctx->h2_options.rel_tol          = 1e-5;
     ctx->h2_options.single_precision = true;
     PetscCall(HssbemH2OptionsFromDatabase(comm, NULL, &ctx->h2_options));
-    hssbem::SizeOptions size_options{ctx->h2_options.single_precision, ctx->h2_options.rel_tol, false};
+    hssbem::SizeOptions size_options;
+    size_options.single_precision = ctx->h2_options.single_precision;
+    size_options.h2_rel_tol       = ctx->h2_options.rel_tol;
     PetscCall(HssbemH2WillBeFactored(comm, &size_options.h2_factored));
+    PetscCall(H2SolverSizeOptions_Private(&size_options));
     PetscCall(CheckSize_Private(comm, type, op.num_nodes(), size_options));
     PetscCall(HssbemMatCreateCompressed_Private(comm, ctx.get(), A, b));
     break;
@@ -278,7 +306,11 @@ PetscErrorCode HssbemCreateSystem(MPI_Comm comm, const hssbem::BemOperator &op, 
     ctx->hss_options.rel_tol          = 1e-8;
     ctx->hss_options.pressure_columns = pressure;
     PetscCall(HssbemHssOptionsFromDatabase(comm, NULL, &ctx->hss_options));
-    PetscCall(CheckSize_Private(comm, type, op.num_nodes(), hssbem::SizeOptions{}));
+    {
+      hssbem::SizeOptions size_options;
+      size_options.hss_rel_tol = ctx->hss_options.rel_tol;
+      PetscCall(CheckSize_Private(comm, type, op.num_nodes(), size_options));
+    }
     PetscCall(HssbemMatCreateCompressed_Private(comm, ctx.get(), A, b));
     break;
   }

@@ -1387,28 +1387,29 @@ class HssOptionTests(CliTestCase):
         self.assertFalse(os.path.exists(self.path("bad.json")))
 
     def test_too_large_for_the_chosen_path_is_refused_before_allocating(self):
-        # sphere_l2 (11 958 unknowns): the dense matrix and its factor need 2.29 GB, more than a
-        # node of 2 GB (as -hssbem_memory_limit says); H² fits there. Refused at once.
+        # sphere_l2 (11 958 unknowns): the dense matrix and its factor need 2.61 GB (the size
+        # model, docs/limits.md), more than a node of 2 GB (as -hssbem_memory_limit says); H² fits
+        # there. Refused at once.
         self.problem(mesh=self.copy_mesh("sphere_l2.msh"))
         r = self.run_problem("problem.json", "-bem_mat_type", "dense", "-hssbem_memory_limit", "2e9")
-        self.assertFailsCleanly(r, r"the dense operator of 11958 unknowns needs about 2\.29 GB per node, "
+        self.assertFailsCleanly(r, r"the dense operator of 11958 unknowns needs about 2\.61 GB per node, "
                                    r"more than the 2 GB of memory there; use -bem_mat_type h2")
         self.assertErrorLine(r)
         self.assertNotRegex(r.output, r"solved", r.describe())
         r = self.run_problem("problem.json", "-bem_mat_type", "h2", "-mat_h2_single_precision", "false",
                              "-hssbem_memory_limit", "1e9")
-        # double precision with PC h2 (the default on one rank): 1.09 GB; single precision fits
-        self.assertFailsCleanly(r, r"the h2 operator of 11958 unknowns needs about 1\.09 GB per node, "
+        # double precision with PC h2 (the default on one rank): 1.37 GB; single precision fits
+        self.assertFailsCleanly(r, r"the h2 operator of 11958 unknowns needs about 1\.37 GB per node, "
                                    r"more than the 1 GB of memory there; use -mat_h2_single_precision")
-        # on 0.7 GB single precision with PC h2 (0.839 GB) is not enough: Jacobi leaves out the
-        # factorization (0.313 GB)
+        # on 0.6 GB single precision with PC h2 (0.673 GB) is not enough: Jacobi leaves out the
+        # factorization (0.378 GB)
         r = self.run_problem("problem.json", "-bem_mat_type", "h2", "-mat_h2_single_precision", "false",
-                             "-hssbem_memory_limit", "0.7e9")
-        self.assertFailsCleanly(r, r"needs about 1\.09 GB per node, more than the 0\.7 GB of memory there; "
+                             "-hssbem_memory_limit", "0.6e9")
+        self.assertFailsCleanly(r, r"needs about 1\.37 GB per node, more than the 0\.6 GB of memory there; "
                                    r"use -mat_h2_single_precision -pc_type jacobi")
         r = self.run_problem("problem.json", "-bem_mat_type", "h2", "-mat_h2_single_precision", "false", "-pc_type", "jacobi",
                              "-hssbem_memory_limit", "0.5e9")
-        self.assertFailsCleanly(r, r"needs about 0\.564 GB per node, more than the 0\.5 GB of memory there; "
+        self.assertFailsCleanly(r, r"needs about 0\.599 GB per node, more than the 0\.5 GB of memory there; "
                                    r"use -mat_h2_single_precision")
 
 

@@ -2,6 +2,7 @@
 /// What each operator path can take: the index width and the memory of the machine. A problem
 /// beyond them is refused before anything is allocated, naming its size and a path that can
 /// take it (the PETSc face checks in HssbemCreateSystem(); -bem_mat_type auto picks within them).
+/// The model and the peaks it was fitted to: docs/limits.md.
 #pragma once
 
 #include "hssbem/core/operator_type.hpp"
@@ -18,35 +19,39 @@ struct MachineLimits {
   long long index_max = 2147483647; ///< largest index of the linear-algebra library (PetscInt)
 };
 
-/// What else than its type and size decides an operator's memory.
+/// What else than its type and size decides an operator's memory (with its default solver).
 struct SizeOptions {
   bool   single_precision = false; ///< H²: single-precision blocks
   double h2_rel_tol = 1e-5;        ///< H²: the compression's tolerance
   bool   h2_factored = false;      ///< H²: PC h2 factors it (GMRES + PC h2, or a direct solve)
+  double pc_h2_rel_tol = 2e-3;     ///< PC h2: the factorization's tolerance (-pc_h2_rel_tol)
+  long long pc_h2_top_size = 2000; ///< PC h2: unknowns left for the dense top (-pc_h2_top_size)
+  long long pc_h2_mixed_top = 4000; ///< PC h2: top size from which its LU is in single precision (-pc_h2_mixed_top; ≤ 0: never)
+  bool   pc_h2_spread_top = true;  ///< PC h2: a single-precision top spread over the ranks (-pc_h2_spread_top)
+  int    krylov_vectors = 101;     ///< H²: vectors of the Krylov method (GMRES(100): 101; preonly: 0)
+  double hss_rel_tol = 1e-8;       ///< HSS: the compression's tolerance (its ULV factors follow it)
 };
 
-/// Bytes the operator `type` needs at its peak for `unknowns` unknowns (whole run):
-/// - dense: the matrix and its LU factor, 16 N² (PETSc's dense LU and ScaLAPACK keep both);
-/// - H²: the matrix, 23.8 kB per unknown with single-precision blocks at tol 1e-5 up to 40 000
-///   unknowns (the disk organ at 40k, the largest of the sweep: 18.6–19.2 kB on spheres), falling
-///   as (N / 40 000)^-0.06 beyond (the disk organ: 22.4, 21.6 and 21.0 kB at 80k, 160k and 300k),
-///   times (1e-5 / tol)^0.135 (measured from 1e-4 to 1e-5: 14.8, 17.5 and 20.1 kB on a 20k
-///   sphere) and 1.8 times that in double precision; PC h2's factorization adds 40 kB (its
-///   factors, workspace and the rest of the driver at its peak: 300k through the driver with
-///   GMRES + PC h2 peaked at 60.7 kB per unknown on the disk organ, 39.7 kB beyond its matrix,
-///   and 45.7 kB on the sphere, 27 kB beyond); all plus 10 % margin;
-/// - HSS: measured 268 MB at 2 994 unknowns at tol 1e-8, growing as N^1.5 (the ranks grow as the
-///   square root of a cluster's size), plus 25 % margin.
-/// Estimates for a refusal with a margin, not a forecast.
+/// Bytes one rank alone needs at its peak for `unknowns` unknowns with the operator `type` and
+/// its default solver, the driver included (node_bytes() with one rank on one node).
 double estimated_bytes(OperatorType type, long long unknowns, const SizeOptions &o);
 
+/// Bytes the most loaded node needs at its peak: each of its ranks' process and driver data
+/// (mesh, operator, vectors: every rank holds them whole), and its ranks' shares of the
+/// operator and solver, which the ranks split — plus, on rank 0's node, HSS's top above the
+/// parts and PC h2's dense top (unless spread). Fitted above the measured peaks (dense + LU,
+/// H² + GMRES + PC h2, HSS + ULV, at three sizes each on 1 and 2 ranks) by at most 25 %:
+/// docs/limits.md.
+double node_bytes(OperatorType type, long long unknowns, const SizeOptions &o, const MachineLimits &m);
+
+/// PC h2's dense top: bytes on the node that holds it (rank 0's; a spread top's share per rank
+/// times the node's ranks), for a top of at most o.pc_h2_top_size unknowns.
+double h2_top_bytes(long long unknowns, const SizeOptions &o, const MachineLimits &m);
+
 /// Why `type` cannot take `unknowns` unknowns on this machine: its entries or a rank's block
-/// exceed the index width, or it needs more memory than the nodes have (dense, H² and HSS are
-/// split over the ranks, a node holding its ranks' shares, HSS's rank 0 a quarter of a share more
-/// for the top above the parts); with the size, the
-/// need and the options that can take it (another operator, single precision, Jacobi instead of
-/// PC h2, a looser H² tolerance). Empty when it fits. (On several ranks, `-pc_type h2` gathers the
-/// H² matrix on rank 0, which this check does not foresee.)
+/// exceed the index width, or it needs more memory than the nodes have (node_bytes()); with the
+/// size, the need and the options that can take it (another operator, single precision,
+/// Jacobi instead of PC h2, a looser H² tolerance). Empty when it fits.
 std::string size_refusal(OperatorType type, long long unknowns, const SizeOptions &o, const MachineLimits &m);
 
 } // namespace hssbem
