@@ -68,8 +68,13 @@ std::vector<ContactPoint> obstacle_points(const Geometry &g, const std::vector<V
 /// mesh near the contact is the slave).
 std::vector<ContactPoint> body_points(const Geometry &g);
 
-/// Per vertex, the points of one side: those with the smaller gap when a vertex has two.
-std::vector<ContactPoint> merge_points(std::vector<ContactPoint> a, const std::vector<ContactPoint> &b, int num_vertices);
+/// Per vertex, the points of one side: those with the smaller gap when a vertex has two; sorted
+/// by where their node's rows sit in the columns (`position`: per dof node).
+std::vector<ContactPoint> merge_points(std::vector<ContactPoint> a, const std::vector<ContactPoint> &b, int num_vertices, const std::vector<int> &position = {});
+
+/// The dof nodes in a spatial order (Morton's curve over their positions) as a row order of the
+/// unknowns (3 per node, kept together): a contact's candidates then sit in a few runs of rows.
+std::vector<int> spatial_row_order(const Discretization &disc);
 
 /// The compliance of a frame's points: with x = x_f − Σ_j W(:, j) v_j, their local relative
 /// displacements are w = w_f + D λ, D(ck, c'l) = −Σ m_ck(r) W(r, j) l_c'l(j) over the rows r
@@ -91,6 +96,10 @@ public:
   /// The free relative displacement of every point (local frame: gap, slip since u_prev) from
   /// the nodal displacements u_free (prescribed where known) and u_prev (empty: zero).
   std::vector<Vec3> free_w(const std::vector<Vec3> &u_free, const std::vector<Vec3> &u_prev) const;
+  /// out[r] += Σ_q D(rows[r] n, cols[q] :) λ[q]: the normal gaps of the points `rows` moved by
+  /// the tractions λ (local frames) at the points `cols`, column by column (each column's rows
+  /// read in increasing order: the points are sorted by their rows).
+  void apply_normal(const std::vector<int> &rows, const std::vector<int> &cols, const Vec3 *lambda, double *out) const;
   /// The loads of the tractions λ (local frame, one per point): pairs (unknown j, value) with
   /// the traction-known unknowns only.
   void loads(const std::vector<Vec3> &lambda, std::vector<int> &unknowns, std::vector<double> &values) const;
@@ -101,6 +110,7 @@ private:
   struct Terms {
     std::array<Mat3, 4> M, L;
     std::array<std::array<const double *, 3>, 4> col; ///< W's columns of the term's node (null: not loaded)
+    std::array<int, 4> row;                           ///< where the term's node's rows sit in a column
   };
   const std::vector<ContactPoint> *m_points;
   std::vector<Terms> m_terms;
@@ -142,8 +152,11 @@ public:
     int iterations = 0;
   };
   /// λ (local frames) for the free relative displacements wf; λ holds the initial guess.
-  /// status per point: 0 open, 1 stick, 2 slip. Throws std::runtime_error after max_it iterations.
-  Result solve(const Compliance &D, const std::vector<Vec3> &wf, double tol, int max_it, std::vector<Vec3> &lambda, std::vector<std::int8_t> &status,
+  /// status per point: 0 open, 1 stick, 2 slip. Newton runs on a zone: the points that carry a
+  /// traction or start penetrated; the others' gaps are checked after, and the ones that went
+  /// through join the zone (tol_gap, as the frictionless solver's). Throws std::runtime_error
+  /// after max_it iterations.
+  Result solve(const Compliance &D, const std::vector<Vec3> &wf, double tol, double tol_gap, int max_it, std::vector<Vec3> &lambda, std::vector<std::int8_t> &status,
                const std::function<void(int, long long, long long, double)> &monitor);
   /// λ with the stick and slip states (and slip directions) of the last solve fixed, for other
   /// free relative displacements: one solve with the factored linear system (the haptic call).

@@ -3,6 +3,7 @@
 #include "contact_points.hpp"
 
 #include <algorithm>
+#include <cstdint>
 #include <cmath>
 #include <limits>
 
@@ -148,9 +149,8 @@ std::vector<ContactPoint> body_points(const Geometry &g)
   return out;
 }
 
-std::vector<ContactPoint> merge_points(std::vector<ContactPoint> a, const std::vector<ContactPoint> &b, int num_vertices)
+std::vector<ContactPoint> merge_points(std::vector<ContactPoint> a, const std::vector<ContactPoint> &b, int num_vertices, const std::vector<int> &position)
 {
-  if (b.empty()) return a;
   const double inf = std::numeric_limits<double>::infinity();
   std::vector<double> gap_a(num_vertices, inf), gap_b(num_vertices, inf);
   for (const ContactPoint &p : a) gap_a[p.vertex] = p.g0;
@@ -160,7 +160,47 @@ std::vector<ContactPoint> merge_points(std::vector<ContactPoint> a, const std::v
     if (gap_a[p.vertex] <= gap_b[p.vertex]) out.push_back(p);
   for (const ContactPoint &p : b)
     if (gap_b[p.vertex] < gap_a[p.vertex]) out.push_back(p);
+  if (!position.empty())
+    std::stable_sort(out.begin(), out.end(), [&](const ContactPoint &x, const ContactPoint &y) { return position[x.node] < position[y.node]; });
   return out;
+}
+
+namespace {
+
+/// Spreads the low 21 bits of x so that two zero bits follow each (Morton interleaving).
+std::uint64_t spread(std::uint64_t x)
+{
+  x &= 0x1fffff;
+  x = (x | x << 32) & 0x1f00000000ffffULL;
+  x = (x | x << 16) & 0x1f0000ff0000ffULL;
+  x = (x | x << 8) & 0x100f00f00f00f00fULL;
+  x = (x | x << 4) & 0x10c30c30c30c30c3ULL;
+  x = (x | x << 2) & 0x1249249249249249ULL;
+  return x;
+}
+
+} // namespace
+
+std::vector<int> spatial_row_order(const Discretization &disc)
+{
+  const int nn = disc.num_nodes();
+  Vec3 lo = disc.node_position(0), hi = lo;
+  for (int i = 0; i < nn; ++i)
+    for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], disc.node_position(i)[d]), hi[d] = std::max(hi[d], disc.node_position(i)[d]);
+  std::vector<std::pair<std::uint64_t, int>> key(nn);
+  for (int i = 0; i < nn; ++i) {
+    std::uint64_t code = 0;
+    for (int d = 0; d < 3; ++d) {
+      const double t = hi[d] > lo[d] ? (disc.node_position(i)[d] - lo[d]) / (hi[d] - lo[d]) : 0.0;
+      code |= spread(static_cast<std::uint64_t>(t * ((1 << 21) - 1))) << d;
+    }
+    key[i] = {code, i};
+  }
+  std::sort(key.begin(), key.end());
+  std::vector<int> order(3 * static_cast<std::size_t>(nn));
+  for (int k = 0; k < nn; ++k)
+    for (int a = 0; a < 3; ++a) order[3 * k + a] = 3 * key[k].second + a;
+  return order;
 }
 
 } // namespace hssbem::contact_detail

@@ -18,25 +18,36 @@ namespace hssbem::contact_detail {
 
 namespace {
 
-/// D's 3×3 blocks, column by column (a point's column computed the first time it is asked for).
+/// D's 3×3 blocks, column by column (a point's column computed the first time it is asked
+/// for), on the rows of a zone of points only: the others are not read until the zone changes.
 class BlockCache {
 public:
-  explicit BlockCache(const Compliance &D) : m_D(D), m_n(D.size()), m_done(D.size(), 0), m_blocks(static_cast<std::size_t>(D.size()) * D.size()) {}
+  explicit BlockCache(const Compliance &D) : m_D(D), m_slot(D.size(), -1), m_column(D.size()) {}
+  /// The rows the columns cover from now on (the columns computed so far are dropped).
+  void set_zone(const std::vector<int> &zone)
+  {
+    m_zone = zone;
+    std::fill(m_slot.begin(), m_slot.end(), -1);
+    for (std::size_t k = 0; k < zone.size(); ++k) m_slot[zone[k]] = static_cast<int>(k);
+    for (std::vector<Mat3> &c : m_column) c.clear();
+  }
+  /// D(c, cp) for c in the zone.
   const Mat3 &at(int c, int cp)
   {
-    if (!m_done[cp]) {
-#pragma omp parallel for schedule(static) if (m_n > 64)
-      for (int c2 = 0; c2 < m_n; ++c2) m_blocks[c2 + static_cast<std::size_t>(cp) * m_n] = m_D.block(c2, cp);
-      m_done[cp] = 1;
+    std::vector<Mat3> &col = m_column[cp];
+    if (col.empty()) {
+      const int nz = static_cast<int>(m_zone.size());
+      col.resize(nz);
+#pragma omp parallel for schedule(static) if (nz > 64)
+      for (int k = 0; k < nz; ++k) col[k] = m_D.block(m_zone[k], cp);
     }
-    return m_blocks[c + static_cast<std::size_t>(cp) * m_n];
+    return col[m_slot[c]];
   }
 
 private:
   const Compliance &m_D;
-  int m_n;
-  std::vector<char> m_done;
-  std::vector<Mat3> m_blocks;
+  std::vector<int> m_zone, m_slot;
+  std::vector<std::vector<Mat3>> m_column; ///< per point: its column of blocks on the zone's rows (empty: not computed)
 };
 
 struct PointState {
@@ -72,12 +83,12 @@ PointState classify(const ContactPoint &p, const std::array<bool, 3> &held, cons
   return s;
 }
 
-/// |Φ| in traction units: ρ times the gap and slip rows, the slip rows of λ as they are.
-double residual_of(const PointState &s)
+/// Φ in traction units: ρ times the gap and slip rows, the rows of λ as they are.
+Vec3 scaled_residual(const PointState &s)
 {
-  if (s.kind == 0) return std::max({std::abs(s.phi[0]), std::abs(s.phi[1]), std::abs(s.phi[2])});
-  const double t = s.kind == 1 ? s.rho * std::max(std::abs(s.phi[1]), std::abs(s.phi[2])) : std::max(std::abs(s.phi[1]), std::abs(s.phi[2]));
-  return std::max(s.rho * std::abs(s.phi[0]), t);
+  if (s.kind == 0) return s.phi;
+  const double t = s.kind == 1 ? s.rho : 1.0;
+  return {s.rho * s.phi[0], t * s.phi[1], t * s.phi[2]};
 }
 
 Mat3 jacobian_free(const ContactPoint &p, const PointState &s, const Mat3 &Dblk, bool same);
@@ -127,92 +138,177 @@ std::array<bool, 3> held_of(const Compliance &D, int c) { return {D.held(c, 0), 
 
 namespace {
 
-/// The states of every point at λ (w = w_f + D λ); returns max |Φ| and fills the closed points.
-double evaluate(const Compliance &D, BlockCache &blocks, const std::vector<Vec3> &wf, const std::vector<double> &rho, const std::vector<Vec3> &lambda,
-                std::vector<PointState> &st, std::vector<int> &closed)
+/// The states of every point at λ (w = w_f + D λ): fills the closed points, returns max |Φ| and
+/// sets `merit` to Σ |Φ|² (traction units).
+double evaluate(const Compliance &D, BlockCache &blocks, const std::vector<int> &zone, const std::vector<Vec3> &wf, const std::vector<double> &rho,
+                const std::vector<Vec3> &lambda, std::vector<PointState> &st, std::vector<int> &closed, double &merit)
 {
-  const int n = D.size();
   std::vector<int> loaded;
-  for (int c = 0; c < n; ++c)
+  for (int c : zone)
     if (max_abs(lambda[c]) > 0) loaded.push_back(c);
   double residual = 0;
+  merit = 0;
   closed.clear();
-  for (int c = 0; c < n; ++c) {
+  for (int c : zone) {
     Vec3 w = wf[c];
     for (int cp : loaded) {
       const Mat3 &B = blocks.at(c, cp);
       for (int k = 0; k < 3; ++k) w[k] += B[3 * k] * lambda[cp][0] + B[3 * k + 1] * lambda[cp][1] + B[3 * k + 2] * lambda[cp][2];
     }
     st[c] = classify(D.point(c), held_of(D, c), lambda[c], w, rho[c]);
-    residual = std::max(residual, residual_of(st[c]));
+    const Vec3 r = scaled_residual(st[c]);
+    residual = std::max(residual, max_abs(r));
+    merit += dot(r, r);
     if (st[c].kind) closed.push_back(c);
   }
   return residual;
 }
 
-/// One Newton step: open points drop their traction; the closed ones solve J Δ = −Φ − J_open Δ_open.
-void newton_step(const Compliance &D, BlockCache &blocks, const std::vector<PointState> &st, const std::vector<int> &rows, std::vector<Vec3> &lambda)
+/// The Newton matrix of the closed points, factored: kept while the states stay, so that later
+/// steps solve with it (chord steps) instead of factoring again.
+struct NewtonMatrix {
+  std::vector<int> rows;
+  std::vector<std::int8_t> kinds;
+  std::vector<double> lu;
+  std::vector<int> piv;
+  bool fits(const std::vector<int> &closed, const std::vector<PointState> &st) const
+  {
+    if (closed != rows) return false;
+    for (std::size_t a = 0; a < rows.size(); ++a)
+      if (st[rows[a]].kind != kinds[a]) return false;
+    return !lu.empty() || rows.empty();
+  }
+};
+
+/// The Newton step Δ: open points drop their traction (Δ = −λ); the closed ones solve
+/// J Δ = −Φ − J_open Δ_open, with J factored now, or the matrix kept from an earlier step
+/// (`chord`: it fits the states).
+std::vector<Vec3> newton_step(const Compliance &D, BlockCache &blocks, const std::vector<int> &zone, const std::vector<PointState> &st, const std::vector<int> &rows,
+                              const std::vector<Vec3> &lambda, NewtonMatrix &J, bool chord)
 {
   const int m = 3 * static_cast<int>(rows.size()), n = D.size();
-  std::vector<double> J(static_cast<std::size_t>(m) * m), rhs(m);
+  std::vector<double> rhs(m);
+  if (!chord) {
+    J.rows = rows, J.kinds.resize(rows.size()), J.lu.assign(static_cast<std::size_t>(m) * m, 0.0), J.piv.resize(m);
+    for (std::size_t a = 0; a < rows.size(); ++a) J.kinds[a] = st[rows[a]].kind;
+  }
   for (int a = 0; a < static_cast<int>(rows.size()); ++a) {
     const int c = rows[a];
     for (int k = 0; k < 3; ++k) rhs[3 * a + k] = -st[c].phi[k];
-    for (int b = 0; b < static_cast<int>(rows.size()); ++b) {
+    for (int b = 0; b < static_cast<int>(rows.size()) && !chord; ++b) {
       const Mat3 Jb = jacobian(D.point(c), held_of(D, c), st[c], blocks.at(c, rows[b]), c == rows[b]);
       for (int k = 0; k < 3; ++k)
-        for (int l = 0; l < 3; ++l) J[(3 * a + k) + static_cast<std::size_t>(3 * b + l) * m] = Jb[3 * k + l];
+        for (int l = 0; l < 3; ++l) J.lu[(3 * a + k) + static_cast<std::size_t>(3 * b + l) * m] = Jb[3 * k + l];
     }
-    for (int cp = 0; cp < n; ++cp) {
+    for (int cp : zone) {
       if (st[cp].kind || max_abs(lambda[cp]) == 0) continue;
       const Mat3 Jb = jacobian(D.point(c), held_of(D, c), st[c], blocks.at(c, cp), false); // Δλ_cp = −λ_cp
       for (int k = 0; k < 3; ++k) rhs[3 * a + k] += Jb[3 * k] * lambda[cp][0] + Jb[3 * k + 1] * lambda[cp][1] + Jb[3 * k + 2] * lambda[cp][2];
     }
   }
   if (m > 0) {
-    std::vector<int> piv(m);
-    if (lapack::getrf(m, J.data(), m, piv.data()) != 0) throw std::runtime_error("contact: the friction Newton matrix is singular (dependent contact constraints)");
-    lapack::getrs('N', m, 1, J.data(), m, piv.data(), rhs.data(), m);
+    if (!chord && lapack::getrf(m, J.lu.data(), m, J.piv.data()) != 0)
+      throw std::runtime_error("contact: the friction Newton matrix is singular (dependent contact constraints)");
+    lapack::getrs('N', m, 1, J.lu.data(), m, J.piv.data(), rhs.data(), m);
   }
-  for (int c = 0; c < n; ++c)
-    if (!st[c].kind) lambda[c] = {0, 0, 0};
+  std::vector<Vec3> step(n, Vec3{0, 0, 0});
+  for (int c : zone)
+    if (!st[c].kind) step[c] = -1.0 * lambda[c];
   for (int a = 0; a < static_cast<int>(rows.size()); ++a)
-    for (int k = 0; k < 3; ++k) lambda[rows[a]][k] += rhs[3 * a + k];
+    for (int k = 0; k < 3; ++k) step[rows[a]][k] = rhs[3 * a + k];
+  return step;
+}
+
+/// Damped semismooth Newton on the points of `zone` (the others keep λ = 0); r counts the steps.
+void newton(const Compliance &D, BlockCache &blocks, const std::vector<int> &zone, const std::vector<Vec3> &wf, const std::vector<double> &rho, double tol, int max_it,
+            std::vector<Vec3> &lambda, std::vector<PointState> &st, FrictionSolver::Result &r, const std::function<void(int, long long, long long, double)> &monitor)
+{
+  const int n = D.size();
+  double scale = 0; // the traction scale: the free penetrations' and the warm start's
+  for (int c : zone) scale = std::max({scale, max_abs(lambda[c]), rho[c] * std::max(0.0, -wf[c][0])});
+  std::vector<PointState> trial_st(n);
+  std::vector<int> closed, trial_closed;
+  std::vector<std::int8_t> last(n, 0);
+  NewtonMatrix J;
+  double merit = 0, residual = evaluate(D, blocks, zone, wf, rho, lambda, st, closed, merit);
+  for (;; ++r.iterations) {
+    for (int c : zone) scale = std::max(scale, max_abs(lambda[c]));
+    long long changed = 0;
+    for (int c : zone) changed += st[c].kind != last[c], last[c] = st[c].kind;
+    if (monitor) monitor(r.iterations, static_cast<long long>(closed.size()), changed, scale > 0 ? residual / scale : residual);
+    if (residual <= tol * scale) return;
+    if (r.iterations >= max_it) throw std::runtime_error("contact: friction did not converge in " + std::to_string(max_it) + " Newton iterations (-contact_max_it)");
+    // While the states stay, the factored matrix of the last step serves (a chord step) as long
+    // as it halves Σ |Φ|²; otherwise a Newton step, damped: semismooth Newton alone cycles
+    // between stick and slip sets (measured on the sliding instrument), so its step is halved
+    // until Σ |Φ|² decreases (Armijo), up to 1/64.
+    std::vector<Vec3> trial = lambda;
+    if (J.fits(closed, st)) {
+      const std::vector<Vec3> step = newton_step(D, blocks, zone, st, closed, lambda, J, true);
+      for (int c : zone) trial[c] = lambda[c] + step[c];
+      double trial_merit = 0;
+      const double trial_residual = evaluate(D, blocks, zone, wf, rho, trial, trial_st, trial_closed, trial_merit);
+      if (trial_merit <= 0.25 * merit) {
+        lambda.swap(trial), st.swap(trial_st), closed.swap(trial_closed);
+        merit = trial_merit, residual = trial_residual;
+        continue;
+      }
+    }
+    const std::vector<Vec3> step = newton_step(D, blocks, zone, st, closed, lambda, J, false);
+    for (double t = 1;; t *= 0.5) {
+      for (int c : zone) trial[c] = lambda[c] + t * step[c];
+      double trial_merit = 0;
+      const double trial_residual = evaluate(D, blocks, zone, wf, rho, trial, trial_st, trial_closed, trial_merit);
+      if (trial_merit <= (1 - 1e-4 * t) * merit || t < 1.0 / 64) {
+        lambda.swap(trial), st.swap(trial_st), closed.swap(trial_closed);
+        merit = trial_merit, residual = trial_residual;
+        break;
+      }
+    }
+  }
 }
 
 } // namespace
 
-FrictionSolver::Result FrictionSolver::solve(const Compliance &D, const std::vector<Vec3> &wf, double tol, int max_it, std::vector<Vec3> &lambda,
+FrictionSolver::Result FrictionSolver::solve(const Compliance &D, const std::vector<Vec3> &wf, double tol, double tol_gap, int max_it, std::vector<Vec3> &lambda,
                                              std::vector<std::int8_t> &status, const std::function<void(int, long long, long long, double)> &monitor)
 {
   const int n = D.size();
   BlockCache blocks(D);
   lambda.resize(n, Vec3{0, 0, 0});
-  std::vector<double> rho(n);
-  double scale = 0; // the traction scale: the free penetrations' and the warm start's
-  for (int c = 0; c < n; ++c) {
-    rho[c] = 1.0 / std::max(blocks.at(c, c)[0], 1e-300);
-    scale = std::max({scale, max_abs(lambda[c]), rho[c] * std::max(0.0, -wf[c][0])});
-  }
+  std::vector<char> in_zone(n, 0);
+  std::vector<int> zone;
+  std::vector<double> rho(n, 0.0);
+  for (int c = 0; c < n; ++c)
+    if (max_abs(lambda[c]) > 0 || wf[c][0] < 0) in_zone[c] = 1;
   m_factored = false;
   std::vector<PointState> st(n);
-  std::vector<int> closed;
-  std::vector<std::int8_t> last(n, 0);
   Result r;
-  for (;; ++r.iterations) {
-    const double residual = evaluate(D, blocks, wf, rho, lambda, st, closed);
-    for (const Vec3 &l : lambda) scale = std::max(scale, max_abs(l));
-    long long changed = 0;
-    for (int c = 0; c < n; ++c) changed += st[c].kind != last[c], last[c] = st[c].kind;
-    if (monitor) monitor(r.iterations, static_cast<long long>(closed.size()), changed, scale > 0 ? residual / scale : residual);
-    if (residual <= tol * scale) break;
-    if (r.iterations >= max_it) throw std::runtime_error("contact: friction did not converge in " + std::to_string(max_it) + " Newton iterations (-contact_max_it)");
-    newton_step(D, blocks, st, closed, lambda);
+  for (;;) { // Newton on the zone, then the points outside it that went through join it
+    zone.clear();
+    for (int c = 0; c < n; ++c)
+      if (in_zone[c]) zone.push_back(c);
+    blocks.set_zone(zone);
+    for (int c : zone)
+      if (rho[c] == 0) rho[c] = 1.0 / std::max(D.block(c, c)[0], 1e-300);
+    newton(D, blocks, zone, wf, rho, tol, max_it, lambda, st, r, monitor);
+    std::vector<int> outside, loaded;
+    std::vector<Vec3> lambda_loaded;
+    for (int c = 0; c < n; ++c)
+      if (!in_zone[c]) outside.push_back(c);
+      else if (max_abs(lambda[c]) > 0) loaded.push_back(c), lambda_loaded.push_back(lambda[c]);
+    std::vector<double> g(outside.size());
+    for (std::size_t k = 0; k < outside.size(); ++k) g[k] = wf[outside[k]][0];
+    D.apply_normal(outside, loaded, lambda_loaded.data(), g.data());
+    bool joined = false;
+    for (std::size_t k = 0; k < outside.size(); ++k)
+      if (g[k] < -tol_gap) in_zone[outside[k]] = 1, joined = true;
+    if (!joined) break;
   }
   status.assign(n, 0);
   m_state.assign(n, 0);
   m_direction.assign(n, Vec3{0, 0, 0});
-  for (int c = 0; c < n; ++c) {
+  for (int c : zone) {
     if (!st[c].kind) lambda[c] = {0, 0, 0};
     status[c] = m_state[c] = st[c].kind;
     if (st[c].kind == 2 && st[c].rt_norm > 0) m_direction[c] = {0, st[c].rt[0] / st[c].rt_norm, st[c].rt[1] / st[c].rt_norm};

@@ -2,6 +2,8 @@
 // the inverse of its active block kept from iteration to iteration and from frame to frame.
 #include "contact_points.hpp"
 
+#include "hssbem/core/blas_threads.hpp"
+
 #include <algorithm>
 #include <stdexcept>
 #include <string>
@@ -60,6 +62,7 @@ void NormalSolver::sync(const Compliance &D, const std::vector<int> &active_node
   if (drop.empty() && add.empty()) return;
   const double k = m_cap.size(), inc = CapacitanceInverse::update_flops(k, drop.size(), add.size());
   bool rebuild = m_updates >= k_refresh || CapacitanceInverse::rebuild_flops(static_cast<double>(active_nodes.size())) <= inc;
+  const SerialBlas serial; // the updates' products run on OpenMP threads (gemm_over_threads), as in scenes
   if (!rebuild) {
     try {
       m_cap.update(drop, add);
@@ -87,23 +90,25 @@ NormalSolver::Result NormalSolver::solve(const Compliance &D, const std::vector<
   for (int c = 0; c < n; ++c) active[c] = !warm.empty() && warm[D.point(c).node];
   Result r;
   for (r.iterations = 1; r.iterations <= max_it; ++r.iterations) {
-    std::vector<int> nodes;
+    std::vector<int> nodes; // in the points' order: their rows increase
     for (int c = 0; c < n; ++c)
       if (active[c]) nodes.push_back(D.point(c).node);
     sync(D, nodes, &r.rebuilt);
     resolve(D, wf, lambda);
+    std::vector<int> inactive, loaded;
+    std::vector<Vec3> lambda_loaded;
+    for (int c = 0; c < n; ++c)
+      if (active[c]) loaded.push_back(c), lambda_loaded.push_back(lambda[c]);
+      else inactive.push_back(c);
+    std::vector<double> g(inactive.size());
+    for (std::size_t r = 0; r < inactive.size(); ++r) g[r] = wf[inactive[r]][0];
+    D.apply_normal(inactive, loaded, lambda_loaded.data(), g.data());
     long long changed = 0, count = 0;
     std::vector<char> next(n, 0);
-    for (int c = 0; c < n; ++c) {
+    for (int c = 0; c < n; ++c)
       if (active[c]) next[c] = lambda[c][0] >= 0;
-      else {
-        double g = wf[c][0];
-        for (int a : m_cap.indices()) g += D.normal(c, m_entries->point_of[a]) * lambda[m_entries->point_of[a]][0];
-        next[c] = g < -tol_gap;
-      }
-      changed += next[c] != active[c];
-      count += next[c];
-    }
+    for (std::size_t r = 0; r < inactive.size(); ++r) next[inactive[r]] = g[r] < -tol_gap;
+    for (int c = 0; c < n; ++c) changed += next[c] != active[c], count += next[c];
     if (monitor) monitor(r.iterations, count, changed);
     if (changed == 0) return r;
     active.swap(next);

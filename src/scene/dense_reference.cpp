@@ -3,6 +3,7 @@
 #include "hssbem/scene/reference.hpp"
 
 #include "hssbem/core/lapack.hpp"
+#include "hssbem/core/timer.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -239,6 +240,18 @@ std::size_t DenseReference::memory_bytes() const { return 8 * (m_H.size() + m_G.
 
 // --- the column cache ---------------------------------------------------------------------------
 
+ReferenceColumns::ReferenceColumns(const ReferenceFactorization &reference, std::vector<int> row_order) : m_ref(&reference), m_order(std::move(row_order))
+{
+  const int n = reference.num_unknowns();
+  if (m_order.empty()) return;
+  if (static_cast<int>(m_order.size()) != n) throw std::invalid_argument("ReferenceColumns: the row order needs one entry per unknown");
+  m_position.assign(n, -1);
+  for (int p = 0; p < n; ++p) {
+    if (m_order[p] < 0 || m_order[p] >= n || m_position[m_order[p]] >= 0) throw std::invalid_argument("ReferenceColumns: the row order is not a permutation");
+    m_position[m_order[p]] = p;
+  }
+}
+
 void ReferenceColumns::require(const std::vector<int> &js)
 {
   std::vector<int> missing;
@@ -246,19 +259,27 @@ void ReferenceColumns::require(const std::vector<int> &js)
   for (int j : js)
     if (!has(j) && seen.insert(j).second) missing.push_back(j);
   if (missing.empty()) return;
-  const std::size_t n = static_cast<std::size_t>(m_ref->num_unknowns());
-  std::unique_ptr<double[]> block(new double[n * missing.size()]);
+  const Timer timer;
+  const std::size_t n = static_cast<std::size_t>(m_ref->num_unknowns()), k = missing.size();
+  std::unique_ptr<double[]> block(new double[n * k]);
+  std::unique_ptr<float[]> single(new float[n * k]);
   m_ref->columns(missing, block.get());
-  for (std::size_t q = 0; q < missing.size(); ++q) m_index.emplace(missing[q], block.get() + q * n);
-  m_block_columns.push_back(missing.size());
+#pragma omp parallel for schedule(static)
+  for (std::size_t q = 0; q < k; ++q) {
+    double *col = block.get() + q * n;
+    if (!m_order.empty()) {
+      const std::vector<double> natural(col, col + n);
+      for (std::size_t p = 0; p < n; ++p) col[p] = natural[m_order[p]];
+    }
+    for (std::size_t p = 0; p < n; ++p) single[q * n + p] = static_cast<float>(col[p]);
+  }
+  for (std::size_t q = 0; q < k; ++q) m_index.emplace(missing[q], block.get() + q * n), m_single.emplace(missing[q], single.get() + q * n);
+  m_columns += k;
   m_blocks.push_back(std::move(block));
+  m_single_blocks.push_back(std::move(single));
+  m_seconds += timer.seconds();
 }
 
-std::size_t ReferenceColumns::memory_bytes() const
-{
-  std::size_t cols = 0;
-  for (std::size_t c : m_block_columns) cols += c;
-  return 8 * cols * static_cast<std::size_t>(m_ref->num_unknowns());
-}
+std::size_t ReferenceColumns::memory_bytes() const { return 12 * m_columns * static_cast<std::size_t>(m_ref->num_unknowns()); }
 
 } // namespace hssbem

@@ -57,6 +57,9 @@ struct ContactOptions {
   int max_it = 50;             ///< iterations per frame before it is an error
   double reach = 0;            ///< candidates: vertices within this gap (0: 5 % of the mesh's bounding-box diagonal)
   bool warm_start = true;      ///< start from the previous frame's active set (and tractions)
+  /// The fields' product with W's loaded columns in single precision (half the memory traffic):
+  /// the contact's share of the fields then carries relative errors of about 1e-7.
+  bool single_fields = false;
   std::function<void(const ContactIteration &)> monitor; ///< called after every iteration (may be empty)
 };
 
@@ -93,10 +96,12 @@ void check_bodies_held(const Discretization &disc, const std::vector<std::array<
 class ContactEngine {
 public:
   /// `reference` (whose pattern must leave the candidates traction-known where they are not
-  /// held) must outlive the engine. Throws std::invalid_argument for a bad obstacle, a
-  /// candidate list of the wrong size or options out of range.
+  /// held) must outlive the engine. `columns`: a cache of W's columns to share with other
+  /// engines on the same reference (null: the engine's own, rows in spatial_order()). Throws
+  /// std::invalid_argument for a bad obstacle, a candidate list of the wrong size or options
+  /// out of range.
   ContactEngine(const Discretization &disc, const ReferenceFactorization &reference, std::vector<Obstacle> obstacles, const ContactSettings &settings,
-                const ContactOptions &options = {});
+                const ContactOptions &options = {}, std::shared_ptr<ReferenceColumns> columns = nullptr);
   ~ContactEngine();
   ContactEngine(const ContactEngine &) = delete;
   ContactEngine &operator=(const ContactEngine &) = delete;
@@ -118,6 +123,10 @@ public:
   double reach() const;
   /// Bytes held by the engine (the columns of W above all; not the reference's own).
   std::size_t memory_bytes() const;
+  /// The cache of W's columns (shared with the engines given it).
+  const std::shared_ptr<ReferenceColumns> &columns() const;
+  /// The dof nodes in a spatial order, as a row order of the unknowns (ReferenceColumns' rows).
+  static std::vector<int> spatial_order(const Discretization &disc);
 
 private:
   struct State;

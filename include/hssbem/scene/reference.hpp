@@ -110,26 +110,43 @@ private:
 
 /// Columns W(:, j) of a reference factorization, computed on demand in blocks and kept (a
 /// contact's candidates come back frame after frame). Pointers stay valid for the object's life.
+///
+/// Rows may be kept in another order (`row_order`: the original row at each position): a
+/// contact reads the rows of its candidates out of many columns, and with the unknowns in a
+/// spatial order those rows lie in a few contiguous runs of each column instead of one cache
+/// line each (measured on the 10k organ: see docs/contact.md). Each column is also kept in
+/// single precision for products whose result tolerates it (the fields of a frame).
 class ReferenceColumns {
 public:
-  explicit ReferenceColumns(const ReferenceFactorization &reference) : m_ref(&reference) {}
+  explicit ReferenceColumns(const ReferenceFactorization &reference, std::vector<int> row_order = {});
 
   /// Makes sure every column of js is here: the missing ones in one blocked columns() call.
   void require(const std::vector<int> &js);
   bool has(int j) const { return m_index.count(j) != 0; }
-  /// Column j (N entries); require() it first (throws std::out_of_range otherwise).
+  /// Column j (N entries, rows in row_order); require() it first (throws std::out_of_range otherwise).
   const double *column(int j) const { return m_index.at(j); }
-  /// W(i, j) for a column held.
-  double entry(int i, int j) const { return m_index.at(j)[i]; }
+  /// The same in single precision.
+  const float *column_single(int j) const { return m_single.at(j); }
+  /// Where original row i sits in a column.
+  int position(int i) const { return m_position.empty() ? i : m_position[i]; }
+  const std::vector<int> &row_order() const { return m_order; }
+  /// W(i, j) for a column held (i an original row).
+  double entry(int i, int j) const { return m_index.at(j)[position(i)]; }
   std::size_t size() const { return m_index.size(); }
   std::size_t memory_bytes() const;
+  /// Seconds spent computing columns so far.
+  double seconds() const { return m_seconds; }
   const ReferenceFactorization &reference() const { return *m_ref; }
 
 private:
   const ReferenceFactorization *m_ref;
+  std::vector<int> m_order, m_position;
   std::vector<std::unique_ptr<double[]>> m_blocks;
-  std::vector<std::size_t> m_block_columns;
+  std::vector<std::unique_ptr<float[]>> m_single_blocks;
+  std::size_t m_columns = 0;
+  double m_seconds = 0;
   std::unordered_map<int, const double *> m_index;
+  std::unordered_map<int, const float *> m_single;
 };
 
 } // namespace hssbem
