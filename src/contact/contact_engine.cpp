@@ -180,6 +180,7 @@ struct ContactEngine::State {
   std::vector<Vec3> wf, lambda, u_prev, warm_lambda;
   std::vector<std::int8_t> point_status;
   std::vector<char> warm_nodes;
+  std::vector<char> zone, zone_nodes;  ///< per point: watched by the iterations; per node: joined this frame
   std::vector<Vec3> offsets;
   bool friction = false, solved = false;
   contact_detail::NormalSolver normal;
@@ -190,6 +191,7 @@ struct ContactEngine::State {
   void detect(const std::vector<Vec3> &offsets_);
   void solve_points(ContactFrameReport &rep);
   void fields(ContactSolution &out) const;
+  bool zone_violations(const ContactSolution &out);
   bool penetrations(const std::vector<Vec3> &offsets_, const ContactSolution &out);
   void outputs(ContactSolution &out) const;
   /// The warm start of the next solve (round or frame): the active set and its tractions.
@@ -269,11 +271,18 @@ void ContactEngine::State::solve_points(ContactFrameReport &rep)
   D = std::make_unique<Compliance>(points, ref->pattern(), *columns);
   wf = D->free_w(u_free, friction ? u_prev : std::vector<Vec3>{});
   const int n = D->size();
+  // The zone the iterations watch: what touched before, what starts penetrated, and what went
+  // through in an earlier round of this frame; the others' gaps are checked in the fields.
+  zone.assign(n, 0);
+  for (int c = 0; c < n; ++c) {
+    const int node = D->point(c).node;
+    zone[c] = wf[c][0] < tol_gap || (!warm_nodes.empty() && warm_nodes[node]) || zone_nodes[node];
+  }
   if (!friction) {
     auto monitor = [&](int it, long long active, long long changed) {
       if (opt.monitor) opt.monitor(ContactIteration{it, active, changed, 0.0});
     };
-    const auto r = normal.solve(*D, wf, opt.warm_start ? warm_nodes : std::vector<char>{}, tol_gap, opt.max_it, lambda, monitor);
+    const auto r = normal.solve(*D, wf, opt.warm_start ? warm_nodes : std::vector<char>{}, zone, tol_gap, opt.max_it, lambda, monitor);
     rep.iterations += r.iterations;
     rep.rebuilt = rep.rebuilt || r.rebuilt;
     point_status.assign(n, 0);
@@ -286,7 +295,21 @@ void ContactEngine::State::solve_points(ContactFrameReport &rep)
   auto monitor = [&](int it, long long active, long long changed, double res) {
     if (opt.monitor) opt.monitor(ContactIteration{it, active, changed, res});
   };
-  rep.iterations += friction_solver.solve(*D, wf, opt.tol, tol_gap, opt.max_it, lambda, point_status, monitor).iterations;
+  rep.iterations += friction_solver.solve(*D, wf, zone, opt.tol, opt.max_it, lambda, point_status, monitor).iterations;
+}
+
+/// Points outside the zone whose gap in the fields went through: they join it.
+bool ContactEngine::State::zone_violations(const ContactSolution &out)
+{
+  bool found = false;
+  for (int c = 0; c < D->size(); ++c) {
+    if (zone[c]) continue;
+    const ContactPoint &p = D->point(c);
+    Vec3 d{};
+    for (int i = 0; i < p.terms; ++i) d = d + p.mw[i] * out.u[p.term_node[i]];
+    if (p.g0 + dot(p.frame[0], d) < -tol_gap) zone_nodes[p.node] = 1, found = true;
+  }
+  return found;
 }
 
 void ContactEngine::State::fields(ContactSolution &out) const
@@ -388,6 +411,7 @@ const ContactFrameReport &ContactEngine::solve(const SystemSelection &values, co
   ContactFrameReport rep;
   s.free_response(values);
   s.offsets = offsets;
+  s.zone_nodes.assign(s.disc->num_nodes(), 0);
   Timer phase;
   s.detect(offsets);
   rep.detect_seconds += phase.seconds();
@@ -400,10 +424,11 @@ const ContactFrameReport &ContactEngine::solve(const SystemSelection &values, co
     s.fields(out);
     rep.fields_seconds += phase.seconds();
     phase.restart();
-    const bool again = rep.rounds < 8 && s.penetrations(offsets, out);
-    if (again) s.detect(offsets);
+    const bool through = rep.rounds < 8 && s.penetrations(offsets, out); // vertices beyond reach
+    const bool joined = rep.rounds < 8 && s.zone_violations(out);           // points outside the zone
+    if (through) s.detect(offsets);
     rep.detect_seconds += phase.seconds();
-    if (!again) break;
+    if (!through && !joined) break;
   }
   s.outputs(out);
   if (s.friction) s.u_prev = out.u; // slip is measured from the previous frame

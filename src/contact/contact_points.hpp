@@ -129,8 +129,10 @@ public:
   };
   /// λ_n per point (local frame, tangential 0) for free gaps wf[c][0], starting from the points
   /// whose node is in `warm` (node flags); tol_gap: how deep an inactive point may sit before it
-  /// joins. Throws std::runtime_error after max_it iterations. `monitor(it, active, changed)`.
-  Result solve(const Compliance &D, const std::vector<Vec3> &wf, const std::vector<char> &warm, double tol_gap, int max_it,
+  /// joins. Only the points of `zone` (per point) are watched: the caller checks the others'
+  /// gaps in the fields and solves again with them when one went through. Throws
+  /// std::runtime_error after max_it iterations. `monitor(it, active, changed)`.
+  Result solve(const Compliance &D, const std::vector<Vec3> &wf, const std::vector<char> &warm, const std::vector<char> &zone, double tol_gap, int max_it,
                std::vector<Vec3> &lambda, const std::function<void(int, long long, long long)> &monitor);
   /// λ_n of the current active set for other free gaps (the haptic call): the points must be
   /// those of the last solve.
@@ -152,12 +154,11 @@ public:
     int iterations = 0;
   };
   /// λ (local frames) for the free relative displacements wf; λ holds the initial guess.
-  /// status per point: 0 open, 1 stick, 2 slip. Newton runs on a zone: the points that carry a
-  /// traction or start penetrated; the others' gaps are checked after, and the ones that went
-  /// through join the zone (tol_gap, as the frictionless solver's). Throws std::runtime_error
-  /// after max_it iterations.
-  Result solve(const Compliance &D, const std::vector<Vec3> &wf, double tol, double tol_gap, int max_it, std::vector<Vec3> &lambda, std::vector<std::int8_t> &status,
-               const std::function<void(int, long long, long long, double)> &monitor);
+  /// status per point: 0 open, 1 stick, 2 slip. Newton runs on the points of `zone` (per
+  /// point): the others keep λ = 0; the caller checks their gaps in the fields, as for the
+  /// frictionless solver. Throws std::runtime_error after max_it iterations.
+  Result solve(const Compliance &D, const std::vector<Vec3> &wf, const std::vector<char> &zone, double tol, int max_it, std::vector<Vec3> &lambda,
+               std::vector<std::int8_t> &status, const std::function<void(int, long long, long long, double)> &monitor);
   /// λ with the stick and slip states (and slip directions) of the last solve fixed, for other
   /// free relative displacements: one solve with the factored linear system (the haptic call).
   void resolve(const Compliance &D, const std::vector<Vec3> &wf, std::vector<Vec3> &lambda);

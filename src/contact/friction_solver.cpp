@@ -270,41 +270,23 @@ void newton(const Compliance &D, BlockCache &blocks, const std::vector<int> &zon
 
 } // namespace
 
-FrictionSolver::Result FrictionSolver::solve(const Compliance &D, const std::vector<Vec3> &wf, double tol, double tol_gap, int max_it, std::vector<Vec3> &lambda,
-                                             std::vector<std::int8_t> &status, const std::function<void(int, long long, long long, double)> &monitor)
+FrictionSolver::Result FrictionSolver::solve(const Compliance &D, const std::vector<Vec3> &wf, const std::vector<char> &in_zone, double tol, int max_it,
+                                             std::vector<Vec3> &lambda, std::vector<std::int8_t> &status,
+                                             const std::function<void(int, long long, long long, double)> &monitor)
 {
   const int n = D.size();
   BlockCache blocks(D);
   lambda.resize(n, Vec3{0, 0, 0});
-  std::vector<char> in_zone(n, 0);
   std::vector<int> zone;
   std::vector<double> rho(n, 0.0);
   for (int c = 0; c < n; ++c)
-    if (max_abs(lambda[c]) > 0 || wf[c][0] < 0) in_zone[c] = 1;
+    if (in_zone[c]) zone.push_back(c), rho[c] = 1.0 / std::max(D.block(c, c)[0], 1e-300);
+    else lambda[c] = {0, 0, 0};
+  blocks.set_zone(zone);
   m_factored = false;
   std::vector<PointState> st(n);
   Result r;
-  for (;;) { // Newton on the zone, then the points outside it that went through join it
-    zone.clear();
-    for (int c = 0; c < n; ++c)
-      if (in_zone[c]) zone.push_back(c);
-    blocks.set_zone(zone);
-    for (int c : zone)
-      if (rho[c] == 0) rho[c] = 1.0 / std::max(D.block(c, c)[0], 1e-300);
-    newton(D, blocks, zone, wf, rho, tol, max_it, lambda, st, r, monitor);
-    std::vector<int> outside, loaded;
-    std::vector<Vec3> lambda_loaded;
-    for (int c = 0; c < n; ++c)
-      if (!in_zone[c]) outside.push_back(c);
-      else if (max_abs(lambda[c]) > 0) loaded.push_back(c), lambda_loaded.push_back(lambda[c]);
-    std::vector<double> g(outside.size());
-    for (std::size_t k = 0; k < outside.size(); ++k) g[k] = wf[outside[k]][0];
-    D.apply_normal(outside, loaded, lambda_loaded.data(), g.data());
-    bool joined = false;
-    for (std::size_t k = 0; k < outside.size(); ++k)
-      if (g[k] < -tol_gap) in_zone[outside[k]] = 1, joined = true;
-    if (!joined) break;
-  }
+  newton(D, blocks, zone, wf, rho, tol, max_it, lambda, st, r, monitor);
   status.assign(n, 0);
   m_state.assign(n, 0);
   m_direction.assign(n, Vec3{0, 0, 0});

@@ -81,8 +81,8 @@ void NormalSolver::sync(const Compliance &D, const std::vector<int> &active_node
     for (int n : active_nodes) m_signature[n] = D.point(m_entries->point_of[n]);
 }
 
-NormalSolver::Result NormalSolver::solve(const Compliance &D, const std::vector<Vec3> &wf, const std::vector<char> &warm, double tol_gap, int max_it,
-                                         std::vector<Vec3> &lambda, const std::function<void(int, long long, long long)> &monitor)
+NormalSolver::Result NormalSolver::solve(const Compliance &D, const std::vector<Vec3> &wf, const std::vector<char> &warm, const std::vector<char> &zone, double tol_gap,
+                                         int max_it, std::vector<Vec3> &lambda, const std::function<void(int, long long, long long)> &monitor)
 {
   m_entries->attach(D);
   const int n = D.size();
@@ -99,7 +99,7 @@ NormalSolver::Result NormalSolver::solve(const Compliance &D, const std::vector<
     std::vector<Vec3> lambda_loaded;
     for (int c = 0; c < n; ++c)
       if (active[c]) loaded.push_back(c), lambda_loaded.push_back(lambda[c]);
-      else inactive.push_back(c);
+      else if (zone[c]) inactive.push_back(c);
     std::vector<double> g(inactive.size());
     for (std::size_t r = 0; r < inactive.size(); ++r) g[r] = wf[inactive[r]][0];
     D.apply_normal(inactive, loaded, lambda_loaded.data(), g.data());
