@@ -31,8 +31,8 @@ public:
     for (std::size_t k = 0; k < zone.size(); ++k) m_slot[zone[k]] = static_cast<int>(k);
     for (std::vector<Mat3> &c : m_column) c.clear();
   }
-  /// D(c, cp) for c in the zone.
-  const Mat3 &at(int c, int cp)
+  /// D(zone[k], cp) for every k: the column of point cp on the zone's rows.
+  const Mat3 *column(int cp)
   {
     std::vector<Mat3> &col = m_column[cp];
     if (col.empty()) {
@@ -41,7 +41,27 @@ public:
 #pragma omp parallel for schedule(static) if (nz > 64)
       for (int k = 0; k < nz; ++k) col[k] = m_D.block(m_zone[k], cp);
     }
-    return col[m_slot[c]];
+    return col.data();
+  }
+  /// D(c, cp) for c in the zone.
+  const Mat3 &at(int c, int cp) { return column(cp)[m_slot[c]]; }
+  int slot(int c) const { return m_slot[c]; }
+  /// dw[k] += Σ_cp D(zone[k], cp) x[cp] over the points with x ≠ 0, column by column.
+  void apply(const std::vector<Vec3> &x, std::vector<Vec3> &dw)
+  {
+    for (std::size_t q = 0; q < m_zone.size(); ++q) {
+      const int cp = m_zone[q];
+      const Vec3 &v = x[cp];
+      if (v[0] == 0 && v[1] == 0 && v[2] == 0) continue;
+      const Mat3 *col = column(cp);
+      for (std::size_t k = 0; k < m_zone.size(); ++k) {
+        const Mat3 &B = col[k];
+        Vec3 &w = dw[k];
+        w[0] += B[0] * v[0] + B[1] * v[1] + B[2] * v[2];
+        w[1] += B[3] * v[0] + B[4] * v[1] + B[5] * v[2];
+        w[2] += B[6] * v[0] + B[7] * v[1] + B[8] * v[2];
+      }
+    }
   }
 
 private:
@@ -91,42 +111,45 @@ Vec3 scaled_residual(const PointState &s)
   return {s.rho * s.phi[0], t * s.phi[1], t * s.phi[2]};
 }
 
-Mat3 jacobian_free(const ContactPoint &p, const PointState &s, const Mat3 &Dblk, bool same);
+/// The rows of the Newton matrix of a closed point, J(c, c') = R D(c, c') + [c = c'] Δ: the
+/// normal row is D's (∂g/∂λ); a stick point's tangential rows are D's (∂s/∂λ); a slip point's are
+/// the derivative of λ_T − μ r_n q, q = r_T/|r_T|, with ∂r_n = e_n δ − ρ D_n and
+/// ∂r_T = E_T δ − ρ D_T, so R = μρ (q_a e_n + r_n Σ_b P_ab e_{b+1}), P = (I − q qᵀ)/|r_T|; a held
+/// (or frictionless slipping) tangential row is λ_k itself.
+struct RowMap {
+  Mat3 R{}, diag{};
+};
 
-/// Rows of the Newton matrix for closed point c against point cp (3×3, row-major): ∂Φ_c/∂λ_cp.
-Mat3 jacobian(const ContactPoint &p, const std::array<bool, 3> &held, const PointState &s, const Mat3 &Dblk, bool same)
+RowMap row_map(const ContactPoint &p, const std::array<bool, 3> &held, const PointState &s)
 {
-  Mat3 J = jacobian_free(p, s, Dblk, same);
+  RowMap m;
+  m.R[0] = 1;
+  if (s.kind == 1) m.R[4] = m.R[8] = 1;
+  else if (p.mu > 0) {
+    const double q[2] = {s.rt[0] / s.rt_norm, s.rt[1] / s.rt_norm};
+    const double P[2][2] = {{(1 - q[0] * q[0]) / s.rt_norm, -q[0] * q[1] / s.rt_norm}, {-q[1] * q[0] / s.rt_norm, (1 - q[1] * q[1]) / s.rt_norm}};
+    for (int a = 0; a < 2; ++a) {
+      m.R[3 * (a + 1)] = p.mu * s.rho * q[a];
+      m.diag[3 * (a + 1)] = -p.mu * q[a];
+      m.diag[3 * (a + 1) + a + 1] = 1;
+      for (int b = 0; b < 2; ++b) {
+        m.R[3 * (a + 1) + b + 1] = p.mu * s.rho * s.rn * P[a][b];
+        m.diag[3 * (a + 1) + b + 1] -= p.mu * s.rn * P[a][b];
+      }
+    }
+  } else m.diag[4] = m.diag[8] = 1; // frictionless: λ_T = 0
   for (int k = 1; k < 3; ++k)
-    if (held[k])
-      for (int l = 0; l < 3; ++l) J[3 * k + l] = same && l == k ? 1.0 : 0.0;
-  return J;
+    if (held[k] || (s.kind == 2 && p.mu == 0))
+      for (int l = 0; l < 3; ++l) m.R[3 * k + l] = 0, m.diag[3 * k + l] = (l == k ? 1.0 : 0.0);
+  return m;
 }
 
-/// jacobian() with every component free.
-Mat3 jacobian_free(const ContactPoint &p, const PointState &s, const Mat3 &Dblk, bool same)
+/// R B (+ Δ for the point's own block).
+Mat3 jacobian(const RowMap &m, const Mat3 &B, bool same)
 {
   Mat3 J{};
-  for (int l = 0; l < 3; ++l) J[l] = Dblk[l]; // the normal row: ∂g/∂λ
-  if (s.kind == 1) {
-    for (int k = 1; k < 3; ++k)
-      for (int l = 0; l < 3; ++l) J[3 * k + l] = Dblk[3 * k + l];
-    return J;
-  }
-  if (p.mu == 0) { // λ_T = 0
-    if (same) J[4] = J[8] = 1;
-    return J;
-  }
-  // slip: ∂/∂λ of λ_T − μ r_n q, q = r_T/|r_T|; ∂r_n = e_n δ − ρ D_n, ∂r_T = E_T δ − ρ D_T
-  const double q[2] = {s.rt[0] / s.rt_norm, s.rt[1] / s.rt_norm};
-  const double P[2][2] = {{(1 - q[0] * q[0]) / s.rt_norm, -q[0] * q[1] / s.rt_norm}, {-q[1] * q[0] / s.rt_norm, (1 - q[1] * q[1]) / s.rt_norm}};
-  for (int a = 0; a < 2; ++a)
-    for (int l = 0; l < 3; ++l) {
-      const double drn = (same && l == 0 ? 1.0 : 0.0) - s.rho * Dblk[l];
-      double v = (same && l == a + 1 ? 1.0 : 0.0) - p.mu * q[a] * drn;
-      for (int b = 0; b < 2; ++b) v -= p.mu * s.rn * P[a][b] * ((same && l == b + 1 ? 1.0 : 0.0) - s.rho * Dblk[3 * (b + 1) + l]);
-      J[3 * (a + 1) + l] = v;
-    }
+  for (int k = 0; k < 3; ++k)
+    for (int l = 0; l < 3; ++l) J[3 * k + l] = m.R[3 * k] * B[l] + m.R[3 * k + 1] * B[3 + l] + m.R[3 * k + 2] * B[6 + l] + (same ? m.diag[3 * k + l] : 0.0);
   return J;
 }
 
@@ -138,24 +161,17 @@ std::array<bool, 3> held_of(const Compliance &D, int c) { return {D.held(c, 0), 
 
 namespace {
 
-/// The states of every point at λ (w = w_f + D λ): fills the closed points, returns max |Φ| and
-/// sets `merit` to Σ |Φ|² (traction units).
-double evaluate(const Compliance &D, BlockCache &blocks, const std::vector<int> &zone, const std::vector<Vec3> &wf, const std::vector<double> &rho,
-                const std::vector<Vec3> &lambda, std::vector<PointState> &st, std::vector<int> &closed, double &merit)
+/// The states of the zone's points for tractions λ and relative displacements w (by zone
+/// position): fills the closed points, returns max |Φ| and sets `merit` to Σ |Φ|² (traction units).
+double classify_zone(const Compliance &D, const std::vector<int> &zone, const std::vector<double> &rho, const std::vector<Vec3> &lambda, const std::vector<Vec3> &w,
+                     std::vector<PointState> &st, std::vector<int> &closed, double &merit)
 {
-  std::vector<int> loaded;
-  for (int c : zone)
-    if (max_abs(lambda[c]) > 0) loaded.push_back(c);
   double residual = 0;
   merit = 0;
   closed.clear();
-  for (int c : zone) {
-    Vec3 w = wf[c];
-    for (int cp : loaded) {
-      const Mat3 &B = blocks.at(c, cp);
-      for (int k = 0; k < 3; ++k) w[k] += B[3 * k] * lambda[cp][0] + B[3 * k + 1] * lambda[cp][1] + B[3 * k + 2] * lambda[cp][2];
-    }
-    st[c] = classify(D.point(c), held_of(D, c), lambda[c], w, rho[c]);
+  for (std::size_t k = 0; k < zone.size(); ++k) {
+    const int c = zone[k];
+    st[c] = classify(D.point(c), held_of(D, c), lambda[c], w[k], rho[c]);
     const Vec3 r = scaled_residual(st[c]);
     residual = std::max(residual, max_abs(r));
     merit += dot(r, r);
@@ -192,17 +208,24 @@ std::vector<Vec3> newton_step(const Compliance &D, BlockCache &blocks, const std
     J.rows = rows, J.kinds.resize(rows.size()), J.lu.assign(static_cast<std::size_t>(m) * m, 0.0), J.piv.resize(m);
     for (std::size_t a = 0; a < rows.size(); ++a) J.kinds[a] = st[rows[a]].kind;
   }
-  for (int a = 0; a < static_cast<int>(rows.size()); ++a) {
-    const int c = rows[a];
-    for (int k = 0; k < 3; ++k) rhs[3 * a + k] = -st[c].phi[k];
-    for (int b = 0; b < static_cast<int>(rows.size()) && !chord; ++b) {
-      const Mat3 Jb = jacobian(D.point(c), held_of(D, c), st[c], blocks.at(c, rows[b]), c == rows[b]);
+  for (int a = 0; a < static_cast<int>(rows.size()); ++a)
+    for (int k = 0; k < 3; ++k) rhs[3 * a + k] = -st[rows[a]].phi[k];
+  std::vector<RowMap> maps(rows.size());
+  for (std::size_t a = 0; a < rows.size(); ++a) maps[a] = row_map(D.point(rows[a]), held_of(D, rows[a]), st[rows[a]]);
+  for (int b = 0; b < static_cast<int>(rows.size()) && !chord; ++b) { // column by column: each a contiguous column of blocks
+    const Mat3 *col = blocks.column(rows[b]);
+    for (int a = 0; a < static_cast<int>(rows.size()); ++a) {
+      const int c = rows[a];
+      const Mat3 Jb = jacobian(maps[a], col[blocks.slot(c)], c == rows[b]);
       for (int k = 0; k < 3; ++k)
         for (int l = 0; l < 3; ++l) J.lu[(3 * a + k) + static_cast<std::size_t>(3 * b + l) * m] = Jb[3 * k + l];
     }
-    for (int cp : zone) {
-      if (st[cp].kind || max_abs(lambda[cp]) == 0) continue;
-      const Mat3 Jb = jacobian(D.point(c), held_of(D, c), st[c], blocks.at(c, cp), false); // Δλ_cp = −λ_cp
+  }
+  for (int cp : zone) { // Δλ_cp = −λ_cp for the open points that carry a traction
+    if (st[cp].kind || max_abs(lambda[cp]) == 0) continue;
+    const Mat3 *col = blocks.column(cp);
+    for (int a = 0; a < static_cast<int>(rows.size()); ++a) {
+      const Mat3 Jb = jacobian(maps[a], col[blocks.slot(rows[a])], false);
       for (int k = 0; k < 3; ++k) rhs[3 * a + k] += Jb[3 * k] * lambda[cp][0] + Jb[3 * k + 1] * lambda[cp][1] + Jb[3 * k + 2] * lambda[cp][2];
     }
   }
@@ -224,13 +247,29 @@ void newton(const Compliance &D, BlockCache &blocks, const std::vector<int> &zon
             std::vector<Vec3> &lambda, std::vector<PointState> &st, FrictionSolver::Result &r, const std::function<void(int, long long, long long, double)> &monitor)
 {
   const int n = D.size();
+  const std::size_t nz = zone.size();
   double scale = 0; // the traction scale: the free penetrations' and the warm start's
   for (int c : zone) scale = std::max({scale, max_abs(lambda[c]), rho[c] * std::max(0.0, -wf[c][0])});
+  std::vector<Vec3> w(nz), dw(nz), trial_w(nz);
+  for (std::size_t k = 0; k < nz; ++k) w[k] = wf[zone[k]];
+  blocks.apply(lambda, w); // w = w_f + D λ on the zone
   std::vector<PointState> trial_st(n);
   std::vector<int> closed, trial_closed;
   std::vector<std::int8_t> last(n, 0);
   NewtonMatrix J;
-  double merit = 0, residual = evaluate(D, blocks, zone, wf, rho, lambda, st, closed, merit);
+  double merit = 0, residual = classify_zone(D, zone, rho, lambda, w, st, closed, merit);
+  // A trial λ + t Δ: its w is w + t D Δ (D Δ once per step), then its states and Σ |Φ|².
+  std::vector<Vec3> trial = lambda;
+  auto try_step = [&](const std::vector<Vec3> &step, double t, double &trial_merit) {
+    for (int c : zone) trial[c] = lambda[c] + t * step[c];
+    for (std::size_t k = 0; k < nz; ++k) trial_w[k] = w[k] + t * dw[k];
+    return classify_zone(D, zone, rho, trial, trial_w, trial_st, trial_closed, trial_merit);
+  };
+  auto accept = [&](double trial_merit, double trial_residual) {
+    lambda.swap(trial), st.swap(trial_st), closed.swap(trial_closed), w.swap(trial_w);
+    merit = trial_merit, residual = trial_residual;
+    trial = lambda;
+  };
   for (;; ++r.iterations) {
     for (int c : zone) scale = std::max(scale, max_abs(lambda[c]));
     long long changed = 0;
@@ -239,29 +278,27 @@ void newton(const Compliance &D, BlockCache &blocks, const std::vector<int> &zon
     if (residual <= tol * scale) return;
     if (r.iterations >= max_it) throw std::runtime_error("contact: friction did not converge in " + std::to_string(max_it) + " Newton iterations (-contact_max_it)");
     // While the states stay, the factored matrix of the last step serves (a chord step) as long
-    // as it halves Σ |Φ|²; otherwise a Newton step, damped: semismooth Newton alone cycles
+    // as it quarters Σ |Φ|²; otherwise a Newton step, damped: semismooth Newton alone cycles
     // between stick and slip sets (measured on the sliding instrument), so its step is halved
     // until Σ |Φ|² decreases (Armijo), up to 1/64.
-    std::vector<Vec3> trial = lambda;
+    double trial_merit = 0;
     if (J.fits(closed, st)) {
       const std::vector<Vec3> step = newton_step(D, blocks, zone, st, closed, lambda, J, true);
-      for (int c : zone) trial[c] = lambda[c] + step[c];
-      double trial_merit = 0;
-      const double trial_residual = evaluate(D, blocks, zone, wf, rho, trial, trial_st, trial_closed, trial_merit);
+      std::fill(dw.begin(), dw.end(), Vec3{0, 0, 0});
+      blocks.apply(step, dw);
+      const double trial_residual = try_step(step, 1.0, trial_merit);
       if (trial_merit <= 0.25 * merit) {
-        lambda.swap(trial), st.swap(trial_st), closed.swap(trial_closed);
-        merit = trial_merit, residual = trial_residual;
+        accept(trial_merit, trial_residual);
         continue;
       }
     }
     const std::vector<Vec3> step = newton_step(D, blocks, zone, st, closed, lambda, J, false);
+    std::fill(dw.begin(), dw.end(), Vec3{0, 0, 0});
+    blocks.apply(step, dw);
     for (double t = 1;; t *= 0.5) {
-      for (int c : zone) trial[c] = lambda[c] + t * step[c];
-      double trial_merit = 0;
-      const double trial_residual = evaluate(D, blocks, zone, wf, rho, trial, trial_st, trial_closed, trial_merit);
+      const double trial_residual = try_step(step, t, trial_merit);
       if (trial_merit <= (1 - 1e-4 * t) * merit || t < 1.0 / 64) {
-        lambda.swap(trial), st.swap(trial_st), closed.swap(trial_closed);
-        merit = trial_merit, residual = trial_residual;
+        accept(trial_merit, trial_residual);
         break;
       }
     }
