@@ -242,7 +242,9 @@ int run(const Args &a)
   }
   // Cold static solves of the sampled frames: a fresh engine each (no warm start, its own
   // active-set inverse; W's columns are the same numbers whichever engine computes them).
+  // Frictionless frames only: with friction a frame depends on the frames before it.
   double worst = 0, scale = 0;
+  if (a.friction > 0) sampled.clear();
   for (std::size_t k = 0; k < sampled.size(); ++k) {
     ContactOptions cold = opt;
     cold.warm_start = false;
