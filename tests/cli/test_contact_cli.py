@@ -8,8 +8,8 @@ Usage:
 The harness (a temporary directory per case, the clean-failure assertions) is test_cli.py's.
 ContactErrorTests: every bad contact input ends with one "hssbem: error:" line naming the
 problem and leaves no file. ContactRunTests: the result layout (/contact, the frames' contact,
-the sidecar's pressure), a contact scene's frames against static runs of the same obstacle
-positions, and the same file from 1 and 2 ranks.
+the sidecar's pressure, the bodies' forces), a contact scene's frames against static runs of the
+same obstacle positions, and the same file from 1 and 2 ranks.
 """
 
 import argparse
@@ -158,6 +158,34 @@ class ContactRunTests(ContactCase):
             self.assertLess(np.max(np.abs(frames[i][0] - u)), 1e-6 * np.max(np.abs(u)), "frame %d" % i)
             self.assertLess(np.max(np.abs(frames[i][1] - p)), 1e-6 * max(np.max(p), 1e-12), "frame %d" % i)
         self.assertGreater(np.max(frames[2][1]), np.max(frames[0][1]))  # the higher table presses harder
+
+    def test_two_bodies_forces(self):
+        # Two unit cubes (12 triangles each), the upper g above the lower, pushed together by
+        # delta at the top: each side of the contact carries E (delta - g) / 2 (the engine's
+        # test measures the same on finer cubes, tests/verification/test_contact.cpp).
+        import numpy as np
+        from test_cli import CUBE_TRIANGLES, CUBE_VERTICES, off_text
+        g, delta = 0.001, 0.01
+        upper = [(x, y, z + 1 + g) for x, y, z in CUBE_VERTICES]
+        tris = CUBE_TRIANGLES + [tuple(i + 8 for i in t) for t in CUBE_TRIANGLES]
+        self.write("two.off", off_text(CUBE_VERTICES + upper, tris))
+        box = lambda lo, hi: {"box": [lo, hi]}  # noqa: E731
+        boundary = [{"where": box([-1, -1, -1e-9], [2, 2, 1e-9]), "displacement": [NAN, NAN, 0]},
+                    {"where": box([-1, -1, 2 + g - 1e-9], [2, 2, 3]), "displacement": [NAN, NAN, -delta]},
+                    {"where": box([-1e-9, -1, -1], [1e-9, 2, 3]), "displacement": [0, NAN, NAN]},
+                    {"where": box([-1, -1e-9, -1], [2, 1e-9, 3]), "displacement": [NAN, 0, NAN]}]
+        self.problem(mesh="two.off", boundary=boundary, contact={"bodies": True})
+        r = self.run_problem("problem.json", timeout=TIMEOUT_RUN)
+        self.assertSucceeds(r, self.out)
+        data, attrs, contact = self.read("out.h5")
+        f0, f1 = data["contact/forces/body_0"], data["contact/forces/body_1"]
+        load = 0.5 * 1000.0 * (delta - g)
+        p = data["contact/pressure"]
+        self.assertLess(np.max(np.abs(f0 + f1)), 1e-9 * load)
+        self.assertLess(np.max(np.abs(f1 - [0, 0, load])), 5e-5 * load)  # measured 1.2e-5
+        self.assertTrue(np.all(data["contact/status"][4:12] == 2) and np.all(p[4:12] > 0.5 * load))
+        self.assertEqual(attrs["solver"], "contact")
+        self.assertGreaterEqual(int(contact["iterations"]), 1)
 
     def test_same_file_from_one_and_two_ranks(self):
         import numpy as np

@@ -12,6 +12,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 #include <memory>
 
@@ -275,6 +276,65 @@ TEST(Contact, TwoStackedCubesShareTheLoad)
   EXPECT_LE(perr, 1e-4); // measured 6.0e-5; 8.3e-3 with the bodies' blocks coupled (DenseReferenceOptions::node_body)
   EXPECT_NEAR(sol.body_force[0][2] + sol.body_force[1][2], 0.0, 1e-12 * p);
   EXPECT_NEAR(sol.body_force[1][2], p, 1e-4 * p); // the upper cube is pushed up by the lower
+}
+
+TEST(Contact, AnInterferenceIsClosedByDeformation)
+{
+  // The table's base place overlaps the undeformed cube by delta (a negative initial gap); the
+  // top held along z, rollers on x0 and y0: the bottom is pushed up by delta, the uniaxial field
+  // u = (nu delta x, nu delta y, delta (1 - z)), t = -E delta n_z e_z.
+  Case c(cube_spec(true, {k_nan, k_nan, 0}), {Obstacle::plane("table", {0, 0, delta}, {0, 0, 1})});
+  c.solve({{0, 0, 0}});
+  const Discretization &disc = *c.s.disc;
+  double uerr = 0, terr = 0, gmin = 0;
+  for (int i = 0; i < disc.num_nodes(); ++i) {
+    const Vec3 x = disc.node_position(i);
+    uerr = std::max(uerr, norm(c.sol.u[i] - Vec3{nu * delta * x[0], nu * delta * x[1], delta * (1 - x[2])}));
+    terr = std::max(terr, norm(c.sol.t[i] - Vec3{0, 0, -E * delta * disc.node(i).normal[2]}) / (E * delta));
+  }
+  for (int v : bottom_vertices(disc.mesh())) gmin = std::min(gmin, c.sol.gap[v]);
+  std::printf("interference closed: |u - exact| %.2e (delta %.0e), |t - exact| / (E delta) %.2e, min gap %.2e; %lld touching\n", uerr, delta, terr, gmin, c.rep.active_vertices);
+  EXPECT_EQ(c.rep.active_vertices, static_cast<long long>(bottom_vertices(disc.mesh()).size()));
+  EXPECT_LE(uerr, 1e-6); // measured 9.0e-8, as when pushed from the top
+  EXPECT_LE(terr, 1e-4); // measured 7.1e-5
+  EXPECT_GE(gmin, -1e-10 * delta);
+  EXPECT_NEAR(c.sol.obstacle_force[0][2], E * delta, 1e-4 * E * delta);
+}
+
+TEST(Contact, PrescribedVerticesAreNoCandidates)
+{
+  // The bottom clamped (all three components) and the table through it: its rules win, nothing
+  // touches, and the answer is the static problem without the table.
+  ProblemSpec spec = cube_spec();
+  spec.rules.push_back(rule(Kind::Displacement, region("z0"), {{0, 0, 0}}));
+  Case c(spec, {Obstacle::plane("table", {0, 0, 0.5 * delta}, {0, 0, 1})});
+  c.solve({{0, 0, 0}});
+  const NodalSolution ref = static_solve(spec, *c.s.disc, *c.op);
+  EXPECT_EQ(c.rep.active_vertices, 0);
+  EXPECT_EQ(c.rep.candidates, 0); // the side vertices nearest the table (z = 0.25) are beyond reach
+  for (int v : bottom_vertices(c.s.disc->mesh())) EXPECT_TRUE(std::isnan(c.sol.gap[v]) && c.sol.pressure[v] == 0 && c.sol.status[v] == 0) << v;
+  EXPECT_LE(max_norm_diff(c.sol.u, ref.u), 1e-12 * delta);
+  EXPECT_EQ(c.sol.obstacle_force[0], (Vec3{0, 0, 0}));
+}
+
+TEST(Contact, EachObstacleReportsItsOwnForce)
+{
+  // The cube on the table (rollers, top pushed down) and a tool (sphere) pressed into the middle
+  // of its x1 face: the tool's force is the x1 face's reaction along x (the table's tractions
+  // there are along z), and the two forces balance the held faces' reactions.
+  const double r = 0.3;
+  Case c(cube_spec(), {Obstacle::plane("table", {0, 0, 0}, {0, 0, 1}), Obstacle::sphere("tool", {1 + r - 0.5 * delta, 0.5, 0.5}, r)});
+  c.solve({{0, 0, 0}, {0, 0, 0}});
+  const Vec3 table = c.sol.obstacle_force[0], tool = c.sol.obstacle_force[1];
+  const auto R = reactions(*c.s.disc, c.sol.t);
+  const Vec3 held = R.at("z1") + R.at("x0") + R.at("y0");
+  const double scale = norm(table), balance = norm(table + tool + held) / scale, tool_x = std::abs(tool[0] - R.at("x1")[0]) / std::abs(tool[0]);
+  std::printf("two obstacles: table (%.4f, %.4f, %.4f), tool (%.4f, %.4f, %.4f); |sum + held reactions| / |F_table| %.2e; tool_x against R(x1)_x %.2e\n", table[0], table[1],
+              table[2], tool[0], tool[1], tool[2], balance, tool_x);
+  EXPECT_GT(table[2], 0.5 * E * delta);
+  EXPECT_LT(tool[0], -1e-3 * E * delta); // the tool pushes along -x, and does push
+  EXPECT_LE(tool_x, 1e-14);              // measured 1.8e-16: the same lumped areas
+  EXPECT_LE(balance, 1e-2);              // measured 7.7e-3 (the coarse cube under a point-like tool)
 }
 
 TEST(Contact, ABodyHeldOnlyByFrictionlessContactIsRefused)
