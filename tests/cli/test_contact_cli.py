@@ -99,6 +99,13 @@ class ContactErrorTests(ContactCase):
         self.cube_contact({"obstacles": [TABLE]})
         self.assertFailsCleanly(self.run_problem("problem.json", "-contact_tol", "2"), r"-contact_tol must lie in \(0, 1\)")
 
+    def test_too_few_iterations(self):
+        # The cube on the table takes two active-set iterations (the bottom edges' side nodes let go).
+        self.cube_contact({"obstacles": [TABLE]})
+        r = self.run_problem("problem.json", "-contact_max_it", "1")
+        self.assertFailsCleanly(r, r"the active set did not settle in 1 iterations \(-contact_max_it\)")
+        self.assertErrorLine(r)
+
 
 class ContactRunTests(ContactCase):
     def read(self, name):
