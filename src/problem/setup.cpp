@@ -64,7 +64,8 @@ void check_every_frame(const ProblemSetup &s)
 {
   for (std::size_t i = 0; i < s.spec.frames.size(); ++i) {
     const NodeConditions nc = frame_conditions(s.spec, i, *s.disc);
-    check_frame_constraints(s, nc.displacement_prescribed, "frames[" + std::to_string(i) + "]");
+    if (!s.spec.contact.present) // contact may hold a body that a frame's rules leave free
+      check_frame_constraints(s, nc.displacement_prescribed, "frames[" + std::to_string(i) + "]");
   }
 }
 
@@ -97,9 +98,18 @@ ProblemSetup setup_problem(ProblemSpec spec, const ProblemOverrides &o)
   const NodeConditions nc = apply_rules(s.spec.rules, *s.disc, s.spec.file);
   s.selection = selection_of(nc);
   s.vertex_displacement_prescribed = vertex_displacement_prescribed(*s.disc, nc);
+  for (std::size_t i = 0; i < s.spec.contact.obstacles.size(); ++i) { // an unreadable obstacle mesh ends the run before any work
+    const ObstacleSpec &o = s.spec.contact.obstacles[i];
+    try {
+      s.obstacle_meshes.push_back(o.shape == ObstacleSpec::Shape::Mesh ? read_mesh(o.mesh_path) : SurfaceMesh{});
+      if (o.shape == ObstacleSpec::Shape::Mesh) s.input_files.push_back(o.mesh_path); // the result may not replace it either
+    } catch (const MeshError &e) {
+      throw MeshError(s.spec.file + ": contact.obstacles[" + std::to_string(i) + "].mesh: " + e.what());
+    }
+  }
   fault_point("Setup");
-  if (s.spec.frames.empty()) handle_rigid_modes(s);
-  else check_every_frame(s);
+  if (!s.spec.frames.empty()) check_every_frame(s);                  // a scene: every frame's rules before the first frame
+  else if (!s.spec.contact.present) handle_rigid_modes(s);           // contact checks each body
   return s;
 }
 

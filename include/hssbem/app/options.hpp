@@ -27,6 +27,14 @@ struct SceneRunOptions {
   bool keep_partial = false;                    ///< -scene_keep_partial: a failed frame commits the frames solved before it (still an error)
 };
 
+/// The options of a contact problem (a problem file with "contact"), -contact_*.
+struct ContactRunOptions {
+  double tol = 1e-10;   ///< -contact_tol: relative tolerance of the gaps and of friction's Newton residual
+  int max_it = 50;      ///< -contact_max_it: iterations per frame before it is an error
+  double reach = 0;     ///< -contact_reach: candidates within this gap (0: 5 % of the mesh's size)
+  bool monitor = false; ///< -contact_monitor: one line per iteration
+};
+
 /// Everything the command line can set besides the solver's options.
 struct AppOptions {
   std::string problem;                            ///< -problem: the problem file (required unless -help)
@@ -34,6 +42,7 @@ struct AppOptions {
   std::optional<OperatorType> operator_type;      ///< -bem_mat_type: hss, h2 or dense; none: auto (the default, see choose_operator())
   QuadratureOptions quad;                         ///< -mat_bem_*
   SceneRunOptions scene;                          ///< -scene_*
+  ContactRunOptions contact;                      ///< -contact_*
   bool help = false;                              ///< -help: list the options (PETSc prints each as it is read)
 };
 
