@@ -520,8 +520,9 @@ void check_frame_obstacles(const ProblemSpec &spec, const Where &top)
   for (const ObstacleSpec &o : spec.contact.obstacles)
     known += (known.empty() ? "" : ", ") + o.name;
   for (std::size_t f = 0; f < spec.frames.size(); ++f)
-    for (const auto &[name, offset] : spec.frames[f].obstacles) {
-      const bool found = std::any_of(spec.contact.obstacles.begin(), spec.contact.obstacles.end(), [&](const ObstacleSpec &o) { return o.name == name; });
+    for (const auto &entry : spec.frames[f].obstacles) {
+      const std::string &name  = entry.first; // not a structured binding: clang 14 (the fuzzers' compiler) cannot capture one
+      const bool         found = std::any_of(spec.contact.obstacles.begin(), spec.contact.obstacles.end(), [&](const ObstacleSpec &o) { return o.name == name; });
       if (!found)
         top.at("frames").at(f).at("obstacles").fail("no obstacle named '" + name + "' (" + (known.empty() ? "the problem has no contact obstacles" : "known: " + known) + ")");
     }
