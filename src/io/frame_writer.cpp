@@ -34,6 +34,7 @@ void check_frame(const std::string &path, std::size_t expected, std::size_t i, c
   detail::check_size(path, g + "/traction", f.traction.size(), nv, "vertex", true);
   detail::check_size(path, g + "/displacement_prescribed", f.displacement_prescribed.size(), nv,
                      "vertex", false);
+  detail::check_stress_sizes(path, g, f.stress, nv, 0); // no stress_corner in frames
 }
 
 void write_frame(H5Writer &w, std::size_t i, const FrameData &f)
@@ -44,6 +45,7 @@ void write_frame(H5Writer &w, std::size_t i, const FrameData &f)
   detail::write_vec3s(w, g, name, "traction", f.traction);
   if (!f.displacement_prescribed.empty())
     detail::write_mask(w, g, name, "displacement_prescribed", f.displacement_prescribed);
+  detail::write_stress(w, g, name, f.stress);
   detail::write_attributes(w, g.get(), name, {f.attributes_real, f.attributes_int, f.attributes_str});
   w.end_group(g, name);
 }
@@ -63,6 +65,7 @@ struct FrameWriter::Impl {
   std::map<std::string, double> base_timings;
   std::size_t num_vertices;
   std::vector<bool> has_mask; ///< one entry per frame appended: displacement_prescribed written
+  std::vector<StressFields> stress_shape; ///< per frame: which stress fields it holds (sizes only, no values)
   bool broken = false, committed = false;
   // Destroyed in reverse order: the HDF5 file is closed before its temporary name is removed.
   std::optional<detail::FileSetCommit> files;
@@ -107,6 +110,8 @@ std::string FrameWriter::Impl::sidecar() const
     if (has_mask[i])
       fields.push_back(detail::node_vectors("displacement_prescribed", g + "/displacement_prescribed",
                                             num_vertices, detail::XdmfNumber::int8));
+    const auto stress = detail::stress_attributes(g, stress_shape[i], num_vertices);
+    fields.insert(fields.end(), stress.begin(), stress.end());
     steps[i].attributes.insert(steps[i].attributes.begin(), fields.begin(), fields.end());
     steps[i].name = "frame_" + std::to_string(i);
     steps[i].time = static_cast<double>(i);
@@ -137,6 +142,11 @@ void FrameWriter::append(std::size_t i, const FrameData &frame)
   write_frame(w, i, frame);
   w.flush();
   m_impl->has_mask.push_back(!frame.displacement_prescribed.empty());
+  StressFields shape; // one entry each where the frame has the field: enough for the sidecar
+  if (!frame.stress.stress.empty()) shape.stress.resize(1);
+  if (!frame.stress.von_mises.empty()) shape.von_mises.resize(1);
+  if (!frame.stress.principal.empty()) shape.principal.resize(1);
+  m_impl->stress_shape.push_back(std::move(shape));
   m_impl->broken = false;
 }
 
