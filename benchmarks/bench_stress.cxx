@@ -12,6 +12,8 @@
 // plain (the identities integrated at the point), band (interpolated along the normal within the
 // band, near_surface.hpp), subtract (the identities of the data minus the linear field of the
 // surface stress at the nearest point, O(triangles) per point: a reference).
+#include "bench_support.hpp"
+
 #include "hssbem/app/run.hpp"
 #include "hssbem/bem/interior_stress.hpp"
 #include "hssbem/bem/near_surface.hpp"
@@ -25,6 +27,10 @@
 #include "hssbem/problem/setup.hpp"
 
 #include <petscsys.h>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 
 #include <cmath>
 #include <ctime>
@@ -44,8 +50,8 @@ using namespace hssbem;
 struct Args {
   std::string kase = "kelvin", mesh, bc = "traction", methods = "plain,band,subtract", csv, mat_type = "dense";
   double nu = 0.3, band = 1.0, near_ratio = 2.0;
-  int samples = 200, speed = 0, direct_speed = 0, equivalent_points = 96, target_leaf = 96, source_leaf = 48;
-  double check_ratio = 2.6, equivalent_ratio = 1.15, check_factor = 2.0;
+  int samples = 200, speed = 0, direct_speed = 0, equivalent_points = 128, target_leaf = 128, source_leaf = 48, grid_cells = 0;
+  double check_ratio = 2.6, equivalent_ratio = 1.05, check_factor = 1.25;
 };
 
 Args parse(int argc, char **argv)
@@ -70,6 +76,7 @@ Args parse(int argc, char **argv)
     else if (k == "--direct-speed") a.direct_speed = std::stoi(next());
     else if (k == "--mat-type") a.mat_type = next();
     else if (k == "--equivalent-points") a.equivalent_points = std::stoi(next());
+    else if (k == "--grid-cells") a.grid_cells = std::stoi(next());
     else if (k == "--target-leaf") a.target_leaf = std::stoi(next());
     else if (k == "--source-leaf") a.source_leaf = std::stoi(next());
     else if (k == "--check-ratio") a.check_ratio = std::stod(next());
@@ -372,8 +379,94 @@ std::vector<DepthPoint> depth_points(const SurfaceLocator &loc, const std::vecto
   return out;
 }
 
+double cpu_seconds() { return double(std::clock()) / CLOCKS_PER_SEC; }
+
+/// The driver's interior chain on a grid of (cells + 1)³ points over the bounding box, with the
+/// exact Kelvin field as boundary data (no solve: the evaluation's cost does not depend on where
+/// the data came from): phase times (wall and CPU), points per second, and the fast evaluation
+/// against the direct sums at a few points.
+int grid_speed(const Args &a)
+{
+  std::vector<std::string> notices;
+  SurfaceMesh mesh = read_mesh(a.mesh);
+  validate_and_orient(mesh, notices);
+  const Discretization disc(mesh, 40.0);
+  const Material mat = Material::from_young(1000.0, a.nu);
+  const Exact ex = kelvin(mat);
+  std::vector<Vec3> u(disc.num_nodes());
+  for (int i = 0; i < disc.num_nodes(); ++i) u[i] = ex.u(disc.node_position(i));
+  std::vector<std::array<Vec3, 3>> t(mesh.triangles.size());
+  for (int e = 0; e < mesh.num_triangles(); ++e)
+    for (int c = 0; c < 3; ++c) t[e][c] = traction_of(ex.stress(mesh.vertices[mesh.triangles[e][c]]), mesh.triangle_normal(e));
+  std::vector<NodeStress> nodes = node_stresses(disc, mat, u, std::vector<Vec3>(disc.num_nodes())); // surface values: not timed here
+  Vec3 lo = mesh.vertices[0], hi = lo;
+  for (const Vec3 &v : mesh.vertices)
+    for (int c = 0; c < 3; ++c) lo[c] = std::min(lo[c], v[c]), hi[c] = std::max(hi[c], v[c]);
+  const int n = a.grid_cells;
+  InteriorGrid g;
+  g.lo = lo, g.hi = hi, g.cells = {n, n, n};
+  const std::vector<Vec3> pts = g.points();
+  InteriorEvaluationOptions eo;
+  eo.equivalent_points = a.equivalent_points, eo.target_leaf = a.target_leaf, eo.source_leaf = a.source_leaf;
+  eo.check_ratio = a.check_ratio, eo.check_factor = a.check_factor, eo.equivalent_ratio = a.equivalent_ratio;
+  Timer total;
+  const double c_start = cpu_seconds();
+  Timer timer;
+  const SurfaceLocator loc(mesh);
+  const std::vector<signed char> side = grid_inside(loc, g.lo, g.spacing(), g.points_per_axis());
+  const double t_inside = timer.seconds();
+  timer.restart();
+  InteriorPlanOptions po;
+  po.band = a.band;
+  const InteriorPlan plan(loc, mesh, pts, po, &side);
+  const double t_plan = timer.seconds();
+  timer.restart();
+  const SomiglianaSources src(disc, mat, u, t);
+  const InteriorEvaluator fast(src, eo);
+  const double t_up = timer.seconds();
+  timer.restart();
+  const std::vector<double> v = fast.evaluate(plan.evaluation_points());
+  const double t_eval = timer.seconds();
+  timer.restart();
+  const std::vector<FieldValue> f = plan.finish(v, corner_displacements(disc, u), corner_stress(disc, nodes));
+  const double t_finish = timer.seconds(), wall = total.seconds(), cpu = cpu_seconds() - c_start;
+  long long inside = 0;
+  for (signed char c : side) inside += c == 1;
+  const InteriorEvaluationStats &st = fast.stats();
+  std::printf("%s: %d triangles (%d unknowns), grid %d^3 = %zu points, %lld inside, %zu integrated; threads %d\n", a.mesh.c_str(), mesh.num_triangles(),
+              3 * disc.num_nodes(), n + 1, pts.size(), inside, plan.evaluation_points().size(),
+#ifdef _OPENMP
+              omp_get_max_threads()
+#else
+              1
+#endif
+  );
+  std::printf("wall seconds: inside %.2f, plan %.2f, sources + upward %.2f, evaluation %.2f, finish %.2f; total %.2f (%.0f grid points/s, %.0f inside points/s); cpu %.1f s\n",
+              t_inside, t_plan, t_up, t_eval, t_finish, wall, pts.size() / wall, inside / wall, cpu);
+  std::printf("evaluation: far pairs %lld, fits %lld, per integrated point: far kernels %.0f, fit kernels %.0f, near particles %.0f, split triangles %.2f\n",
+              st.far_pairs, st.local_fits, double(st.kernel_far) / v.size() * field_outputs, double(st.kernel_fit) / v.size() * field_outputs,
+              double(st.kernel_near) / v.size() * field_outputs, double(st.adaptive_triangles) / v.size() * field_outputs);
+  const int nd = std::min<int>(a.direct_speed > 0 ? a.direct_speed : 100, static_cast<int>(plan.evaluation_points().size()));
+  std::vector<Vec3> sub;
+  for (int i = 0; i < nd; ++i) sub.push_back(plan.evaluation_points()[(static_cast<std::size_t>(i) * plan.evaluation_points().size()) / nd]);
+  InteriorEvaluationOptions direct = eo;
+  direct.direct = true;
+  const std::vector<double> ref = InteriorEvaluator(src, direct).evaluate(sub);
+  double es = 0, ns = 0;
+  for (int i = 0; i < nd; ++i)
+    for (int k = 3; k < field_outputs; ++k) {
+      const std::size_t at = (static_cast<std::size_t>(i) * plan.evaluation_points().size()) / nd;
+      const double d = v[at * field_outputs + k] - ref[static_cast<std::size_t>(i) * field_outputs + k];
+      es += d * d, ns += ref[static_cast<std::size_t>(i) * field_outputs + k] * ref[static_cast<std::size_t>(i) * field_outputs + k];
+    }
+  std::printf("fast vs direct at %d points: stress %.2e (relative L2); peak RSS %.0f MB\n", nd, std::sqrt(es / ns), bench::peak_rss_mb());
+  (void)f;
+  return 0;
+}
+
 int run(const Args &a)
 {
+  if (a.grid_cells > 0) return grid_speed(a);
   const Material mat = Material::from_young(1000.0, a.nu);
   const Exact ex = a.kase == "kelvin" ? kelvin(mat) : a.kase == "lame" ? lame(mat, lame_inner, lame_outer, lame_pressure) : tension(mat, tension_load);
   ProblemSetup s = setup_problem(make_spec(a, mat, ex), ProblemOverrides{});

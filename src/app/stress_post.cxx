@@ -108,7 +108,13 @@ void interior_fields(MPI_Comm comm, const ProblemSetup &s, const NodalSolution &
     fault_point("Interior");
     is.points = all_interior_points(s.spec);
     is.locator.emplace(*s.mesh);
-    is.plan.emplace(*is.locator, *s.mesh, is.points, o.plan);
+    std::vector<signed char> inside(s.spec.interior_points.size(), -1); // explicit points: the winding number
+    if (s.spec.interior_grid) {
+      const InteriorGrid &g = *s.spec.interior_grid;
+      const std::vector<signed char> grid = grid_inside(*is.locator, g.lo, g.spacing(), g.points_per_axis());
+      inside.insert(inside.end(), grid.begin(), grid.end());
+    }
+    is.plan.emplace(*is.locator, *s.mesh, is.points, o.plan, &inside);
     is.sources.emplace(*s.disc, s.material, sol.u, corner_tractions(*s.disc, s.selection, sol), o.quad);
     is.evaluator.emplace(*is.sources, o.fast);
   });

@@ -9,8 +9,10 @@ namespace hssbem {
 
 namespace {
 
-/// A support point must lie this many (reduced) band depths from the surface, at least.
-constexpr double support_clearance = 0.75;
+/// A support point at depth s along the line must lie at least this fraction of s from the
+/// surface: its nearest surface is (nearly) the one the line starts from, so the line does not
+/// reach across a thin wall or towards another face.
+constexpr double support_clearance = 0.9;
 
 double longest_edge(const SurfaceMesh &mesh, int t)
 {
@@ -50,7 +52,7 @@ InteriorPlan::Recipe InteriorPlan::band_recipe(const SurfaceLocator &locator, co
     const int at = static_cast<int>(m_eval.size());
     m_eval.push_back(x1);
     r.eval[0] = at;
-    if (clear_of_surface(locator, x2, support_clearance * delta)) { // quadratic through 0, δ, 2δ
+    if (clear_of_surface(locator, x2, 2 * support_clearance * delta)) { // quadratic through 0, δ, 2δ
       m_eval.push_back(x2);
       r.eval[1] = at + 1;
       r.w_surface = 0.5 * (s - 1) * (s - 2);
@@ -70,7 +72,8 @@ InteriorPlan::Recipe InteriorPlan::band_recipe(const SurfaceLocator &locator, co
   return r;
 }
 
-InteriorPlan::InteriorPlan(const SurfaceLocator &locator, const SurfaceMesh &mesh, const std::vector<Vec3> &points, const InteriorPlanOptions &o)
+InteriorPlan::InteriorPlan(const SurfaceLocator &locator, const SurfaceMesh &mesh, const std::vector<Vec3> &points, const InteriorPlanOptions &o,
+                           const std::vector<signed char> *inside)
   : m_recipe(points.size())
 {
   const double on = o.on_surface * locator.size(), reach = std::max(on, o.band * max_edge(mesh));
@@ -82,7 +85,7 @@ InteriorPlan::InteriorPlan(const SurfaceLocator &locator, const SurfaceMesh &mes
       r.kind = PointKind::Surface, r.triangle = n.triangle, r.bary = n.bary, r.w_surface = 1;
       continue;
     }
-    if (!locator.inside(x)) continue; // Outside
+    if (inside && (*inside)[p] >= 0 ? (*inside)[p] == 0 : !locator.inside(x)) continue; // Outside
     const double delta = n.triangle >= 0 ? o.band * longest_edge(mesh, n.triangle) : 0.0;
     if (n.triangle >= 0 && n.distance < delta) {
       r = band_recipe(locator, mesh, x, n, delta);
@@ -91,6 +94,53 @@ InteriorPlan::InteriorPlan(const SurfaceLocator &locator, const SurfaceMesh &mes
     r.kind = PointKind::Deep, r.eval[0] = static_cast<int>(m_eval.size()), r.w[0] = 1;
     m_eval.push_back(x);
   }
+}
+
+namespace {
+
+/// Union-find over grid points.
+int find_root(std::vector<int> &parent, int i)
+{
+  while (parent[i] != i) i = parent[i] = parent[parent[i]];
+  return i;
+}
+
+} // namespace
+
+std::vector<signed char> grid_inside(const SurfaceLocator &locator, const Vec3 &origin, const Vec3 &spacing, const std::array<int, 3> &n)
+{
+  const long long total = 1LL * n[0] * n[1] * n[2];
+  const double step = std::max({spacing[0], spacing[1], spacing[2]}) * (1 + 1e-9);
+  auto point = [&](long long p) {
+    const long long i = p % n[0], j = (p / n[0]) % n[1], k = p / (1LL * n[0] * n[1]);
+    return Vec3{origin[0] + i * spacing[0], origin[1] + j * spacing[1], origin[2] + k * spacing[2]};
+  };
+  std::vector<signed char> side(static_cast<std::size_t>(total), -1);
+  std::vector<char> clear(static_cast<std::size_t>(total));
+#pragma omp parallel for schedule(dynamic, 256)
+  for (long long p = 0; p < total; ++p) {
+    const Vec3 x = point(p);
+    clear[p] = locator.nearest(x, step).triangle < 0;
+    if (!clear[p]) side[p] = locator.inside(x);
+  }
+  std::vector<int> parent(static_cast<std::size_t>(total));
+  for (long long p = 0; p < total; ++p) parent[p] = static_cast<int>(p);
+  const long long stride[3] = {1, n[0], 1LL * n[0] * n[1]};
+  for (long long p = 0; p < total; ++p) {
+    const long long idx[3] = {p % n[0], (p / n[0]) % n[1], p / stride[2]};
+    for (int a = 0; a < 3; ++a)
+      if (idx[a] + 1 < n[a] && (clear[p] || clear[p + stride[a]])) parent[find_root(parent, static_cast<int>(p))] = find_root(parent, static_cast<int>(p + stride[a]));
+  }
+  std::vector<signed char> root_side(static_cast<std::size_t>(total), -1);
+  for (long long p = 0; p < total; ++p)
+    if (side[p] >= 0) root_side[find_root(parent, static_cast<int>(p))] = side[p];
+  for (long long p = 0; p < total; ++p) {
+    if (side[p] >= 0) continue;
+    signed char &r = root_side[find_root(parent, static_cast<int>(p))];
+    if (r < 0) r = locator.inside(point(p)); // a component that never nears the surface
+    side[p] = r;
+  }
+  return side;
 }
 
 std::vector<FieldValue> InteriorPlan::finish(const std::vector<double> &values, const std::vector<std::array<Vec3, 3>> &corner_u,

@@ -2,6 +2,7 @@
 #include "interior_evaluation_impl.hpp"
 
 #include "hssbem/compress/compression.hpp"
+#include "hssbem/core/blas_threads.hpp"
 #include "hssbem/core/lapack.hpp"
 #include "hssbem/core/timer.hpp"
 
@@ -75,10 +76,11 @@ void add_forces_at(const SomiglianaConstants &k, const Vec3 &x, const Vec3 &cent
   const int n = s.size();
   double u0 = 0, u1 = 0, u2 = 0;
   const double ox = centre[0] - x[0], oy = centre[1] - x[1], oz = centre[2] - x[2];
+  const double *SX = s.x.data(), *SY = s.y.data(), *SZ = s.z.data(), *Q0 = q, *Q1 = q + n, *Q2 = q + 2 * n;
 #pragma omp simd reduction(+ : u0, u1, u2)
   for (int j = 0; j < n; ++j) {
     double v0, v1, v2;
-    kelvin_displacement_point(k, ox + r * s.x[j], oy + r * s.y[j], oz + r * s.z[j], q[j], q[n + j], q[2 * n + j], v0, v1, v2);
+    kelvin_displacement_point(k, ox + r * SX[j], oy + r * SY[j], oz + r * SZ[j], Q0[j], Q1[j], Q2[j], v0, v1, v2);
     u0 += v0, u1 += v1, u2 += v2;
   }
   u[0] += u0, u[1] += u1, u[2] += u2;
@@ -109,16 +111,18 @@ void OrderedParticles::add_regular(const SomiglianaConstants &k, const Vec3 &x, 
 {
   double a0 = 0, a1 = 0, a2 = 0, a3 = 0, a4 = 0, a5 = 0, a6 = 0, a7 = 0, a8 = 0;
   const double x0 = x[0], x1 = x[1], x2 = x[2];
+  // Raw pointers: the loop below must see plain arrays to vectorise with contiguous loads.
+  const double *Y0 = y[0].data(), *Y1 = y[1].data(), *Y2 = y[2].data(), *F0 = f[0].data(), *F1 = f[1].data(), *F2 = f[2].data();
+  const double *M0 = m[0].data(), *M1 = m[1].data(), *M2 = m[2].data(), *N0 = n[0].data(), *N1 = n[1].data(), *N2 = n[2].data();
+  const double *C0 = c[0].data(), *C1 = c[1].data(), *C2 = c[2].data(), *R2 = r2.data();
 #pragma omp simd reduction(+ : a0, a1, a2, a3, a4, a5, a6, a7, a8)
   for (std::size_t j = begin; j < end; ++j) {
-    const double c0 = c[0][j] - x0, c1 = c[1][j] - x1, c2 = c[2][j] - x2;
-    const bool regular = c0 * c0 + c1 * c1 + c2 * c2 >= r2[j];
-    double v[field_outputs];
-    somigliana_point(k, y[0][j] - x0, y[1][j] - x1, y[2][j] - x2, f[0][j], f[1][j], f[2][j], m[0][j], m[1][j], m[2][j], n[0][j], n[1][j], n[2][j], v[0], v[1], v[2],
-                     v[3], v[4], v[5], v[6], v[7], v[8]);
-    a0 += regular ? v[0] : 0.0, a1 += regular ? v[1] : 0.0, a2 += regular ? v[2] : 0.0;
-    a3 += regular ? v[3] : 0.0, a4 += regular ? v[4] : 0.0, a5 += regular ? v[5] : 0.0;
-    a6 += regular ? v[6] : 0.0, a7 += regular ? v[7] : 0.0, a8 += regular ? v[8] : 0.0;
+    const double c0 = C0[j] - x0, c1 = C1[j] - x1, c2 = C2[j] - x2;
+    const double w = c0 * c0 + c1 * c1 + c2 * c2 >= R2[j] ? 1.0 : 0.0; // a triangle near x is split elsewhere
+    double v0, v1, v2, v3, v4, v5, v6, v7, v8;
+    somigliana_point(k, Y0[j] - x0, Y1[j] - x1, Y2[j] - x2, w * F0[j], w * F1[j], w * F2[j], w * M0[j], w * M1[j], w * M2[j], N0[j], N1[j], N2[j], v0, v1, v2, v3,
+                     v4, v5, v6, v7, v8);
+    a0 += v0, a1 += v1, a2 += v2, a3 += v3, a4 += v4, a5 += v5, a6 += v6, a7 += v7, a8 += v8;
   }
   out[0] += a0, out[1] += a1, out[2] += a2, out[3] += a3, out[4] += a4, out[5] += a5, out[6] += a6, out[7] += a7, out[8] += a8;
 }
@@ -161,25 +165,30 @@ void InteriorEvaluator::Impl::add_equivalent(const Vec3 &x, int b, double *out) 
   const Vec3 &c = tree.cluster(b).centre;
   const double r = R[b] * up.r_equiv, ox = c[0] - x[0], oy = c[1] - x[1], oz = c[2] - x[2];
   const SomiglianaConstants &k = src.constants();
+  const double *SX = s.x.data(), *SY = s.y.data(), *SZ = s.z.data(), *Q0 = f.data(), *Q1 = f.data() + n, *Q2 = f.data() + 2 * n;
   double a0 = 0, a1 = 0, a2 = 0, a3 = 0, a4 = 0, a5 = 0, a6 = 0, a7 = 0, a8 = 0;
 #pragma omp simd reduction(+ : a0, a1, a2, a3, a4, a5, a6, a7, a8)
   for (int j = 0; j < n; ++j) {
-    double w[field_outputs];
-    kelvin_force_point(k, ox + r * s.x[j], oy + r * s.y[j], oz + r * s.z[j], f[j], f[n + j], f[2 * n + j], w[0], w[1], w[2], w[3], w[4], w[5], w[6], w[7], w[8]);
-    a0 += w[0], a1 += w[1], a2 += w[2], a3 += w[3], a4 += w[4], a5 += w[5], a6 += w[6], a7 += w[7], a8 += w[8];
+    double w0, w1, w2, w3, w4, w5, w6, w7, w8;
+    kelvin_force_point(k, ox + r * SX[j], oy + r * SY[j], oz + r * SZ[j], Q0[j], Q1[j], Q2[j], w0, w1, w2, w3, w4, w5, w6, w7, w8);
+    a0 += w0, a1 += w1, a2 += w2, a3 += w3, a4 += w4, a5 += w5, a6 += w6, a7 += w7, a8 += w8;
   }
   out[0] += a0, out[1] += a1, out[2] += a2, out[3] += a3, out[4] += a4, out[5] += a5, out[6] += a6, out[7] += a7, out[8] += a8;
 }
 
-void InteriorEvaluator::Impl::add_leaf(const Vec3 &x, int b, double *out) const
+void InteriorEvaluator::Impl::add_leaf(const Vec3 &x, int b, double *out, InteriorEvaluationStats &s) const
 {
   const Cluster &cl = tree.cluster(b);
   const double D = norm(x - cl.centre);
-  if (D >= opt.check_ratio * R[b] && D >= reach[b] && cl.size() * Particles::per_triangle > up.pe()) return add_equivalent(x, b, out);
+  if (D >= opt.check_ratio * R[b] && D >= reach[b] && cl.size() * Particles::per_triangle > up.pe()) {
+    s.kernel_far += up.pe();
+    return add_equivalent(x, b, out);
+  }
   particles.add_regular(src.constants(), x, Particles::per_triangle * static_cast<std::size_t>(cl.begin), Particles::per_triangle * static_cast<std::size_t>(cl.end), out);
+  s.kernel_near += Particles::per_triangle * cl.size();
   for (int p = cl.begin; p < cl.end; ++p) {
     const int e = tree.perm()[p];
-    if (!src.is_regular(x, e)) src.add_triangle(x, e, out);
+    if (!src.is_regular(x, e)) src.add_triangle(x, e, out), ++s.adaptive_triangles;
   }
 }
 
@@ -207,14 +216,16 @@ void InteriorEvaluator::Impl::upward_leaf(int c)
   const std::size_t begin = Particles::per_triangle * static_cast<std::size_t>(cl.begin), end = Particles::per_triangle * static_cast<std::size_t>(cl.end);
   const int pc = up.pc();
   std::vector<double> field(3 * pc, 0.0);
+  const double *Y0 = o.y[0].data(), *Y1 = o.y[1].data(), *Y2 = o.y[2].data(), *F0 = o.f[0].data(), *F1 = o.f[1].data(), *F2 = o.f[2].data();
+  const double *M0 = o.m[0].data(), *M1 = o.m[1].data(), *M2 = o.m[2].data(), *N0 = o.n[0].data(), *N1 = o.n[1].data(), *N2 = o.n[2].data();
   for (int i = 0; i < pc; ++i) {
     const Vec3 x = up.check_point(cl.centre, R[c], i);
+    const double x0 = x[0], x1 = x[1], x2 = x[2];
     double u0 = 0, u1 = 0, u2 = 0;
 #pragma omp simd reduction(+ : u0, u1, u2)
     for (std::size_t j = begin; j < end; ++j) {
       double v0, v1, v2;
-      somigliana_displacement_point(k, o.y[0][j] - x[0], o.y[1][j] - x[1], o.y[2][j] - x[2], o.f[0][j], o.f[1][j], o.f[2][j], o.m[0][j], o.m[1][j], o.m[2][j],
-                                    o.n[0][j], o.n[1][j], o.n[2][j], v0, v1, v2);
+      somigliana_displacement_point(k, Y0[j] - x0, Y1[j] - x1, Y2[j] - x2, F0[j], F1[j], F2[j], M0[j], M1[j], M2[j], N0[j], N1[j], N2[j], v0, v1, v2);
       u0 += v0, u1 += v1, u2 += v2;
     }
     field[i] = u0, field[pc + i] = u1, field[2 * pc + i] = u2;
@@ -238,6 +249,7 @@ void InteriorEvaluator::Impl::upward_inner(int c)
 
 void InteriorEvaluator::Impl::upward()
 {
+  const SerialBlas serial; // the fits' products run inside the loops over clusters
   source_radii();
   q.assign(tree.num_clusters(), {});
   for (int l = tree.levels() - 1; l >= 0; --l) {

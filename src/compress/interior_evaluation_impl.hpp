@@ -66,8 +66,9 @@ struct InteriorEvaluator::Impl {
 
   void order_particles();
   /// out[0..9) += the field at x of the triangles of source leaf b: through its equivalent
-  /// forces where x is far from it, else its particles (adaptive where near).
-  void add_leaf(const Vec3 &x, int b, double *out) const;
+  /// forces where x is far from it, else its particles (adaptive where near). Counts the kernel
+  /// evaluations into `s`.
+  void add_leaf(const Vec3 &x, int b, double *out, InteriorEvaluationStats &s) const;
   /// out[0..9) += the field at x of source cluster b's equivalent forces.
   void add_equivalent(const Vec3 &x, int b, double *out) const;
   void source_radii();

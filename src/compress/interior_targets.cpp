@@ -2,6 +2,7 @@
 // the downward pass and the leaves (see interior_evaluation.hpp).
 #include "interior_evaluation_impl.hpp"
 
+#include "hssbem/core/blas_threads.hpp"
 #include "hssbem/core/timer.hpp"
 
 #include <algorithm>
@@ -129,6 +130,8 @@ void TargetPass::downward(int a)
     field[i] = u[0], field[pc + i] = u[1], field[2 * pc + i] = u[2];
   }
   down.solve(m_R[a], field, m_local[a]);
+#pragma omp atomic
+  m_stats.kernel_fit += static_cast<long long>(pc) * down.pe() * (static_cast<long long>(m_far[a].size()) + inherit);
 }
 
 /// v += the far field at x (in cluster a) of the forces on a's outer sphere.
@@ -141,12 +144,13 @@ void TargetPass::add_local(int a, const Vec3 &x, double *v) const
   const Vec3 &c = m_tree.cluster(a).centre;
   const double r = m_R[a] * m_s.down.r_equiv, ox = c[0] - x[0], oy = c[1] - x[1], oz = c[2] - x[2];
   const SomiglianaConstants &k = m_s.src.constants();
+  const double *SX = s.x.data(), *SY = s.y.data(), *SZ = s.z.data(), *Q0 = q.data(), *Q1 = q.data() + n, *Q2 = q.data() + 2 * n;
   double a0 = 0, a1 = 0, a2 = 0, a3 = 0, a4 = 0, a5 = 0, a6 = 0, a7 = 0, a8 = 0;
 #pragma omp simd reduction(+ : a0, a1, a2, a3, a4, a5, a6, a7, a8)
   for (int j = 0; j < n; ++j) {
-    double w[field_outputs];
-    kelvin_force_point(k, ox + r * s.x[j], oy + r * s.y[j], oz + r * s.z[j], q[j], q[n + j], q[2 * n + j], w[0], w[1], w[2], w[3], w[4], w[5], w[6], w[7], w[8]);
-    a0 += w[0], a1 += w[1], a2 += w[2], a3 += w[3], a4 += w[4], a5 += w[5], a6 += w[6], a7 += w[7], a8 += w[8];
+    double w0, w1, w2, w3, w4, w5, w6, w7, w8;
+    kelvin_force_point(k, ox + r * SX[j], oy + r * SY[j], oz + r * SZ[j], Q0[j], Q1[j], Q2[j], w0, w1, w2, w3, w4, w5, w6, w7, w8);
+    a0 += w0, a1 += w1, a2 += w2, a3 += w3, a4 += w4, a5 += w5, a6 += w6, a7 += w7, a8 += w8;
   }
   v[0] += a0, v[1] += a1, v[2] += a2, v[3] += a3, v[4] += a4, v[5] += a5, v[6] += a6, v[7] += a7, v[8] += a8;
 }
@@ -159,23 +163,34 @@ std::vector<int> TargetPass::deferred_sources(int a) const
 }
 
 /// The points at positions [begin, end) of final cluster a: its far field (outer forces, and the
-/// deferred far sources directly) and its near sources.
+/// deferred far sources directly) and its near sources. Source by source, so that a near leaf's
+/// particles stay in cache for all the points; each point sums in the same order whatever the range.
 void TargetPass::finish_points(int a, int begin, int end, std::vector<double> &out) const
 {
   const std::vector<int> deferred = deferred_sources(a);
-#pragma omp atomic
-  m_stats.direct_far += static_cast<long long>(deferred.size()) * (end - begin);
-  for (int p = begin; p < end; ++p) {
-    const int i = m_tree.perm()[p];
-    double *v = &out[static_cast<std::size_t>(i) * field_outputs];
-    if (m_owner[a] >= 0) add_local(m_owner[a], m_points[i], v);
-    for (int b : deferred) m_s.add_equivalent(m_points[i], b, v);
-    for (int b : m_near[a]) m_s.add_leaf(m_points[i], b, v);
+  InteriorEvaluationStats s;
+  auto value = [&](int p) { return &out[static_cast<std::size_t>(m_tree.perm()[p]) * field_outputs]; };
+  auto point = [&](int p) -> const Vec3 & { return m_points[m_tree.perm()[p]]; };
+  if (m_owner[a] >= 0)
+    for (int p = begin; p < end; ++p) add_local(m_owner[a], point(p), value(p));
+  for (int b : deferred)
+    for (int p = begin; p < end; ++p) m_s.add_equivalent(point(p), b, value(p));
+  for (int b : m_near[a])
+    for (int p = begin; p < end; ++p) m_s.add_leaf(point(p), b, value(p), s);
+  const long long n = end - begin, pe = m_s.up.pe();
+  s.kernel_far += n * (pe * static_cast<long long>(deferred.size()) + (m_owner[a] >= 0 ? pe : 0));
+#pragma omp critical(interior_stats)
+  {
+    m_stats.direct_far += static_cast<long long>(deferred.size()) * n;
+    m_stats.kernel_far += s.kernel_far;
+    m_stats.kernel_near += s.kernel_near;
+    m_stats.adaptive_triangles += s.adaptive_triangles;
   }
 }
 
 void TargetPass::run(std::vector<double> &out)
 {
+  const SerialBlas serial; // the fits' products run inside the loops over clusters
   Timer timer;
   m_pending[0] = {0};
   std::vector<int> level{0}, finals;
@@ -201,13 +216,13 @@ void TargetPass::run(std::vector<double> &out)
   }
   m_stats.downward_seconds += timer.seconds();
   timer.restart();
-  // Work items of at most 64 points of the final clusters, within this share.
+  // Work items of at most 128 points of the final clusters, within this share.
   std::vector<std::array<int, 3>> items;
   for (int a : finals) {
     const Cluster &ta = m_tree.cluster(a);
     m_stats.near_pairs += static_cast<long long>(m_near[a].size());
     for (int b : m_near[a]) m_stats.near_triangle_visits += static_cast<long long>(std::min(ta.end, m_hi) - std::max(ta.begin, m_lo)) * m_s.tree.cluster(b).size();
-    for (int p = std::max(ta.begin, m_lo); p < std::min(ta.end, m_hi); p += 64) items.push_back({a, p, std::min({p + 64, ta.end, m_hi})});
+    for (int p = std::max(ta.begin, m_lo); p < std::min(ta.end, m_hi); p += 128) items.push_back({a, p, std::min({p + 128, ta.end, m_hi})});
   }
 #pragma omp parallel for schedule(dynamic)
   for (std::size_t i = 0; i < items.size(); ++i) finish_points(items[i][0], items[i][1], items[i][2], out);

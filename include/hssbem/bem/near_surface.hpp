@@ -39,7 +39,10 @@ using FieldValue = std::array<double, field_outputs>;
 class InteriorPlan {
 public:
   /// Classify `points` (and find the support points of the band). O(points · log triangles).
-  InteriorPlan(const SurfaceLocator &locator, const SurfaceMesh &mesh, const std::vector<Vec3> &points, const InteriorPlanOptions &options = {});
+  /// `inside`, if given, says for each point whether it lies inside (1) or outside (0) the body,
+  /// or that the plan must find out (−1, by the winding number).
+  InteriorPlan(const SurfaceLocator &locator, const SurfaceMesh &mesh, const std::vector<Vec3> &points, const InteriorPlanOptions &options = {},
+               const std::vector<signed char> *inside = nullptr);
 
   std::size_t num_points() const { return m_recipe.size(); }
   PointKind kind(std::size_t p) const { return m_recipe[p].kind; }
@@ -64,5 +67,12 @@ private:
   std::vector<Recipe> m_recipe;
   std::vector<Vec3> m_eval;
 };
+
+/// Inside (1) or outside (0) for the points of a regular grid, point (i, j, k) at origin + (i, j,
+/// k) * spacing, numbered x fastest: the winding number only at the points within a grid step of
+/// the surface; the others take the side of a neighbour, since a segment of one step from a point
+/// farther than a step from the surface cannot cross it (connected components of such steps,
+/// each taking the side of one of its points whose winding number is known).
+std::vector<signed char> grid_inside(const SurfaceLocator &locator, const Vec3 &origin, const Vec3 &spacing, const std::array<int, 3> &points);
 
 } // namespace hssbem

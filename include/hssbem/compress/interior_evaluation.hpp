@@ -39,12 +39,12 @@
 namespace hssbem {
 
 struct InteriorEvaluationOptions {
-  int equivalent_points = 128;   ///< points on each equivalent sphere
-  double check_factor = 2.0;     ///< points on each check sphere / equivalent_points
-  double equivalent_ratio = 1.15; ///< equivalent (sources) or check (targets) sphere radius / cluster radius
+  int equivalent_points = 128;    ///< points on each equivalent sphere
+  double check_factor = 1.25;     ///< points on each check sphere / equivalent_points
+  double equivalent_ratio = 1.05; ///< equivalent (sources) or check (targets) sphere radius / cluster radius
   double check_ratio = 2.6;       ///< check (sources) or equivalent (targets) sphere radius / cluster radius
   int source_leaf = 48;           ///< triangles per source leaf (at most)
-  int target_leaf = 64;           ///< points per target leaf (at most)
+  int target_leaf = 128;          ///< points per target leaf (at most)
   bool direct = false;            ///< every point against every triangle (the reference; O(points · triangles))
 };
 
@@ -54,6 +54,10 @@ struct InteriorEvaluationStats {
   long long local_fits = 0;       ///< target clusters with outer forces of their own
   long long direct_far = 0;       ///< (point, far source cluster) pairs evaluated directly (small clusters)
   long long near_pairs = 0, near_triangle_visits = 0;
+  long long kernel_far = 0;       ///< point-force kernels at points (outer forces, far sources taken directly, near leaves through their forces)
+  long long kernel_fit = 0;       ///< point-force kernels at check points (upward and downward fits)
+  long long kernel_near = 0;      ///< particles of near leaves evaluated at points
+  long long adaptive_triangles = 0; ///< (point, triangle) pairs integrated by splitting
   int source_clusters = 0, target_clusters = 0;
   double upward_seconds = 0, lists_seconds = 0, downward_seconds = 0, near_seconds = 0;
 };
