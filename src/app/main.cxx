@@ -6,6 +6,7 @@
 #include "hssbem/petsc/log.h"
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <exception>
 #include <new>
@@ -139,13 +140,20 @@ int driver_main(MPI_Comm comm)
   (void)PetscOptionsGetBool(NULL, NULL, "-hssbem_traceback", &traceback, NULL);
   (void)PetscOptionsGetReal(NULL, NULL, "-hssbem_error_timeout", &timeout, NULL);
   std::string message;
-  try {
-    const QuietPetscErrors quiet(!traceback);
-    message = run_and_catch(comm, &failed);
-  } catch (const std::exception &e) { // the error handler itself could not be set
+  if (!(timeout > 0 && std::isfinite((double)timeout))) { // nan or inf would wait forever, 0 or less abort a good run
+    char given[32];
+    std::snprintf(given, sizeof given, "%g", (double)timeout);
     failed  = 1;
-    message = e.what();
-  }
+    message = std::string("option -hssbem_error_timeout ") + given + ": the time-out must be positive and finite (seconds; default 10)";
+    timeout = 10;
+  } else
+    try {
+      const QuietPetscErrors quiet(!traceback);
+      message = run_and_catch(comm, &failed);
+    } catch (const std::exception &e) { // the error handler itself could not be set
+      failed  = 1;
+      message = e.what();
+    }
   const int status = finish(agree, failed, message, (double)timeout);
   MPI_Comm_free(&agree);
   return status;

@@ -1,35 +1,45 @@
 // Per-cluster blocks between ranks (see cluster_exchange.hpp).
 #include "hssbem/core/cluster_exchange.hpp"
 
+#include "hssbem/core/fault.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <string>
 
 namespace hssbem {
 
 ClusterExchange::ClusterExchange(const RankComm &comm, std::vector<std::vector<int>> need) : m_comm(&comm), m_recv(std::move(need))
 {
-  m_recv.resize(comm.size());
-  for (std::vector<int> &v : m_recv) {
-    std::sort(v.begin(), v.end());
-    v.erase(std::unique(v.begin(), v.end()), v.end());
-  }
+  collectively(comm, [&] {
+    m_recv.resize(comm.size());
+    for (std::vector<int> &v : m_recv) {
+      std::sort(v.begin(), v.end());
+      v.erase(std::unique(v.begin(), v.end()), v.end());
+    }
+  });
   m_send = comm.exchange(m_recv);
 }
 
-std::vector<std::vector<double>> exchange_values(const RankComm &comm, const std::vector<std::vector<double>> &send)
+std::vector<std::vector<double>> exchange_values(const RankComm &comm, const std::vector<std::vector<double>> &send, const char *what)
 {
   const int P = comm.size();
-  std::vector<std::vector<int>> sizes(P);
-  for (int q = 0; q < P; ++q) {
-    if (send[q].size() > static_cast<std::size_t>(std::numeric_limits<int>::max())) throw std::length_error("exchange: a record too large for one message");
-    if (!send[q].empty()) sizes[q] = {static_cast<int>(send[q].size())};
-  }
+  std::vector<std::vector<int>> sizes;
+  collectively(comm, [&] {
+    sizes.resize(P);
+    for (int q = 0; q < P; ++q)
+      if (!send[q].empty()) sizes[q] = {message_count(send[q].size(), std::string(what) + " to rank " + std::to_string(q))};
+  });
   const std::vector<std::vector<int>> from = comm.exchange(sizes);
-  std::vector<std::vector<double>> recv(P);
-  for (int q = 0; q < P; ++q)
-    if (!from[q].empty()) recv[q].resize(static_cast<std::size_t>(from[q][0]));
+  std::vector<std::vector<double>> recv;
+  collectively(comm, [&] {
+    fault_point("Exchange");
+    recv.resize(P);
+    for (int q = 0; q < P; ++q)
+      if (!from[q].empty()) recv[q].resize(static_cast<std::size_t>(from[q][0]));
+  });
   comm.exchange(send, recv);
   return recv;
 }

@@ -5,6 +5,13 @@
 #include <stdexcept>
 #include <thread>
 
+// The controls of the test shim that replaces operator new (tests/mpi/fail_new.cpp); null unless
+// a test preloads it.
+extern "C" {
+void hssbem_fail_new_arm(long nth) __attribute__((weak));
+void hssbem_fail_new_disarm() __attribute__((weak));
+}
+
 namespace hssbem {
 
 namespace {
@@ -26,6 +33,7 @@ bool parse_fault_kind(const std::string &name, FaultKind *kind)
   else if (name == "oom") *kind = FaultKind::OutOfMemory;
   else if (name == "pause") *kind = FaultKind::Pause;
   else if (name == "unreadable") *kind = FaultKind::Unreadable;
+  else if (name == "alloc") *kind = FaultKind::Allocation;
   else return false;
   return true;
 }
@@ -40,7 +48,16 @@ void fault_point(const char *site)
   case FaultKind::OutOfMemory: throw std::bad_alloc();
   case FaultKind::Pause: std::this_thread::sleep_for(std::chrono::duration<double>(g_plan.seconds)); break;
   case FaultKind::Unreadable: break; // acts through fault_path()
+  case FaultKind::Allocation:
+    if (!hssbem_fail_new_arm) throw std::logic_error("-hssbem_fault_kind alloc needs the allocation shim of the tests preloaded");
+    hssbem_fail_new_arm(g_plan.count);
+    break;
   }
+}
+
+void fault_end(const char *site)
+{
+  if (g_armed && g_plan.site == site && g_plan.kind == FaultKind::Allocation && hssbem_fail_new_disarm) hssbem_fail_new_disarm();
 }
 
 std::string fault_path(const char *site, const std::string &path)

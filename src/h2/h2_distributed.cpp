@@ -85,9 +85,11 @@ H2DistributedProduct::H2DistributedProduct(const H2Matrix &K, const RankComm &co
   m_pot = ClusterExchange(comm, std::move(need_pot));
   m_row_up = ClusterExchange(comm, std::move(need_row_up));
   m_far_t = ClusterExchange(comm, std::move(need_far_t));
-  for (const auto &list : m_vals.sends()) m_boundary.insert(m_boundary.end(), list.begin(), list.end());
-  std::sort(m_boundary.begin(), m_boundary.end());
-  m_boundary.erase(std::unique(m_boundary.begin(), m_boundary.end()), m_boundary.end());
+  collectively(comm, [&] {
+    for (const auto &list : m_vals.sends()) m_boundary.insert(m_boundary.end(), list.begin(), list.end());
+    std::sort(m_boundary.begin(), m_boundary.end());
+    m_boundary.erase(std::unique(m_boundary.begin(), m_boundary.end()), m_boundary.end());
+  });
   // Traffic of one product with one column.
   for (int q = 0; q < P; ++q) {
     long long values = 0;
@@ -152,8 +154,7 @@ void H2DistributedProduct::far_potentials(const double *X, int ldx, int nrhs, st
   const H2Matrix &K = m_K;
   const ClusterTree &tree = K.tree();
   const int nc = tree.num_clusters(), w = K.col_block();
-  std::vector<DenseMatrix> xh(nc);
-  yh.assign(nc, DenseMatrix());
+  std::vector<DenseMatrix> xh;
   const auto moments = [&](int c) { return static_cast<int>(K.col_skeleton(c).size()); };
   const auto potentials = [&](int c) { return static_cast<int>(K.row_skeleton(c).size()); };
   const auto values = [&](int c) { return w * tree.cluster(c).size(); };
@@ -161,6 +162,9 @@ void H2DistributedProduct::far_potentials(const double *X, int ldx, int nrhs, st
 
   // 1–2. Moments below the parts; moments and boundary values to the ranks that read them.
   collectively(m_comm, [&] {
+    xh.resize(nc);
+    yh.assign(nc, DenseMatrix());
+    if (xv) xv->resize(nc);
     up.upward(m_up, X, ldx, xh);
     if (!xv) return;
     for (int c : m_boundary) {
@@ -193,7 +197,7 @@ void H2DistributedProduct::apply(const double *X, int ldx, double *Y, int ldy, i
   const H2Matrix &K = m_K;
   const ClusterTree &tree = K.tree();
   const int nc = tree.num_clusters(), w = K.col_block(), rb = K.row_block();
-  std::vector<DenseMatrix> yh, xv(nc);
+  std::vector<DenseMatrix> yh, xv;
   far_potentials(X, ldx, nrhs, yh, &xv);
   // 5. Downward through the parts, then the leaves.
   collectively(m_comm, [&] {
@@ -225,7 +229,7 @@ std::vector<DenseMatrix> H2DistributedProduct::skeleton_far_field(const double *
     const Passes down{m_K, m_first, nrhs, true};
     down.downward(m_down, yh, [&](int c) { return static_cast<int>(m_K.row_skeleton(c).size()); });
   });
-  for (int c = 0; c < m_K.tree().num_clusters(); ++c)
+  for (int c = 0; c < m_K.tree().num_clusters(); ++c) // frees only: nothing to fail
     if (!m_K.holds(c)) yh[c] = DenseMatrix();
   return yh;
 }
@@ -237,9 +241,13 @@ std::vector<DenseMatrix> H2DistributedProduct::skeleton_far_field_transposed(con
   const auto row_moments = [&](int c) { return static_cast<int>(K.row_skeleton(c).size()); };
   const auto col_potentials = [&](int c) { return static_cast<int>(K.col_skeleton(c).size()); };
   const Passes up{K, m_first, nrhs, true}, down{K, m_first, nrhs, false};
-  std::vector<DenseMatrix> yh(nc), xh(nc);
+  std::vector<DenseMatrix> yh, xh;
   // Row moments up through the parts, the parts' roots' to rank 0, up through the top.
-  collectively(m_comm, [&] { up.upward(m_up, Y, ldy, yh); });
+  collectively(m_comm, [&] {
+    yh.resize(nc);
+    xh.resize(nc);
+    up.upward(m_up, Y, ldy, yh);
+  });
   m_row_up.run(yh, nrhs, false, row_moments);
   // Far blocks transposed, summed per column cluster: this rank's own, and its shares of the
   // other ranks' column clusters (sent to their owners, which add them up).
@@ -264,7 +272,7 @@ std::vector<DenseMatrix> H2DistributedProduct::skeleton_far_field_transposed(con
   collectively(m_comm, [&] { down.downward(m_top_down, xh, col_potentials); });
   m_pot.run(xh, nrhs, true, col_potentials);
   collectively(m_comm, [&] { down.downward(m_down, xh, col_potentials); });
-  for (int c = 0; c < nc; ++c)
+  for (int c = 0; c < nc; ++c) // frees only: nothing to fail
     if (!K.holds(c)) xh[c] = DenseMatrix();
   return xh;
 }
@@ -388,9 +396,12 @@ std::optional<H2Matrix> gather_h2_matrix(const H2Matrix &K, const RankComm &comm
       for (const H2Block &B : K.near_blocks(c)) p.put_block(B);
     }
   };
-  std::vector<std::vector<double>> send(P), recv(P); // bytes, in doubles' storage (one allocation)
-  std::vector<std::vector<int>> sizes(P);
+  std::vector<std::vector<double>> send, recv; // bytes, in doubles' storage (one allocation)
+  std::vector<std::vector<int>> sizes;
   collectively(comm, [&] {
+    send.resize(P);
+    recv.resize(P);
+    sizes.resize(P);
     if (me == root) return;
     Packer count;
     pack(count);
@@ -402,8 +413,10 @@ std::optional<H2Matrix> gather_h2_matrix(const H2Matrix &K, const RankComm &comm
     sizes[root] = {static_cast<int>(send[root].size())};
   });
   const std::vector<std::vector<int>> from = comm.exchange(sizes);
-  for (int q = 0; q < P; ++q)
-    if (!from[q].empty()) recv[q].resize(static_cast<std::size_t>(from[q][0]));
+  collectively(comm, [&] {
+    for (int q = 0; q < P; ++q)
+      if (!from[q].empty()) recv[q].resize(static_cast<std::size_t>(from[q][0]));
+  });
   comm.exchange(send, recv);
   send.clear();
   std::optional<H2Matrix> whole;

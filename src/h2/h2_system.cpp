@@ -31,15 +31,20 @@ std::vector<double> H2BemSystem::diagonal(const SystemSelection &sel) const
 }
 
 H2DistributedSystem::H2DistributedSystem(const BemOperator &op, const H2Options &options, const std::vector<int> &node_part, const RankComm &comm)
-  : m_K(std::make_unique<H2Matrix>(compress_bem_operator_h2(op, options, node_part, comm))), m_product(std::make_unique<H2DistributedProduct>(*m_K, comm))
 {
+  H2Matrix K = compress_bem_operator_h2(op, options, node_part, comm);
+  collectively(comm, [&] { m_K = std::make_unique<H2Matrix>(std::move(K)); });
+  m_product = make_unique_collectively<H2DistributedProduct>(comm, *m_K, comm);
 }
 
 std::vector<double> H2DistributedSystem::rhs(const SystemSelection &sel) const
 {
   const int n = num_points();
-  const std::vector<double> xk = local_k_input(*m_K, first_point(), n, sel, nullptr);
-  std::vector<double> b(3L * n);
+  std::vector<double> xk, b;
+  collectively(m_product->comm(), [&] {
+    xk = local_k_input(*m_K, first_point(), n, sel, nullptr);
+    b.resize(3L * n);
+  });
   m_product->apply(xk.data(), m_K->col_block() * n, b.data(), 3 * n);
   return b;
 }
@@ -47,7 +52,7 @@ std::vector<double> H2DistributedSystem::rhs(const SystemSelection &sel) const
 void H2DistributedSystem::apply(const SystemSelection &sel, const double *x, double *y) const
 {
   const int n = num_points();
-  const std::vector<double> xk = local_k_input(*m_K, first_point(), n, sel, x);
+  const std::vector<double> xk = collectively(m_product->comm(), [&] { return local_k_input(*m_K, first_point(), n, sel, x); });
   m_product->apply(xk.data(), m_K->col_block() * n, y, 3 * n);
 }
 

@@ -27,21 +27,24 @@ void put_columns(std::vector<DenseMatrix> &whole, const std::vector<DenseMatrix>
   }
 }
 
-/// The sketch through a matrix's two far-field passes: far(X, ldx, q) and far_t(Y, ldy, q), fed
-/// with this rank's rows (from point `first`, `count` points) of random inputs drawn for all n.
+/// The sketch through a matrix's two far-field passes: far(X, ldx, q) and far_t(Y, ldy, q)
+/// (collective on comm, failure-atomic), fed with this rank's rows (from point `first`) of
+/// random inputs drawn for all n; the local work between them in agreements.
 template <class Far, class FarT>
-FarFieldSketch sketch_passes(const H2Matrix &K, int p, unsigned seed, int first, const Far &far, const FarT &far_t)
+FarFieldSketch sketch_passes(const H2Matrix &K, const RankComm &comm, int p, unsigned seed, int first, const Far &far, const FarT &far_t)
 {
   const ClusterTree &tree = K.tree();
   const int nc = tree.num_clusters(), n = tree.num_points(), w = K.col_block(), rb = K.row_block();
   FarFieldSketch s;
   s.columns = p;
-  s.row.resize(nc);
-  s.col.resize(nc);
-  for (int c = 0; c < nc; ++c) {
-    s.row[c] = DenseMatrix(K.row_interpolation(c).rank(), p);
-    s.col[c] = DenseMatrix(K.col_interpolation(c).rank(), p);
-  }
+  collectively(comm, [&] {
+    s.row.resize(nc);
+    s.col.resize(nc);
+    for (int c = 0; c < nc; ++c) {
+      s.row[c] = DenseMatrix(K.holds(c) ? K.row_interpolation(c).rank() : 0, p); // other ranks' clusters: no rows here
+      s.col[c] = DenseMatrix(K.holds(c) ? K.col_interpolation(c).rank() : 0, p);
+    }
+  });
   std::mt19937_64 gen(seed);
   std::normal_distribution<double> normal;
   const double scale = 1.0 / std::sqrt(static_cast<double>(p));
@@ -53,14 +56,20 @@ FarFieldSketch sketch_passes(const H2Matrix &K, int p, unsigned seed, int first,
   for (int j0 = 0; j0 < p; j0 += chunk) {
     const int q = std::min(chunk, p - j0);
     // Random K inputs on H and G columns (slots 0-5; a pressure column, slot 6, takes no part).
-    X.assign(static_cast<std::size_t>(w) * n * q, 0.0);
-    for (int j = 0; j < q; ++j)
-      for (int k = 0; k < n; ++k)
-        for (int t = 0; t < std::min(w, 6); ++t) X[static_cast<std::size_t>(j) * w * n + static_cast<std::size_t>(w) * k + t] = scale * normal(gen);
-    put_columns(s.row, far(X.data() + static_cast<std::size_t>(w) * first, w * n, q), j0);
-    Y.resize(static_cast<std::size_t>(rb) * n * q);
-    for (double &v : Y) v = scale * normal(gen);
-    put_columns(s.col, far_t(Y.data() + static_cast<std::size_t>(rb) * first, rb * n, q), j0);
+    collectively(comm, [&] {
+      X.assign(static_cast<std::size_t>(w) * n * q, 0.0);
+      for (int j = 0; j < q; ++j)
+        for (int k = 0; k < n; ++k)
+          for (int t = 0; t < std::min(w, 6); ++t) X[static_cast<std::size_t>(j) * w * n + static_cast<std::size_t>(w) * k + t] = scale * normal(gen);
+    });
+    std::vector<DenseMatrix> part = far(X.data() + static_cast<std::size_t>(w) * first, w * n, q);
+    collectively(comm, [&] {
+      put_columns(s.row, part, j0);
+      Y.resize(static_cast<std::size_t>(rb) * n * q);
+      for (double &v : Y) v = scale * normal(gen);
+    });
+    part = far_t(Y.data() + static_cast<std::size_t>(rb) * first, rb * n, q);
+    put_columns(s.col, part, j0); // copies into storage that exists: nothing to fail
   }
   return s;
 }
@@ -70,18 +79,15 @@ FarFieldSketch sketch_passes(const H2Matrix &K, int p, unsigned seed, int first,
 FarFieldSketch far_field_sketch(const H2Matrix &K, int p, unsigned seed)
 {
   return sketch_passes(
-    K, p, seed, 0, [&](const double *X, int ldx, int q) { return K.skeleton_far_field(X, ldx, q); },
+    K, SerialComm(), p, seed, 0, [&](const double *X, int ldx, int q) { return K.skeleton_far_field(X, ldx, q); },
     [&](const double *Y, int ldy, int q) { return K.skeleton_far_field_transposed(Y, ldy, q); });
 }
 
 FarFieldSketch far_field_sketch(const H2DistributedProduct &K, int p, unsigned seed)
 {
-  FarFieldSketch s = sketch_passes(
-    K.matrix(), p, seed, K.first_point(), [&](const double *X, int ldx, int q) { return K.skeleton_far_field(X, ldx, q); },
+  return sketch_passes(
+    K.matrix(), K.comm(), p, seed, K.first_point(), [&](const double *X, int ldx, int q) { return K.skeleton_far_field(X, ldx, q); },
     [&](const double *Y, int ldy, int q) { return K.skeleton_far_field_transposed(Y, ldy, q); });
-  for (int c = 0; c < K.matrix().tree().num_clusters(); ++c) // other ranks' clusters: no rows here
-    if (!K.matrix().holds(c)) s.row[c] = DenseMatrix(0, p), s.col[c] = DenseMatrix(0, p);
-  return s;
 }
 
 } // namespace hssbem

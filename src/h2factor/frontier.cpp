@@ -86,31 +86,26 @@ Frontier::Frontier(const H2Matrix &K, const FarFieldSketch &sketch, const Patter
   : m_K(K), m_tree(K.tree()), m_part(K.partition()), m_sketch(sketch), m_pat(pattern), m_w(K.col_block()), m_single(single), m_box_part(std::move(part)),
     m_comm(comm ? comm : &one_rank())
 {
-  if (!m_box_part.empty() && m_box_part.size() != static_cast<std::size_t>(m_tree.num_clusters())) throw std::invalid_argument("H2 factorization: a part list of the wrong length");
-  if (m_comm->size() > 1) {
-    if (m_box_part.empty()) throw std::invalid_argument("H2 factorization: several ranks need the tree's parts");
-    m_owner = cluster_owners(m_tree, m_comm->size());
-    m_rank = m_comm->rank();
-  }
-  const int nc = m_tree.num_clusters();
-  m_in_front.assign(nc, 0);
-  m_D.resize(nc);
-  m_Eu.resize(nc);
-  m_Ew.resize(nc);
-  m_Phi.resize(nc);
-  m_Psi.resize(nc);
-  m_M.resize(nc);
-  m_F.resize(nc);
-  m_X.resize(nc);
-  m_G.resize(nc);
-  m_cross.resize(nc);
-  m_side.resize(nc);
-  m_fill_cols.resize(nc);
-  m_fill_col_blocks.resize(nc);
-  m_opened.resize(nc);
-  m_front = m_tree.leaves();
-  for (int c : m_front) m_in_front[c] = 1;
-  collectively(*m_comm, [&] { init_leaves(); }); // this rank's; every leaf's unknowns and Φ, Ψ
+  collectively(*m_comm, [&] { // this rank's leaves; every leaf's unknowns and Φ, Ψ
+    if (!m_box_part.empty() && m_box_part.size() != static_cast<std::size_t>(m_tree.num_clusters())) throw std::invalid_argument("H2 factorization: a part list of the wrong length");
+    if (m_comm->size() > 1) {
+      if (m_box_part.empty()) throw std::invalid_argument("H2 factorization: several ranks need the tree's parts");
+      m_owner = cluster_owners(m_tree, m_comm->size());
+      m_rank = m_comm->rank();
+    }
+    const std::size_t nc = static_cast<std::size_t>(m_tree.num_clusters());
+    m_in_front.assign(nc, 0);
+    for (auto *v : {&m_D, &m_cross, &m_fill_cols}) v->resize(nc);
+    for (auto *v : {&m_Eu, &m_Ew}) v->resize(nc);
+    for (auto *v : {&m_Phi, &m_Psi}) v->resize(nc);
+    for (auto *v : {&m_M, &m_F, &m_X, &m_G}) v->resize(nc);
+    m_side.resize(nc);
+    m_fill_col_blocks.resize(nc);
+    m_opened.resize(nc);
+    m_front = m_tree.leaves();
+    for (int c : m_front) m_in_front[c] = 1;
+    init_leaves();
+  });
   if (!m_owner.empty()) exchange_leaf_copies();
   note_bytes();
 }
@@ -379,20 +374,23 @@ DenseMatrix Frontier::assemble_close(int P, int Q, int l)
 void Frontier::merge(int l)
 {
   std::vector<int> front;
-  for (int c : m_tree.clusters_at_level(l - 1))
-    if (m_box_part.empty() || m_box_part[c] >= 0) front.push_back(c);
-  for (int c : m_tree.leaves())
-    if (m_tree.cluster(c).level < l - 1) front.push_back(c);
-  if (!m_box_part.empty()) // the parts' roots (and boxes under them) that stop below level l - 1
-    for (int c : m_front)
-      if (m_tree.cluster(c).level >= l && m_box_part[m_tree.cluster(c).parent] < 0) front.push_back(c);
-  // Unknowns and restricted bases of the new boxes: children's, concatenated and transferred.
-  std::vector<int> parents;
-  for (int P : front)
-    if (m_tree.cluster(P).level == l - 1 && m_tree.cluster(P).left >= 0 && mine(P)) parents.push_back(P);
-  collectively(*m_comm, [&] { merge_bases(parents); });
-  std::vector<char> in_front(m_tree.num_clusters(), 0);
-  for (int P : front) in_front[P] = 1;
+  std::vector<char> in_front;
+  collectively(*m_comm, [&] {
+    for (int c : m_tree.clusters_at_level(l - 1))
+      if (m_box_part.empty() || m_box_part[c] >= 0) front.push_back(c);
+    for (int c : m_tree.leaves())
+      if (m_tree.cluster(c).level < l - 1) front.push_back(c);
+    if (!m_box_part.empty()) // the parts' roots (and boxes under them) that stop below level l - 1
+      for (int c : m_front)
+        if (m_tree.cluster(c).level >= l && m_box_part[m_tree.cluster(c).parent] < 0) front.push_back(c);
+    // Unknowns and restricted bases of the new boxes: children's, concatenated and transferred.
+    std::vector<int> parents;
+    for (int P : front)
+      if (m_tree.cluster(P).level == l - 1 && m_tree.cluster(P).left >= 0 && mine(P)) parents.push_back(P);
+    merge_bases(parents);
+    in_front.assign(m_tree.num_clusters(), 0);
+    for (int P : front) in_front[P] = 1;
+  });
   if (!m_owner.empty()) prepare_cross_merge(l, front, in_front);
   collectively(*m_comm, [&] { merge_blocks(l, front, in_front); });
 }

@@ -201,6 +201,14 @@ private:
   void share_top_columns();
   /// The top's row offsets: box s of the frontier holds rows off[s] .. off[s + 1] − 1.
   std::vector<int> top_offsets() const;
+  /// The positions of this rank's boxes in the frontier.
+  std::vector<int> my_positions() const;
+  /// Several ranks, not rank 0: the top's rows of this rank's boxes (positions `here`) as one
+  /// message to rank 0 in r (halves: blocks rounded to single precision, two to a value); the
+  /// blocks move out of the store.
+  void pack_top_rows(const std::vector<int> &here, bool halves, std::vector<double> &r);
+  /// Rank 0: the other ranks' rows of the top (pack_top_rows' messages) into the sink.
+  void unpack_top_rows(std::vector<std::vector<double>> &recv, const std::vector<int> &here, bool halves, TopSink &sink) const;
   DenseMatrix leaf_col_basis(int c) const;
   DenseMatrix leaf_near(int a, int b) const;
   void add_regularisation(DenseMatrix &B, int P, int Q) const;

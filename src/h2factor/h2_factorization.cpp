@@ -53,7 +53,10 @@ const FarFieldSketch &H2FactorCache::sketch(int p, double *made)
   for (const auto &s : m_sketches)
     if (s->columns == p) return *s;
   Timer t;
-  m_sketches.push_back(std::make_unique<FarFieldSketch>(m_dist ? far_field_sketch(*m_dist, p) : far_field_sketch(*m_K, p)));
+  const SerialComm one;
+  const RankComm &comm = m_dist ? m_dist->comm() : one;
+  FarFieldSketch s = m_dist ? far_field_sketch(*m_dist, p) : far_field_sketch(*m_K, p);
+  collectively(comm, [&] { m_sketches.push_back(std::make_unique<FarFieldSketch>(std::move(s))); });
   if (made) *made = t.seconds();
   return *m_sketches.back();
 }
@@ -64,7 +67,8 @@ void check_options(const H2FactorOptions &o)
 {
   if (!(o.rel_tol > 0 && o.rel_tol < 1)) throw std::invalid_argument("H2 factorization: the relative tolerance must lie in (0, 1)");
   if (o.leaf_size < 0) throw std::invalid_argument("H2 factorization: the leaf size must be 0 (the matrix's) or positive");
-  if (o.sketch_columns < 0) throw std::invalid_argument("H2 factorization: the sketch size must be 0 (from the tolerance) or positive");
+  if (o.sketch_columns < 0 || o.sketch_columns > kMaxSketchColumns)
+    throw std::invalid_argument("H2 factorization: the sketch size must be 0 (from the tolerance) or at most " + std::to_string(kMaxSketchColumns));
   if (o.top_size < 0) throw std::invalid_argument("H2 factorization: the top size must be >= 0");
 }
 
@@ -158,13 +162,16 @@ std::string top_breakdown(const h2f::TopBlock &top)
 /// all) where the 9 600-unknown dense top it left behind takes about 3 s.
 bool dense_top_is_cheaper(const h2f::Frontier &F, const std::vector<int> &boxes, double n, const RankComm &comm, int mixed_from)
 {
-  double level = 0;
-  for (int X : boxes) {
-    const double m = static_cast<double>(F.active(X).size());
-    double around = m;
-    for (int Y : F.neighbours(X)) around += static_cast<double>(F.active(Y).size());
-    level += 2 * around * around * m;
-  }
+  double level = collectively(comm, [&] {
+    double flops = 0;
+    for (int X : boxes) {
+      const double m = static_cast<double>(F.active(X).size());
+      double around = m;
+      for (int Y : F.neighbours(X)) around += static_cast<double>(F.active(Y).size());
+      flops += 2 * around * around * m;
+    }
+    return flops;
+  });
   comm.sum(&level, 1);
   const double top = 2.0 / 3.0 * n * n * n / (mixed_from > 0 && n >= mixed_from ? 2.0 : 1.0);
   return top < level;
@@ -257,89 +264,81 @@ LevelSchedule level_schedule(const h2f::Frontier &F, const std::vector<int> &box
 /// Run step(X) for every box of the schedule on the OpenMP threads (OpenBLAS serial, but threaded
 /// for a box that runs alone), each as soon as the boxes it waits for are done, the earliest
 /// ready box first; finish(X) runs after step(X), one at a time, with no step starting
-/// meanwhile; start(X) likewise before it.
+/// meanwhile; start(X) likewise before it. The first exception of any of them stops the level
+/// and is rethrown after the region: the region itself allocates nothing (the ready boxes are a
+/// heap in storage reserved before it) and lets nothing escape (std::terminate).
 template <class Start, class Step, class Finish>
 void run_schedule(const LevelSchedule &s, const Start &start, const Step &step, const Finish &finish)
 {
   const int n = static_cast<int>(s.order.size());
-  std::vector<int> waits = s.waits;
-  std::set<int> ready;
+  std::vector<int> waits = s.waits, ready; // ready: a min-heap of positions
+  ready.reserve(n);
   for (int j = 0; j < n; ++j)
-    if (waits[j] == 0) ready.insert(j);
+    if (waits[j] == 0) ready.push_back(j);
+  std::make_heap(ready.begin(), ready.end(), std::greater<int>());
   std::mutex mu;
   std::condition_variable cv;
   int done = 0;
   std::exception_ptr error;
   const bool par = parallel_over_clusters(static_cast<std::size_t>(n));
   SerialBlas serial(par);
+  // One box's turn: false when the level is over (all done, or an error).
+  const auto turn = [&]() -> bool {
+    int j = -1;
+    bool alone = false, ok = false;
+    {
+      std::unique_lock<std::mutex> lock(mu);
+      cv.wait(lock, [&] { return !ready.empty() || done == n || error; });
+      if (done == n || error) return false;
+      std::pop_heap(ready.begin(), ready.end(), std::greater<int>());
+      j = ready.back();
+      ready.pop_back();
+      alone = par && s.alone[j]; // then nothing else runs or can start meanwhile
+      if (alone) serial.widen(true);
+      try {
+        start(s.order[j]);
+      } catch (...) {
+        error = std::current_exception();
+      }
+      ok = !error; // read under the lock: another thread may be setting it
+    }
+    if (ok) try {
+        step(s.order[j]);
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(mu);
+        if (!error) error = std::current_exception();
+        ok = false;
+      }
+    {
+      std::lock_guard<std::mutex> lock(mu);
+      if (alone) serial.widen(false);
+      if (ok) try {
+          finish(s.order[j]);
+        } catch (...) {
+          if (!error) error = std::current_exception();
+        }
+      ++done;
+      for (int k : s.after[j])
+        if (--waits[k] == 0) { // within the capacity reserved above: no allocation
+          ready.push_back(k);
+          std::push_heap(ready.begin(), ready.end(), std::greater<int>());
+        }
+    }
+    cv.notify_all();
+    return true;
+  };
 #pragma omp parallel if (par)
   {
-    for (;;) {
-      int j = -1;
-      bool alone = false, ok = false;
-      {
-        std::unique_lock<std::mutex> lock(mu);
-        cv.wait(lock, [&] { return !ready.empty() || done == n || error; });
-        if (done == n || error) break;
-        j = *ready.begin();
-        ready.erase(ready.begin());
-        alone = par && s.alone[j]; // then nothing else runs or can start meanwhile
-        if (alone) serial.widen(true);
-        try {
-          start(s.order[j]);
-        } catch (...) {
-          error = std::current_exception();
-        }
-        ok = !error; // read under the lock: another thread may be setting it
+    try {
+      while (turn()) {
       }
-      if (ok) try {
-          step(s.order[j]);
-        } catch (...) {
-          std::lock_guard<std::mutex> lock(mu);
-          if (!error) error = std::current_exception();
-          ok = false;
-        }
-      {
-        std::lock_guard<std::mutex> lock(mu);
-        if (alone) serial.widen(false);
-        if (ok) try {
-            finish(s.order[j]);
-          } catch (...) {
-            if (!error) error = std::current_exception();
-          }
-        ++done;
-        for (int k : s.after[j])
-          if (--waits[k] == 0) ready.insert(k);
-      }
+    } catch (...) { // the lock or the wait itself failed (std::system_error): stop every thread
+      std::lock_guard<std::mutex> lock(mu);
+      if (!error) error = std::current_exception();
       cv.notify_all();
     }
   }
   if (error) std::rethrow_exception(error);
-}
-
-} // namespace
-
-namespace {
-
-/// Run fn on this rank and agree with the others: a breakdown on any rank throws H2Breakdown on
-/// every rank (the PC fails everywhere); any other exception throws on its rank and PeerFault on
-/// the others (as collectively()).
-template <class Fn>
-void agreed(const RankComm &comm, Fn &&fn)
-{
-  std::string broke;
-  std::exception_ptr err;
-  try {
-    fn();
-  } catch (const H2Breakdown &e) {
-    broke = e.what();
-  } catch (...) {
-    err = std::current_exception();
-  }
-  const double worst = comm.max(err ? 2.0 : broke.empty() ? 0.0 : 1.0);
-  if (err) std::rethrow_exception(err);
-  if (worst >= 2) throw PeerFault();
-  if (worst >= 1) throw H2Breakdown(broke.empty() ? "H2 factorization broke down on another rank" : broke);
 }
 
 } // namespace
@@ -404,12 +403,13 @@ H2Factorization::H2Factorization(H2FactorCache &cache, const SystemSelection &se
 }
 
 H2Factorization::H2Factorization(H2FactorCache &cache, const RankComm &comm, const SystemSelection &sel, const H2FactorOptions &options, const std::vector<double> *rigid_modes)
-  : m_K(cache.matrix()), m_comm(&comm), m_options(options), m_f(std::make_unique<Factors>())
+  : m_K(cache.matrix()), m_comm(&comm), m_options(options)
 {
   PhaseScope whole(Phase::H2Factorization);
   const ClusterTree &tree = m_K.tree();
   const int P = comm.size(), me = comm.rank();
   collectively(comm, [&] {
+    m_f = std::make_unique<Factors>();
     check_options(options);
     if (!cache.distributed()) throw std::invalid_argument("H2 factorization: the distributed factorization needs a distributed matrix's cache");
     if (P > 1 && tree.num_parts() != P) throw std::invalid_argument("H2 factorization: the tree has " + std::to_string(tree.num_parts()) + " parts for " + std::to_string(P) + " ranks");
@@ -434,7 +434,10 @@ H2Factorization::H2Factorization(H2FactorCache &cache, const RankComm &comm, con
 
   Timer timer;
   const bool single_store = m_stats.single_panels && m_f->pattern.dofs() > options.top_size;
-  auto front = std::make_unique<h2f::Frontier>(m_K, *sketch, m_f->pattern, single_store, tree.num_parts() > 1 ? cluster_parts(tree) : std::vector<int>{}, &comm);
+  std::vector<int> parts;
+  if (tree.num_parts() > 1) parts = collectively(comm, [&] { return cluster_parts(tree); });
+  std::optional<h2f::Frontier> front; // no allocation of its own before its collective construction
+  front.emplace(m_K, *sketch, m_f->pattern, single_store, std::move(parts), &comm);
   const int last = last_level(tree, tree.num_parts() > 1);
   const int l0 = std::max(first_level(tree, options.leaf_size, options.rel_tol), last);
   for (int l = tree.levels() - 1; l > l0; --l) front->merge(l);
@@ -449,23 +452,27 @@ H2Factorization::H2Factorization(H2FactorCache &cache, const RankComm &comm, con
   return_free_memory(); // what the levels freed, before the top is allocated
   // The top spread over the ranks (single precision, several ranks), or on rank 0.
   const bool spread = single_top && P > 1 && options.spread_top;
-  h2f::BlockGrid grid;
+  std::optional<h2f::BlockGrid> grid;
   h2f::SingleTop lone;
-  h2f::GridSink to_grid(grid);
+  std::optional<h2f::GridSink> to_grid;
   h2f::SingleSink to_single(lone);
   std::vector<float> columns;
   std::vector<double> row_sums;
   int spread_n = 0;
+  collectively(comm, [&] {
+    if (spread) m_f->spread = std::make_unique<h2f::SpreadTop>();
+    else to_grid.emplace(grid.emplace());
+  });
   if (spread)
     spread_n = front->take_top_spread(h2f::SpreadTop::kBlock, &columns, &row_sums, &m_f->top_own, &m_f->top_pos);
   else
-    front->take_top_ranks(&m_f->top_dofs, &m_f->top_from, &m_f->top_own, single_top ? static_cast<h2f::TopSink &>(to_single) : to_grid);
+    front->take_top_ranks(&m_f->top_dofs, &m_f->top_from, &m_f->top_own, single_top ? static_cast<h2f::TopSink &>(to_single) : *to_grid);
   const std::size_t front_peak = front->peak_bytes(), front_left = front->store_bytes();
   front.reset(); // spent: its memory goes before the top's LU
   return_free_memory();
-  agreed(comm, [&] {
+  collectively<H2Breakdown>(comm, [&] {
     fault_point("H2FTop");
-    if (!spread && me == 0 && !(single_top ? m_f->top.factor_single(std::move(lone), single_trial_tol(options)) : m_f->top.factor(std::move(grid), options.mixed_top_from)))
+    if (!spread && me == 0 && !(single_top ? m_f->top.factor_single(std::move(lone), single_trial_tol(options)) : m_f->top.factor(std::move(*grid), options.mixed_top_from)))
       throw H2Breakdown(top_breakdown(m_f->top));
     // This rank's steps and top unknowns on its own rows (the steps touch no other rank's).
     const int offset = 3 * m_first, n = 3 * m_count;
@@ -479,15 +486,7 @@ H2Factorization::H2Factorization(H2FactorCache &cache, const RankComm &comm, con
       for (std::vector<int> *v : {&st.box, &st.S, &st.R, &st.I}) shift(*v);
     shift(m_f->top_own);
   });
-  if (spread) { // collective, after the agreement: every rank reaches it
-    m_f->spread = std::make_unique<h2f::SpreadTop>();
-    if (!m_f->spread->factor(comm, spread_n, std::move(columns), std::move(row_sums), single_trial_tol(options))) {
-      char trial[32];
-      std::snprintf(trial, sizeof trial, "%.1e", m_f->spread->trial_error());
-      throw H2Breakdown("H2 factorization broke down: the top block (" + std::to_string(spread_n) + " unknowns, spread over the ranks) is singular to single precision (a trial solve is off by " +
-                        trial + "; a tolerance below 1e-5 factors it in double)");
-    }
-  }
+  if (spread) m_f->spread->factor(comm, spread_n, std::move(columns), std::move(row_sums), single_trial_tol(options)); // collective; throws H2Breakdown on every rank
   m_stats.time_top = timer.seconds();
   m_stats.top_size = static_cast<int>(comm.max(spread ? spread_n : m_f->top.size()));
   m_stats.top_spread = spread ? P : 0;
@@ -504,17 +503,21 @@ void H2Factorization::eliminate_levels(h2f::Frontier &front, const RankComm &com
   const ClusterTree &tree = m_K.tree();
   const H2FactorOptions &options = m_options;
   Timer timer;
+  collectively(comm, [&] { m_stats.levels.reserve(static_cast<std::size_t>(tree.levels())); }); // push_back below never allocates
   for (int l = l0; l >= last; --l) {
     double active = static_cast<double>(front.active_total());
     comm.sum(&active, 1);
     if (active <= options.top_size || !comm.any(front.level_has_far_field(l))) break;
     std::vector<int> boxes; // this rank's boxes of the level
-    bool any = false;
-    for (int X : tree.clusters_at_level(l))
-      if (front.steps_at(X)) {
-        any = true;
-        if (front.mine(X)) boxes.push_back(X);
-      }
+    const bool any = collectively(comm, [&] {
+      bool some = false; // the same on every rank: every rank knows the frontier's boxes
+      for (int X : tree.clusters_at_level(l))
+        if (front.steps_at(X)) {
+          some = true;
+          if (front.mine(X)) boxes.push_back(X);
+        }
+      return some;
+    });
     if (!any) break; // above the parts
     if (options.top_when_cheaper && dense_top_is_cheaper(front, boxes, active, comm, options.mixed_top_from)) break;
     H2FactorLevelStats ls;
@@ -524,11 +527,15 @@ void H2Factorization::eliminate_levels(h2f::Frontier &front, const RankComm &com
     timer.restart();
     {
       PhaseScope phase(Phase::H2Eliminate);
-      std::vector<h2f::Step> steps(tree.num_clusters());
-      std::vector<double> flops(tree.num_clusters(), 0.0), t_skel(tree.num_clusters(), 0.0), t_elim(tree.num_clusters(), 0.0);
-      std::vector<std::vector<h2f::NewFill>> fills(tree.num_clusters());
+      std::vector<h2f::Step> steps;
+      std::vector<double> flops, t_skel, t_elim;
+      std::vector<std::vector<h2f::NewFill>> fills;
       LevelSchedule schedule;
-      agreed(comm, [&] {
+      collectively<H2Breakdown>(comm, [&] {
+        const std::size_t nc = static_cast<std::size_t>(tree.num_clusters());
+        steps.resize(nc);
+        for (auto *v : {&flops, &t_skel, &t_elim}) v->assign(nc, 0.0);
+        fills.resize(nc);
         schedule = level_schedule(front, boxes, tree.num_clusters());
         run_schedule(
           schedule, [&](int X) { front.claim(X); },
@@ -549,20 +556,22 @@ void H2Factorization::eliminate_levels(h2f::Frontier &front, const RankComm &com
       });
       front.finish_level(); // the other sides of the cross blocks
       // The solve replays the steps in the schedule's order (dependencies come first in it).
-      for (int X : schedule.order) {
-        const h2f::Step &st = steps[X];
-        ls.boxes += 1;
-        ls.mean_candidates += st.candidates;
-        ls.max_candidates = std::max(ls.max_candidates, st.candidates);
-        ls.mean_rank += static_cast<double>(st.S.size());
-        ls.max_rank = std::max(ls.max_rank, static_cast<int>(st.S.size()));
-        ls.eliminated += static_cast<long long>(st.R.size());
-        m_stats.flops_schur += flops[X];
-        m_stats.time_skeleton += t_skel[X];
-        m_stats.time_eliminate += t_elim[X];
-        ls.bytes += steps[X].bytes();
-        m_f->steps.push_back(std::move(steps[X]));
-      }
+      collectively(comm, [&] {
+        for (int X : schedule.order) {
+          const h2f::Step &st = steps[X];
+          ls.boxes += 1;
+          ls.mean_candidates += st.candidates;
+          ls.max_candidates = std::max(ls.max_candidates, st.candidates);
+          ls.mean_rank += static_cast<double>(st.S.size());
+          ls.max_rank = std::max(ls.max_rank, static_cast<int>(st.S.size()));
+          ls.eliminated += static_cast<long long>(st.R.size());
+          m_stats.flops_schur += flops[X];
+          m_stats.time_skeleton += t_skel[X];
+          m_stats.time_eliminate += t_elim[X];
+          ls.bytes += steps[X].bytes();
+          m_f->steps.push_back(std::move(steps[X]));
+        }
+      });
     }
     if (ls.boxes > 0) {
       ls.mean_candidates /= ls.boxes;
@@ -576,7 +585,7 @@ void H2Factorization::eliminate_levels(h2f::Frontier &front, const RankComm &com
       m_stats.time_merge += t.seconds();
     }
     ls.seconds = timer.seconds();
-    m_stats.levels.push_back(ls);
+    m_stats.levels.push_back(ls); // within the capacity reserved above
   }
 }
 
@@ -635,10 +644,12 @@ void H2Factorization::solve_local(const double *b, double *x) const
   const RankComm &comm = *m_comm;
   const int P = comm.size(), me = comm.rank();
   const std::size_t n = 3 * static_cast<std::size_t>(m_count);
-  std::vector<double> y(b, b + n), work;
+  std::vector<double> y, work;
   if (m_f->spread) { // every rank holds the top's right-hand side whole, and solves its part
-    std::vector<double> t(static_cast<std::size_t>(m_f->spread->size()), 0.0);
+    std::vector<double> t;
     collectively(comm, [&] {
+      y.assign(b, b + n);
+      t.assign(static_cast<std::size_t>(m_f->spread->size()), 0.0);
       for (const h2f::Step &s : m_f->steps) s.forward(y.data(), work);
       for (std::size_t i = 0; i < m_f->top_own.size(); ++i) t[m_f->top_pos[i]] = y[m_f->top_own[i]];
     });
@@ -651,8 +662,11 @@ void H2Factorization::solve_local(const double *b, double *x) const
     });
     return;
   }
-  std::vector<std::vector<double>> send(P), recv(P);
+  std::vector<std::vector<double>> send, recv;
   collectively(comm, [&] {
+    y.assign(b, b + n);
+    send.resize(P);
+    recv.resize(P);
     for (const h2f::Step &s : m_f->steps) s.forward(y.data(), work);
     const std::vector<int> &own = m_f->top_own;
     if (me != 0)
@@ -692,6 +706,21 @@ void H2Factorization::solve_local(const double *b, double *x) const
 } // namespace hssbem
 
 namespace hssbem {
+
+double h2_top_peak_bytes(const H2FactorOptions &o, long long unknowns, long long top_unknowns, int ranks)
+{
+  const double n2 = static_cast<double>(top_unknowns) * static_cast<double>(top_unknowns);
+  // As the factorization decides (single_store): panels in single precision, and levels below the top.
+  const bool single_panels = (o.single_panels < 0 ? o.rel_tol >= 1e-5 : o.single_panels == 1) && unknowns > o.top_size;
+  const bool reduced = top_in_single(static_cast<double>(top_unknowns), o);
+  const double vectors = 32.0 * static_cast<double>(top_unknowns); // pivots, offsets, the trial's and the solves' vectors
+  if (!reduced) return 16 * n2 + vectors;
+  if (!single_panels) return 12 * n2 + vectors;
+  if (ranks > 1 && o.spread_top) return 12 * n2 / ranks + vectors;
+  return 8 * n2 + vectors;
+}
+
+long long h2_top_unknowns_from_options(const H2FactorOptions &o, long long unknowns) { return unknowns <= o.top_size ? unknowns : 0; }
 
 double estimate_inverse_error(const H2Factorization &F, const std::function<void(const double *, double *)> &apply_a, int iterations, unsigned seed)
 {

@@ -3,11 +3,16 @@
 
 #include "frontier.hpp"
 
+#include "hssbem/h2factor/h2_factorization.hpp"
+
 #include "hssbem/core/blas_threads.hpp"
+#include "hssbem/core/fault.hpp"
 #include "hssbem/core/lapack.hpp"
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <string>
 #include <limits>
 #include <numeric>
 #include <stdexcept>
@@ -259,23 +264,39 @@ int SpreadTop::local_column(int c) const
   return (j / m_ranks) * kBlock + c % kBlock;
 }
 
-bool SpreadTop::factor(const RankComm &comm, int n, std::vector<float> local, std::vector<double> row_sums, double trial_tol)
+void SpreadTop::factor(const RankComm &comm, int n, std::vector<float> local, std::vector<double> row_sums, double trial_tol)
 {
   m_comm = &comm;
   m_n = n;
   m_ranks = comm.size();
   m_rank = comm.rank();
-  if (local.size() != static_cast<std::size_t>(n) * spread_columns(n, kBlock, m_rank, m_ranks) || row_sums.size() != static_cast<std::size_t>(n))
-    throw std::logic_error("H2 factorization: a spread top of the wrong size");
-  m_lu = std::move(local);
-  m_piv.assign(n, 0);
-  if (n == 0) return true;
-  if (comm.spread_getrf(n, kBlock, m_lu.data(), m_piv.data()) != 0) return false;
-  comm.sum(row_sums.data(), n); // b = A·1
-  solve(row_sums.data());
-  m_trial = 0;
-  for (double v : row_sums) m_trial = std::max(m_trial, std::abs(v - 1.0));
-  return m_trial <= trial_tol; // the same on every rank (x is); false for NaN too
+  collectively(comm, [&] {
+    check_spread_size(n, kBlock, m_ranks);
+    if (local.size() != static_cast<std::size_t>(n) * spread_columns(n, kBlock, m_rank, m_ranks) || row_sums.size() != static_cast<std::size_t>(n))
+      throw std::logic_error("H2 factorization: a spread top of the wrong size");
+    m_lu = std::move(local);
+    m_piv.assign(n, 0);
+  });
+  if (n == 0) return;
+  const int info = comm.spread_getrf(n, kBlock, m_lu.data(), m_piv.data());
+  if (info == 0) { // the same on every rank
+    comm.sum(row_sums.data(), n); // b = A·1
+    solve(row_sums.data());
+  }
+  // Each rank judges the trial on its own copy of x (the sums' rounding may differ by rank), and
+  // the agreement makes one verdict of them: a breakdown on any rank is one on every rank.
+  collectively<H2Breakdown>(comm, [&] {
+    m_trial = HUGE_VAL;
+    if (info == 0) {
+      m_trial = 0;
+      for (double v : row_sums) m_trial = std::max(m_trial, std::abs(v - 1.0));
+    }
+    if (m_trial <= trial_tol && !fault_armed("SpreadTopBreakdown")) return; // false for NaN too
+    char trial[32];
+    std::snprintf(trial, sizeof trial, info != 0 ? "a zero pivot" : "a trial solve off by %.1e", m_trial);
+    throw H2Breakdown("H2 factorization broke down: the top block (" + std::to_string(n) + " unknowns, spread over the ranks) is singular to single precision (" + trial +
+                      (fault_armed("SpreadTopBreakdown") ? ", injected fault at SpreadTopBreakdown" : "") + "; a tolerance below 1e-5 factors it in double)");
+  });
 }
 
 void SpreadTop::solve(double *x) const
@@ -284,11 +305,15 @@ void SpreadTop::solve(double *x) const
   if (n == 0) return;
   const std::size_t ld = static_cast<std::size_t>(n);
   const RankComm &comm = *m_comm;
+  std::vector<double> u, y, part, v;
+  collectively(comm, [&] {
+    for (auto *w : {&u, &y, &v}) w->assign(n, 0.0);
+    part.resize(kBlock);
+  });
   for (int i = 0; i < n; ++i)
     if (m_piv[i] - 1 != i) std::swap(x[i], x[m_piv[i] - 1]);
   // Forward, L unit lower: u gathers this rank's columns' updates; the owner of block k takes
   // the sum of every rank's to its rows, and solves.
-  std::vector<double> u(n, 0.0), y(n, 0.0), part(kBlock);
   for (int k = 0; k < blocks; ++k) {
     const int c0 = k * kBlock, c1 = std::min(n, c0 + kBlock), w = c1 - c0;
     std::copy(u.begin() + c0, u.begin() + c1, part.begin());
@@ -305,7 +330,6 @@ void SpreadTop::solve(double *x) const
   }
   // Backward, U: v gathers the updates from the right; the result goes to x, zero where other
   // ranks solve, and one sum makes it whole everywhere.
-  std::vector<double> v(n, 0.0);
   std::fill(x, x + n, 0.0);
   for (int k = blocks - 1; k >= 0; --k) {
     const int c0 = k * kBlock, c1 = std::min(n, c0 + kBlock), w = c1 - c0;

@@ -127,10 +127,12 @@ private:
 class SpreadTop {
 public:
   static constexpr int kBlock = 128;
-  /// Factor (collective). `local`: this rank's columns (n × spread_columns(n, kBlock, rank, P)),
-  /// `row_sums`: A·1 on this rank's rows of A, zero elsewhere (n entries). False on every rank
-  /// when the LU meets a zero pivot or its trial solve (A x = A·1) is off by more than trial_tol.
-  bool factor(const RankComm &comm, int n, std::vector<float> local, std::vector<double> row_sums, double trial_tol);
+  /// Factor (collective, failure-atomic). `local`: this rank's columns (n × spread_columns(n,
+  /// kBlock, rank, P)), `row_sums`: A·1 on this rank's rows of A, zero elsewhere (n entries).
+  /// Throws H2Breakdown on every rank when the LU meets a zero pivot or its trial solve
+  /// (A x = A·1) is off by more than trial_tol on any rank (fault site SpreadTopBreakdown: as if
+  /// on this rank), std::length_error beyond ScaLAPACK's 32-bit local indexing.
+  void factor(const RankComm &comm, int n, std::vector<float> local, std::vector<double> row_sums, double trial_tol);
   /// x ← A⁻¹ x, all n entries on every rank, in and out (collective).
   void solve(double *x) const;
   int size() const { return m_n; }

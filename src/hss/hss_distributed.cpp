@@ -15,6 +15,7 @@ HssPasses::HssPasses(const HssMatrix &K, const RankComm &comm)
 {
   const ClusterTree &tree = K.tree();
   const int nc = tree.num_clusters(), me = comm.rank();
+  collectively(comm, [&] { // local work, but a member that the collective constructors build first
   if (K.rank() != me) throw std::logic_error("HSS: the matrix belongs to rank " + std::to_string(K.rank()));
   above.assign(nc, 0);
   if (tree.num_parts() > 1) {
@@ -35,14 +36,17 @@ HssPasses::HssPasses(const HssMatrix &K, const RankComm &comm)
   top_up = clusters_by_level(tree, top, true);
   top_down = clusters_by_level(tree, top, false);
   down = clusters_by_level(tree, below, false);
+  });
 }
 
 HssDistributedProduct::HssDistributedProduct(const HssMatrix &K, const RankComm &comm) : m_K(K), m_comm(comm), m_passes(K, comm)
 {
   const ClusterTree &tree = K.tree();
   const int P = comm.size();
-  std::vector<std::vector<int>> need_moments(P), need_potentials(P);
+  std::vector<std::vector<int>> need_moments, need_potentials;
   collectively(comm, [&] {
+    need_moments.resize(P);
+    need_potentials.resize(P);
     for (int c = 0; c < tree.num_clusters(); ++c) {
       if (!K.holds(c)) continue;
       const Cluster &cl = tree.cluster(c);

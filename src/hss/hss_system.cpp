@@ -70,16 +70,23 @@ HssDistributedSystem::HssDistributedSystem(const BemOperator &op, const HssOptio
 }
 
 HssDistributedSystem::HssDistributedSystem(const BemOperator &op, HssMatrix K, const RankComm &comm)
-  : m_op(op), m_comm(comm), m_K(std::make_unique<HssMatrix>(std::move(K))), m_product(std::make_unique<HssDistributedProduct>(*m_K, comm))
+  : m_op(op), m_comm(comm)
 {
-  if (m_K->tree().num_points() != op.num_nodes()) throw std::invalid_argument("HSS: the compressed matrix does not belong to this operator");
+  collectively(comm, [&] {
+    if (K.tree().num_points() != op.num_nodes()) throw std::invalid_argument("HSS: the compressed matrix does not belong to this operator");
+    m_K = std::make_unique<HssMatrix>(std::move(K));
+  });
+  m_product = make_unique_collectively<HssDistributedProduct>(comm, *m_K, comm);
 }
 
 std::vector<double> HssDistributedSystem::rhs(const SystemSelection &sel) const
 {
   const int n = num_points();
-  const std::vector<double> xk = local_k_input(*m_K, first_point(), n, sel, nullptr);
-  std::vector<double> b(3L * n);
+  std::vector<double> xk, b;
+  collectively(m_comm, [&] {
+    xk = local_k_input(*m_K, first_point(), n, sel, nullptr);
+    b.resize(3L * n);
+  });
   m_product->apply(xk.data(), m_K->col_block() * n, b.data(), 3 * n);
   return b;
 }
@@ -87,7 +94,7 @@ std::vector<double> HssDistributedSystem::rhs(const SystemSelection &sel) const
 void HssDistributedSystem::apply(const SystemSelection &sel, const double *x, double *y) const
 {
   const int n = num_points();
-  const std::vector<double> xk = local_k_input(*m_K, first_point(), n, sel, x);
+  const std::vector<double> xk = collectively(m_comm, [&] { return local_k_input(*m_K, first_point(), n, sel, x); });
   m_product->apply(xk.data(), m_K->col_block() * n, y, 3 * n);
 }
 

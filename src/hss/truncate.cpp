@@ -204,10 +204,14 @@ public:
       for_each_cluster(m_held, [this](int c) { couple_or_copy(c); });
     });
     if (m_comm.size() > 1) {
-      std::vector<int> all(static_cast<Size>(m_tree.num_clusters()));
-      std::iota(all.begin(), all.end(), 0);
-      std::vector<NestedBasis *> bases(all.size());
-      for (int c : all) bases[static_cast<Size>(c)] = &m_out.cluster(c);
+      std::vector<int> all;
+      std::vector<NestedBasis *> bases;
+      collectively(m_comm, [&] {
+        all.resize(static_cast<Size>(m_tree.num_clusters()));
+        std::iota(all.begin(), all.end(), 0);
+        bases.resize(all.size());
+        for (int c : all) bases[static_cast<Size>(c)] = &m_out.cluster(c);
+      });
       for (bool columns : {false, true}) share_skeletons(all, bases, [this](int c) { return m_K.holds(c); }, m_comm, columns);
     }
   }
@@ -256,9 +260,9 @@ private:
   /// parent held elsewhere) without, pack(child) goes to the other rank, which unpacks it.
   void move_records(bool down, const Pack &pack, const Unpack &unpack)
   {
-    const int P = m_comm.size();
-    std::vector<std::vector<double>> send(P);
-    collectively(m_comm, [&] {
+    exchange_records(
+      m_comm, "the HSS truncation's records",
+      [&](std::vector<std::vector<double>> &send) {
       for (int c = 1; c < m_tree.num_clusters(); ++c) {
         const int parent = m_tree.cluster(c).parent;
         const int here = down ? parent : c, there = down ? c : parent;
@@ -267,16 +271,15 @@ private:
         r.push_back(c);
         pack(c, r);
       }
-    });
-    const std::vector<std::vector<double>> recv = exchange_values(m_comm, send);
-    collectively(m_comm, [&] {
+      },
+      [&](const std::vector<std::vector<double>> &recv) {
       for (const std::vector<double> &r : recv)
         for (std::size_t at = 0; at < r.size();) {
           const int c = static_cast<int>(r[at++]);
           if (c < 1 || c >= m_tree.num_clusters()) throw std::logic_error("HSS truncation: a corrupt record from another rank");
           unpack(c, r, at);
         }
-    });
+      });
   }
 
   /// What the parent of a part's root needs of it after step 3: E and the new skeletons.

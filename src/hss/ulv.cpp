@@ -28,13 +28,16 @@ UlvFactorization::UlvFactorization(const HssMatrix &K, const std::vector<std::ar
 }
 
 UlvFactorization::UlvFactorization(const HssMatrix &K, const RankComm &comm, const std::vector<std::array<bool, 3>> &displacement_known, const LowRankTerm *extra)
-  : m_K(K), m_comm(comm), m_passes(K, comm), m_nodes(K.tree().num_clusters())
+  : m_K(K), m_comm(comm), m_passes(K, comm)
 {
   PhaseScope phase(Phase::Factorization);
   const ClusterTree &tree = K.tree();
   const int P = comm.size();
-  std::vector<std::vector<int>> need_up(P), need_down(P);
+  std::vector<std::vector<int>> need_up, need_down;
   collectively(comm, [&] {
+    m_nodes.resize(tree.num_clusters());
+    need_up.resize(P);
+    need_down.resize(P);
     if (static_cast<int>(displacement_known.size()) != tree.num_points())
       throw std::invalid_argument("ULV: the boundary-condition pattern has " + std::to_string(displacement_known.size()) + " nodes, the matrix " +
                                   std::to_string(tree.num_points()));
@@ -127,9 +130,9 @@ void UlvFactorization::factor_root(DenseMatrix D)
 void UlvFactorization::send_part_roots()
 {
   const ClusterTree &tree = m_K.tree();
-  const int P = m_comm.size();
-  std::vector<std::vector<double>> send(P);
-  collectively(m_comm, [&] {
+  exchange_records(
+    m_comm, "the ULV's parts' roots",
+    [&](std::vector<std::vector<double>> &send) {
     for (int c = 0; c < tree.num_clusters(); ++c) {
       const int parent = tree.cluster(c).parent;
       if (!m_K.holds(c) || parent < 0 || m_K.holds(parent)) continue;
@@ -140,9 +143,8 @@ void UlvFactorization::send_part_roots()
       append_matrix(r, nd.Vt);
       append_matrix(r, nd.Dt);
     }
-  });
-  const std::vector<std::vector<double>> recv = exchange_values(m_comm, send);
-  collectively(m_comm, [&] {
+    },
+    [&](const std::vector<std::vector<double>> &recv) {
     for (int c = 0; c < tree.num_clusters(); ++c) // the senders need only Ut (kept for nothing: their parents are elsewhere)
       if (m_K.holds(c) && tree.cluster(c).parent >= 0 && !m_K.holds(tree.cluster(c).parent)) m_nodes[c].Dt = m_nodes[c].Vt = DenseMatrix();
     for (const std::vector<double> &r : recv)
@@ -157,7 +159,7 @@ void UlvFactorization::send_part_roots()
         nd.Vt = read_matrix(r, at);
         nd.Dt = read_matrix(r, at);
       }
-  });
+    });
 }
 
 void UlvFactorization::widen_generators(const LowRankTerm &extra)
@@ -298,7 +300,7 @@ void UlvFactorization::solve(double *b) const
   PhaseScope phase(Phase::Solve);
   const ClusterTree &tree = m_K.tree();
   const int nc = tree.num_clusters();
-  SolveWork w(nc);
+  SolveWork w(0);
   const auto up = [&](const std::vector<std::vector<int>> &levels) {
     for (const std::vector<int> &level : levels) for_each_cluster(level, [&](int c) { solve_up(c, b, w); });
   };
@@ -306,8 +308,10 @@ void UlvFactorization::solve(double *b) const
     for (const std::vector<int> &level : levels) for_each_cluster(level, [&](int c) { solve_down(c, b, w); });
   };
   // Forward within the parts; their roots' reduced right-hand sides and known parts to rank 0.
-  std::vector<DenseMatrix> msg(nc);
+  std::vector<DenseMatrix> msg;
   collectively(m_comm, [&] {
+    w = SolveWork(nc);
+    msg.resize(nc);
     up(m_passes.up);
     for (const std::vector<int> &to : m_up.sends())
       for (int c : to) {

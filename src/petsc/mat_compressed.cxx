@@ -274,13 +274,22 @@ static PetscErrorCode CreateDistributed_Private(MPI_Comm comm, HssbemSystemConte
   std::vector<double>        b0;
   PetscScalar               *ba;
   double                     figures[7] = {0, 0, 0, 0, 0, 0, 0};
+  MPI_Comm                   dup;
 
   PetscFunctionBegin;
   PetscCallMPI(MPI_Comm_rank(comm, &rank));
   PetscCallMPI(MPI_Comm_size(comm, &size));
   PetscCall(PetscLogEventBegin(BEM_Partition, 0, 0, 0, 0));
-  guard.Run("Partition", [&] {
-    sys->comm = std::make_unique<HssbemMpiComm>(comm, true);
+  /* The engines' own communicator, duplicated on every rank before anything can fail on one. */
+  PetscCallMPI(MPI_Comm_dup(comm, &dup));
+  guard.Run([&] {
+    try {
+      sys->comm = std::make_unique<HssbemMpiComm>(dup, true);
+    } catch (...) {
+      MPI_Comm_free(&dup);
+      throw;
+    }
+    hssbem::fault_point("Partition");
     sys->node_part.resize((std::size_t)nn);
     if (rank != 0) return;
     sys->node_part                     = hssbem::partition_nodes(op.discretization(), size, &sys->partition);
@@ -295,8 +304,8 @@ static PetscErrorCode CreateDistributed_Private(MPI_Comm comm, HssbemSystemConte
   PetscCall(PetscLogEventEnd(BEM_Partition, 0, 0, 0, 0));
   guard.Run([&] {
     hssbem::collectively(*sys->comm, [] { hssbem::fault_point("Compression"); }); /* as in MatMult */
-    if (h2) sys->h2dist = std::make_shared<hssbem::H2DistributedSystem>(op, sys->h2_options, sys->node_part, *sys->comm);
-    else sys->hssdist = std::make_shared<hssbem::HssDistributedSystem>(op, sys->hss_options, sys->node_part, *sys->comm);
+    if (h2) sys->h2dist = hssbem::make_shared_collectively<hssbem::H2DistributedSystem>(*sys->comm, op, sys->h2_options, sys->node_part, *sys->comm);
+    else sys->hssdist = hssbem::make_shared_collectively<hssbem::HssDistributedSystem>(*sys->comm, op, sys->hss_options, sys->node_part, *sys->comm);
     b0                              = sys->distributed()->rhs(sys->sel);
     const hssbem::ClusterTree &tree = sys->distributed()->tree();
     sys->system_of_dof.resize(3 * (std::size_t)nn);

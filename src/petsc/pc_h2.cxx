@@ -106,8 +106,11 @@ double EstimateDistributed_Private(const PC_H2 &h2, const HssbemSystemContext &p
   const std::size_t       n    = 3 * (std::size_t)h2.dsys->num_points();
   std::mt19937_64         gen(1 + (unsigned)comm.rank());
   std::normal_distribution<double> normal;
-  std::vector<double>     v(n), z(n), w(n);
-  for (double &x : v) x = normal(gen);
+  std::vector<double>     v, z, w;
+  hssbem::collectively(comm, [&] {
+    for (auto *a : {&v, &z, &w}) a->resize(n);
+    for (double &x : v) x = normal(gen);
+  });
   const auto norm = [&](const std::vector<double> &x) {
     double s = 0;
     for (double e : x) s += e * e;
@@ -143,7 +146,7 @@ void FactorDistributed(PC_H2 *h2, const HssbemSystemContext &p)
     o.rel_tol           = h2->rel_tol;
     o.pressure_columns  = false; /* the factorization needs H and G only */
     hssbem::Timer timer;
-    h2->dsys             = std::make_shared<hssbem::H2DistributedSystem>(*p.op, o, p.node_part, *p.comm);
+    h2->dsys             = hssbem::make_shared_collectively<hssbem::H2DistributedSystem>(*p.comm, *p.op, o, p.node_part, *p.comm);
     h2->seconds_compress = timer.seconds();
     h2->source           = Source::Compressed;
     h2->compressed_tol   = o.rel_tol;
@@ -152,10 +155,12 @@ void FactorDistributed(PC_H2 *h2, const HssbemSystemContext &p)
         throw std::logic_error("PC h2: its compression's rows on this rank are not the matrix's");
     });
   }
-  if (!h2->cache || h2->dsys.get() != before) h2->cache = std::make_shared<hssbem::H2FactorCache>(h2->dsys->product());
+  hssbem::collectively(*p.comm, [&] {
+    if (!h2->cache || h2->dsys.get() != before) h2->cache = std::make_shared<hssbem::H2FactorCache>(h2->dsys->product());
+  });
   hssbem::Timer timer;
   try {
-    h2->factors = std::make_unique<hssbem::H2Factorization>(*h2->cache, *p.comm, p.sel, FactorOptions(*h2), p.modes.empty() ? nullptr : &p.modes);
+    h2->factors = hssbem::make_unique_collectively<hssbem::H2Factorization>(*p.comm, *h2->cache, *p.comm, p.sel, FactorOptions(*h2), p.modes.empty() ? nullptr : &p.modes);
   } catch (const hssbem::H2Breakdown &e) { /* thrown on every rank */
     h2->failure = e.what();
     return;
@@ -185,6 +190,7 @@ PetscErrorCode PCSetUp_H2(PC pc)
       hssbem::collectively(*p->comm, [] { hssbem::fault_point("PCSetUp"); }); /* every step is collective */
       FactorDistributed(h2, *p);
     });
+    hssbem::fault_end("PCSetUp");
     PetscCall(guard.Check(comm, "PC h2 set-up"));
     breakdown = !h2->failure.empty();
     PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &breakdown, 1, MPI_INT, MPI_MAX, comm));
@@ -196,8 +202,10 @@ PetscErrorCode PCSetUp_H2(PC pc)
   }
   /* A dense or HSS matrix: the factorization runs on rank 0, on an H² compression made there. */
   guard.Run("PCSetUp", [&] {
+    h2->ex = std::make_unique<HssbemRootExchange>(p->system_of_dof);
     if (rank == 0) FactorOnRoot(h2, *p); /* the factorization runs on rank 0 */
   });
+  hssbem::fault_end("PCSetUp");
   PetscCall(guard.Check(comm, "PC h2 set-up"));
   breakdown = rank == 0 && !h2->failure.empty();
   PetscCallMPI(MPI_Bcast(&breakdown, 1, MPI_INT, 0, comm));
@@ -205,7 +213,6 @@ PetscErrorCode PCSetUp_H2(PC pc)
     PetscCall(PetscInfo(pc, "H2 factorization broke down: %s\n", rank == 0 ? h2->failure.c_str() : "on rank 0"));
     PetscCall(PCSetFailedReason(pc, PC_FACTOR_NUMERIC_ZEROPIVOT));
   }
-  PetscCallCXX(h2->ex = std::make_unique<HssbemRootExchange>(p->system_of_dof));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -287,8 +294,9 @@ PetscErrorCode CheckOptions_Private(PC pc, const PC_H2 &h2)
   PetscCheck(h2.rel_tol > 0 && h2.rel_tol < 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-pc_h2_rel_tol must lie in (0, 1)");
   PetscCheck(h2.leaf_size >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-pc_h2_leaf_size must be 0 (the matrix's leaves) or positive");
   PetscCheck(h2.top_size >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-pc_h2_top_size must be >= 0");
-  PetscCheck(h2.sketch_size >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-pc_h2_sketch_size must be 0 (from the tolerance) or positive");
-  PetscCheck(h2.estimate_error >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-pc_h2_estimate_error must be >= 0");
+  PetscCheck(h2.sketch_size >= 0 && h2.sketch_size <= hssbem::kMaxSketchColumns, comm, PETSC_ERR_ARG_OUTOFRANGE, "-pc_h2_sketch_size must be 0 (from the tolerance: 48 to 320) or at most %d, got %d", hssbem::kMaxSketchColumns,
+             (int)h2.sketch_size);
+  PetscCheck(h2.estimate_error >= 0 && h2.estimate_error <= 1000, comm, PETSC_ERR_ARG_OUTOFRANGE, "-pc_h2_estimate_error must lie in [0, 1000] (power iterations; 5 estimate the norm well), got %d", (int)h2.estimate_error);
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -452,7 +460,7 @@ PetscErrorCode PCH2SetMixedTop_H2(PC pc, PetscInt n)
 PetscErrorCode PCH2SetSketchSize_H2(PC pc, PetscInt n)
 {
   PetscFunctionBegin;
-  PetscCheck(n >= 0, PetscObjectComm((PetscObject)pc), PETSC_ERR_ARG_OUTOFRANGE, "the sketch size must be 0 (from the tolerance) or positive");
+  PetscCheck(n >= 0 && n <= hssbem::kMaxSketchColumns, PetscObjectComm((PetscObject)pc), PETSC_ERR_ARG_OUTOFRANGE, "the sketch size must be 0 (from the tolerance) or at most %d", hssbem::kMaxSketchColumns);
   ((PC_H2 *)pc->data)->sketch_size = n;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
@@ -460,7 +468,7 @@ PetscErrorCode PCH2SetSketchSize_H2(PC pc, PetscInt n)
 PetscErrorCode PCH2SetEstimateError_H2(PC pc, PetscInt n)
 {
   PetscFunctionBegin;
-  PetscCheck(n >= 0, PetscObjectComm((PetscObject)pc), PETSC_ERR_ARG_OUTOFRANGE, "the power iterations must be >= 0");
+  PetscCheck(n >= 0 && n <= 1000, PetscObjectComm((PetscObject)pc), PETSC_ERR_ARG_OUTOFRANGE, "the power iterations must lie in [0, 1000]");
   ((PC_H2 *)pc->data)->estimate_error = n;
   PetscFunctionReturn(PETSC_SUCCESS);
 }

@@ -110,8 +110,8 @@ void FactorDistributed(PC_HSS *hss, const HssbemSystemContext &p)
   hssbem::Timer timer;
   hss->source = ChooseSource_Private(o, p, p.hssdist != nullptr);
   if (hss->source == Source::Matrix) hss->dsys = p.hssdist;
-  else if (hss->source == Source::Truncated) hss->dsys = std::make_shared<hssbem::HssDistributedSystem>(*p.op, hssbem::truncate_hss(p.hssdist->matrix(), o.rel_tol, o.max_rank, *p.comm), *p.comm);
-  else hss->dsys = std::make_shared<hssbem::HssDistributedSystem>(*p.op, o, p.node_part, *p.comm);
+  else if (hss->source == Source::Truncated) hss->dsys = hssbem::make_shared_collectively<hssbem::HssDistributedSystem>(*p.comm, *p.op, hssbem::truncate_hss(p.hssdist->matrix(), o.rel_tol, o.max_rank, *p.comm), *p.comm);
+  else hss->dsys = hssbem::make_shared_collectively<hssbem::HssDistributedSystem>(*p.comm, *p.op, o, p.node_part, *p.comm);
   hss->seconds_compress = timer.seconds();
   /* The same part, so the same points on this rank, perhaps in another order (another leaf size);
      checked on every rank before the factorization's collective steps. */
@@ -155,17 +155,19 @@ PetscErrorCode PCSetUp_HSS(PC pc)
       hssbem::collectively(*p->comm, [] { hssbem::fault_point("PCSetUp"); });
       FactorDistributed(hss, *p);
     });
+    hssbem::fault_end("PCSetUp");
     PetscCall(guard.Check(comm, "PC hss set-up"));
     breakdown = !hss->failure.empty();
     PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &breakdown, 1, MPI_INT, MPI_MAX, comm));
   } else {
     guard.Run("PCSetUp", [&] {
+      hss->ex = std::make_unique<HssbemRootExchange>(p->system_of_dof);
       if (rank == 0) FactorOnRoot(hss, *p); /* on a dense matrix on several ranks, the compression lives on rank 0 */
     });
+    hssbem::fault_end("PCSetUp");
     PetscCall(guard.Check(comm, "PC hss set-up"));
     breakdown = rank == 0 && !hss->failure.empty();
     PetscCallMPI(MPI_Bcast(&breakdown, 1, MPI_INT, 0, comm));
-    PetscCallCXX(hss->ex = std::make_unique<HssbemRootExchange>(p->system_of_dof));
   }
   if (breakdown) {
     PetscCall(PetscInfo(pc, "HSS factorization broke down: %s\n", !hss->failure.empty() ? hss->failure.c_str() : "on another rank"));

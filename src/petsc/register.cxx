@@ -35,14 +35,21 @@ static PetscBool HssbemPackageInitialized = PETSC_FALSE;
                                   DenseAssembly, Breakdown, Gather (the solve),
                                   Post, Write, Commit, SceneSetup, Frame (rank 0's work), Driver
                                   (unguarded: the last resort of app/main.hpp)
-   -hssbem_fault_kind <kind>      error (default), oom (std::bad_alloc), pause, or unreadable
-                                  (MeshRead: the mesh file cannot be opened)
+   -hssbem_fault_kind <kind>      error (default), oom (std::bad_alloc), pause, unreadable
+                                  (MeshRead: the mesh file cannot be opened), or alloc (the
+                                  -hssbem_fault_count'th large allocation from the fault point to
+                                  the site's end fails; needs the test shim tests/mpi/fail_new.cpp
+                                  preloaded; sites PCSetUp of PC h2 and PC hss)
    -hssbem_fault_rank <r>         only on rank r of PETSC_COMM_WORLD (default: every rank)
-   -hssbem_fault_seconds <s>      how long a pause lasts (default 60) */
+   -hssbem_fault_seconds <s>      how long a pause lasts (default 60)
+   -hssbem_fault_count <n>        alloc: which large allocation fails (0: none, only counted)
+   Further sites: Partition (every rank's part of the METIS partition), Exchange (the allocation
+   of what arrives in an exchange of records), SpreadTopBreakdown (a spread top's trial solve
+   counts as failed on that rank). */
 static PetscErrorCode ArmFaultFromOptions_Private(void)
 {
   char              site[64] = "", kind[16] = "error";
-  PetscInt          rank    = -1;
+  PetscInt          rank    = -1, count = 0;
   PetscReal         seconds = 60;
   PetscBool         set;
   PetscMPIInt       me;
@@ -54,11 +61,13 @@ static PetscErrorCode ArmFaultFromOptions_Private(void)
   PetscCall(PetscOptionsGetString(NULL, NULL, "-hssbem_fault_kind", kind, sizeof(kind), NULL));
   PetscCall(PetscOptionsGetInt(NULL, NULL, "-hssbem_fault_rank", &rank, NULL));
   PetscCall(PetscOptionsGetReal(NULL, NULL, "-hssbem_fault_seconds", &seconds, NULL));
-  PetscCheck(hssbem::parse_fault_kind(kind, &plan.kind), PETSC_COMM_WORLD, PETSC_ERR_ARG_UNKNOWN_TYPE, "-hssbem_fault_kind %s: use error, oom, pause or unreadable", kind);
+  PetscCall(PetscOptionsGetInt(NULL, NULL, "-hssbem_fault_count", &count, NULL));
+  PetscCheck(hssbem::parse_fault_kind(kind, &plan.kind), PETSC_COMM_WORLD, PETSC_ERR_ARG_UNKNOWN_TYPE, "-hssbem_fault_kind %s: use error, oom, pause, unreadable or alloc", kind);
   PetscCallMPI(MPI_Comm_rank(PETSC_COMM_WORLD, &me));
   PetscCallCXX(plan.site = site);
   plan.rank    = (int)rank;
   plan.seconds = (double)seconds;
+  plan.count   = (long)count;
   PetscCallCXX(hssbem::arm_fault(plan, me));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

@@ -7,6 +7,7 @@
 
 #include "system_context.hpp"
 
+#include <cmath>
 #include <string>
 
 /* The format the factorization needs: MATDENSE LU works on one rank only, parallel dense LU is
@@ -79,6 +80,19 @@ static PetscErrorCode KSPSolveInLayout_Private(KSP ksp, Mat op, Vec b, Vec x, Pe
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* -hssbem_residual_max: the largest true relative residual ||b - A x|| / ||b|| that counts as a
+   solution, whatever the KSP (preonly included: a loose preconditioner applied once is no solve). */
+static PetscErrorCode ResidualMax_Private(MPI_Comm comm, PetscReal *bound)
+{
+  PetscFunctionBegin;
+  *bound = HSSBEM_RESIDUAL_MAX;
+  PetscOptionsBegin(comm, NULL, "The main solve (hssbem)", "KSP");
+  PetscCall(PetscOptionsReal("-hssbem_residual_max", "Largest true relative residual ||b - A x||/||b|| accepted as a solution (any KSP, preonly included)", "HssbemSolveSystem", *bound, bound, NULL));
+  PetscOptionsEnd();
+  PetscCheck(*bound > 0 && std::isfinite((double)*bound), comm, PETSC_ERR_ARG_OUTOFRANGE, "-hssbem_residual_max must be positive and finite, got %g", (double)*bound);
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 PetscErrorCode HssbemDefaultPCType(MPI_Comm comm, hssbem::OperatorType type, const char **pc_type)
 {
   PetscFunctionBegin;
@@ -132,13 +146,22 @@ PetscErrorCode HssbemKSPCreate(MPI_Comm comm, const char *mat_type, KSP *ksp)
   PetscCall(HssbemDefaultPCType(comm, type, &pc_type));
   PetscCall(PCSetType(pc, pc_type));
   PetscCall(KSPSetFromOptions(*ksp));
+  {
+    PetscReal bound; /* read here too, so that -help lists it and a bad value stops the run early */
+    PetscCall(ResidualMax_Private(comm, &bound));
+  }
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
 /*@C
   HssbemSolveSystem - Solves A x = b with a KSP from HssbemKSPCreate(); a dense A is converted in
   place to the format its factorization needs (so no second copy stays alive). A diverged solve
-  is an error.
+  is an error, and so is one whose true relative residual ||b - A x|| / ||b|| (A's own product)
+  is not finite or exceeds -hssbem_residual_max (default HSSBEM_RESIDUAL_MAX), whatever the KSP:
+  with -ksp_type preonly KSP reports convergence after one application of the PC, however loose.
+
+  Options Database Key:
+. -hssbem_residual_max <r> - largest true relative residual accepted as a solution
 
   Level: intermediate
 @*/
@@ -147,8 +170,10 @@ PetscErrorCode HssbemSolveSystem(KSP ksp, Mat *A, Vec b, Vec x, HssbemSolveInfo 
   PC            pc;
   MatType       ftype;
   MatSolverType st = NULL;
+  PetscReal     bound;
 
   PetscFunctionBegin;
+  PetscCall(ResidualMax_Private(PetscObjectComm((PetscObject)ksp), &bound));
   PetscCall(PetscLogEventBegin(BEM_Solve, 0, 0, 0, 0));
   PetscCall(FactorMatType_Private(ksp, *A, &ftype));
   if (ftype) PetscCall(MatConvert(*A, ftype, MAT_INPLACE_MATRIX, A));
@@ -169,5 +194,8 @@ PetscErrorCode HssbemSolveSystem(KSP ksp, Mat *A, Vec b, Vec x, HssbemSolveInfo 
   PetscCallCXX(info->solver_type = st ? st : "");
   PetscCall(PetscLogEventEnd(BEM_Solve, 0, 0, 0, 0));
   PetscCheck(info->reason > 0, PetscObjectComm((PetscObject)*A), PETSC_ERR_NOT_CONVERGED, "the linear solve failed: %s after %" PetscInt_FMT " iterations", KSPConvergedReasons[info->reason], info->iterations);
+  PetscCheck(std::isfinite((double)info->residual) && info->residual <= bound, PetscObjectComm((PetscObject)*A), PETSC_ERR_NOT_CONVERGED,
+             "the linear solve gave no solution: its true relative residual ||b - A x||/||b|| is %.3g, above -hssbem_residual_max %g (%s + %s, %s after %" PetscInt_FMT " iterations)", (double)info->residual, (double)bound,
+             info->ksp_type.c_str(), info->pc_type.c_str(), KSPConvergedReasons[info->reason], info->iterations);
   PetscFunctionReturn(PETSC_SUCCESS);
 }

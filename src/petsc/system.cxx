@@ -201,6 +201,7 @@ PetscErrorCode HssbemMachineLimits(MPI_Comm comm, hssbem::MachineLimits *limits)
   MPI_Comm    node;
   PetscMPIInt size, on_node;
   PetscReal   given = 0;
+  PetscBool   set;
   double      memory;
 
   PetscFunctionBegin;
@@ -208,7 +209,8 @@ PetscErrorCode HssbemMachineLimits(MPI_Comm comm, hssbem::MachineLimits *limits)
   PetscCallMPI(MPI_Comm_split_type(comm, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node));
   PetscCallMPI(MPI_Comm_size(node, &on_node));
   PetscCallMPI(MPI_Comm_free(&node));
-  PetscCall(PetscOptionsGetReal(NULL, NULL, "-hssbem_memory_limit", &given, NULL));
+  PetscCall(PetscOptionsGetReal(NULL, NULL, "-hssbem_memory_limit", &given, &set));
+  PetscCheck(!set || (given >= 0 && std::isfinite((double)given)), comm, PETSC_ERR_ARG_OUTOFRANGE, "-hssbem_memory_limit must be a finite number of bytes (0: the machine's), got %g", (double)given);
   memory = given > 0 ? (double)given : NodeMemoryBytes_Private();
   PetscCallMPI(MPI_Allreduce(&memory, &limits->node_memory_bytes, 1, MPI_DOUBLE, MPI_MIN, comm));
   PetscCallMPI(MPI_Allreduce(&on_node, &limits->ranks_per_node, 1, MPI_INT, MPI_MAX, comm));

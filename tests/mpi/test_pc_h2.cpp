@@ -11,7 +11,12 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
+#include <fstream>
+#include <iterator>
 #include <memory>
+#include <unistd.h>
+#include <string>
 
 using namespace hssbem;
 using namespace hssbem::test;
@@ -88,7 +93,7 @@ Outcome ksp_solve(Mat A, Vec b, Vec x_ref, const char *options)
   PetscCallAbort(PETSC_COMM_WORLD, VecDestroy(&x));
   PetscCallAbort(PETSC_COMM_WORLD, KSPDestroy(&ksp));
   // Remove only what this solve set: the program's own options (leaf sizes) stay.
-  for (const char *key : {"-t_ksp_type", "-t_ksp_rtol", "-t_pc_type", "-t_pc_h2_rel_tol", "-t_pc_h2_top_size", "-t_pc_h2_top_when_cheaper", "-t_pc_h2_leaf_size", "-t_ksp_pc_side"})
+  for (const char *key : {"-t_ksp_type", "-t_ksp_rtol", "-t_pc_type", "-t_pc_h2_rel_tol", "-t_pc_h2_top_size", "-t_pc_h2_top_when_cheaper", "-t_pc_h2_leaf_size", "-t_ksp_pc_side", "-t_pc_h2_mixed_top"})
     PetscCallAbort(PETSC_COMM_WORLD, PetscOptionsClearValue(NULL, key));
   return o;
 }
@@ -137,7 +142,7 @@ TEST_F(PCH2Test, DefaultSolverOfTheH2Matrix)
   EXPECT_LE(info.residual, 1e-10);
   EXPECT_GE(info.iterations, 2); // a loose factorization, not an exact inverse
   EXPECT_LE(info.iterations, 12); // PC h2 at its default (Jacobi: 49 at 2 ranks)
-  EXPECT_LE(diff, 1e-7); // -mat_h2_rel_tol 1e-9 here
+  EXPECT_LE(diff, 4e-9); // measured at 1, 2, 3, 4, 6 ranks: 2.3e-11, 1.4e-9, 5.4e-11, 2.0e-11, 1.1e-9 (H² at 1e-9, GMRES to 1e-10)
   PetscCallAbort(PETSC_COMM_WORLD, KSPDestroy(&ksp));
   PetscCallAbort(PETSC_COMM_WORLD, MatDestroy(&A));
   VecDestroy(&x);
@@ -149,11 +154,11 @@ TEST_F(PCH2Test, DirectSolveAtTightTolerance)
   // level with a far field eliminated: on this small mesh the dense top would be cheaper).
   const Outcome o = ksp_solve(mixed->A[2], mixed->b[2], mixed->xd, "-t_ksp_type preonly -t_pc_type h2 -t_pc_h2_rel_tol 1e-7 -t_pc_h2_top_size 200 -t_pc_h2_top_when_cheaper false");
   EXPECT_GT(o.reason, 0);
-  EXPECT_LE(o.diff, 100 * 1e-7);
-  // ... and at 1e-3 it is visibly a preconditioner only.
+  EXPECT_LE(o.diff, 5e-6); // measured at 1, 2, 3, 4, 6 ranks: 8.3e-7, 1.6e-6, 1.3e-6, 9.0e-7, 3.2e-11 (6 ranks: the top holds nearly all)
+  // ... and at 1e-3 it is visibly a preconditioner only (measured 3.9e-2 to 5.5e-2).
   const Outcome loose = ksp_solve(mixed->A[2], mixed->b[2], mixed->xd, "-t_ksp_type preonly -t_pc_type h2 -t_pc_h2_rel_tol 1e-3 -t_pc_h2_top_size 200");
-  EXPECT_GT(loose.diff, 1e-6);
-  EXPECT_LE(loose.diff, 1e-1);
+  EXPECT_GT(loose.diff, 1e-2);
+  EXPECT_LE(loose.diff, 1.6e-1);
 }
 
 TEST_F(PCH2Test, PreconditionerOnTheDenseAndHssMatrices)
@@ -164,7 +169,9 @@ TEST_F(PCH2Test, PreconditionerOnTheDenseAndHssMatrices)
     EXPECT_GT(o.reason, 0);
     EXPECT_GE(o.its, 2);
     EXPECT_LE(o.its, 12);
-    EXPECT_LE(o.diff, t == 0 ? 1e-8 : 1e-6); // the HSS matrix is at 1e-8
+    // Measured: 5.2e-10 on every rank count (dense; the compression on rank 0), 2.1e-8 to 3.3e-8
+    // (HSS, at 1e-8).
+    EXPECT_LE(o.diff, t == 0 ? 1.6e-9 : 1e-7);
   }
 }
 
@@ -176,7 +183,58 @@ TEST_F(PCH2Test, PreconditionerOnTheDistributedH2Matrix)
   EXPECT_GT(o.reason, 0);
   EXPECT_GE(o.its, 2); // a loose factorization, not an exact inverse
   EXPECT_LE(o.its, 12);
-  EXPECT_LE(o.diff, 1e-7); // -mat_h2_rel_tol 1e-9 here
+  EXPECT_LE(o.diff, 4e-9); // as the default solver's
+}
+
+/// What viewing A's PC h2 says (its ASCII view, through a file, on every rank) once it is set
+/// up with `options` (prefix "t_"), which are removed again afterwards.
+std::string pc_view_after(Mat A, const char *options)
+{
+  KSP ksp;
+  PC pc;
+  PetscViewer v;
+  char name[64] = "/tmp/hssbem-pc-view-XXXXXX";
+  PetscMPIInt rank;
+  PetscCallAbort(PETSC_COMM_WORLD, MPI_Comm_rank(PETSC_COMM_WORLD, &rank));
+  if (rank == 0) close(mkstemp(name));
+  PetscCallAbort(PETSC_COMM_WORLD, MPI_Bcast(name, sizeof name, MPI_CHAR, 0, PETSC_COMM_WORLD));
+  PetscCallAbort(PETSC_COMM_WORLD, PetscOptionsInsertString(NULL, options));
+  PetscCallAbort(PETSC_COMM_WORLD, KSPCreate(PETSC_COMM_WORLD, &ksp));
+  PetscCallAbort(PETSC_COMM_WORLD, KSPSetOptionsPrefix(ksp, "t_"));
+  PetscCallAbort(PETSC_COMM_WORLD, KSPSetOperators(ksp, A, A));
+  PetscCallAbort(PETSC_COMM_WORLD, KSPSetFromOptions(ksp));
+  PetscCallAbort(PETSC_COMM_WORLD, KSPSetUp(ksp));
+  PetscCallAbort(PETSC_COMM_WORLD, KSPGetPC(ksp, &pc));
+  PetscCallAbort(PETSC_COMM_WORLD, PetscViewerASCIIOpen(PETSC_COMM_WORLD, name, &v));
+  PetscCallAbort(PETSC_COMM_WORLD, PCView(pc, v));
+  PetscCallAbort(PETSC_COMM_WORLD, PetscViewerDestroy(&v));
+  PetscCallAbort(PETSC_COMM_WORLD, KSPDestroy(&ksp));
+  for (const char *key : {"-t_ksp_type", "-t_ksp_rtol", "-t_ksp_pc_side", "-t_pc_type", "-t_pc_h2_mixed_top", "-t_pc_h2_top_size", "-t_pc_h2_top_when_cheaper"})
+    PetscCallAbort(PETSC_COMM_WORLD, PetscOptionsClearValue(NULL, key));
+  std::ifstream in(name);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  PetscCallAbort(PETSC_COMM_WORLD, MPI_Barrier(PETSC_COMM_WORLD)); // every rank has read it
+  if (rank == 0) std::remove(name);
+  return text;
+}
+
+TEST_F(PCH2Test, PreconditionerWithTheTopSpreadOverTheRanks)
+{
+  // The mesh's top (a few hundred unknowns at the default tolerance) lies below the size from
+  // which a single-precision top is spread over the ranks (-pc_h2_mixed_top 4000): forced here,
+  // with every level the parts allow eliminated, the spread top (ScaLAPACK on several ranks; the
+  // single-precision LU on one) preconditions GMRES as well as the others.
+  const char *spread = "-t_ksp_type gmres -t_ksp_pc_side right -t_ksp_rtol 1e-10 -t_pc_type h2 -t_pc_h2_mixed_top 1 -t_pc_h2_top_size 0 -t_pc_h2_top_when_cheaper false";
+  const Outcome o = ksp_solve(mixed->A[2], mixed->b[2], mixed->xd, spread);
+  EXPECT_GT(o.reason, 0);
+  EXPECT_GE(o.its, 2);
+  EXPECT_LE(o.its, 12);
+  EXPECT_LE(o.diff, 6.5e-9); // measured at 1, 2, 3, 4, 6 ranks: 2.7e-11, 2.1e-9, 6.1e-11, 2.1e-11, 1.1e-9
+  PetscMPIInt size;
+  PetscCallAbort(PETSC_COMM_WORLD, MPI_Comm_size(PETSC_COMM_WORLD, &size));
+  const std::string view = pc_view_after(mixed->A[2], spread);
+  if (size > 1) EXPECT_NE(view.find("top spread over " + std::to_string(size) + " ranks"), std::string::npos) << view;
+  else EXPECT_NE(view.find("LU in single precision like the panels"), std::string::npos) << view;
 }
 
 TEST(PCH2Pure, RegularisedPressureProblemMatchesDense)
@@ -185,7 +243,7 @@ TEST(PCH2Pure, RegularisedPressureProblemMatchesDense)
   ASSERT_TRUE(s.setup.pure_traction);
   const Outcome o = ksp_solve(s.A[2], s.b[2], s.xd, "-t_ksp_type preonly -t_pc_type h2 -t_pc_h2_rel_tol 1e-8 -t_pc_h2_top_size 200 -t_pc_h2_top_when_cheaper false");
   EXPECT_GT(o.reason, 0);
-  EXPECT_LE(o.diff, 100 * 1e-8);
+  EXPECT_LE(o.diff, 7.5e-9); // measured at 1, 2, 3, 4, 6 ranks: 2.9e-10, 2.4e-9, 2.3e-10, 1.5e-10, 3.1e-11
 }
 
 TEST(PCH2Pure, UnregularisedBreakdownIsAPcFailure)
@@ -208,8 +266,16 @@ TEST(PCH2Options, BadValuesAreErrors)
   EXPECT_NE(PCH2SetRelTol(pc, 2.0), 0);
   EXPECT_NE(PCH2SetLeafSize(pc, -1), 0);
   EXPECT_NE(PCH2SetTopSize(pc, -3), 0);
+  EXPECT_NE(PCH2SetSketchSize(pc, -1), 0);
+  EXPECT_NE(PCH2SetSketchSize(pc, 100000), 0); // beyond any tolerance's need (at most 4096)
+  EXPECT_NE(PCH2SetEstimateError(pc, 1000000), 0);
   EXPECT_EQ(PCH2SetRelTol(pc, 1e-4), 0);
   EXPECT_EQ(PCH2SetLeafSize(pc, 128), 0);
+  EXPECT_EQ(PCH2SetSketchSize(pc, 4096), 0);
+  // Through the options database, checked at PCSetFromOptions.
+  PetscCallAbort(PETSC_COMM_WORLD, PetscOptionsInsertString(NULL, "-pc_h2_sketch_size 5000"));
+  EXPECT_NE(PCSetFromOptions(pc), 0);
+  PetscCallAbort(PETSC_COMM_WORLD, PetscOptionsClearValue(NULL, "-pc_h2_sketch_size"));
   PetscCallAbort(PETSC_COMM_WORLD, PetscPopErrorHandler());
   PetscCallAbort(PETSC_COMM_WORLD, KSPDestroy(&ksp));
 }

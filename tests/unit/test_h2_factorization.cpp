@@ -91,6 +91,8 @@ struct Case {
   int leaf;
   double p_known;        ///< probability that a component's displacement is known (traction unknown)
   double min_eliminated; ///< fraction of the unknowns the levels must eliminate (the rest is the dense top; cube_l1: 48 % measured)
+  double max_error;      ///< bound on the error against dense LU: 3x the measured value
+  double max_inverse;    ///< bound on the ||I - A F^-1|| estimate: likewise
 };
 
 void PrintTo(const Case &c, std::ostream *os) { *os << case_name(c.mesh, c.tol, c.leaf); }
@@ -120,7 +122,7 @@ TEST_P(H2FactorAccuracy, SolveMatchesDenseLU)
   const H2FactorStats &st = F.stats();
   std::printf("%s tol %.0e leaf %d, %.0f%% u known: error vs dense LU %.2e\n", c.mesh, c.tol, c.leaf, 100 * c.p_known, err);
   print_stats(st);
-  EXPECT_LE(err, 10 * c.tol); // measured up to 1.5 tol
+  EXPECT_LE(err, c.max_error);
   // Not a dense LU in disguise: the levels eliminated a good part of A before the dense top.
   ASSERT_FALSE(st.levels.empty());
   long long eliminated = 0;
@@ -132,14 +134,17 @@ TEST_P(H2FactorAccuracy, SolveMatchesDenseLU)
     apply_compressed_k(K, pattern_product_input(sel, in, n, K.col_block()), out);
   });
   std::printf("  ||I - A F^-1|| ~ %.2e\n", inv_err);
-  EXPECT_LE(inv_err, 10 * c.tol);
+  EXPECT_LE(inv_err, c.max_inverse);
 }
 
 INSTANTIATE_TEST_SUITE_P(Meshes, H2FactorAccuracy,
-                         ::testing::Values(Case{"sphere_l1.msh", 1e-3, 16, 0.3, 0.8}, Case{"sphere_l1.msh", 1e-6, 16, 0.3, 0.6},
-                                           Case{"sphere_l1.msh", 1e-9, 16, 0.3, 0.5}, Case{"sphere_l1.msh", 1e-6, 32, 0.7, 0.6},
-                                           Case{"cardioid_fine.msh", 1e-3, 32, 0.5, 0.5}, Case{"cardioid_fine.msh", 1e-6, 32, 0.5, 0.3},
-                                           Case{"cube_l1.msh", 1e-6, 16, 0.3, 0.45}, Case{"hollow_sphere_l0.msh", 1e-6, 16, 0.3, 0.05}),
+                         // error and ||I - A F^-1|| measured (2 threads): 1.10e-3, 3.64e-3; 2.66e-7, 1.70e-6; 7.87e-11,
+                         // 7.44e-10; 6.17e-7, 1.58e-6; 1.27e-3, 2.69e-3; 8.49e-7, 1.97e-6; 3.02e-7, 5.48e-7; the
+                         // hollow sphere (nearly all of it in the dense top) 1.6e-15, 1.2e-15: rounding level
+                         ::testing::Values(Case{"sphere_l1.msh", 1e-3, 16, 0.3, 0.8, 3.3e-3, 1.1e-2}, Case{"sphere_l1.msh", 1e-6, 16, 0.3, 0.6, 8e-7, 5.1e-6},
+                                           Case{"sphere_l1.msh", 1e-9, 16, 0.3, 0.5, 2.4e-10, 2.3e-9}, Case{"sphere_l1.msh", 1e-6, 32, 0.7, 0.6, 1.9e-6, 4.8e-6},
+                                           Case{"cardioid_fine.msh", 1e-3, 32, 0.5, 0.5, 3.9e-3, 8.1e-3}, Case{"cardioid_fine.msh", 1e-6, 32, 0.5, 0.3, 2.6e-6, 6e-6},
+                                           Case{"cube_l1.msh", 1e-6, 16, 0.3, 0.45, 9.1e-7, 1.7e-6}, Case{"hollow_sphere_l0.msh", 1e-6, 16, 0.3, 0.05, 1e-14, 1e-14}),
                          [](const ::testing::TestParamInfo<Case> &info) { return case_name(info.param.mesh, info.param.tol, info.param.leaf); });
 
 TEST(H2FactorSchedule, TwoThreadsGiveTheSameFactorsEveryTimeAndTheOneThreadOnesToTheTolerance)
@@ -176,7 +181,7 @@ TEST(H2FactorSchedule, TwoThreadsGiveTheSameFactorsEveryTimeAndTheOneThreadOnesT
   // One thread: the same steps, but BLAS threaded where two threads ran it serially (rounding).
   const double diff = rel(x1, xs);
   std::printf("two threads, three runs: identical; one thread: relative difference %.2e\n", diff);
-  EXPECT_LE(diff, 1e-5);
+  EXPECT_LE(diff, 3.5e-10); // measured 1.1e-10
 }
 
 TEST(H2FactorAccuracy, LooseToleranceIsApproximate)
@@ -197,8 +202,8 @@ TEST(H2FactorAccuracy, LooseToleranceIsApproximate)
   F.solve(b.data(), x.data());
   const double err = rel(x, dense_solve(dense_a(dense_k(*L->op, 6), n, 6, known), b));
   std::printf("tol 1e-2: error %.2e\n", err);
-  EXPECT_GT(err, 1e-5);
-  EXPECT_LE(err, 1.0);
+  EXPECT_GT(err, 4e-3); // measured 1.3e-2
+  EXPECT_LE(err, 4e-2);
 }
 
 TEST(H2FactorMemory, SinglePrecisionWorkingBlocksHalveTheStore)
@@ -229,8 +234,8 @@ TEST(H2FactorMemory, SinglePrecisionWorkingBlocksHalveTheStore)
   EXPECT_GT(ws, 0u);
   EXPECT_LT(ws, 0.65 * wd);
   EXPECT_GT(ws, 0.4 * wd); // a merge holds both levels, blocks being worked on are in double
-  EXPECT_LE(moved, 1e-2 * fo.rel_tol);
-  EXPECT_LE(err, 10 * fo.rel_tol);
+  EXPECT_LE(moved, 6.7e-7); // measured 2.2e-7
+  EXPECT_LE(err, 3.3e-4);   // measured 1.1e-4
 }
 
 TEST(H2FactorPatterns, TwoPatternsOneCompression)
@@ -255,7 +260,7 @@ TEST(H2FactorPatterns, TwoPatternsOneCompression)
     F.solve(b.data(), x.data());
     const double err = rel(x, dense_solve(dense_a(Kd, n, 6, known), b));
     std::printf("pattern %d: error %.2e, sketch %.3f s\n", pass, err, F.stats().time_sketch);
-    EXPECT_LE(err, 1e-4);
+    EXPECT_LE(err, 4e-7); // measured 4.5e-8, 1.3e-7
     if (pass == 1) EXPECT_EQ(F.stats().time_sketch, 0.0); // the cached sketch
     std::mt19937 gen(11);
     std::bernoulli_distribution flip(0.3);
@@ -294,7 +299,7 @@ TEST(H2FactorPureTraction, RegularisedMatchesDense)
     F.solve(b.data(), x.data());
     const double err = rel(x, xd);
     std::printf("pure traction, tol %.0e: error %.2e, top %d\n", tol, err, F.stats().top_size);
-    EXPECT_LE(err, 10 * tol); // measured 0.3 tol (1e-3), 0.02 tol (1e-7)
+    EXPECT_LE(err, tol > 1e-5 ? 1.1e-3 : 7.4e-9); // measured 3.5e-4 (1e-3), 2.5e-9 (1e-7)
     EXPECT_GT(F.stats().levels.size(), 0u);
   }
 }
@@ -336,6 +341,11 @@ TEST(H2FactorTop, MixedPrecisionTopSolvesLikeTheDoubleLU)
   EXPECT_EQ(mixed.stats().top_size, 3 * n);
   // The double block is kept beside the single-precision LU: 1.5 times the bytes.
   EXPECT_NEAR(static_cast<double>(mixed.stats().top_bytes) / plain.stats().top_bytes, 1.5, 0.01);
+  // The size model's figure for the top (its peak, while it is made) covers what it keeps.
+  const double peak = h2_top_peak_bytes(fo, 3LL * n, mixed.stats().top_size, 1);
+  EXPECT_GE(peak, static_cast<double>(mixed.stats().top_bytes));
+  EXPECT_LE(peak, 1.1 * static_cast<double>(mixed.stats().top_bytes));
+  EXPECT_EQ(h2_top_unknowns_from_options(fo, 3LL * n), 3LL * n);
   const std::vector<double> b = random_vector(3L * n, 3);
   std::vector<double> x1(b.size()), x2(b.size());
   plain.solve(b.data(), x1.data());
@@ -373,6 +383,13 @@ TEST(H2FactorTop, SinglePanelsTopIsALinearOperatorInAThirdOfTheMemory)
   ASSERT_EQ(single.stats().top_size, plain.stats().top_size);
   ASSERT_GT(single.stats().top_size, 100);
   EXPECT_NEAR(static_cast<double>(single.stats().top_bytes) / plain.stats().top_bytes, 0.5, 0.01);
+  // The size model's figures: the single top's peak, the LU and the rows arriving (8 n²), twice
+  // what it keeps; the double top's, the block and its LU (16 n²).
+  fo.mixed_top_from = 1;
+  EXPECT_NEAR(h2_top_peak_bytes(fo, 3LL * n, single.stats().top_size, 1) / single.stats().top_bytes, 2.0, 0.05);
+  fo.mixed_top_from = 0;
+  EXPECT_NEAR(h2_top_peak_bytes(fo, 3LL * n, plain.stats().top_size, 1) / plain.stats().top_bytes, 2.0, 0.05);
+  EXPECT_EQ(h2_top_unknowns_from_options(fo, 3LL * n), 0); // top_size 0: the levels decide
   EXPECT_LT(single.top_trial(), fo.rel_tol);
   const std::vector<double> b1 = random_vector(3L * n, 3), b2 = random_vector(3L * n, 4);
   std::vector<double> b3(b1.size()), x1(b1.size()), x2(b1.size()), x3(b1.size()), xp(b1.size()), sum(b1.size());
@@ -385,8 +402,8 @@ TEST(H2FactorTop, SinglePanelsTopIsALinearOperatorInAThirdOfTheMemory)
   plain.solve(b1.data(), xp.data());
   const double against_double = rel(x1, xp);
   std::printf("cardioid, top %d: trial %.1e, linearity %.1e, against the double top %.1e\n", single.stats().top_size, single.top_trial(), nonlinear, against_double);
-  EXPECT_LT(nonlinear, 1e-13);
-  EXPECT_LT(against_double, 1e-4); // the single LU's error through the steps
+  EXPECT_LT(nonlinear, 1.2e-14);     // measured 3.7e-15: rounding
+  EXPECT_LT(against_double, 2.7e-7); // the single LU's error through the steps, measured 8.9e-8
   EXPECT_GT(against_double, 0.0);  // and not the double LU itself
 }
 
@@ -421,6 +438,7 @@ TEST(H2FactorOptionsCheck, LeafSizeStartsHigherAndBadOptionsThrow)
   std::vector<double> x1(b.size()), x2(b.size());
   fine.solve(b.data(), x1.data());
   coarse.solve(b.data(), x2.data());
+  std::printf("leaves of 16 and 64 nodes at 1e-6: solutions differ by %.2e\n", rel(x2, x1));
   EXPECT_LE(rel(x2, x1), 1e-4);
   fo = H2FactorOptions{};
   fo.rel_tol = 0;

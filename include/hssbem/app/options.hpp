@@ -52,7 +52,7 @@ struct AppOptions {
 /// at the driver's H² defaults (tol 1e-5, single-precision blocks, leaf 64, eta 0; PC h2 at 3e-3,
 /// rtol 1e-8) beside dense assembly + LU in the same run, 1 process, 2 threads, sphere meshes:
 /// dense faster at 3 036 and 4 983 unknowns (2.3x, 1.2x), H² faster at 6 990 (1.4x) and 9 030
-/// (1.9x): the README's "Choosing the operator" table.
+/// (1.9x): benchmarks/results/2026-11-23-h2-defaults.md (docs/performance.md).
 inline constexpr long long k_auto_dense_max_unknowns = 6000;
 
 /// The operator -bem_mat_type auto takes for `unknowns` unknowns on this machine: dense below

@@ -14,7 +14,11 @@ enum class FaultKind {
   Error,       ///< throw std::runtime_error("injected fault at <site>")
   OutOfMemory, ///< throw std::bad_alloc
   Pause,       ///< sleep `seconds`, then go on
-  Unreadable   ///< fault_path() gives a path that cannot be opened; fault_point() does nothing
+  Unreadable,  ///< fault_path() gives a path that cannot be opened; fault_point() does nothing
+  /// From the site's fault point to its fault_end(), the `count`th large allocation (operator
+  /// new) throws std::bad_alloc: needs the test shim that replaces operator new
+  /// (tests/mpi/fail_new.cpp, preloaded), else the fault point throws std::logic_error.
+  Allocation
 };
 
 /// One armed site. rank < 0: every rank; else only the process whose rank (in the world
@@ -24,18 +28,22 @@ struct FaultPlan {
   FaultKind kind = FaultKind::Error;
   int rank = -1;
   double seconds = 0;
+  long count = 0; ///< Allocation: which large allocation fails (0: none, they are only counted)
 };
 
 /// Arm `plan` for this process (rank `this_rank`); an empty site disarms. Not thread-safe: call
 /// it once at start-up.
 void arm_fault(const FaultPlan &plan, int this_rank);
 
-/// The kind named "error", "oom", "pause" or "unreadable"; false for any other name.
+/// The kind named "error", "oom", "pause", "unreadable" or "alloc"; false for any other name.
 bool parse_fault_kind(const std::string &name, FaultKind *kind);
 
 /// A place where a failure must be handled cleanly: does what the armed plan says when it names
 /// `site` (and this rank), nothing otherwise. Call it outside OpenMP regions.
 void fault_point(const char *site);
+
+/// The end of the work a fault point marks, for kinds that act over a stretch of it (Allocation).
+void fault_end(const char *site);
 
 /// The file to open at `site`: `path`, or, when `site` is armed for this rank with
 /// FaultKind::Unreadable, the same name in a folder "injected-unreadable" beside it that does

@@ -3,13 +3,25 @@
 /// MPI rank; the PETSc layer implements it on an MPI communicator, petsc/mpi_comm.h), so that the
 /// plain C++ layers stay free of MPI. SerialComm is the one-rank case.
 ///
-/// Every call is collective: all ranks make it, in the same order. A fault on one rank inside a
-/// collective phase must not leave the others waiting: run the rank's work through
-/// `collectively()`, which agrees on failure before the next collective call.
+/// Every call is collective: all ranks make it, in the same order. A failure on one rank must
+/// never leave the others waiting in a collective call it will not make. The rule that ensures
+/// it: every function that makes collective calls is *failure-atomic* — it returns on every rank
+/// or throws on every rank. The calls of RankComm are (its MPI implementation agrees internally
+/// wherever it allocates between two MPI steps), and so is `collectively(comm, fn)`, the
+/// agreement: it runs fn, a rank's local work that may fail (allocations, size checks, a
+/// breakdown), then agrees with the other ranks on whether any failed. A distributed algorithm
+/// is then a sequence of collective calls with all the local work between them inside
+/// `collectively()`; nothing that can throw stands outside one.
 #pragma once
 
+#include <cstddef>
 #include <exception>
+#include <memory>
+#include <new>
+#include <optional>
 #include <stdexcept>
+#include <string>
+#include <type_traits>
 #include <vector>
 
 namespace hssbem {
@@ -26,6 +38,8 @@ struct CommTraffic {
   long long bytes = 0, messages = 0;
 };
 
+/// Every call is collective and failure-atomic (see the file's notes): it returns on every rank or
+/// throws on every rank, whatever it allocates.
 class RankComm {
 public:
   virtual ~RankComm() = default;
@@ -37,7 +51,9 @@ public:
   /// rank sent here (index = sender). Empty lists are not sent.
   virtual std::vector<std::vector<int>> exchange(const std::vector<std::vector<int>> &send) const = 0;
   /// Point to point with sizes both sides know: send[q] goes to rank q, recv[q] (already sized to
-  /// what q sends) is filled from rank q. Empty buffers are not sent. Counted in traffic().
+  /// what q sends) is filled from rank q. Empty buffers are not sent. Counted in traffic(). Each
+  /// buffer holds at most kMaxMessage values: the callers check it (message_count()) inside the
+  /// agreement that prepares the buffers, as this call allocates nothing and agrees on nothing.
   virtual void exchange(const std::vector<std::vector<double>> &send, std::vector<std::vector<double>> &recv) const = 0;
   /// Whether `mine` is true on any rank.
   virtual bool any(bool mine) const = 0;
@@ -48,7 +64,9 @@ public:
   /// by blocks of nb columns, block j on rank j mod size() (ScaLAPACK's 1 × P process grid):
   /// `local` holds this rank's columns in order, n × spread_columns(n, nb) column-major. On
   /// return it holds their part of the factors, and ipiv (n entries, 1-based) the row
-  /// interchanges, the same on every rank. Returns getrf's info, the same on every rank.
+  /// interchanges, the same on every rank. Returns getrf's info, the same on every rank. Each
+  /// rank's local array holds at most kMaxMessage entries (check_spread_size(), ScaLAPACK's
+  /// 32-bit local indexing), checked by the caller's agreement.
   virtual int spread_getrf(int n, int nb, float *local, int *ipiv) const;
 
   const CommTraffic &traffic() const { return m_traffic; }
@@ -59,6 +77,19 @@ protected:
 
 /// How many of n columns in blocks of nb fall to `rank` of `ranks` (block j on rank j mod ranks).
 int spread_columns(int n, int nb, int rank, int ranks);
+
+/// The most values one message (and one rank's local array of a spread LU) may hold: MPI counts,
+/// BLACS/ScaLAPACK local indices and the descriptors are 32-bit integers.
+constexpr long long kMaxMessage = 2147483647;
+
+/// `values` as an MPI count; std::length_error naming `what` (e.g. "rank 1's rows of the top")
+/// beyond kMaxMessage.
+int message_count(std::size_t values, const std::string &what);
+
+/// Throws std::length_error when a spread LU of n unknowns in blocks of nb over `ranks` ranks
+/// would give some rank more than kMaxMessage local entries (n × its columns: on 2 ranks from
+/// n = 65 536 on).
+void check_spread_size(long long n, int nb, int ranks);
 
 /// One rank: every collective is the identity.
 class SerialComm : public RankComm {
@@ -73,20 +104,89 @@ public:
   double max(double v) const override { return v; }
 };
 
-/// Run fn on this rank, then agree with the others: when fn threw on any rank, every rank
-/// throws (the failing ranks their own exception, the others PeerFault); otherwise none does.
-template <class Fn>
-void collectively(const RankComm &comm, Fn &&fn)
+namespace detail {
+
+/// The agreement's collective step: the worst of the ranks' outcomes (0 done, 1 a soft failure,
+/// 2 any other failure).
+int worst_outcome(const RankComm &comm, int mine);
+/// The message of the lowest rank with `mine` set, on every rank (collective).
+std::string lowest_message(const RankComm &comm, bool mine, const std::string &message);
+
+/// Whether e is a Soft (never with Soft = void); its message in *message.
+template <class Soft>
+bool is_soft(const std::exception_ptr &e, std::string *message)
 {
+  if constexpr (std::is_void_v<Soft>) {
+    (void)e, (void)message;
+    return false;
+  } else {
+    try {
+      std::rethrow_exception(e);
+    } catch (const Soft &s) {
+      *message = s.what();
+      return true;
+    } catch (...) {
+      return false;
+    }
+  }
+}
+
+} // namespace detail
+
+/// The agreement. Run fn on this rank (its local work before the next collective call) and
+/// agree with the others: when fn threw on any rank, every rank throws (the failing ranks their
+/// own exception, the others PeerFault); otherwise every rank returns fn's result.
+///
+/// With Soft (collectively<H2Breakdown>(comm, fn)): a failure of type Soft is one every rank must
+/// see as such (a factorization's breakdown, which a PC reports as a failed set-up rather than an
+/// error). When some rank threw Soft and none failed otherwise, every rank throws Soft with the
+/// message of the lowest rank that threw it; another failure on any rank wins as above.
+template <class Soft = void, class Fn>
+auto collectively(const RankComm &comm, Fn &&fn) -> decltype(fn())
+{
+  using Result = decltype(fn());
   std::exception_ptr err;
+  std::conditional_t<std::is_void_v<Result>, char, std::optional<Result>> out{};
   try {
-    fn();
+    if constexpr (std::is_void_v<Result>) fn();
+    else out.emplace(fn());
   } catch (...) {
     err = std::current_exception();
   }
-  const bool failed = comm.any(err != nullptr);
-  if (err) std::rethrow_exception(err);
-  if (failed) throw PeerFault();
+  std::string message;
+  const bool soft = err && detail::is_soft<Soft>(err, &message);
+  const int worst = detail::worst_outcome(comm, !err ? 0 : soft ? 1 : 2);
+  if (worst == 2 || (std::is_void_v<Soft> && worst == 1)) {
+    if (err && !soft) std::rethrow_exception(err);
+    throw PeerFault();
+  }
+  if constexpr (!std::is_void_v<Soft>) {
+    if (worst == 1) throw Soft(detail::lowest_message(comm, soft, message));
+  }
+  if constexpr (!std::is_void_v<Result>) return std::move(*out);
+}
+
+/// A T built by a collective (failure-atomic) constructor, in a shared_ptr: the storage comes
+/// first, in an agreement, so that no rank misses the construction for want of memory.
+template <class T, class... Args>
+std::shared_ptr<T> make_shared_collectively(const RankComm &comm, Args &&...args)
+{
+  const std::shared_ptr<std::optional<T>> slot = collectively(comm, [] { return std::make_shared<std::optional<T>>(); });
+  slot->emplace(std::forward<Args>(args)...);
+  return std::shared_ptr<T>(slot, &**slot); // sharing the slot's ownership: no allocation
+}
+
+/// The same in a unique_ptr (its storage, from the global operator new, agreed first).
+template <class T, class... Args>
+std::unique_ptr<T> make_unique_collectively(const RankComm &comm, Args &&...args)
+{
+  void *storage = collectively(comm, [] { return ::operator new(sizeof(T)); });
+  try {
+    return std::unique_ptr<T>(new (storage) T(std::forward<Args>(args)...));
+  } catch (...) {
+    ::operator delete(storage);
+    throw;
+  }
 }
 
 } // namespace hssbem

@@ -33,10 +33,12 @@ namespace hssbem {
 
 class H2DistributedProduct {
 public:
-  /// Plans the exchanges (collective).
+  /// Plans the exchanges (collective). Every collective member function is failure-atomic
+  /// (rank_comm.hpp).
   H2DistributedProduct(const H2Matrix &K, const RankComm &comm);
 
   const H2Matrix &matrix() const { return m_K; }
+  const RankComm &comm() const { return m_comm; }
   /// This rank's points: positions [first_point(), first_point() + num_points()) of cluster order.
   int first_point() const { return m_first; }
   int num_points() const { return m_count; }

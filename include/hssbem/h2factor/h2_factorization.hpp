@@ -138,7 +138,11 @@ public:
   const H2Matrix &matrix() const { return *m_K; }
   const H2DistributedProduct *distributed() const { return m_dist; }
   /// The sketch with p columns, made on first use (seconds spent in *made, 0 when cached).
+  /// Failure-atomic on a distributed matrix's ranks.
   const FarFieldSketch &sketch(int p, double *made = nullptr);
+  /// Use `s` as the sketch with s.columns columns (a test compares two factorizations on one
+  /// sketch: the distributed one's, gathered).
+  void adopt(FarFieldSketch s) { m_sketches.push_back(std::make_unique<FarFieldSketch>(std::move(s))); }
 
 private:
   const H2Matrix *m_K;
@@ -199,8 +203,30 @@ private:
   H2FactorStats m_stats;
 };
 
-/// Sketch columns used for a tolerance when H2FactorOptions::sketch_columns is 0.
+/// Sketch columns used for a tolerance when H2FactorOptions::sketch_columns is 0 (48 to 320).
 int default_sketch_columns(double rel_tol);
+
+/// The most sketch columns H2FactorOptions::sketch_columns may ask for: far beyond what any
+/// tolerance needs (the skeletons of a box stay below a few hundred), and each column is a pass
+/// over the far field in both directions.
+constexpr int kMaxSketchColumns = 4096;
+
+/// For the size model (core/size_limits.hpp, which cannot see this layer: the PETSc face passes
+/// the figure on): the bytes PC h2's dense top of n = `top_unknowns` unknowns (of `unknowns` in
+/// all) takes at its peak on the rank that holds the most of it, with these options on `ranks`
+/// ranks. The options decide its precision and place (H2FactorStats::top_*): in double on rank 0,
+/// 16 n² while the LU is made from the block (8 n² after); mixed (double panels, or everything in
+/// the top, and n ≥ mixed_top_from), 12 n² (the block in double beside the single LU); single
+/// precision alone on rank 0 (single panels), 4 n² and the other ranks' rows as they arrive, at
+/// most 4 n² more; spread over P ranks, 4 n² / P for the columns and up to twice that in
+/// messages, 12 n² / P.
+double h2_top_peak_bytes(const H2FactorOptions &options, long long unknowns, long long top_unknowns, int ranks);
+
+/// The top's unknowns that the options alone decide for a system of `unknowns` unknowns: all of
+/// them when they are at most top_size (everything factored densely), else 0: then the levels
+/// decide when to stop (a few thousand unknowns in the runs measured: 1 761 on a 20k disk organ
+/// at the default tolerance, 5 174 on an 80k sphere on 2 ranks, 9 567 on a 20k sphere at 1e-7).
+long long h2_top_unknowns_from_options(const H2FactorOptions &options, long long unknowns);
 
 /// ‖I − A F⁻¹‖₂ estimated by power iterations from a random vector (the largest of the ratios
 /// ‖(I − A F⁻¹) v‖ / ‖v‖ met): how far the factorization is from an exact inverse of A, for

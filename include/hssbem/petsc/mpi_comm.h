@@ -6,11 +6,14 @@
 
 #include <mpi.h>
 
+#include <vector>
+
 class HssbemMpiComm : public hssbem::RankComm {
 public:
-  /* On comm; with duplicate, on a duplicate of it (freed with this object), so that its messages
-     never meet the caller's. */
-  explicit HssbemMpiComm(MPI_Comm comm, bool duplicate = false);
+  /* On comm, which this object frees when `owned` (a duplicate the caller made with MPI_Comm_dup
+     on every rank, so that its messages never meet the caller's). Not collective: construction
+     on some ranks only (an allocation failure) leaves no rank waiting. */
+  explicit HssbemMpiComm(MPI_Comm comm, bool owned = false);
   ~HssbemMpiComm() override;
   HssbemMpiComm(const HssbemMpiComm &)            = delete;
   HssbemMpiComm &operator=(const HssbemMpiComm &) = delete;
@@ -28,7 +31,12 @@ public:
   int spread_getrf(int n, int nb, float *local, int *ipiv) const override;
 
 private:
-  MPI_Comm m_comm;
-  bool     m_owned = false;
-  int      m_rank = 0, m_size = 1;
+  /* A point-to-point request into the requests reserved at construction, and their end. */
+  void Post(void *buf, int count, MPI_Datatype type, int peer, int tag, bool receive) const;
+  void WaitAll() const;
+
+  MPI_Comm                         m_comm;
+  bool                             m_owned = false;
+  int                              m_rank = 0, m_size = 1;
+  mutable std::vector<MPI_Request> m_req;
 };

@@ -84,6 +84,13 @@ struct HssbemSolveInfo {
    -pc_hss_rel_tol 1e-3 by default), preonly + LU for HSSBEM_MAT_DENSE. */
 PetscErrorCode HssbemKSPCreate(MPI_Comm comm, const char *mat_type, KSP *ksp);
 
+/* The largest true relative residual ||b - A x|| / ||b|| that HssbemSolveSystem() accepts as a
+   solution by default (-hssbem_residual_max): the default solvers reach 1e-8 (GMRES, dense LU
+   far below), a direct H² or HSS solve about its tolerance. */
+#define HSSBEM_RESIDUAL_MAX 1e-4
+
 /* Solve A x = b with that KSP. A dense A is converted in place when its factorization needs
-   another format (ScaLAPACK for parallel LU, AIJ for MUMPS). A diverged solve is an error. */
+   another format (ScaLAPACK for parallel LU, AIJ for MUMPS). A diverged solve is an error, and so
+   is a solution whose true relative residual is not finite or exceeds -hssbem_residual_max, with
+   any KSP (preonly included). */
 PetscErrorCode HssbemSolveSystem(KSP ksp, Mat *A, Vec b, Vec x, HssbemSolveInfo *info);
