@@ -11,7 +11,10 @@ by the mean of its corners' values: |u| by default, or the per-vertex dataset gi
 NAME (e.g. von_mises, or pressure in a contact result). NAME is looked up as /fields/NAME, then
 /contact/NAME; in a result with frames as /frames/<i>/NAME, then /frames/<i>/contact/NAME; a NAME
 with a slash is a path as given. A dataset with several columns per vertex (a vector, the Voigt
-stress) is coloured by the norm of its rows; NaN values (vertices without one) count as 0. The
+stress) is coloured by the norm of its rows, or by one column with NAME:COLUMN: a column number
+from 0, or for six columns a Voigt label xx, yy, zz, yz, xz, xy (stress:xx, stress:yz), for three
+columns x, y, z, and for principal_stress 1, 2, 3 (largest first: principal_stress:1);
+e.g. displacement:z; NaN values (vertices without one) count as 0. The
 colour scale and the axes are the same for every frame (taken over all frames of the file), so
 pictures of one file can be compared and put in sequence.
 
@@ -70,7 +73,7 @@ class Frame:
         """The PNG name of this frame in the output directory."""
         if self.index is None:
             return "displacement.png" if self.field is None else \
-                "%s.png" % self.field.strip("/").replace("/", "_")
+                "%s.png" % self.field.strip("/").replace("/", "_").replace(":", "_")
         return "frame_%04d.png" % self.index
 
     def title(self):
@@ -162,6 +165,35 @@ def read_frame(h5, index, nv):
                  float(seconds) if seconds is not None else None)
 
 
+VOIGT = ("xx", "yy", "zz", "yz", "xz", "xy")
+
+
+def split_column(spec):
+    """(NAME, COLUMN label or None) of --field NAME[:COLUMN]."""
+    name, _, column = spec.partition(":")
+    return name, (column or None)
+
+
+def column_index(label, columns, where):
+    """The 0-based column that `label` names in the dataset `where` of `columns` columns: 1, 2, 3
+    for principal_stress (sigma_1 >= sigma_2 >= sigma_3), otherwise a number from 0, a Voigt
+    label (six columns) or x, y, z (three)."""
+    if columns == 3 and where.endswith("principal_stress"):
+        if label in ("1", "2", "3"):
+            return int(label) - 1
+        raise RenderError("%s: no column '%s' (1, 2 or 3: the principal stresses, largest first)"
+                          % (where, label))
+    if label.isdigit() and int(label) < columns:
+        return int(label)
+    if columns == 6 and label in VOIGT:
+        return VOIGT.index(label)
+    if columns == 3 and label in ("x", "y", "z"):
+        return "xyz".index(label)
+    raise RenderError("%s has %d columns: no column '%s' (a number from 0%s)"
+                      % (where, columns, label, {6: ", or xx, yy, zz, yz, xz, xy",
+                                                  3: ", or x, y, z"}.get(columns, "")))
+
+
 def field_candidates(name, index):
     """Where --field NAME is looked for, in order, for frame `index` (None: no frames)."""
     if "/" in name:
@@ -172,8 +204,9 @@ def field_candidates(name, index):
 
 
 def read_field(h5, name, index, nv):
-    """(path, values per vertex) of --field NAME: the dataset's rows, or their norms when it has
-    several columns; NaN counts as 0."""
+    """(path, values per vertex) of --field NAME[:COLUMN]: the dataset's rows, their norms when it
+    has several columns, or the column asked for; NaN counts as 0."""
+    name, column = split_column(name)
     candidates = field_candidates(name, index)
     found = [p for p in candidates if p in h5 and isinstance(h5[p], h5py.Dataset)]
     if not found:
@@ -182,6 +215,12 @@ def read_field(h5, name, index, nv):
     if data.ndim == 0 or data.shape[0] != nv or data.ndim > 2:
         raise RenderError("%s: %s has shape %s, expected (%d,) or (%d, k): one value or row per "
                           "vertex" % (h5.filename, found[0], data.shape, nv, nv))
+    if column is not None:
+        if data.ndim != 2:
+            raise RenderError("%s: %s has one value per vertex: no column '%s'"
+                              % (h5.filename, found[0], column))
+        data = data[:, column_index(column, data.shape[1], "%s: %s" % (h5.filename, found[0]))]
+        return "%s:%s" % (found[0], column), np.nan_to_num(data)
     if data.ndim == 2:
         data = np.linalg.norm(np.nan_to_num(data), axis=1)
     return found[0], np.nan_to_num(data)
@@ -396,8 +435,10 @@ def make_parser():
                         help="colour by this per-vertex dataset instead of |u|: /fields/NAME, "
                         "else /contact/NAME (with frames /frames/<i>/NAME, else "
                         "/frames/<i>/contact/NAME); a NAME with a slash is a path as given; "
-                        "rows of several values (vectors, stress) colour by their norm; "
-                        "e.g. --field von_mises, --field pressure")
+                        "rows of several values (vectors, stress) colour by their norm, or by "
+                        "one column with NAME:COLUMN (a number from 0; xx, yy, zz, yz, xz, xy "
+                        "of the Voigt stress; x, y, z; 1, 2, 3 of principal_stress); "
+                        "e.g. --field von_mises, stress:zz, principal_stress:1, pressure")
     return parser
 
 

@@ -212,6 +212,31 @@ class RenderTests(TempDirTest):
         _, _, frames = render.load_result(self.path("r.h5"), None, None)
         np.testing.assert_allclose(frames[0].colour, 0.01)  # default: |u|
 
+    def test_field_columns(self):
+        sys.path.insert(0, SCRIPTS)
+        import render
+        stress = np.tile(np.arange(6, dtype=float), (6, 1))  # column k holds k
+        principal = np.tile([3.0, 2.0, -1.0], (6, 1))
+        write_result(self.path("r.h5"), frames=0,
+                     extra={"/fields/stress": stress, "/fields/principal_stress": principal})
+        for spec, value in (("stress:xx", 0), ("stress:zz", 2), ("stress:yz", 3), ("stress:xy", 5),
+                            ("stress:4", 4), ("principal_stress:1", 3), ("principal_stress:3", -1),
+                            ("displacement", 0.01), ("displacement:z", 0.01 * OCTA_VERTICES[:, 2])):
+            _, _, frames = render.load_result(self.path("r.h5"), None, spec)
+            np.testing.assert_allclose(frames[0].colour, value, err_msg=spec)
+        self.assertEqual(frames[0].field, "/fields/displacement:z")
+        for spec, pattern in (("stress:zx", r"/fields/stress has 6 columns: no column 'zx' \(a "
+                               "number from 0, or xx"),
+                              ("principal_stress:0", r"r\.h5: /fields/principal_stress: no column "
+                               "'0' \(1, 2 or 3"),
+                              ("stress:6", r"no column '6'"),
+                              ("displacement:xx", r"has 3 columns: no column 'xx'")):
+            with self.assertRaisesRegex(render.RenderError, pattern):
+                render.load_result(self.path("r.h5"), None, spec)
+        r = self.render("r.h5", "--field", "stress:zz")
+        self.assertEqual(r.returncode, 0, describe(r))
+        self.assertEqual(self.pictures(), ["fields_stress_zz.png"])
+
     def test_field_in_frames(self):
         extra = {"/frames/%d/von_mises" % i: np.full(6, float(i)) for i in range(3)}
         extra.update({"/frames/%d/contact/pressure" % i: np.full(6, 2.0 * i) for i in range(3)})
