@@ -35,6 +35,7 @@ void check_frame(const std::string &path, std::size_t expected, std::size_t i, c
   detail::check_size(path, g + "/displacement_prescribed", f.displacement_prescribed.size(), nv,
                      "vertex", false);
   detail::check_stress_sizes(path, g, f.stress, nv, 0); // no stress_corner in frames
+  detail::check_contact(path, g + "/contact", f.contact, nv);
 }
 
 void write_frame(H5Writer &w, std::size_t i, const FrameData &f)
@@ -46,6 +47,8 @@ void write_frame(H5Writer &w, std::size_t i, const FrameData &f)
   if (!f.displacement_prescribed.empty())
     detail::write_mask(w, g, name, "displacement_prescribed", f.displacement_prescribed);
   detail::write_stress(w, g, name, f.stress);
+  if (f.contact.present())
+    detail::write_contact(w, name + "/contact", f.contact);
   detail::write_attributes(w, g.get(), name, {f.attributes_real, f.attributes_int, f.attributes_str});
   w.end_group(g, name);
 }
@@ -66,6 +69,7 @@ struct FrameWriter::Impl {
   std::size_t num_vertices;
   std::vector<bool> has_mask; ///< one entry per frame appended: displacement_prescribed written
   std::vector<StressFields> stress_shape; ///< per frame: which stress fields it holds (sizes only, no values)
+  std::vector<bool> has_contact; ///< one entry per frame appended: contact written
   bool broken = false, committed = false;
   // Destroyed in reverse order: the HDF5 file is closed before its temporary name is removed.
   std::optional<detail::FileSetCommit> files;
@@ -112,6 +116,9 @@ std::string FrameWriter::Impl::sidecar() const
                                             num_vertices, detail::XdmfNumber::int8));
     const auto stress = detail::stress_attributes(g, stress_shape[i], num_vertices);
     fields.insert(fields.end(), stress.begin(), stress.end());
+    if (has_contact[i])
+      for (const detail::XdmfAttribute &a : detail::contact_attributes(g + "/contact", num_vertices))
+        fields.push_back(a);
     steps[i].attributes.insert(steps[i].attributes.begin(), fields.begin(), fields.end());
     steps[i].name = "frame_" + std::to_string(i);
     steps[i].time = static_cast<double>(i);
@@ -147,6 +154,7 @@ void FrameWriter::append(std::size_t i, const FrameData &frame)
   if (!frame.stress.von_mises.empty()) shape.von_mises.resize(1);
   if (!frame.stress.principal.empty()) shape.principal.resize(1);
   m_impl->stress_shape.push_back(std::move(shape));
+  m_impl->has_contact.push_back(frame.contact.present());
   m_impl->broken = false;
 }
 

@@ -36,6 +36,14 @@ struct InteriorRunOptions {
   InteriorEvaluationOptions fast; ///< -bem_interior_equivalent_points, _source_leaf, _target_leaf, _direct
 };
 
+/// The options of a contact problem (a problem file with "contact"), -contact_*.
+struct ContactRunOptions {
+  double tol = 1e-10;   ///< -contact_tol: relative tolerance of the gaps and of friction's Newton residual
+  int max_it = 50;      ///< -contact_max_it: iterations per frame before it is an error
+  double reach = 0;     ///< -contact_reach: candidates within this gap (0: 5 % of the mesh's size)
+  bool monitor = false; ///< -contact_monitor: one line per iteration
+};
+
 /// Everything the command line can set besides the solver's options.
 struct AppOptions {
   std::string problem;                            ///< -problem: the problem file (required unless -help)
@@ -44,6 +52,7 @@ struct AppOptions {
   QuadratureOptions quad;                         ///< -mat_bem_*
   SceneRunOptions scene;                          ///< -scene_*
   InteriorRunOptions interior;                    ///< -bem_interior_*
+  ContactRunOptions contact;                      ///< -contact_*
   bool help = false;                              ///< -help: list the options (PETSc prints each as it is read)
 };
 
