@@ -6,7 +6,7 @@
 #include <petscsys.h>
 
 PETSC_EXTERN PetscClassId  HSSBEM_CLASSID;
-PETSC_EXTERN PetscLogEvent BEM_Mesh, BEM_Assembly, BEM_Partition, BEM_Solve, BEM_Post, BEM_Interior, BEM_Output;
+PETSC_EXTERN PetscLogEvent BEM_Mesh, BEM_Assembly, BEM_Partition, BEM_Solve, BEM_Post, BEM_Stress, BEM_Interior, BEM_Output;
 /* Phases of the compression engines, HSS and H² (hssbem::Phase), reported through their phase hook;
    HSS_FactorTop and HSS_SolveTop: the distributed ULV's exchanges with rank 0 and its top there. */
 PETSC_EXTERN PetscLogEvent HSS_Tree, HSS_Compress, HSS_NearField, HSS_Truncate, HSS_Factor, HSS_Solve, HSS_MatMult, HSS_FactorTop, HSS_SolveTop;
