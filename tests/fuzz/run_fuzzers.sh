@@ -3,7 +3,7 @@
 # its seeds (make_seeds.py) and its kept regression inputs, for a bounded time or number of
 # inputs each, two harnesses at a time (one per core of the CI machine):
 #
-#   tests/fuzz/run_fuzzers.sh BUILD 20              # 20 s per harness (CI: 3 rounds, about 1 min)
+#   tests/fuzz/run_fuzzers.sh BUILD 60              # 60 s per harness (CI: 3 rounds, about 3 min)
 #   tests/fuzz/run_fuzzers.sh BUILD runs=1000000    # 10^6 inputs per harness
 #   tests/fuzz/run_fuzzers.sh BUILD 600 --grow      # then merge what is new into corpus/<harness>/
 #
