@@ -2,6 +2,7 @@
 // the contact engine (contact/contact_engine.hpp) on the dense reference factorization, on rank 0.
 #include "hssbem/app/run.hpp"
 #include "result_base.hpp"
+#include "stress_post.hpp"
 
 #include "hssbem/app/petsc_call.hpp"
 #include "hssbem/bem/post.hpp"
@@ -103,11 +104,24 @@ ContactData contact_data(const ContactEngine &engine, const ContactSolution &sol
   return c;
 }
 
+/// A contact solution with a non-finite value (a singular or overflowing system) is an error
+/// before anything of it is written.
+void check_finite(const ContactSolution &sol, long long frame)
+{
+  for (const std::vector<Vec3> *field : {&sol.u, &sol.t})
+    for (const Vec3 &v : *field)
+      for (double c : v)
+        if (!std::isfinite(c))
+          throw std::runtime_error("contact: the solution" + (frame < 0 ? std::string() : " of frame " + std::to_string(frame)) +
+                                   " is not finite (the contact system is singular or overflows)");
+}
+
 /// What the driver keeps of a contact run on rank 0.
 struct ContactRun {
   const ProblemSetup &s;
   const BemOperator &op;
   const ContactRunOptions &o;
+  const InteriorRunOptions &interior;
   PetscMPIInt size;
   std::map<std::string, double> &seconds;
   std::unique_ptr<DenseReference> reference;
@@ -156,6 +170,7 @@ void ContactRun::single(const NodeConditions &nc)
   ContactSolution sol;
   const ContactFrameReport rep = engine->solve(selection_of(nc), placements_of(s.spec)[0], sol);
   seconds["contact_solve"] += rep.seconds;
+  check_finite(sol, -1);
   HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF, "hssbem: contact: %lld vertices touching (%lld stick, %lld slip) after %lld iterations, %.3f ms\n", rep.active_vertices, rep.stick,
                               rep.slip, rep.iterations, 1e3 * rep.seconds));
   if (s.output.empty()) return;
@@ -167,8 +182,15 @@ void ContactRun::single(const NodeConditions &nc)
   r.traction_corner = corner_values(*s.disc, sol.t);
   r.displacement_prescribed = vertex_displacement_prescribed(*s.disc, nc);
   r.reactions = reactions(*s.disc, sol.t);
-  r.interior_points = s.spec.interior_points;
-  r.interior_displacement = interior_displacement(op, NodalSolution{sol.u, sol.t}, s.spec.interior_points);
+  const NodalSolution nodal{sol.u, sol.t};
+  std::vector<NodeStress> nodes;
+  {
+    const Timer timer;
+    const EventScope event(BEM_Stress);
+    r.stress = surface_stress_fields(s, nodal, nodes, true);
+    seconds["stress"] += timer.seconds();
+  }
+  interior_fields(PETSC_COMM_SELF, s, nodal, nodes, interior, r, seconds); // the contact run is rank 0's
   r.contact = contact_data(*engine, sol, rep, s.spec.contact.bodies);
   r.timings = seconds;
   const EventScope event(BEM_Output);
@@ -197,6 +219,7 @@ void ContactRun::scene(const std::vector<NodeConditions> &frames)
       rep = engine->solve(selection_of(frames[frame]), placements[frame], sol);
     }
     total += rep.seconds, slowest = std::max(slowest, rep.seconds), iterations += rep.iterations;
+    check_finite(sol, frame);
     if (!writer) continue;
     FrameData f;
     f.displacement = vertex_average(*s.disc, sol.u);
@@ -204,6 +227,8 @@ void ContactRun::scene(const std::vector<NodeConditions> &frames)
     f.displacement_prescribed = vertex_displacement_prescribed(*s.disc, frames[frame]);
     f.attributes_real = {{"seconds", rep.seconds}};
     f.attributes_int = {{"iterations", rep.iterations}, {"active_vertices", rep.active_vertices}};
+    std::vector<NodeStress> nodes;
+    f.stress = surface_stress_fields(s, NodalSolution{sol.u, sol.t}, nodes, false);
     f.contact = contact_data(*engine, sol, rep, s.spec.contact.bodies);
     const EventScope event(BEM_Output);
     writer->append(static_cast<std::size_t>(frame), f);
@@ -219,7 +244,8 @@ void ContactRun::scene(const std::vector<NodeConditions> &frames)
 
 } // namespace
 
-void run_contact(MPI_Comm comm, const ProblemSetup &s, const BemOperator &op, std::optional<OperatorType> asked, const ContactRunOptions &o, std::map<std::string, double> seconds)
+void run_contact(MPI_Comm comm, const ProblemSetup &s, const BemOperator &op, std::optional<OperatorType> asked, const ContactRunOptions &o, const InteriorRunOptions &interior,
+                 std::map<std::string, double> seconds)
 {
   PetscMPIInt rank, size;
   HssbemCallMPIThrow(MPI_Comm_rank(comm, &rank));
@@ -240,7 +266,7 @@ void run_contact(MPI_Comm comm, const ProblemSetup &s, const BemOperator &op, st
     if (rank != 0) return;
     const NodeConditions base = apply_rules(s.spec.rules, *s.disc, s.spec.file);
     const std::vector<NodeConditions> frames = frames_of(s, base);
-    ContactRun run{s, op, o, size, seconds, nullptr, nullptr};
+    ContactRun run{s, op, o, interior, size, seconds, nullptr, nullptr};
     run.set_up(base);
     if (s.spec.frames.empty()) run.single(frames[0]);
     else run.scene(frames);

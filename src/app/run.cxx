@@ -236,7 +236,7 @@ void run_problem(MPI_Comm comm, const std::string &problem_file, const ProblemOv
     HssbemCallThrow(PetscPrintf(comm, "hssbem: %s: %d vertices, %d triangles, %d dof nodes (%d sharp vertices), %d unknowns, %d ranks\n", s.spec.mesh_path.c_str(), s.mesh->num_vertices(),
                                 s.mesh->num_triangles(), s.disc->num_nodes(), s.disc->num_sharp_vertices(), 3 * s.disc->num_nodes(), size));
     check_unused_options(comm, false);
-    run_contact(comm, s, op, asked, contact, seconds);
+    run_contact(comm, s, op, asked, contact, interior, seconds);
     return;
   }
   if (!s.spec.frames.empty()) {

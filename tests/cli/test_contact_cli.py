@@ -139,6 +139,27 @@ class ContactRunTests(ContactCase):
         self.assertIn("/contact/pressure", xdmf)
         self.assertIn("/contact/status", xdmf)
 
+    def test_stress_on_the_surface_and_inside(self):
+        # The cube pressed onto the table is in uniaxial stress: sigma_zz = -E delta = -10 and
+        # nothing else, on the surface (face vertices), at interior points and on a grid; a
+        # contact run writes them as any other run does.
+        import numpy as np
+        self.cube_contact({"obstacles": [TABLE]},
+                          interior_points={"points": [[0.5, 0.5, 0.5], [0.3, 0.6, 0.02]],
+                                           "grid": {"box": [[0.1, 0.1, 0.1], [0.9, 0.9, 0.9]], "cells": [2, 2, 2]}})
+        self.assertSucceeds(self.run_problem("problem.json", timeout=TIMEOUT_RUN), self.out)
+        data, _, _ = self.read("out.h5")
+        exact = np.array([0, 0, -10.0, 0, 0, 0])
+        x = data["mesh/vertices"]
+        on_face = ((np.abs(x) < 1e-9) | (np.abs(x - 1) < 1e-9)).sum(axis=1) == 1
+        self.assertGreater(on_face.sum(), 40)
+        self.assertLess(np.max(np.abs(data["fields/stress"][on_face] - exact)), 1e-3)  # measured 2.0e-4
+        self.assertLess(np.max(np.abs(data["fields/von_mises"][on_face] - 10.0)), 1e-3)
+        self.assertEqual(data["interior/stress"].shape, (2, 6))
+        self.assertLess(np.max(np.abs(data["interior/stress"] - exact)), 1.5e-4)  # measured 4.6e-5
+        self.assertTrue(np.all(data["interior/grid/inside"]))
+        self.assertLess(np.max(np.abs(data["interior/grid/stress"] - exact)), 3.5e-4)  # measured 1.2e-4
+
     def test_scene_frames_equal_static_runs(self):
         # The table rises under the cube frame by frame; each frictionless frame is the static
         # problem with the table at that frame's place (its own run, -bem_mat_type dense).
@@ -152,6 +173,7 @@ class ContactRunTests(ContactCase):
         with h5py.File(self.out, "r") as f:
             self.assertEqual(int(f.attrs["num_frames"]), len(rises))
             frames = [(f["/frames/%d/displacement" % i][()], f["/frames/%d/contact/pressure" % i][()]) for i in range(len(rises))]
+            self.assertIn("/frames/%d/stress" % (len(rises) - 1), f)
         with open(self.path("out.xdmf")) as f:
             self.assertIn("/frames/3/contact/pressure", f.read())
         for i, z in enumerate(rises):

@@ -48,9 +48,11 @@ void run_scene(MPI_Comm comm, const ProblemSetup &s, const BemOperator &op, std:
 /// contact engine (contact/contact_engine.hpp) over the dense reference factorization of the
 /// base rules: every body checked to be held, every frame's conditions checked to keep the base
 /// pattern, the columns every frame needs computed in one block, then the frames, written as a
-/// result file with /contact (single solve) or /frames/<i>/contact. Throws for -bem_mat_type
+/// result file with /contact (single solve) or /frames/<i>/contact, the surface stress (and, for
+/// a single solve, the interior points and grid: `interior`) as in any other run. Throws for -bem_mat_type
 /// hss or h2 and for a problem that does not fit the node's memory.
-void run_contact(MPI_Comm comm, const ProblemSetup &s, const BemOperator &op, std::optional<OperatorType> asked, const ContactRunOptions &o, std::map<std::string, double> seconds);
+void run_contact(MPI_Comm comm, const ProblemSetup &s, const BemOperator &op, std::optional<OperatorType> asked, const ContactRunOptions &o,
+                 const InteriorRunOptions &interior, std::map<std::string, double> seconds);
 
 /// Build the system of a prepared problem with the operator of `type` and solve it: the unknowns
 /// (3 per dof node, node order) on rank 0 (empty elsewhere), or on every rank with to_all.
