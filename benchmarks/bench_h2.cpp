@@ -1,6 +1,6 @@
 // The H² path end to end on one mesh: compression of K = [H, G], GMRES(100) + Jacobi through
 // PETSc with the H² product, optionally against dense assembly + LU of the same system; prints
-// one CSV row with bench_hss's columns (so bench_hss.py drives both, see README.md) and the H²
+// one CSV row with bench_hss's columns (so bench_hss.py drives both, see benchmarks/README.md) and the H²
 // extras.
 //
 //   bench_h2 --mesh FILE [--tol 1e-5] [--leaf 64] [--eta 0] [--single 0|1] [--dense 0|1]

@@ -1,4 +1,4 @@
-// HSS direct solve against dense assembly + LU on one mesh; prints one CSV row (see README.md).
+// HSS direct solve against dense assembly + LU on one mesh; prints one CSV row (see benchmarks/README.md).
 //
 //   bench_hss --mesh FILE [--tol 1e-6] [--leaf 256] [--dense 0|1] [--header]
 //

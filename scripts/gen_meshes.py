@@ -22,6 +22,10 @@ Usage
         [--refine K]   (K nested 1:4 refinements with projection onto the ellipsoid)
   scripts/gen_meshes.py --cardioid-triangles 20000 --out c.msh  # cardioid with exactly N triangles
   scripts/gen_meshes.py --check-examples [--out DIR]   # check meshes/examples/*.json selectors
+  scripts/gen_meshes.py --hertz-size HC --out h.msh     # Hertz contact: a hemisphere of radius R
+        [--radius R] [--hertz-far HF] [--hertz-fine-radius RF] [--hertz-pair GAP]
+        (pole at the origin, flat face up at z = R; size HC within RF of the pole, growing to HF;
+        --hertz-pair adds its mirror image below, pole at z = -GAP: two bodies in one mesh)
 
 Nested refinement (sphere, cube, hollow sphere, disk organ; not the cardioid): every triangle
 (a, b, c) is split into (a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca) with the new mid-edge vertices
@@ -690,6 +694,43 @@ def gen_disk_organ(outdir, log):
     save(outdir, "disk_organ_4k.msh", V2, T2, disk_regions(V2, T2), ["bottom", "top"], [+1], log)
 
 
+# Hertz contact hemispheres --------------------------------------------------------------------------
+
+
+def hertz_hemisphere(R, hc, hf, rf):
+    """The hemisphere z in [0, R] of the sphere of radius R centred at (0, 0, R): pole at the
+    origin, flat face at z = R; gmsh size hc within rf of the origin, growing linearly to hf.
+    Vertices projected exactly onto the sphere and the plane.  Returns (V, T, region) with
+    regions 0 flat, 1 curved."""
+    def build():
+        ball = gmsh.model.occ.addSphere(0, 0, R, R)
+        box = gmsh.model.occ.addBox(-2 * R, -2 * R, 0, 4 * R, 4 * R, R)
+        gmsh.model.occ.intersect([(3, ball)], [(3, box)])
+        gmsh.model.occ.synchronize()
+        f = gmsh.model.mesh.field.add("MathEval")
+        gmsh.model.mesh.field.setString(f, "F", f"min({hf}, {hc} + 0.35 * max(0, sqrt(x*x + y*y + z*z) - {rf}))")
+        gmsh.model.mesh.field.setAsBackgroundMesh(f)
+    V, T = mesh_occ_surface(build, hf)
+    on_flat = np.abs(V[:, 2] - R) < 1e-6 * R
+    c = np.array([0, 0, R])
+    d = V - c
+    V = np.where(on_flat[:, None], np.column_stack([V[:, 0], V[:, 1], np.full(len(V), R)]),
+                 c + R * d / np.linalg.norm(d, axis=1)[:, None])
+    T = orient_outward(V, T)
+    flat_tri = on_flat[T].all(axis=1)
+    return V, T, np.where(flat_tri, 0, 1)
+
+
+def hertz_mesh(R, hc, hf, rf, pair_gap):
+    V, T, reg = hertz_hemisphere(R, hc, hf, rf)
+    if pair_gap is None:
+        return V, T, reg, ["flat", "curved"], [+1]
+    Vb = V * np.array([1, 1, -1]) - np.array([0, 0, pair_gap])  # the mirror image, pole at z = -gap
+    Tb = T[:, [0, 2, 1]] + len(V)                                 # mirrored: flip to stay outward
+    return (np.vstack([V, Vb]), np.vstack([T, Tb]), np.concatenate([reg, reg + 2]),
+            ["flat_a", "curved_a", "flat_b", "curved_b"], [+1, +1])
+
+
 # ------------------------------------------------------------------------------------------------
 # example problem checks
 
@@ -803,6 +844,14 @@ def main():
     ap.add_argument("--cardioid-triangles", type=int, metavar="N",
                     help="write one cardioid body of revolution (the source paper's heart-like organ) with "
                     "N triangles (N even) to --out FILE")
+    ap.add_argument("--hertz-size", type=float, metavar="HC",
+                    help="write a Hertz contact hemisphere (pole at the origin, flat face up) with size HC "
+                    "near the pole to --out FILE")
+    ap.add_argument("--hertz-far", type=float, metavar="HF", help="Hertz: size far from the pole (default 0.25 R)")
+    ap.add_argument("--hertz-fine-radius", type=float, metavar="RF",
+                    help="Hertz: size HC within this distance of the pole (default 0.3 R)")
+    ap.add_argument("--hertz-pair", type=float, metavar="GAP",
+                    help="Hertz: add the mirror image below, its pole at z = -GAP (two bodies)")
     ap.add_argument("--refine", type=int, default=0, metavar="K",
                     help="apply K nested 1:4 refinements (single-sphere and single-disk modes)")
     ap.add_argument("--check-examples", action="store_true",
@@ -818,6 +867,18 @@ def main():
     if single_sphere + single_disk + single_cardioid + (args.sphere_triangles is not None and args.sphere_size is not None) \
             + (args.disk_triangles is not None and args.disk_size is not None) > 1:
         ap.error("give only one of --sphere-triangles, --sphere-size, --disk-triangles, --disk-size, --cardioid-triangles")
+
+    if args.hertz_size is not None:
+        if not args.out or not args.out.endswith(".msh"):
+            ap.error("Hertz mode needs --out FILE.msh")
+        R = args.radius
+        hf = args.hertz_far if args.hertz_far else 0.25 * R
+        rf = args.hertz_fine_radius if args.hertz_fine_radius else 0.3 * R
+        V, T, reg, names, signs = hertz_mesh(R, args.hertz_size, hf, rf, args.hertz_pair)
+        d = os.path.dirname(os.path.abspath(args.out))
+        os.makedirs(d, exist_ok=True)
+        save(d, os.path.basename(args.out), V, T, reg, names, signs, [])
+        return
 
     if single_cardioid:
         if not args.out or not args.out.endswith(".msh"):

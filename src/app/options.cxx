@@ -47,7 +47,11 @@ PetscErrorCode OptionString_Private(const char *key, const char *text, std::stri
 . -scene_refresh <n>          - incremental capacitance updates before a rebuild
 . -scene_single_from <n>      - single-precision capacitance inverse from this many switched unknowns (-1: never)
 . -scene_krylov_rtol <r>      - GMRES tolerance of the krylov strategy
-- -scene_monitor              - print one line per frame
+. -scene_monitor              - print one line per frame
+. -contact_tol <r>            - contact: relative tolerance of the gaps (times the mesh's size) and of friction's Newton residual
+. -contact_max_it <n>         - contact: active-set (or Newton) iterations per frame before it is an error
+. -contact_reach <length>     - contact: vertices within this gap of an obstacle or body are candidates (0: 5 % of the mesh's size)
+- -contact_monitor            - contact: print one line per iteration
 */
 PetscErrorCode ProcessOptions_Private(MPI_Comm comm, AppOptions *opts)
 {
@@ -59,6 +63,8 @@ PetscErrorCode ProcessOptions_Private(MPI_Comm comm, AppOptions *opts)
   std::string strategy = scene_strategy_name(opts->scene.strategy);
   PetscInt    refresh  = opts->scene.refresh_every, single_from = opts->scene.single_from;
   PetscBool   monitor  = opts->scene.monitor ? PETSC_TRUE : PETSC_FALSE;
+  PetscBool   contact_monitor = opts->contact.monitor ? PETSC_TRUE : PETSC_FALSE;
+  PetscInt    contact_max_it  = opts->contact.max_it;
 
   PetscFunctionBegin;
   PetscCall(PetscOptionsHasHelp(NULL, &help));
@@ -82,8 +88,17 @@ PetscErrorCode ProcessOptions_Private(MPI_Comm comm, AppOptions *opts)
   PetscCall(PetscOptionsInt("-scene_single_from", "Scenes: switched sets of at least this size keep the capacitance inverse in single precision, refined in double (-1: never)", "", single_from, &single_from, NULL));
   PetscCall(PetscOptionsReal("-scene_krylov_rtol", "Scenes: GMRES relative tolerance (true residual) of the krylov strategy", "", opts->scene.krylov_rtol, &opts->scene.krylov_rtol, NULL));
   PetscCall(PetscOptionsBool("-scene_monitor", "Scenes: print one line per frame (strategy, switched unknowns, time)", "", monitor, &monitor, NULL));
+  PetscCall(PetscOptionsReal("-contact_tol", "Contact: relative tolerance of the gaps (times the mesh's size) and of friction's Newton residual", "", opts->contact.tol, &opts->contact.tol, NULL));
+  PetscCall(PetscOptionsInt("-contact_max_it", "Contact: active-set (or Newton) iterations per frame before it is an error", "", contact_max_it, &contact_max_it, NULL));
+  PetscCall(PetscOptionsReal("-contact_reach", "Contact: vertices within this gap of an obstacle or another body are candidates (0: 5 % of the mesh's size)", "", opts->contact.reach, &opts->contact.reach, NULL));
+  PetscCall(PetscOptionsBool("-contact_monitor", "Contact: print one line per iteration (active points, changes, residual)", "", contact_monitor, &contact_monitor, NULL));
   PetscOptionsEnd();
   opts->scene.monitor = monitor == PETSC_TRUE;
+  opts->contact.monitor = contact_monitor == PETSC_TRUE;
+  PetscCheck(opts->contact.tol > 0 && opts->contact.tol < 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-contact_tol must lie in (0, 1)");
+  PetscCheck(contact_max_it >= 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-contact_max_it must be at least 1");
+  PetscCheck(opts->contact.reach >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-contact_reach must be >= 0 (0: automatic)");
+  opts->contact.max_it = (int)contact_max_it;
   {
     const std::optional<SceneStrategy> st = parse_scene_strategy(strategy);
     PetscCheck(st, comm, PETSC_ERR_ARG_UNKNOWN_TYPE, "-scene_strategy %s is not available; use auto, solve, update, refactor or krylov", strategy.c_str());

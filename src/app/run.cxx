@@ -206,7 +206,7 @@ OperatorType resolve_operator(MPI_Comm comm, std::optional<OperatorType> asked, 
 }
 
 void run_problem(MPI_Comm comm, const std::string &problem_file, const ProblemOverrides &overrides, const QuadratureOptions &quad, std::optional<OperatorType> asked,
-                 const SceneRunOptions &scene)
+                 const SceneRunOptions &scene, const ContactRunOptions &contact)
 {
   std::map<std::string, double> seconds; // per phase, for the result file
   const Timer                   timer;
@@ -225,6 +225,13 @@ void run_problem(MPI_Comm comm, const std::string &problem_file, const ProblemOv
   });
   const BemOperator &op = *built;
   seconds["setup"] += timer.seconds();
+  if (s.spec.contact.present) {
+    HssbemCallThrow(PetscPrintf(comm, "hssbem: %s: %d vertices, %d triangles, %d dof nodes (%d sharp vertices), %d unknowns, %d ranks\n", s.spec.mesh_path.c_str(), s.mesh->num_vertices(),
+                                s.mesh->num_triangles(), s.disc->num_nodes(), s.disc->num_sharp_vertices(), 3 * s.disc->num_nodes(), size));
+    check_unused_options(comm, false);
+    run_contact(comm, s, op, asked, contact, seconds);
+    return;
+  }
   if (!s.spec.frames.empty()) {
     HssbemCallThrow(PetscPrintf(comm, "hssbem: %s: %d vertices, %d triangles, %d dof nodes (%d sharp vertices), %d unknowns, %d ranks\n", s.spec.mesh_path.c_str(), s.mesh->num_vertices(),
                                 s.mesh->num_triangles(), s.disc->num_nodes(), s.disc->num_sharp_vertices(), 3 * s.disc->num_nodes(), size));
@@ -248,7 +255,7 @@ void run_driver(MPI_Comm comm)
 {
   const AppOptions opts = read_app_options(comm);
   if (!opts.problem.empty()) {
-    run_problem(comm, opts.problem, opts.overrides, opts.quad, opts.operator_type, opts.scene);
+    run_problem(comm, opts.problem, opts.overrides, opts.quad, opts.operator_type, opts.scene, opts.contact);
     return;
   }
   if (!opts.help) throw std::runtime_error("no problem file; give -problem FILE.json (-help lists the options)");

@@ -48,16 +48,28 @@ std::string describe(const double *v)
 
 ConstraintReport analyse_constraints(const Discretization &disc, const std::vector<std::array<bool, 3>> &known)
 {
+  std::vector<NodeConstraint> constraints;
+  for (int i = 0; i < disc.num_nodes(); ++i)
+    for (int c = 0; c < 3; ++c)
+      if (known[i][c]) {
+        Vec3 axis{};
+        axis[c] = 1;
+        constraints.push_back({i, axis});
+      }
+  return analyse_constraints(disc, constraints);
+}
+
+ConstraintReport analyse_constraints(const Discretization &disc, const std::vector<NodeConstraint> &constraints)
+{
   const Frame f = frame_of(disc);
   double gram[36] = {0}, w[6];
-  for (int i = 0; i < disc.num_nodes(); ++i)
-    for (int c = 0; c < 3; ++c) {
-      if (!known[i][c]) continue;
-      double row[6];
-      for (int m = 0; m < 6; ++m) row[m] = mode(f, m, disc.node_position(i), c);
-      for (int a = 0; a < 6; ++a)
-        for (int b = 0; b < 6; ++b) gram[6 * a + b] += row[a] * row[b];
-    }
+  for (const NodeConstraint &k : constraints) {
+    double row[6] = {0};
+    for (int m = 0; m < 6; ++m)
+      for (int c = 0; c < 3; ++c) row[m] += k.direction[c] * mode(f, m, disc.node_position(k.node), c);
+    for (int a = 0; a < 6; ++a)
+      for (int b = 0; b < 6; ++b) gram[6 * a + b] += row[a] * row[b];
+  }
   lapack::syev(6, gram, w);
   ConstraintReport rep;
   const double top = std::max(w[5], 1e-300);

@@ -118,7 +118,7 @@ void add_rigid_body_terms(const BemOperator &op, H2Matrix &K, const RankComm &co
 /// the two-means splits of the cluster tree (more compact clusters: fewer near pairs, so more of
 /// each row is approximated) the sampled error at 300k rose by 22 % (sphere) and 46 % (disk
 /// organ) at 0.7; skeletons at 0.55 rel_tol bring it to 7.8e-7 and 9.7e-7 (1.2e-6 and 9.3e-7
-/// before both changes) for 1.8–2.0 % more memory than 0.7 on the new tree (README, H2 engine).
+/// before both changes) for 1.8–2.0 % more memory than 0.7 on the new tree (benchmarks/results/2026-11-26-h2-compact-clusters.md).
 constexpr double k_skeleton_tol_factor = 0.55, k_far_tol_divisor = 5, k_near_tol_divisor = 10;
 
 double skeleton_tolerance(const H2Options &options)

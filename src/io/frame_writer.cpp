@@ -34,6 +34,7 @@ void check_frame(const std::string &path, std::size_t expected, std::size_t i, c
   detail::check_size(path, g + "/traction", f.traction.size(), nv, "vertex", true);
   detail::check_size(path, g + "/displacement_prescribed", f.displacement_prescribed.size(), nv,
                      "vertex", false);
+  detail::check_contact(path, g + "/contact", f.contact, nv);
 }
 
 void write_frame(H5Writer &w, std::size_t i, const FrameData &f)
@@ -44,6 +45,8 @@ void write_frame(H5Writer &w, std::size_t i, const FrameData &f)
   detail::write_vec3s(w, g, name, "traction", f.traction);
   if (!f.displacement_prescribed.empty())
     detail::write_mask(w, g, name, "displacement_prescribed", f.displacement_prescribed);
+  if (f.contact.present())
+    detail::write_contact(w, name + "/contact", f.contact);
   detail::write_attributes(w, g.get(), name, {f.attributes_real, f.attributes_int, f.attributes_str});
   w.end_group(g, name);
 }
@@ -63,6 +66,7 @@ struct FrameWriter::Impl {
   std::map<std::string, double> base_timings;
   std::size_t num_vertices;
   std::vector<bool> has_mask; ///< one entry per frame appended: displacement_prescribed written
+  std::vector<bool> has_contact; ///< one entry per frame appended: contact written
   bool broken = false, committed = false;
   // Destroyed in reverse order: the HDF5 file is closed before its temporary name is removed.
   std::optional<detail::FileSetCommit> files;
@@ -107,6 +111,9 @@ std::string FrameWriter::Impl::sidecar() const
     if (has_mask[i])
       fields.push_back(detail::node_vectors("displacement_prescribed", g + "/displacement_prescribed",
                                             num_vertices, detail::XdmfNumber::int8));
+    if (has_contact[i])
+      for (const detail::XdmfAttribute &a : detail::contact_attributes(g + "/contact", num_vertices))
+        fields.push_back(a);
     steps[i].attributes.insert(steps[i].attributes.begin(), fields.begin(), fields.end());
     steps[i].name = "frame_" + std::to_string(i);
     steps[i].time = static_cast<double>(i);
@@ -137,6 +144,7 @@ void FrameWriter::append(std::size_t i, const FrameData &frame)
   write_frame(w, i, frame);
   w.flush();
   m_impl->has_mask.push_back(!frame.displacement_prescribed.empty());
+  m_impl->has_contact.push_back(frame.contact.present());
   m_impl->broken = false;
 }
 

@@ -88,6 +88,43 @@ void write_interior(H5Writer &w, const ResultData &d)
 
 } // namespace
 
+void write_contact(H5Writer &w, const std::string &name, const ContactData &c)
+{
+  H5Handle g = w.group(name);
+  const hsize_t nv = count(c.pressure.size());
+  w.dataset(g.get(), name, "pressure", doubles(c.pressure, {nv}));
+  w.dataset(g.get(), name, "gap", doubles(c.gap, {nv}));
+  w.dataset(g.get(), name, "status", int8s(c.status, {nv}));
+  const std::string fname = name + "/forces";
+  H5Handle f = w.group(fname);
+  for (const auto &[who, force] : c.forces)
+    w.dataset(f.get(), fname, who, doubles({force.begin(), force.end()}, {3}));
+  w.end_group(f, fname);
+  const std::map<std::string, double> no_real;
+  const std::map<std::string, long long> counts{{"iterations", c.iterations}, {"active_vertices", c.active_vertices}};
+  const std::map<std::string, std::string> no_text;
+  write_attributes(w, g.get(), name, {no_real, counts, no_text});
+  w.end_group(g, name);
+}
+
+void check_contact(const std::string &path, const std::string &group, const ContactData &c, std::size_t nv)
+{
+  if (!c.present())
+    return;
+  check_size(path, group + "/pressure", c.pressure.size(), nv, "vertex", true);
+  check_size(path, group + "/gap", c.gap.size(), nv, "vertex", true);
+  check_size(path, group + "/status", c.status.size(), nv, "vertex", true);
+  for (const auto &entry : c.forces)
+    if (entry.first.empty() || entry.first == "." || entry.first.find('/') != std::string::npos)
+      fail_output(path, "obstacle name '" + entry.first + "' cannot name the dataset " + group + "/forces/<name>");
+}
+
+std::vector<XdmfAttribute> contact_attributes(const std::string &group, std::size_t nv)
+{
+  return {{"pressure", "Scalar", "Node", {group + "/pressure", {nv}, XdmfNumber::float64}},
+          {"contact_status", "Scalar", "Node", {group + "/status", {nv}, XdmfNumber::int8}}};
+}
+
 ResultMetadata metadata_of(const ResultData &d)
 {
   return {d.attributes_real, d.attributes_int, d.attributes_str, d.timings, d.reactions};
@@ -100,6 +137,8 @@ void write_result_groups(H5Writer &w, const ResultData &d, const ResultMetadata 
   write_bc(w, d);
   write_reactions(w, meta.reactions);
   write_interior(w, d);
+  if (d.contact.present())
+    write_contact(w, "/contact", d.contact);
   write_attributes(w, w.root(), "/", {meta.attributes_real, meta.attributes_int, meta.attributes_str});
 }
 
@@ -143,6 +182,9 @@ XdmfGrid result_grid(const std::string &path, const ResultData &d)
   if (!d.displacement_prescribed.empty())
     fields.push_back(node_vectors("displacement_prescribed", "/bc/displacement_prescribed", nv,
                                   XdmfNumber::int8));
+  if (d.contact.present())
+    for (const XdmfAttribute &a : contact_attributes("/contact", nv))
+      fields.push_back(a);
   XdmfGrid grid = mesh_grid(path, d);
   grid.attributes.insert(grid.attributes.begin(), fields.begin(), fields.end());
   return grid;
@@ -207,6 +249,7 @@ void validate_result(const std::string &path, const ResultData &d)
   check_mesh(path, d);
   check_sizes(path, d);
   check_region_names(path, d);
+  check_contact(path, "/contact", d.contact, d.vertices.size());
 }
 
 namespace {

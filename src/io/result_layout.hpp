@@ -34,6 +34,13 @@ ResultMetadata metadata_of(const ResultData &d);
 /// /timings.
 void write_result_groups(H5Writer &w, const ResultData &d, const ResultMetadata &meta);
 
+/// The group `name` (/contact or /frames/<i>/contact) of a contact's results.
+void write_contact(H5Writer &w, const std::string &name, const ContactData &c);
+/// Refuses contact arrays that are not one entry per vertex (nv) or names that cannot be datasets.
+void check_contact(const std::string &path, const std::string &group, const ContactData &c, std::size_t nv);
+/// The sidecar's contact fields (pressure, contact_status) read from `group`.
+std::vector<XdmfAttribute> contact_attributes(const std::string &group, std::size_t nv);
+
 /// /timings: one float64 attribute per phase (seconds).
 void write_timings(H5Writer &w, const std::map<std::string, double> &timings);
 

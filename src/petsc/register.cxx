@@ -15,6 +15,7 @@ PetscLogEvent BEM_Mesh, BEM_Assembly, BEM_Partition, BEM_Solve, BEM_Post, BEM_In
 PetscLogEvent HSS_Tree, HSS_Compress, HSS_NearField, HSS_Truncate, HSS_Factor, HSS_Solve, HSS_MatMult, HSS_FactorTop, HSS_SolveTop;
 PetscLogEvent H2_Tree, H2_Compress, H2_NearField, H2_MatMult, H2F_Factor, H2F_Sketch, H2F_Eliminate, H2F_Merge, H2F_Top, H2F_Solve;
 PetscLogEvent SCN_Setup, SCN_Update, SCN_Apply, SCN_Refactor, SCN_Krylov, SCN_Frame;
+PetscLogEvent CNT_Setup, CNT_Detect, CNT_Solve, CNT_Fields;
 
 /* The engine's phases as log events (engine phases open and close on the calling thread). */
 static void PhaseHook_Private(hssbem::Phase phase, bool begin)
@@ -22,7 +23,7 @@ static void PhaseHook_Private(hssbem::Phase phase, bool begin)
   static const PetscLogEvent *event[] = {&HSS_Tree, &HSS_Compress, &HSS_NearField, &HSS_Truncate, &HSS_Factor, &HSS_Solve, &HSS_MatMult, &HSS_FactorTop, &HSS_SolveTop,
                                         &H2_Tree,    &H2_Compress, &H2_NearField, &H2_MatMult,
                                         &H2F_Factor, &H2F_Sketch, &H2F_Eliminate, &H2F_Merge, &H2F_Top, &H2F_Solve,
-                                        &SCN_Setup,  &SCN_Update, &SCN_Apply,     &SCN_Refactor, &SCN_Krylov};
+                                        &SCN_Setup,  &SCN_Update, &SCN_Apply,     &SCN_Refactor, &SCN_Krylov, &CNT_Detect,   &CNT_Solve, &CNT_Fields};
   static_assert(sizeof(event) / sizeof(event[0]) == static_cast<int>(hssbem::Phase::Count), "one log event per phase");
   const PetscLogEvent e = *event[static_cast<int>(phase)];
   if (begin) (void)PetscLogEventBegin(e, 0, 0, 0, 0);
@@ -172,6 +173,10 @@ PetscErrorCode HssbemInitializePackage(void)
   PetscCall(PetscLogEventRegister(" SceneApply", HSSBEM_CLASSID, &SCN_Apply));
   PetscCall(PetscLogEventRegister(" SceneRefactor", HSSBEM_CLASSID, &SCN_Refactor));
   PetscCall(PetscLogEventRegister(" SceneKrylov", HSSBEM_CLASSID, &SCN_Krylov));
+  PetscCall(PetscLogEventRegister("ContactSetup", HSSBEM_CLASSID, &CNT_Setup));
+  PetscCall(PetscLogEventRegister(" ContactDetect", HSSBEM_CLASSID, &CNT_Detect));
+  PetscCall(PetscLogEventRegister(" ContactSolve", HSSBEM_CLASSID, &CNT_Solve));
+  PetscCall(PetscLogEventRegister(" ContactFields", HSSBEM_CLASSID, &CNT_Fields));
   hssbem::set_phase_hook(PhaseHook_Private);
   PetscCall(PCRegister(PCHSS, PCCreate_HSS));
   PetscCall(PCRegister(PCH2, PCCreate_H2));

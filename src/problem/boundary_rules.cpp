@@ -23,8 +23,8 @@ struct RuleContext {
 
   [[noreturn]] void fail(const std::string &what) const
   {
-    throw ProblemError((origin.empty() ? std::string() : origin + ": ") + list + "[" +
-                       std::to_string(index) + "]: " + what);
+    const std::string item = index == std::string::npos ? list : list + "[" + std::to_string(index) + "]"; // npos: not a list item
+    throw ProblemError((origin.empty() ? std::string() : origin + ": ") + item + ": " + what);
   }
 };
 
@@ -265,6 +265,19 @@ VertexConditions apply_rules(const std::vector<BoundaryRule> &rules, const Surfa
       apply_rows(rules[i], sel, vc);
   }
   return vc;
+}
+
+std::vector<int> select_vertices(const Selector &where, const SurfaceMesh &mesh, const std::string &origin, const std::string &what)
+{
+  const MeshView view = make_view(mesh);
+  BoundaryRule rule;
+  rule.where = where;
+  rule.rows = {Vec3{0, 0, 0}};
+  const RuleContext ctx{origin, what, std::string::npos};
+  std::vector<int> sel = select(rule, view, ctx);
+  if (sel.empty())
+    ctx.fail("selects no vertex");
+  return sel;
 }
 
 NodeConditions node_conditions(const VertexConditions &vc, const Discretization &disc)

@@ -9,6 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <climits>
 #include <cstdint>
 #include <cmath>
@@ -345,7 +346,7 @@ json parse_json(const std::string &text, const Where &w)
 
 void read_top_level(const json &j, const Where &w, ProblemSpec &spec)
 {
-  check_keys(j, w, {"mesh", "material", "boundary", "frames", "interior_points", "output"});
+  check_keys(j, w, {"mesh", "material", "boundary", "frames", "interior_points", "output", "contact"});
   if (!j.contains("mesh"))
     w.fail("missing 'mesh' (path of the surface mesh, relative to the problem file)");
   if (!j.contains("material"))
@@ -370,12 +371,138 @@ std::vector<BoundaryRule> read_rule_list(const json &j, const Where &w)
   return rules;
 }
 
+/// A frame's "obstacles": {"name": {"translate": [dx, dy, dz]}, ...}; the names are checked
+/// against "contact.obstacles" once the whole file is read (check_frame_obstacles).
+std::vector<std::pair<std::string, Vec3>> read_frame_obstacles(const json &j, const Where &w)
+{
+  if (!j.is_object())
+    w.fail(std::string("expected {\"<obstacle name>\": {\"translate\": [dx, dy, dz]}, ...}, got ") + j.type_name());
+  std::vector<std::pair<std::string, Vec3>> placed;
+  for (const auto &item : j.items()) {
+    const Where wi = w.at(item.key());
+    check_keys(item.value(), wi, {"translate"});
+    if (!item.value().contains("translate"))
+      wi.fail("missing 'translate' (the obstacle's offset from its base position in this frame)");
+    placed.emplace_back(item.key(), read_vec3(item.value()["translate"], wi.at("translate")));
+  }
+  return placed;
+}
+
 FrameSpec read_frame(const json &j, const Where &w)
 {
-  check_keys(j, w, {"boundary"});
-  if (!j.contains("boundary"))
-    w.fail("missing 'boundary' (the frame's rules, applied after the base rules; may be [])");
-  return {read_rule_list(j["boundary"], w.at("boundary"))};
+  check_keys(j, w, {"boundary", "obstacles"});
+  if (!j.contains("boundary") && !j.contains("obstacles"))
+    w.fail("missing 'boundary' (the frame's rules, applied after the base rules; may be []) or 'obstacles'");
+  FrameSpec f;
+  if (j.contains("boundary"))
+    f.rules = read_rule_list(j["boundary"], w.at("boundary"));
+  if (j.contains("obstacles"))
+    f.obstacles = read_frame_obstacles(j["obstacles"], w.at("obstacles"));
+  return f;
+}
+
+// --- "contact" ----------------------------------------------------------------------------------
+
+double read_friction(const json &j, const Where &w)
+{
+  const double mu = read_number(j, w);
+  if (mu < 0)
+    w.fail("the friction coefficient must be >= 0 (0: frictionless), got " + j.dump());
+  return mu;
+}
+
+void read_plane(const json &j, const Where &w, ObstacleSpec &o)
+{
+  check_keys(j, w, {"point", "normal"});
+  if (!j.contains("point") || !j.contains("normal"))
+    w.fail("expected {\"point\": [x, y, z], \"normal\": [nx, ny, nz]} (the normal points toward the bodies)");
+  o.shape = ObstacleSpec::Shape::Plane;
+  o.point = read_vec3(j["point"], w.at("point"));
+  o.normal = read_vec3(j["normal"], w.at("normal"));
+  if (norm(o.normal) == 0)
+    w.at("normal").fail("the normal is zero");
+}
+
+void read_obstacle_sphere(const json &j, const Where &w, ObstacleSpec &o)
+{
+  check_keys(j, w, {"center", "radius"});
+  if (!j.contains("center") || !j.contains("radius"))
+    w.fail("expected {\"center\": [x, y, z], \"radius\": r}");
+  o.shape = ObstacleSpec::Shape::Sphere;
+  o.center = read_vec3(j["center"], w.at("center"));
+  o.radius = read_number(j["radius"], w.at("radius"));
+  if (!(o.radius > 0))
+    w.at("radius").fail("the radius must be > 0, got " + j["radius"].dump());
+}
+
+ObstacleSpec read_obstacle(const json &j, const Where &w, const std::string &origin)
+{
+  check_keys(j, w, {"name", "plane", "sphere", "mesh", "friction"});
+  if (!j.contains("name"))
+    w.fail("missing 'name' (frames move an obstacle by its name)");
+  ObstacleSpec o;
+  o.name = read_string(j["name"], w.at("name"));
+  const int shapes = int(j.contains("plane")) + int(j.contains("sphere")) + int(j.contains("mesh"));
+  if (shapes != 1)
+    w.fail(std::string(shapes == 0 ? "needs" : "has more than") + " one of 'plane', 'sphere', 'mesh' (give exactly one)");
+  if (j.contains("plane"))
+    read_plane(j["plane"], w.at("plane"), o);
+  else if (j.contains("sphere"))
+    read_obstacle_sphere(j["sphere"], w.at("sphere"), o);
+  else {
+    o.shape = ObstacleSpec::Shape::Mesh;
+    o.mesh_path = resolve_mesh_path(read_string(j["mesh"], w.at("mesh")), origin);
+  }
+  if (j.contains("friction"))
+    o.friction = read_friction(j["friction"], w.at("friction"));
+  return o;
+}
+
+std::vector<ObstacleSpec> read_obstacles(const json &j, const Where &w, const std::string &origin)
+{
+  if (!j.is_array())
+    w.fail(std::string("expected a list of obstacles, got ") + j.type_name());
+  std::vector<ObstacleSpec> list;
+  for (std::size_t i = 0; i < j.size(); ++i) {
+    list.push_back(read_obstacle(j[i], w.at(i), origin));
+    for (std::size_t k = 0; k + 1 < list.size(); ++k)
+      if (list[k].name == list.back().name)
+        w.at(i).at("name").fail("duplicate obstacle name '" + list.back().name + "' (also " + w.at(k).path + ")");
+  }
+  return list;
+}
+
+ContactSpec read_contact(const json &j, const Where &w, const std::string &origin)
+{
+  check_keys(j, w, {"obstacles", "friction", "bodies", "where"});
+  ContactSpec c;
+  c.present = true;
+  if (j.contains("obstacles"))
+    c.obstacles = read_obstacles(j["obstacles"], w.at("obstacles"), origin);
+  if (j.contains("friction"))
+    c.friction = read_friction(j["friction"], w.at("friction"));
+  if (j.contains("bodies")) {
+    if (!j["bodies"].is_boolean())
+      w.at("bodies").fail(std::string("expected true or false, got ") + j["bodies"].type_name());
+    c.bodies = j["bodies"].get<bool>();
+  }
+  if (j.contains("where"))
+    c.where = read_selector(j["where"], w.at("where"));
+  return c;
+}
+
+/// Every frame's obstacles must name an obstacle of "contact": checked before any frame is solved.
+void check_frame_obstacles(const ProblemSpec &spec, const Where &top)
+{
+  std::string known;
+  for (const ObstacleSpec &o : spec.contact.obstacles)
+    known += (known.empty() ? "" : ", ") + o.name;
+  for (std::size_t f = 0; f < spec.frames.size(); ++f)
+    for (const auto &[name, offset] : spec.frames[f].obstacles) {
+      const bool found = std::any_of(spec.contact.obstacles.begin(), spec.contact.obstacles.end(), [&](const ObstacleSpec &o) { return o.name == name; });
+      if (!found)
+        top.at("frames").at(f).at("obstacles").fail("no obstacle named '" + name + "' (" + (known.empty() ? "the problem has no contact obstacles" : "known: " + known) + ")");
+    }
 }
 
 /// A scene: each frame is solved with the base rules followed by its own.
@@ -404,6 +531,9 @@ ProblemSpec parse_problem(const std::string &json_text, const std::string &origi
     spec.rules = read_rule_list(j["boundary"], top.at("boundary"));
   if (j.contains("frames"))
     spec.frames = read_frames(j["frames"], top.at("frames"));
+  if (j.contains("contact"))
+    spec.contact = read_contact(j["contact"], top.at("contact"), spec.file);
+  check_frame_obstacles(spec, top);
   return spec;
 }
 

@@ -88,8 +88,16 @@ ProblemSetup setup_problem(ProblemSpec spec, const ProblemOverrides &o)
   const NodeConditions nc = apply_rules(s.spec.rules, *s.disc, s.spec.file);
   s.selection = selection_of(nc);
   s.vertex_displacement_prescribed = vertex_displacement_prescribed(*s.disc, nc);
+  for (std::size_t i = 0; i < s.spec.contact.obstacles.size(); ++i) { // an unreadable obstacle mesh ends the run before any work
+    const ObstacleSpec &o = s.spec.contact.obstacles[i];
+    try {
+      s.obstacle_meshes.push_back(o.shape == ObstacleSpec::Shape::Mesh ? read_mesh(o.mesh_path) : SurfaceMesh{});
+    } catch (const MeshError &e) {
+      throw MeshError(s.spec.file + ": contact.obstacles[" + std::to_string(i) + "].mesh: " + e.what());
+    }
+  }
   fault_point("Setup");
-  if (s.spec.frames.empty()) handle_rigid_modes(s); // a scene checks each frame (check_frame_constraints)
+  if (s.spec.frames.empty() && !s.spec.contact.present) handle_rigid_modes(s); // scenes check each frame, contact each body
   return s;
 }
 

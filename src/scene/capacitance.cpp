@@ -116,9 +116,36 @@ void relayout(std::vector<T> &M, int old_ld, int new_ld, int k, const std::vecto
   M = std::move(out);
 }
 
+/// A stored column-major matrix.
+class StoredEntries final : public MatrixEntries {
+public:
+  StoredEntries(const double *W, int n) : m_W(W), m_n(n) {}
+  void block(const std::vector<int> &rows, const std::vector<int> &cols, double *out, std::size_t ld) const override
+  {
+    const int nr = static_cast<int>(rows.size()), nc = static_cast<int>(cols.size());
+#pragma omp parallel for schedule(static) if (static_cast<double>(nr) * nc > 262144)
+    for (int q = 0; q < nc; ++q) {
+      const double *w = m_W + static_cast<std::size_t>(cols[q]) * m_n;
+      for (int p = 0; p < nr; ++p) out[p + q * ld] = w[rows[p]];
+    }
+  }
+
+private:
+  const double *m_W;
+  int m_n;
+};
+
 } // namespace
 
-CapacitanceInverse::CapacitanceInverse(const double *W, int n, int single_from) : m_W(W), m_n(n), m_single_from(single_from), m_slot_of(n, -1), m_pos(n, -1) {}
+CapacitanceInverse::CapacitanceInverse(const double *W, int n, int single_from)
+    : CapacitanceInverse(std::make_shared<StoredEntries>(W, n), n, single_from)
+{
+}
+
+CapacitanceInverse::CapacitanceInverse(std::shared_ptr<const MatrixEntries> entries, int n, int single_from)
+    : m_W(std::move(entries)), m_n(n), m_single_from(single_from), m_slot_of(n, -1), m_pos(n, -1)
+{
+}
 
 double CapacitanceInverse::update_flops(double k, double r, double a)
 {
@@ -140,9 +167,7 @@ void CapacitanceInverse::rebuild(const std::vector<int> &J, bool force_double)
   m_k = k;
   m_ld = k + std::max(32, k / 16); // room for a contact that grows a little
   m_C.assign(sq(m_ld), 0.0);
-#pragma omp parallel for schedule(static) if (k > 512)
-  for (int q = 0; q < k; ++q)
-    for (int p = 0; p < k; ++p) c(p, q) = w(J[p], J[q]);
+  m_W->block(J, J, m_C.data(), m_ld);
   m_single = !force_double && k >= m_single_from;
   refresh_view();
   // The inverse of the compact W(J, J), then spread to the leading dimension m_ld.
@@ -205,12 +230,7 @@ void CapacitanceInverse::add_indices(const std::vector<int> &add)
   std::vector<int> idx(k, -1);
   for (int p = 0; p < m_k; ++p) idx[p] = m_slot_index[p];
   for (int q = 0; q < m; ++q) idx[A[q]] = add[q];
-#pragma omp parallel for schedule(static) if (k > 512)
-  for (int q = 0; q < m; ++q)
-    for (int p = 0; p < k; ++p) c(p, A[q]) = idx[p] >= 0 ? w(idx[p], add[q]) : 0.0;
-#pragma omp parallel for schedule(static) if (k > 512)
-  for (int q = 0; q < k; ++q)
-    for (int p = 0; p < m; ++p) c(A[p], q) = idx[q] >= 0 ? w(add[p], idx[q]) : 0.0;
+  fill_new_entries(idx, A, add);
   const std::vector<int> all = slots_upto(k);
   try {
     if (m_single) add_slots(m_invf, m_ld, k, A, gather<float>(m_C, m_ld, all, A), gather<float>(m_C, m_ld, A, all), gather<float>(m_C, m_ld, A, A));
@@ -226,6 +246,22 @@ void CapacitanceInverse::add_indices(const std::vector<int> &add)
     m_slot_index[A[q]] = add[q];
     m_slot_of[add[q]] = A[q];
   }
+}
+
+void CapacitanceInverse::fill_new_entries(const std::vector<int> &idx, const std::vector<int> &A, const std::vector<int> &add)
+{
+  std::vector<int> used, used_index; // the slots holding an index (old and new), and their indices
+  for (std::size_t p = 0; p < idx.size(); ++p)
+    if (idx[p] >= 0) used.push_back(static_cast<int>(p)), used_index.push_back(idx[p]);
+  const std::size_t nu = used.size(), m = add.size();
+  std::vector<double> cols(nu * m), rows(m * nu);
+  m_W->block(used_index, add, cols.data(), nu);
+  m_W->block(add, used_index, rows.data(), m);
+  for (int a : A) clear_slot(m_C, m_ld, static_cast<int>(idx.size()), a);
+  for (std::size_t q = 0; q < m; ++q)
+    for (std::size_t p = 0; p < nu; ++p) c(used[p], A[q]) = cols[p + q * nu];
+  for (std::size_t q = 0; q < nu; ++q)
+    for (std::size_t p = 0; p < m; ++p) c(A[p], used[q]) = rows[p + q * m];
 }
 
 std::vector<int> CapacitanceInverse::slots_upto(int k)

@@ -85,8 +85,7 @@ DenseScene::DenseScene(const BemOperator &op, const SystemSelection &reference, 
   if (m_opt.refresh_every < 1) throw std::invalid_argument("DenseScene: refresh_every must be at least 1");
   {
     const PhaseScope phase(Phase::SceneSetup);
-    assemble(op);
-    factor_reference(reference);
+    factor_reference(op, reference);
     measure_rates();
   }
   m_cap = CapacitanceInverse(m_W.data(), m_n, m_opt.single_from);
@@ -97,54 +96,6 @@ DenseScene::DenseScene(const BemOperator &op, const SystemSelection &reference, 
 
 DenseScene::~DenseScene() = default;
 
-/// H and G (and Gn) column-major, rows in chunks per thread with their own workspaces.
-void DenseScene::assemble(const BemOperator &op)
-{
-  const int nn = m_nodes, N = m_n, chunk = 8;
-  m_H.assign(sq(N), 0.0);
-  m_G.assign(sq(N), 0.0);
-  if (m_opt.with_pressure) m_Gn.assign(static_cast<std::size_t>(N) * nn, 0.0);
-  std::vector<int> J(nn);
-  std::iota(J.begin(), J.end(), 0);
-  std::exception_ptr failure;
-#pragma omp parallel
-  {
-    std::unique_ptr<BemOperator::Workspace> ws;
-    std::vector<double> H, G, Gn;
-    try {
-      ws = std::make_unique<BemOperator::Workspace>(op);
-      H.resize(3 * chunk * static_cast<std::size_t>(N));
-      G.resize(H.size());
-      if (m_opt.with_pressure) Gn.resize(3 * chunk * static_cast<std::size_t>(nn));
-    } catch (...) {
-#pragma omp critical(hssbem_scene_assembly)
-      if (!failure) failure = std::current_exception();
-    }
-#pragma omp for schedule(dynamic, 1)
-    for (int r0 = 0; r0 < nn; r0 += chunk) {
-      if (!ws) continue;
-      try {
-        std::vector<int> I(std::min(chunk, nn - r0));
-        std::iota(I.begin(), I.end(), r0);
-        op.fill_hg(I, J, H.data(), G.data(), N, m_opt.with_pressure ? Gn.data() : nullptr, nn, *ws);
-        for (std::size_t r = 0; r < 3 * I.size(); ++r) {
-          const std::size_t row = 3 * static_cast<std::size_t>(r0) + r;
-          for (int c = 0; c < N; ++c) {
-            m_H[row + static_cast<std::size_t>(c) * N] = H[r * N + c];
-            m_G[row + static_cast<std::size_t>(c) * N] = G[r * N + c];
-          }
-          if (m_opt.with_pressure)
-            for (int c = 0; c < nn; ++c) m_Gn[row + static_cast<std::size_t>(c) * N] = Gn[r * nn + c];
-        }
-      } catch (...) {
-#pragma omp critical(hssbem_scene_assembly)
-        if (!failure) failure = std::current_exception();
-      }
-    }
-  }
-  if (failure) std::rethrow_exception(failure);
-}
-
 std::vector<char> DenseScene::pattern_of(const SystemSelection &sel) const
 {
   if (static_cast<int>(sel.displacement_known.size()) != m_nodes || static_cast<int>(sel.known.size()) != m_nodes)
@@ -154,38 +105,25 @@ std::vector<char> DenseScene::pattern_of(const SystemSelection &sel) const
   return p;
 }
 
-/// A₀ from the reference pattern, its LU, W = A₀⁻¹ K₀' and W_p = A₀⁻¹ Gn.
-void DenseScene::factor_reference(const SystemSelection &reference)
+/// The reference factorization (reference.hpp), W = A₀⁻¹ K₀' (every column) and W_p = A₀⁻¹ Gn.
+void DenseScene::factor_reference(const BemOperator &op, const SystemSelection &reference)
 {
   const int N = m_n;
   m_ref = pattern_of(SystemSelection{reference.displacement_known, std::vector<Vec3>(m_nodes), {}});
-  m_lu0.resize(sq(N));
+  DenseReferenceOptions ro;
+  ro.with_pressure = m_opt.with_pressure;
+  m_reference = std::make_unique<DenseReference>(op, m_ref, ro);
+  std::vector<int> all(N);
+  std::iota(all.begin(), all.end(), 0);
   m_W.resize(sq(N));
-#pragma omp parallel for schedule(static)
-  for (int j = 0; j < N; ++j) {
-    const double *h = &m_H[static_cast<std::size_t>(j) * N], *g = &m_G[static_cast<std::size_t>(j) * N];
-    double *a = &m_lu0[static_cast<std::size_t>(j) * N], *w = &m_W[static_cast<std::size_t>(j) * N];
-    for (int i = 0; i < N; ++i) {
-      a[i] = m_ref[j] ? -g[i] : h[i];
-      w[i] = m_ref[j] ? h[i] : -g[i];
-    }
-  }
-  double h2 = 0, g2 = 0;
-  for (std::size_t i = 0; i < m_H.size(); ++i) h2 += m_H[i] * m_H[i], g2 += m_G[i] * m_G[i];
-  m_scale_t = g2 > 0 ? std::sqrt(h2 / g2) : 1.0;
-  if (!m_opt.keep_operator) { // W and A₀ hold what the Woodbury path needs
-    std::vector<double>().swap(m_H);
-    std::vector<double>().swap(m_G);
-  }
-  m_piv0.resize(N);
-  const int info = lapack::getrf(N, m_lu0.data(), N, m_piv0.data());
-  if (info != 0) throw std::runtime_error("scene: the reference pattern's system is singular (LU pivot " + std::to_string(info) + " is zero); the base rules must hold the body");
-  lapack::getrs('N', N, N, m_lu0.data(), N, m_piv0.data(), m_W.data(), N);
+  m_reference->columns(all, m_W.data());
   if (m_opt.with_pressure) {
-    m_Wp = m_Gn;
-    lapack::getrs('N', N, m_nodes, m_lu0.data(), N, m_piv0.data(), m_Wp.data(), N);
+    m_Wp.resize(static_cast<std::size_t>(N) * m_nodes);
+    std::vector<int> nodes(m_nodes);
+    std::iota(nodes.begin(), nodes.end(), 0);
+    m_reference->pressure_columns(nodes, m_Wp.data());
   }
-  if (!m_opt.keep_operator) std::vector<double>().swap(m_Gn);
+  if (!m_opt.keep_operator) m_reference->drop_operator(); // W and A₀ hold what the Woodbury path needs
 }
 
 /// The cost model's rates: a gathered product over all of W's columns (bytes/s), a GEMM (flop/s).
@@ -308,50 +246,18 @@ void DenseScene::update_capacitance(const std::vector<char> &pattern)
   m_cap_pattern = pattern;
 }
 
-void DenseScene::rhs(const SystemSelection &sel, const std::vector<char> &pattern, std::vector<double> &b) const
-{
-  if (m_H.empty()) throw std::invalid_argument("scene: this strategy needs the operator (SceneOptions::keep_operator)");
-  b.assign(m_n, 0.0);
-  std::vector<int> hc, gc, pc;
-  std::vector<double> hv, gv, pv;
-  for (int j = 0; j < m_n; ++j) {
-    const int node = j / 3;
-    const double v = sel.known[node][j % 3];
-    if (pattern[j]) {
-      if (v != 0.0) hc.push_back(j), hv.push_back(-v);
-    } else if (!has_pressure(sel, node) && v != 0.0) gc.push_back(j), gv.push_back(v);
-  }
-  for (int node = 0; node < m_nodes; ++node)
-    if (has_pressure(sel, node)) pc.push_back(node), pv.push_back(-sel.pressure[node]);
-  if (!pc.empty() && m_Gn.empty()) throw std::invalid_argument("scene frame: pressure loads need a scene set up with pressure (SceneOptions::with_pressure)");
-  gather_axpy(m_H.data(), m_n, hc, hv, b.data());
-  gather_axpy(m_G.data(), m_n, gc, gv, b.data());
-  gather_axpy(m_Gn.data(), m_n, pc, pv, b.data());
-}
+void DenseScene::rhs(const SystemSelection &sel, const std::vector<char> &pattern, std::vector<double> &b) const { m_reference->rhs(sel, pattern, b); }
 
-void DenseScene::apply_system(const std::vector<char> &pattern, const double *x, double *y) const
-{
-  std::vector<double> xu(m_n), xt(m_n);
-  for (int j = 0; j < m_n; ++j) (pattern[j] ? xt : xu)[j] = x[j];
-  lapack::gemv('N', m_n, m_n, 1.0, m_H.data(), m_n, xu.data(), 0.0, y);
-  lapack::gemv('N', m_n, m_n, -1.0, m_G.data(), m_n, xt.data(), 1.0, y);
-}
+void DenseScene::apply_system(const std::vector<char> &pattern, const double *x, double *y) const { m_reference->apply(pattern, x, y); }
 
 void DenseScene::refactor(const SystemSelection &sel, const std::vector<char> &pattern, std::vector<double> &x)
 {
   const PhaseScope phase(Phase::SceneRefactor);
-  if (m_H.empty()) throw std::invalid_argument("scene: refactor needs the operator (SceneOptions::keep_operator)");
+  if (!m_reference->has_operator()) throw std::invalid_argument("scene: refactor needs the operator (SceneOptions::keep_operator)");
   const int N = m_n;
   m_lu_pattern.clear();
   m_lu.resize(sq(N));
-#pragma omp parallel for schedule(static)
-  for (int j = 0; j < N; ++j) {
-    const double *h = &m_H[static_cast<std::size_t>(j) * N], *g = &m_G[static_cast<std::size_t>(j) * N];
-    double *a = &m_lu[static_cast<std::size_t>(j) * N];
-    if (pattern[j])
-      for (int i = 0; i < N; ++i) a[i] = -g[i];
-    else std::copy_n(h, N, a);
-  }
+  m_reference->system_matrix(pattern, m_lu.data());
   m_piv.resize(N);
   const int info = lapack::getrf(N, m_lu.data(), N, m_piv.data());
   if (info != 0) throw std::runtime_error("scene frame: the system is singular (LU pivot " + std::to_string(info) + " is zero)");
@@ -373,7 +279,7 @@ void DenseScene::apply_previous(const double *r, double *z) const
     return;
   }
   std::copy_n(r, m_n, z); // Woodbury form of the capacitance's pattern: (I + Z E_Jᵀ)⁻¹ A₀⁻¹ r
-  lapack::getrs('N', m_n, 1, m_lu0.data(), m_n, m_piv0.data(), z, m_n);
+  m_reference->solve(z, 1);
   capacitance_correct(z);
 }
 
@@ -396,8 +302,8 @@ void DenseScene::krylov(const SystemSelection &sel, const std::vector<char> &pat
       m_n, [&](const double *in, double *out) { apply_system(pattern, in, out); },
       [&](const double *in, double *out) {
         apply_previous(in, out);
-        for (int j = 0; j < m_n; ++j) // see m_scale_t
-          if (pattern[j] != prev[j]) out[j] *= pattern[j] ? m_scale_t : 1.0 / m_scale_t;
+        for (int j = 0; j < m_n; ++j) // see the comment above
+          if (pattern[j] != prev[j]) out[j] *= pattern[j] ? m_reference->operator_scale() : 1.0 / m_reference->operator_scale();
       },
       b.data(),
       x.data(), m_opt.krylov_rtol, m_opt.krylov_max_it);
@@ -423,10 +329,10 @@ std::array<double, 5> DenseScene::predict(const SystemSelection &sel, const std:
   t[static_cast<int>(SceneStrategy::Solve)] = changed_cap == 0 ? apply : (!m_lu_pattern.empty() && m_lu_pattern == pattern ? lu_solve : k_inf);
   bool rebuild = false;
   t[static_cast<int>(SceneStrategy::Update)] = predict_update(pattern, &rebuild) + apply;
-  t[static_cast<int>(SceneStrategy::Refactor)] = m_H.empty() ? k_inf : 16.0 * N * N / bw + 2.0 / 3.0 * N * N * N / m_lu_flops + lu_solve;
+  t[static_cast<int>(SceneStrategy::Refactor)] = !m_reference->has_operator() ? k_inf : 16.0 * N * N / bw + 2.0 / 3.0 * N * N * N / m_lu_flops + lu_solve;
   const double its = std::min<double>(static_cast<double>(changed_prev) + 1, m_opt.krylov_max_it);
   const double per_it = 32.0 * N * N / bw + 8.0 * N * static_cast<double>(m_cap.size()) / bw;
-  t[static_cast<int>(SceneStrategy::Krylov)] = m_H.empty() || !m_krylov ? k_inf : its * per_it + 16.0 * N * N / bw;
+  t[static_cast<int>(SceneStrategy::Krylov)] = !m_reference->has_operator() || !m_krylov ? k_inf : its * per_it + 16.0 * N * N / bw;
   for (int s = 1; s < 5; ++s) t[s] *= m_correction[s];
   return t;
 }
@@ -538,8 +444,8 @@ double DenseScene::residual(const SystemSelection &sel, const std::vector<double
 
 std::size_t DenseScene::memory_bytes() const
 {
-  const std::size_t d = m_W.size() + m_Wp.size() + m_H.size() + m_G.size() + m_Gn.size() + m_lu0.size() + m_lu.size() + sq(m_cap.size());
-  return 8 * d;
+  const std::size_t d = m_W.size() + m_Wp.size() + m_lu.size() + sq(m_cap.size());
+  return 8 * d + m_reference->memory_bytes();
 }
 
 } // namespace hssbem

@@ -26,6 +26,14 @@ struct SceneRunOptions {
   bool monitor = false;                         ///< -scene_monitor: one line per frame
 };
 
+/// The options of a contact problem (a problem file with "contact"), -contact_*.
+struct ContactRunOptions {
+  double tol = 1e-10;   ///< -contact_tol: relative tolerance of the gaps and of friction's Newton residual
+  int max_it = 50;      ///< -contact_max_it: iterations per frame before it is an error
+  double reach = 0;     ///< -contact_reach: candidates within this gap (0: 5 % of the mesh's size)
+  bool monitor = false; ///< -contact_monitor: one line per iteration
+};
+
 /// Everything the command line can set besides the solver's options.
 struct AppOptions {
   std::string problem;                            ///< -problem: the problem file (required unless -help)
@@ -33,6 +41,7 @@ struct AppOptions {
   std::optional<OperatorType> operator_type;      ///< -bem_mat_type: hss, h2 or dense; none: auto (the default, see choose_operator())
   QuadratureOptions quad;                         ///< -mat_bem_*
   SceneRunOptions scene;                          ///< -scene_*
+  ContactRunOptions contact;                      ///< -contact_*
   bool help = false;                              ///< -help: list the options (PETSc prints each as it is read)
 };
 
@@ -41,7 +50,7 @@ struct AppOptions {
 /// at the driver's H² defaults (tol 1e-5, single-precision blocks, leaf 64, eta 0; PC h2 at 3e-3,
 /// rtol 1e-8) beside dense assembly + LU in the same run, 1 process, 2 threads, sphere meshes:
 /// dense faster at 3 036 and 4 983 unknowns (2.3x, 1.2x), H² faster at 6 990 (1.4x) and 9 030
-/// (1.9x): the README's "Choosing the operator" table.
+/// (1.9x): benchmarks/results/2026-11-23-h2-defaults.md (docs/performance.md).
 inline constexpr long long k_auto_dense_max_unknowns = 6000;
 
 /// The operator -bem_mat_type auto takes for `unknowns` unknowns on this machine: dense below

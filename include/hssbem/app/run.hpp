@@ -34,7 +34,7 @@ void run_driver(MPI_Comm comm);
 /// once the problem's size is known, and the log line says so.
 /// A problem file with "frames" is a scene: see run_scene().
 void run_problem(MPI_Comm comm, const std::string &problem_file, const ProblemOverrides &overrides, const QuadratureOptions &quad, std::optional<OperatorType> type,
-                 const SceneRunOptions &scene = {});
+                 const SceneRunOptions &scene = {}, const ContactRunOptions &contact = {});
 
 /// Solve a scene (s.spec.frames not empty) on rank 0 with the dense scene engine: the reference
 /// pattern (the base rules, or frame 0's when they do not hold the body) factored once, then
@@ -43,6 +43,14 @@ void run_problem(MPI_Comm comm, const std::string &problem_file, const ProblemOv
 /// the end. `seconds` holds the set-up's times so far. Throws for -bem_mat_type hss or h2 and
 /// for a scene that does not fit the node's memory.
 void run_scene(MPI_Comm comm, const ProblemSetup &s, const BemOperator &op, std::optional<OperatorType> asked, const SceneRunOptions &o, std::map<std::string, double> seconds);
+
+/// Solve a contact problem (s.spec.contact.present), once or frame by frame, on rank 0 with the
+/// contact engine (contact/contact_engine.hpp) over the dense reference factorization of the
+/// base rules: every body checked to be held, every frame's conditions checked to keep the base
+/// pattern, the columns every frame needs computed in one block, then the frames, written as a
+/// result file with /contact (single solve) or /frames/<i>/contact. Throws for -bem_mat_type
+/// hss or h2 and for a problem that does not fit the node's memory.
+void run_contact(MPI_Comm comm, const ProblemSetup &s, const BemOperator &op, std::optional<OperatorType> asked, const ContactRunOptions &o, std::map<std::string, double> seconds);
 
 /// Build the system of a prepared problem with the operator of `type` and solve it: the unknowns
 /// (3 per dof node, node order) on rank 0 (empty elsewhere), or on every rank with to_all.

@@ -25,6 +25,16 @@ struct ConstraintReport {
 /// Rank of the prescribed displacement components on the rigid modes of the body.
 ConstraintReport analyse_constraints(const Discretization &disc, const std::vector<std::array<bool, 3>> &displacement_known);
 
+/// A constraint on the displacement of one dof node along one direction (a prescribed Cartesian
+/// component, or a contact normal).
+struct NodeConstraint {
+  int node;
+  Vec3 direction;
+};
+/// Rank of general constraints on the rigid modes (of the nodes they name: restrict them to one
+/// body to check that body alone).
+ConstraintReport analyse_constraints(const Discretization &disc, const std::vector<NodeConstraint> &constraints);
+
 /// The six rigid modes at the dof nodes as orthonormal columns: row-major (3 · nodes) × 6. A
 /// pure-traction system H u = b is singular along them; H + c Φ Φᵀ is not, and its solution
 /// differs from a solution of H u = b (projected on the range of H) by a rigid motion only.

@@ -1,5 +1,5 @@
 /// \file phase.hpp
-/// Named phases of the compression engines (HSS and H²), of the H² factorization and of scenes, reported to an optional hook so a host
+/// Named phases of the compression engines (HSS and H²), of the H² factorization, of scenes and of contact, reported to an optional hook so a host
 /// (the PETSc layer: one PetscLogEvent per phase) can time them without the engines depending on
 /// it. The engines open and close phases on the calling thread only, never inside their OpenMP
 /// regions.
@@ -32,6 +32,9 @@ enum class Phase {
   SceneApply,      ///< scene: the Woodbury (or LU) solve of a frame
   SceneRefactor,   ///< scene: dense LU of a frame's system
   SceneKrylov,     ///< scene: GMRES preconditioned by the last factorization
+  ContactDetect,   ///< contact: contact points of a frame (obstacles' gaps, pairs of bodies)
+  ContactSolve,    ///< contact: compliance and the active-set (or Newton) iterations
+  ContactFields,   ///< contact: the fields from the free response and W's loaded columns
   Count
 };
 

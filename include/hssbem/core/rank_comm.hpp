@@ -180,13 +180,13 @@ std::shared_ptr<T> make_shared_collectively(const RankComm &comm, Args &&...args
 template <class T, class... Args>
 std::unique_ptr<T> make_unique_collectively(const RankComm &comm, Args &&...args)
 {
-  void *storage = collectively(comm, [] { return ::operator new(sizeof(T)); });
-  try {
-    return std::unique_ptr<T>(new (storage) T(std::forward<Args>(args)...));
-  } catch (...) {
-    ::operator delete(storage);
-    throw;
-  }
+  // The storage is owned from the start: when another rank fails the agreement (PeerFault here)
+  // or T's constructor throws, it is released on the way out.
+  using Storage = std::unique_ptr<void, void (*)(void *)>;
+  Storage storage = collectively(comm, [] { return Storage(::operator new(sizeof(T)), [](void *p) { ::operator delete(p); }); });
+  T *object = new (storage.get()) T(std::forward<Args>(args)...);
+  storage.release();
+  return std::unique_ptr<T>(object);
 }
 
 } // namespace hssbem

@@ -1,8 +1,9 @@
 /// \file h2_system.hpp
 /// The collocation system of a problem through the H² engine, in mesh order: compress
 /// K = [H, G(, Gn)] once (strong admissibility, h2_compression.hpp); per boundary-condition
-/// pattern, the right-hand side, products with A and its diagonal, for Krylov solvers. There is
-/// no H² factorization yet: a direct solve goes through HSS (hss/hss_system.hpp, PC hss).
+/// pattern, the right-hand side, products with A and its diagonal, for Krylov solvers. It is
+/// factored by the H² factorization (h2factor/, PC h2): a preconditioner at a loose tolerance, a
+/// direct solver at a tight one (docs/h2-factorization.md).
 #pragma once
 
 #include "hssbem/compress/compressed_system.hpp"

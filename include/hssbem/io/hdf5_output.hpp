@@ -9,6 +9,7 @@
 
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <map>
 #include <memory>
 #include <stdexcept>
@@ -20,6 +21,17 @@ namespace hssbem {
 class OutputError : public std::runtime_error {
 public:
   using std::runtime_error::runtime_error;
+};
+
+/// A contact's results (contact/), in mesh vertex order: /contact (or /frames/<i>/contact).
+struct ContactData {
+  std::vector<double> pressure;        ///< /contact/pressure (nv): normal contact traction, >= 0
+  std::vector<double> gap;             ///< /contact/gap (nv): NaN where a vertex faces nothing within reach
+  std::vector<std::int8_t> status;     ///< /contact/status (nv int8): 0 free, 1 stick, 2 slip
+  std::map<std::string, Vec3> forces;  ///< /contact/forces/<obstacle> and /contact/forces/body_<k> (3 each)
+  long long iterations = 0;            ///< attribute of /contact
+  long long active_vertices = 0;       ///< attribute of /contact
+  bool present() const { return !pressure.empty(); }
 };
 
 /// Everything a result file holds, all arrays in mesh vertex order (whole on every rank that
@@ -40,6 +52,7 @@ struct ResultData {
   std::map<std::string, long long> attributes_int;  ///< root attributes (iterations, ranks, ...)
   std::map<std::string, std::string> attributes_str;///< root attributes (solver, version, ...)
   std::map<std::string, double> timings;            ///< /timings attributes, seconds per phase
+  ContactData contact;                              ///< /contact, when present (the same on every rank)
 };
 
 /// Check that `path` can be written (directory exists and is writable) before any work is done.
@@ -55,8 +68,9 @@ void check_output_path(const std::string &path);
 /// temporary files before the signal takes its course.
 /// Layout: /mesh/{vertices, triangles, triangle_region, sharp_vertex}, /fields/{displacement,
 /// traction, traction_corner}, /bc/displacement_prescribed, /reactions/<region>,
-/// /interior/{points, displacement}, root attributes, /timings attributes; empty optional
-/// arrays are skipped. Arrays that are not empty must have one entry per vertex (triangle).
+/// /interior/{points, displacement}, /contact/{pressure, gap, status, forces/<name>} with the
+/// attributes iterations and active_vertices, root attributes, /timings attributes; empty
+/// optional arrays are skipped. The sidecar shows the contact's pressure and status. Arrays that are not empty must have one entry per vertex (triangle).
 /// Throws OutputError; on error no temporary file is left and an existing result is untouched.
 void write_result(const std::string &path, const ResultData &data);
 
@@ -79,6 +93,7 @@ struct FrameData {
   std::map<std::string, double> attributes_real;            ///< e.g. "seconds"
   std::map<std::string, long long> attributes_int;          ///< e.g. "iterations"
   std::map<std::string, std::string> attributes_str;        ///< e.g. "strategy"
+  ContactData contact;                                      ///< /frames/<i>/contact, when present
 };
 
 /// A result file written frame by frame: the frames of a scene are streamed into the temporary
@@ -90,6 +105,7 @@ struct FrameData {
 ///   /frames/<i>/displacement            nv x 3 float64
 ///   /frames/<i>/traction                nv x 3 float64
 ///   /frames/<i>/displacement_prescribed nv x 3 int8 (0/1), as /bc; only when given
+///   /frames/<i>/contact/...             as /contact; only when given
 ///   attributes of /frames/<i>           FrameData::attributes_* (float64, int64, UTF-8)
 /// /frames exists (maybe empty) from the start; /timings and the root attributes given to
 /// commit() are written at the end.

@@ -17,6 +17,8 @@ PETSC_EXTERN PetscLogEvent HSS_Tree, HSS_Compress, HSS_NearField, HSS_Truncate, 
 PETSC_EXTERN PetscLogEvent H2_Tree, H2_Compress, H2_NearField, H2_MatMult, H2F_Factor, H2F_Sketch, H2F_Eliminate, H2F_Merge, H2F_Top, H2F_Solve;
 /* Phases of a scene (frames): set-up, capacitance update, Woodbury/LU solve, refactorization, Krylov; and one whole frame. */
 PETSC_EXTERN PetscLogEvent SCN_Setup, SCN_Update, SCN_Apply, SCN_Refactor, SCN_Krylov, SCN_Frame;
+/* Phases of contact (contact/): the set-up (reference factorization, columns of W), and per frame the detection, the solve, the fields. */
+PETSC_EXTERN PetscLogEvent CNT_Setup, CNT_Detect, CNT_Solve, CNT_Fields;
 
 PETSC_EXTERN PetscErrorCode HssbemInitializePackage(void);
 PETSC_EXTERN PetscErrorCode HssbemFinalizePackage(void);

@@ -7,6 +7,7 @@
 #include "hssbem/bem/kelvin.hpp"
 #include "hssbem/bem/mesh.hpp"
 
+#include <limits>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -44,9 +45,33 @@ struct BoundaryRule {
 
 /// One frame of a scene: its "boundary" rules, applied after the base rules (ProblemSpec::rules),
 /// so that later rules win per node and component as within one list. No rules: the frame is the
-/// base problem.
+/// base problem. A contact scene's frame also places obstacles: each named one at its base
+/// position translated by `translate` (absolute, not cumulative); an obstacle not named stays at
+/// its base position.
 struct FrameSpec {
   std::vector<BoundaryRule> rules;
+  std::vector<std::pair<std::string, Vec3>> obstacles; ///< "obstacles": {"name": {"translate": [dx, dy, dz]}}
+};
+
+/// A rigid obstacle of "contact.obstacles" as the file gives it (the mesh not yet read).
+struct ObstacleSpec {
+  enum class Shape { Plane, Sphere, Mesh };
+  std::string name;
+  Shape shape = Shape::Plane;
+  Vec3 point{}, normal{};  ///< plane: {"point": [..], "normal": [..]}; the normal points toward the bodies
+  Vec3 center{};           ///< sphere: {"center": [..], "radius": r}
+  double radius = 0;
+  std::string mesh_path;   ///< mesh: path of a triangulated surface, resolved relative to the problem file
+  double friction = std::numeric_limits<double>::quiet_NaN(); ///< "friction" of this obstacle (NaN: the global one)
+};
+
+/// "contact": contact as physics (contact/): rigid obstacles, contact between the mesh's bodies.
+struct ContactSpec {
+  bool present = false;                  ///< the problem file has a "contact" object
+  std::vector<ObstacleSpec> obstacles;   ///< "obstacles" (default none)
+  double friction = 0;                   ///< "friction": Coulomb coefficient of every pair (0: frictionless)
+  bool bodies = false;                   ///< "bodies": contact between the mesh's separate bodies too
+  std::optional<Selector> where;         ///< "where": candidate vertices (default all)
 };
 
 /// Parsed problem file, before it meets a mesh. Paths are resolved relative to the file.
@@ -56,6 +81,7 @@ struct ProblemSpec {
   std::optional<double> E, nu, lambda, mu;
   std::vector<BoundaryRule> rules; ///< base rules ("boundary")
   std::vector<FrameSpec> frames;   ///< "frames" in file order; empty: an ordinary single solve
+  ContactSpec contact;             ///< "contact"; contact.present false: none
   std::vector<Vec3> interior_points;
   std::string output;          ///< may be empty
 };
@@ -64,6 +90,11 @@ struct ProblemSpec {
 ProblemSpec read_problem(const std::string &path);
 /// Parse from a JSON string (for tests); `origin` is used in messages and to resolve paths.
 ProblemSpec parse_problem(const std::string &json_text, const std::string &origin);
+
+/// The vertices a selector picks (ascending), for selectors outside boundary rules (the
+/// contact's "where"); `what` names it in messages ("contact.where"). Throws ProblemError for a
+/// selection that is empty, an unknown region or a vertex index out of range.
+std::vector<int> select_vertices(const Selector &where, const SurfaceMesh &mesh, const std::string &origin, const std::string &what);
 
 /// Boundary condition per vertex and component, in mesh order.
 struct VertexConditions {

@@ -32,6 +32,8 @@ struct ProblemSetup {
   bool pure_traction = false;
   std::vector<std::string> notices;
   std::string output;
+  /// Per obstacle of spec.contact, its mesh as read (mesh obstacles; empty for the others).
+  std::vector<SurfaceMesh> obstacle_meshes;
 };
 
 /// Read, validate and prepare. Throws MeshError, ProblemError, ConstraintError or
@@ -41,7 +43,8 @@ ProblemSetup setup_problem(const std::string &problem_file, const ProblemOverrid
 /// Same, from a parsed specification (tests build one in code).
 ProblemSetup setup_problem(ProblemSpec spec, const ProblemOverrides &overrides);
 
-/// A scene (spec.frames not empty) skips the base problem's constraint check in setup_problem;
+/// A scene (spec.frames not empty) or a contact problem (spec.contact.present, whose bodies are
+/// checked one by one by the contact set-up) skips the base problem's constraint check in setup_problem;
 /// each frame's pattern goes through this one instead: true when the prescribed displacements
 /// fix all six rigid motions, else ConstraintError naming `what` (e.g. "frames[3]").
 bool check_frame_constraints(const ProblemSetup &s, const std::vector<std::array<bool, 3>> &displacement_known, const std::string &what);

@@ -27,9 +27,21 @@
 
 #include <climits>
 #include <cstddef>
+#include <memory>
 #include <vector>
 
 namespace hssbem {
+
+/// The entries of the fixed n×n matrix whose principal submatrices a CapacitanceInverse inverts,
+/// when they are computed rather than stored (a contact's compliance, contact/). Entries are read
+/// only for indices being added (rebuild(), update()'s `add`); an entry may change while neither
+/// of its indices is in the set.
+class MatrixEntries {
+public:
+  virtual ~MatrixEntries() = default;
+  /// out[p + q ld] = W(rows[p], cols[q]).
+  virtual void block(const std::vector<int> &rows, const std::vector<int> &cols, double *out, std::size_t ld) const = 0;
+};
 
 class CapacitanceInverse {
 public:
@@ -37,6 +49,8 @@ public:
   /// Rebuilds keep the inverse in single precision for sets of at least `single_from` indices
   /// (INT_MAX: always double).
   CapacitanceInverse(const double *W, int n, int single_from = INT_MAX);
+  /// The same with W's entries from `entries` (shared: copies of this object read the same).
+  CapacitanceInverse(std::shared_ptr<const MatrixEntries> entries, int n, int single_from = INT_MAX);
 
   /// C⁻¹ for the index set J from scratch (LU of W(J, J), then its inverse). Throws
   /// std::runtime_error when W(J, J) is singular. force_double: keep the inverse in double.
@@ -69,6 +83,8 @@ public:
 private:
   void drop_indices(const std::vector<int> &drop);
   void add_indices(const std::vector<int> &add);
+  /// C's rows and columns of the new slots A (holding `add`), idx the index of every slot (-1: empty).
+  void fill_new_entries(const std::vector<int> &idx, const std::vector<int> &A, const std::vector<int> &add);
   /// Room for `slots` slots (grows the arrays, keeping their contents).
   void reserve(int slots);
   /// Move the used slots to the front, in order, and forget the empty ones.
@@ -76,10 +92,9 @@ private:
   /// m_J and m_pos from the slots.
   void refresh_view();
   static std::vector<int> slots_upto(int k);
-  double w(int i, int j) const { return m_W[i + static_cast<std::size_t>(j) * m_n]; }
   double &c(int p, int q) { return m_C[p + static_cast<std::size_t>(q) * m_ld]; }
 
-  const double *m_W;
+  std::shared_ptr<const MatrixEntries> m_W;
   int m_n;
   int m_single_from;
   bool m_single = false;

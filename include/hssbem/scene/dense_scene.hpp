@@ -33,6 +33,7 @@
 
 #include "hssbem/bem/bem_operator.hpp"
 #include "hssbem/scene/capacitance.hpp"
+#include "hssbem/scene/reference.hpp"
 
 #include <array>
 #include <functional>
@@ -125,8 +126,7 @@ public:
   std::array<double, 5> predict(const SystemSelection &sel) const;
 
 private:
-  void assemble(const BemOperator &op);
-  void factor_reference(const SystemSelection &reference);
+  void factor_reference(const BemOperator &op, const SystemSelection &reference);
   void measure_rates();
   std::vector<char> pattern_of(const SystemSelection &sel) const;
   /// y = A₀⁻¹ b_S for the pattern of the switched set J (m_cap) and sel's values.
@@ -152,8 +152,8 @@ private:
   SceneOptions m_opt;
   std::unique_ptr<KrylovSolver> m_krylov;
   std::vector<char> m_ref;           ///< reference pattern: 1 where u is known (t unknown)
+  std::unique_ptr<DenseReference> m_reference; ///< A₀'s LU, and H, G, Gn (keep_operator)
   std::vector<double> m_W, m_Wp;     ///< A₀⁻¹ K₀' and A₀⁻¹ Gn, column-major
-  std::vector<double> m_H, m_G, m_Gn;///< the operator, column-major (keep_operator)
   /// W(J, J)⁻¹ for the current switched set; mutable: a solve whose single-precision refinement
   /// stops contracting rebuilds it (in double) on the spot.
   mutable CapacitanceInverse m_cap;
@@ -161,15 +161,12 @@ private:
   void capacitance_solve(const double *r, double *s) const;
   std::vector<char> m_cap_pattern;   ///< the pattern m_cap serves
   int m_updates_since_rebuild = 0;
-  std::vector<double> m_lu0;         ///< LU of the reference A₀ (column-major) and its pivots
-  std::vector<int> m_piv0;
   std::vector<double> m_lu;          ///< LU of A_S after a refactor, column-major
   std::vector<int> m_piv;
   std::vector<char> m_lu_pattern;    ///< its pattern (empty: none)
   std::vector<char> m_last_pattern;  ///< pattern of the previous frame
   std::vector<Vec3> m_last_u, m_last_t; ///< fields of the previous frame (krylov's initial guess)
   enum class Last { None, Woodbury, Lu } m_last_factor = Last::Woodbury; ///< the last factorization made
-  double m_scale_t = 1;              ///< ‖H‖_F / ‖G‖_F: the scale of −G columns against H columns (krylov)
   double m_bandwidth = 1e10, m_flops = 1e10, m_lu_flops = 1e10;
   std::array<double, 5> m_correction{{1, 1, 1, 1, 1}}; ///< measured / predicted, per strategy
   double m_setup_seconds = 0;

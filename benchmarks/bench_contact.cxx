@@ -1,0 +1,281 @@
+// Contact benchmark: frames of contact as physics (contact/contact_engine.hpp) on the dense
+// reference factorization, one scenario per run, with the frames checked against cold static
+// solves of the same obstacle positions (a fresh engine: no warm start, no cached columns) and
+// the haptic call timed.
+//
+//   bench_contact --mesh FILE --scenario wall|instrument|table [--frames 60] [--friction 0]
+//                 [--target 0.2] [--check 3] [--haptic 20] [--E 3000 --nu 0.45] [--reach 0]
+//
+//   wall:       the mesh's region "base" clamped; a rigid wall (plane) comes in along -x and
+//               pushes until `target` of the vertices touch (the paper's cardioid: 20 %).
+//   instrument: region "bottom" clamped; a sphere (radius 0.6) pressed into the top slides
+//               along x across the organ, its depth such that `target` of the vertices touch.
+//   table:      the top cap (z above 40 % of the height) held; a table (plane) rises under the
+//               organ until `target` of the vertices touch.
+// Prints one line of figures per scenario (and "csv," the same as a CSV row).
+#include "bench_support.hpp"
+
+#include "hssbem/bem/mesh.hpp"
+#include "hssbem/bem/post.hpp"
+#include "hssbem/contact/contact_engine.hpp"
+#include "hssbem/petsc/log.h"
+#include "hssbem/problem/problem.hpp"
+#include "hssbem/problem/setup.hpp"
+#include "hssbem/scene/reference.hpp"
+
+#include <petscsys.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace {
+
+using namespace hssbem;
+
+struct Args {
+  std::string mesh, scenario = "wall";
+  int frames = 60, check = 3, haptic = 20;
+  double friction = 0, target = -1, E = 3000, nu = 0.45, reach = 0;
+  bool single_fields = false;
+};
+
+Args parse(int argc, char **argv)
+{
+  Args a;
+  for (int i = 1; i < argc; ++i) {
+    const std::string k = argv[i];
+    auto next = [&]() -> std::string {
+      if (i + 1 >= argc) throw std::invalid_argument(k + " needs a value");
+      return argv[++i];
+    };
+    if (k == "--mesh") a.mesh = next();
+    else if (k == "--scenario") a.scenario = next();
+    else if (k == "--frames") a.frames = std::stoi(next());
+    else if (k == "--check") a.check = std::stoi(next());
+    else if (k == "--haptic") a.haptic = std::stoi(next());
+    else if (k == "--friction") a.friction = std::stod(next());
+    else if (k == "--target") a.target = std::stod(next());
+    else if (k == "--E") a.E = std::stod(next());
+    else if (k == "--nu") a.nu = std::stod(next());
+    else if (k == "--reach") a.reach = std::stod(next());
+    else if (k == "--single-fields") a.single_fields = true;
+    else if (k.rfind("-", 0) == 0 && k.rfind("--", 0) != 0) { // a PETSc option and its value
+      if (i + 1 < argc && argv[i + 1][0] != '-') ++i;
+    } else throw std::invalid_argument("unknown argument " + k);
+  }
+  if (a.mesh.empty()) throw std::invalid_argument("give --mesh FILE");
+  if (a.scenario != "wall" && a.scenario != "instrument" && a.scenario != "table") throw std::invalid_argument("--scenario is wall, instrument or table");
+  if (a.target < 0) a.target = a.scenario == "instrument" ? 0.05 : 0.2;
+  return a;
+}
+
+/// A scenario: what holds the body, the obstacle, and its offset at a "depth" s in [0, 1] of
+/// frame f (the depth is calibrated to the target share of touching vertices).
+struct Scenario {
+  std::vector<BoundaryRule> rules;
+  Obstacle obstacle;
+  std::function<Vec3(int frame, int frames, double depth)> offset;
+};
+
+BoundaryRule hold(Selector where)
+{
+  BoundaryRule r;
+  r.kind = BoundaryRule::Kind::Displacement;
+  r.where = std::move(where);
+  r.rows = {{0, 0, 0}};
+  return r;
+}
+
+Scenario scenario_of(const Args &a, const SurfaceMesh &m)
+{
+  Vec3 lo = m.vertices[0], hi = lo;
+  for (const Vec3 &v : m.vertices)
+    for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], v[d]), hi[d] = std::max(hi[d], v[d]);
+  Scenario sc;
+  Selector where;
+  where.kind = Selector::Kind::Region;
+  if (a.scenario == "wall") {
+    where.region_name = "base";
+    sc.rules = {hold(where)};
+    // The wall comes down on the top (the body's end away from its clamped base).
+    sc.obstacle = Obstacle::plane("wall", {0, 0, hi[2] + 1e-3}, {0, 0, -1});
+    sc.offset = [](int f, int n, double depth) { return Vec3{0, 0, -depth * (f + 1) / n}; };
+  } else if (a.scenario == "instrument") {
+    where.region_name = "bottom";
+    sc.rules = {hold(where)};
+    const double r = 0.6; // an instrument broad enough to touch 5 % of the organ
+    sc.obstacle = Obstacle::sphere("tool", {lo[0] + 0.25 * (hi[0] - lo[0]), 0.5 * (lo[1] + hi[1]), hi[2] + r}, r);
+    const double travel = 0.5 * (hi[0] - lo[0]);
+    sc.offset = [travel](int f, int n, double depth) { return Vec3{travel * f / std::max(1, n - 1), 0, -depth}; };
+  } else {
+    where.kind = Selector::Kind::Box;
+    where.lo = {lo[0] - 1, lo[1] - 1, lo[2] + 0.6 * (hi[2] - lo[2])};
+    where.hi = {hi[0] + 1, hi[1] + 1, hi[2] + 1};
+    sc.rules = {hold(where)};
+    sc.obstacle = Obstacle::plane("table", {0, 0, lo[2] - 1e-3}, {0, 0, 1});
+    sc.offset = [](int f, int n, double depth) { return Vec3{0, 0, depth * (f + 1) / n}; };
+  }
+  if (a.friction > 0) sc.obstacle.friction = a.friction;
+  return sc;
+}
+
+double median(std::vector<double> v)
+{
+  if (v.empty()) return NAN;
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+/// CPU seconds of this process (every thread): on a shared machine, what a frame costs apart
+/// from the time it waited for a core.
+double cpu_seconds()
+{
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return t.tv_sec + 1e-9 * t.tv_nsec;
+}
+
+double load_average()
+{
+  double l = NAN;
+  if (FILE *f = std::fopen("/proc/loadavg", "r")) {
+    if (std::fscanf(f, "%lf", &l) != 1) l = NAN;
+    std::fclose(f);
+  }
+  return l;
+}
+
+struct Setup {
+  ProblemSetup s;
+  std::unique_ptr<BemOperator> op;
+  NodeConditions base;
+  std::unique_ptr<DenseReference> ref;
+};
+
+int run(const Args &a)
+{
+  Setup st;
+  ProblemSpec spec;
+  spec.file = "bench_contact";
+  spec.mesh_path = a.mesh;
+  spec.E = a.E, spec.nu = a.nu;
+  spec.contact.present = true;
+  {
+    const SurfaceMesh m = read_mesh(a.mesh);
+    spec.rules = scenario_of(a, m).rules;
+  }
+  st.s = setup_problem(spec, ProblemOverrides{});
+  const Scenario sc = scenario_of(a, *st.s.mesh);
+  st.op = std::make_unique<BemOperator>(*st.s.disc, st.s.material);
+  st.base = apply_rules(st.s.spec.rules, *st.s.disc, "bench_contact");
+  const int nv = st.s.mesh->num_vertices(), N = 3 * st.s.disc->num_nodes();
+  std::printf("bench_contact: %s, scenario %s: %d vertices, %d unknowns, friction %.2g, target %.0f %% touching, %d frames; OMP_NUM_THREADS=%s, load %.2f\n", a.mesh.c_str(),
+              a.scenario.c_str(), nv, N, a.friction, 100 * a.target, a.frames, std::getenv("OMP_NUM_THREADS") ? std::getenv("OMP_NUM_THREADS") : "unset", load_average());
+  std::vector<char> pattern(N);
+  for (int j = 0; j < N; ++j) pattern[j] = st.base.displacement_prescribed[j / 3][j % 3];
+  Timer t;
+  st.ref = std::make_unique<DenseReference>(*st.op, pattern);
+  const double t_ref = t.seconds();
+  const SystemSelection values = selection_of(st.base);
+  ContactSettings settings;
+  ContactOptions opt;
+  opt.reach = a.reach;
+  opt.single_fields = a.single_fields;
+  // One cache of W's columns for every engine below: the calibration's columns serve the frames.
+  const auto columns = std::make_shared<ReferenceColumns>(*st.ref, ContactEngine::spatial_order(*st.s.disc));
+  auto touching = [&](const ContactSolution &sol) {
+    long long n = 0;
+    for (std::int8_t s : sol.status) n += s != 0;
+    return static_cast<double>(n) / nv;
+  };
+  // Calibrate the depth (bisection with a cold engine) so that the deepest frame touches `target`.
+  double lo = 0, hi = 0.5, depth = 0;
+  {
+    ContactEngine probe(*st.s.disc, *st.ref, {sc.obstacle}, settings, opt, columns);
+    const int deepest = a.scenario == "instrument" ? a.frames / 2 : a.frames - 1;
+    for (int it = 0; it < 14; ++it) {
+      depth = 0.5 * (lo + hi);
+      ContactSolution sol;
+      probe.solve(values, {sc.offset(deepest, a.frames, depth)}, sol);
+      if (std::getenv("BENCH_CONTACT_VERBOSE")) std::printf("  calibration: depth %.4f touches %.1f %%\n", depth, 100 * touching(sol));
+      (touching(sol) < a.target ? lo : hi) = depth;
+    }
+  }
+  // The frames, timed; columns for every frame's candidates computed first (prefetch).
+  t.restart();
+  ContactEngine engine(*st.s.disc, *st.ref, {sc.obstacle}, settings, opt, columns);
+  std::vector<std::vector<Vec3>> placements;
+  for (int f = 0; f < a.frames; ++f) placements.push_back({sc.offset(f, a.frames, depth)});
+  engine.prefetch(placements);
+  const double t_prefetch = columns->seconds(); // every column computed, the calibration's included
+  std::vector<double> seconds, cpu, haptic;
+  std::vector<std::vector<Vec3>> sampled;
+  std::vector<int> sampled_frame;
+  long long iterations = 0, max_it = 0;
+  double most = 0;
+  for (int f = 0; f < a.frames; ++f) {
+    ContactSolution sol;
+    const double c0 = cpu_seconds();
+    const ContactFrameReport rep = engine.solve(values, placements[f], sol);
+    cpu.push_back(cpu_seconds() - c0);
+    seconds.push_back(rep.seconds);
+    if (std::getenv("BENCH_CONTACT_VERBOSE"))
+      std::printf("  frame %d: %.3f ms (detect %.3f, solve %.3f, fields %.3f), %lld iterations, %lld rounds, %lld candidates, %lld touching%s\n", f, 1e3 * rep.seconds,
+                  1e3 * rep.detect_seconds, 1e3 * rep.solve_seconds, 1e3 * rep.fields_seconds, rep.iterations, static_cast<long long>(rep.rounds), rep.candidates,
+                  rep.active_vertices, rep.rebuilt ? ", rebuilt" : "");
+    iterations += rep.iterations, max_it = std::max(max_it, rep.iterations);
+    most = std::max(most, touching(sol));
+    if (a.check > 0 && f % std::max(1, a.frames / a.check) == 0) sampled.push_back(sol.u), sampled_frame.push_back(f);
+    for (int h = 0; h < a.haptic; ++h) { // the instrument moves on a little between frames
+      const Vec3 next = placements[f][0] + (0.1 * (h + 1) / a.haptic) * ((f + 1 < a.frames ? placements[f + 1][0] : placements[f][0]) - placements[f][0]);
+      const Timer th;
+      const std::vector<Vec3> F = engine.haptic_forces({next});
+      haptic.push_back(th.seconds());
+      (void)F;
+    }
+  }
+  // Cold static solves of the sampled frames: a fresh engine each (no warm start, its own
+  // active-set inverse; W's columns are the same numbers whichever engine computes them).
+  // Frictionless frames only: with friction a frame depends on the frames before it.
+  double worst = 0, scale = 0;
+  if (a.friction > 0) sampled.clear();
+  for (std::size_t k = 0; k < sampled.size(); ++k) {
+    ContactOptions cold = opt;
+    cold.warm_start = false;
+    ContactEngine fresh(*st.s.disc, *st.ref, {sc.obstacle}, settings, cold, columns);
+    ContactSolution sol;
+    fresh.solve(values, placements[sampled_frame[k]], sol);
+    for (std::size_t i = 0; i < sol.u.size(); ++i) worst = std::max(worst, norm(sol.u[i] - sampled[k][i])), scale = std::max(scale, norm(sol.u[i]));
+  }
+  const double ms = 1e3 * median(seconds);
+  std::printf("  set-up: reference %.1f s, columns %.1f s (%.0f MB); frames: median %.2f ms (%.0f Hz; CPU %.2f ms), slowest %.2f ms; iterations %.2f per frame (max %lld); "
+              "touching up to %.1f %%; cold static solves of %zu frames differ by %.1e (relative); haptic median %.1f us (%.0f Hz); peak RSS %.0f MB; load %.2f\n",
+              t_ref, t_prefetch, engine.memory_bytes() / 1e6, ms, 1e3 / ms, 1e3 * median(cpu), 1e3 * *std::max_element(seconds.begin(), seconds.end()), static_cast<double>(iterations) / a.frames, max_it,
+              100 * most, sampled.size(), scale > 0 ? worst / scale : worst, 1e6 * median(haptic), 1.0 / median(haptic), bench::peak_rss_mb(), load_average());
+  std::printf("csv,%s,%s,%d,%.2g,%d,%.2f,%.2f,%.3f,%.0f,%.3f,%.2f,%lld,%.3f,%.2e,%.2f,%.0f,%.2f\n", a.scenario.c_str(), a.mesh.c_str(), N, a.friction, a.frames, t_ref, t_prefetch, ms, 1e3 / ms, 1e3 * median(cpu),
+              static_cast<double>(iterations) / a.frames, max_it, most, scale > 0 ? worst / scale : worst, 1e6 * median(haptic), bench::peak_rss_mb(), load_average());
+  return 0;
+}
+
+} // namespace
+
+int main(int argc, char **argv)
+{
+  PetscCall(PetscInitialize(&argc, &argv, NULL, NULL));
+  PetscCall(HssbemInitializePackage());
+  int rc = 0;
+  try {
+    rc = run(parse(argc, argv));
+  } catch (const std::exception &e) {
+    std::fprintf(stderr, "bench_contact: %s\n", e.what());
+    rc = 1;
+  }
+  PetscCall(PetscFinalize());
+  return rc;
+}

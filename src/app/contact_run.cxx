@@ -1,0 +1,250 @@
+// Contact problems in the driver: a problem file with "contact", solved once or frame by frame by
+// the contact engine (contact/contact_engine.hpp) on the dense reference factorization, on rank 0.
+#include "hssbem/app/run.hpp"
+#include "result_base.hpp"
+
+#include "hssbem/app/petsc_call.hpp"
+#include "hssbem/bem/post.hpp"
+#include "hssbem/bem/rigid_modes.hpp"
+#include "hssbem/contact/contact_engine.hpp"
+#include "hssbem/core/fault.hpp"
+#include "hssbem/core/timer.hpp"
+#include "hssbem/io/hdf5_output.hpp"
+#include "hssbem/petsc/log.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+
+namespace hssbem {
+
+namespace {
+
+Obstacle obstacle_of(const ObstacleSpec &o, const SurfaceMesh &mesh)
+{
+  Obstacle ob;
+  switch (o.shape) {
+  case ObstacleSpec::Shape::Plane: ob = Obstacle::plane(o.name, o.point, o.normal); break;
+  case ObstacleSpec::Shape::Sphere: ob = Obstacle::sphere(o.name, o.center, o.radius); break;
+  case ObstacleSpec::Shape::Mesh: ob = Obstacle::mesh(o.name, mesh); break;
+  }
+  ob.friction = o.friction;
+  return ob;
+}
+
+/// The obstacles, checked (a degenerate triangle of an obstacle mesh, say) with the file named.
+std::vector<Obstacle> obstacles_of(const ProblemSetup &s)
+{
+  std::vector<Obstacle> list;
+  for (std::size_t i = 0; i < s.spec.contact.obstacles.size(); ++i) {
+    list.push_back(obstacle_of(s.spec.contact.obstacles[i], s.obstacle_meshes[i]));
+    try {
+      const ObstacleGeometry check(list.back());
+    } catch (const std::invalid_argument &e) {
+      const std::string where = s.spec.contact.obstacles[i].shape == ObstacleSpec::Shape::Mesh ? " (" + s.spec.contact.obstacles[i].mesh_path + ")" : "";
+      throw ProblemError(s.spec.file + ": contact.obstacles[" + std::to_string(i) + "]" + where + ": " + e.what());
+    }
+  }
+  return list;
+}
+
+ContactSettings settings_of(const ProblemSetup &s)
+{
+  ContactSettings c;
+  c.friction = s.spec.contact.friction;
+  c.bodies = s.spec.contact.bodies;
+  if (s.spec.contact.where) {
+    c.candidate.assign(s.mesh->vertices.size(), 0);
+    for (int v : select_vertices(*s.spec.contact.where, *s.mesh, s.spec.file, "contact.where")) c.candidate[v] = 1;
+  }
+  return c;
+}
+
+/// Per frame (or the single solve), the obstacles' offsets in the engine's order.
+std::vector<std::vector<Vec3>> placements_of(const ProblemSpec &spec)
+{
+  const std::size_t no = spec.contact.obstacles.size();
+  std::vector<std::vector<Vec3>> out(std::max<std::size_t>(1, spec.frames.size()), std::vector<Vec3>(no, Vec3{0, 0, 0}));
+  for (std::size_t f = 0; f < spec.frames.size(); ++f)
+    for (const auto &[name, offset] : spec.frames[f].obstacles)
+      for (std::size_t o = 0; o < no; ++o)
+        if (spec.contact.obstacles[o].name == name) out[f][o] = offset;
+  return out;
+}
+
+/// Every frame's conditions, checked before frame 0: a contact scene keeps the base pattern.
+std::vector<NodeConditions> frames_of(const ProblemSetup &s, const NodeConditions &base)
+{
+  std::vector<NodeConditions> out;
+  if (s.spec.frames.empty()) return {base};
+  for (std::size_t f = 0; f < s.spec.frames.size(); ++f) {
+    out.push_back(frame_conditions(s.spec, f, *s.disc));
+    if (out.back().displacement_prescribed != base.displacement_prescribed)
+      throw ProblemError(s.spec.file + ": frames[" + std::to_string(f) +
+                         "].boundary: a contact scene's frames may change the values of the base rules, not which components they prescribe (the reference factorization's pattern)");
+  }
+  return out;
+}
+
+ContactData contact_data(const ContactEngine &engine, const ContactSolution &sol, const ContactFrameReport &rep, bool bodies)
+{
+  ContactData c;
+  c.pressure = sol.pressure;
+  c.gap = sol.gap;
+  c.status = sol.status;
+  for (int o = 0; o < engine.num_obstacles(); ++o) c.forces[engine.obstacle_name(o)] = sol.obstacle_force[o];
+  if (bodies)
+    for (int b = 0; b < engine.bodies().count; ++b) c.forces["body_" + std::to_string(b)] = sol.body_force[b];
+  c.iterations = rep.iterations;
+  c.active_vertices = rep.active_vertices;
+  return c;
+}
+
+/// What the driver keeps of a contact run on rank 0.
+struct ContactRun {
+  const ProblemSetup &s;
+  const BemOperator &op;
+  const ContactRunOptions &o;
+  PetscMPIInt size;
+  std::map<std::string, double> &seconds;
+  std::unique_ptr<DenseReference> reference;
+  std::unique_ptr<ContactEngine> engine;
+  long long frame = 0;
+
+  void set_up(const NodeConditions &base);
+  void single(const NodeConditions &nc);
+  void scene(const std::vector<NodeConditions> &frames);
+};
+
+void ContactRun::set_up(const NodeConditions &base)
+{
+  const EventScope event(CNT_Setup);
+  const Timer timer;
+  std::vector<Obstacle> obstacles = obstacles_of(s);
+  const ContactSettings settings = settings_of(s);
+  ContactOptions opt;
+  opt.tol = o.tol, opt.max_it = o.max_it, opt.reach = o.reach;
+  if (o.monitor)
+    opt.monitor = [this](const ContactIteration &it) {
+      HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF, "hssbem: contact: frame %lld iteration %d: %lld touching, %lld changed, residual %.3e\n", frame, it.iteration, it.active, it.changed, it.residual));
+    };
+  try {
+    check_bodies_held(*s.disc, base.displacement_prescribed, obstacles, settings, opt);
+  } catch (const ConstraintError &e) {
+    throw ConstraintError(s.spec.file + ": " + e.what());
+  }
+  fault_point("ContactSetup");
+  DenseReferenceOptions ro;
+  ro.node_body = node_bodies(*s.disc);
+  ro.with_pressure = std::any_of(base.pressure.begin(), base.pressure.end(), [](double p) { return !std::isnan(p); });
+  std::vector<char> pattern(3 * base.displacement_prescribed.size());
+  for (std::size_t i = 0; i < base.displacement_prescribed.size(); ++i)
+    for (int c = 0; c < 3; ++c) pattern[3 * i + c] = base.displacement_prescribed[i][c];
+  reference = std::make_unique<DenseReference>(op, pattern, ro);
+  engine = std::make_unique<ContactEngine>(*s.disc, *reference, std::move(obstacles), settings, opt);
+  engine->prefetch(placements_of(s.spec));
+  seconds["contact_setup"] += timer.seconds();
+  HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF, "hssbem: contact: set up in %.2f s (%d obstacles, %d bodies, reach %.3g; %.0f MB)\n", timer.seconds(), engine->num_obstacles(),
+                              engine->bodies().count, engine->reach(), (reference->memory_bytes() + engine->memory_bytes()) / 1e6));
+}
+
+void ContactRun::single(const NodeConditions &nc)
+{
+  ContactSolution sol;
+  const ContactFrameReport rep = engine->solve(selection_of(nc), placements_of(s.spec)[0], sol);
+  seconds["contact_solve"] += rep.seconds;
+  HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF, "hssbem: contact: %lld vertices touching (%lld stick, %lld slip) after %lld iterations, %.3f ms\n", rep.active_vertices, rep.stick,
+                              rep.slip, rep.iterations, 1e3 * rep.seconds));
+  if (s.output.empty()) return;
+  ResultData r = result_base(s, size);
+  r.attributes_str["solver"] = "contact";
+  r.attributes_str["mat_type"] = "dense";
+  r.displacement = vertex_average(*s.disc, sol.u);
+  r.traction = vertex_average(*s.disc, sol.t);
+  r.traction_corner = corner_values(*s.disc, sol.t);
+  r.displacement_prescribed = vertex_displacement_prescribed(*s.disc, nc);
+  r.reactions = reactions(*s.disc, sol.t);
+  r.interior_points = s.spec.interior_points;
+  r.interior_displacement = interior_displacement(op, NodalSolution{sol.u, sol.t}, s.spec.interior_points);
+  r.contact = contact_data(*engine, sol, rep, s.spec.contact.bodies);
+  r.timings = seconds;
+  const EventScope event(BEM_Output);
+  write_result(s.output, r);
+  HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF, "hssbem: wrote %s\n", s.output.c_str()));
+}
+
+void ContactRun::scene(const std::vector<NodeConditions> &frames)
+{
+  std::unique_ptr<FrameWriter> writer;
+  if (!s.output.empty()) {
+    ResultData base = result_base(s, size);
+    base.attributes_str["solver"] = "contact";
+    base.attributes_str["mat_type"] = "dense";
+    writer = std::make_unique<FrameWriter>(s.output, base);
+  }
+  const std::vector<std::vector<Vec3>> placements = placements_of(s.spec);
+  double total = 0, slowest = 0;
+  long long iterations = 0;
+  for (frame = 0; frame < static_cast<long long>(frames.size()); ++frame) {
+    fault_point("Frame");
+    ContactSolution sol;
+    ContactFrameReport rep;
+    {
+      const EventScope event(SCN_Frame);
+      rep = engine->solve(selection_of(frames[frame]), placements[frame], sol);
+    }
+    total += rep.seconds, slowest = std::max(slowest, rep.seconds), iterations += rep.iterations;
+    if (!writer) continue;
+    FrameData f;
+    f.displacement = vertex_average(*s.disc, sol.u);
+    f.traction = vertex_average(*s.disc, sol.t);
+    f.displacement_prescribed = vertex_displacement_prescribed(*s.disc, frames[frame]);
+    f.attributes_real = {{"seconds", rep.seconds}};
+    f.attributes_int = {{"iterations", rep.iterations}, {"active_vertices", rep.active_vertices}};
+    f.contact = contact_data(*engine, sol, rep, s.spec.contact.bodies);
+    const EventScope event(BEM_Output);
+    writer->append(static_cast<std::size_t>(frame), f);
+  }
+  const double n = static_cast<double>(frames.size());
+  seconds["frames"] += total;
+  HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF, "hssbem: contact: %zu frames in %.3f s (%.2f ms per frame, %.0f Hz; slowest %.2f ms); %.2f iterations per frame\n", frames.size(),
+                              total, 1e3 * total / n, n / std::max(total, 1e-12), 1e3 * slowest, iterations / n));
+  if (!writer) return;
+  writer->commit(seconds, {{"num_frames", static_cast<long long>(frames.size())}}, {{"frame_seconds_mean", total / n}});
+  HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF, "hssbem: wrote %s\n", s.output.c_str()));
+}
+
+} // namespace
+
+void run_contact(MPI_Comm comm, const ProblemSetup &s, const BemOperator &op, std::optional<OperatorType> asked, const ContactRunOptions &o, std::map<std::string, double> seconds)
+{
+  PetscMPIInt rank, size;
+  HssbemCallMPIThrow(MPI_Comm_rank(comm, &rank));
+  HssbemCallMPIThrow(MPI_Comm_size(comm, &size));
+  if (asked && *asked != OperatorType::Dense)
+    throw std::runtime_error(std::string("-bem_mat_type ") + operator_type_name(*asked) + ": contact runs on the dense reference factorization; use -bem_mat_type dense or auto");
+  const long long N = 3LL * s.disc->num_nodes();
+  MachineLimits limits;
+  HssbemCallThrow(HssbemMachineLimits(comm, &limits));
+  const double need = 8.0 * N * N * 4.0; // H, G, the LU, and W's columns (at most N)
+  if (need > 0.9 * static_cast<double>(limits.node_memory_bytes))
+    throw std::runtime_error("contact needs about " + std::to_string(static_cast<long long>(need / 1e9 + 0.5)) + " GB for " + std::to_string(N) +
+                             " unknowns (dense reference factorization, H and G, W's columns), more than this node's " +
+                             std::to_string(static_cast<long long>(limits.node_memory_bytes / 1e9)) + " GB");
+  HssbemCallThrow(PetscPrintf(comm, "hssbem: contact: %zu obstacles%s, %zu frames, on the dense reference factorization (rank 0)\n", s.spec.contact.obstacles.size(),
+                              s.spec.contact.bodies ? " and the bodies" : "", std::max<std::size_t>(1, s.spec.frames.size())));
+  run_collectively(comm, [&] {
+    if (rank != 0) return;
+    const NodeConditions base = apply_rules(s.spec.rules, *s.disc, s.spec.file);
+    const std::vector<NodeConditions> frames = frames_of(s, base);
+    ContactRun run{s, op, o, size, seconds, nullptr, nullptr};
+    run.set_up(base);
+    if (s.spec.frames.empty()) run.single(frames[0]);
+    else run.scene(frames);
+  });
+}
+
+} // namespace hssbem

@@ -1,0 +1,102 @@
+// The bodies of a mesh (bodies.hpp): connected surfaces by shared vertices, nesting by the
+// winding number of one vertex of a surface with respect to each other surface.
+#include "hssbem/contact/bodies.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+namespace hssbem {
+
+namespace {
+
+int find_root(std::vector<int> &parent, int i)
+{
+  while (parent[i] != i) i = parent[i] = parent[parent[i]];
+  return i;
+}
+
+/// Connected surfaces: per triangle, the index of its surface (0, 1, ... by first triangle).
+std::vector<int> surfaces_of(const SurfaceMesh &m, int &count)
+{
+  std::vector<int> parent(m.vertices.size());
+  std::iota(parent.begin(), parent.end(), 0);
+  for (const auto &t : m.triangles)
+    for (int k = 1; k < 3; ++k) parent[find_root(parent, t[k])] = find_root(parent, t[0]);
+  std::vector<int> label(m.vertices.size(), -1), surface(m.triangles.size());
+  count = 0;
+  for (std::size_t t = 0; t < m.triangles.size(); ++t) {
+    const int r = find_root(parent, m.triangles[t][0]);
+    if (label[r] < 0) label[r] = count++;
+    surface[t] = label[r];
+  }
+  return surface;
+}
+
+/// Winding number of p with respect to the triangles of surface s (±1 inside, 0 outside).
+double winding(const SurfaceMesh &m, const std::vector<int> &surface, int s, const Vec3 &p)
+{
+  double total = 0;
+  for (std::size_t t = 0; t < m.triangles.size(); ++t) {
+    if (surface[t] != s) continue;
+    const Vec3 a = m.vertices[m.triangles[t][0]] - p, b = m.vertices[m.triangles[t][1]] - p, c = m.vertices[m.triangles[t][2]] - p;
+    const double la = norm(a), lb = norm(b), lc = norm(c);
+    const double num = dot(a, cross(b, c)), den = la * lb * lc + dot(a, b) * lc + dot(b, c) * la + dot(c, a) * lb;
+    total += 2 * std::atan2(num, den);
+  }
+  return total / (4 * M_PI);
+}
+
+} // namespace
+
+Bodies find_bodies(const SurfaceMesh &m)
+{
+  int ns = 0;
+  const std::vector<int> surface = surfaces_of(m, ns);
+  std::vector<int> probe(ns, -1); // a vertex of each surface
+  for (std::size_t t = 0; t < m.triangles.size(); ++t)
+    if (probe[surface[t]] < 0) probe[surface[t]] = m.triangles[t][0];
+  // inside[s][r]: surface s lies inside surface r
+  std::vector<std::vector<char>> inside(ns, std::vector<char>(ns, 0));
+  std::vector<int> depth(ns, 0);
+  for (int s = 0; s < ns; ++s)
+    for (int r = 0; r < ns; ++r)
+      if (r != s && std::abs(winding(m, surface, r, m.vertices[probe[s]])) > 0.5) inside[s][r] = 1, ++depth[s];
+  // A surface's body: itself at even depth; else the enclosing surface one level up.
+  std::vector<int> owner(ns);
+  for (int s = 0; s < ns; ++s) {
+    owner[s] = s;
+    if (depth[s] % 2 == 0) continue;
+    for (int r = 0; r < ns; ++r)
+      if (inside[s][r] && depth[r] == depth[s] - 1) owner[s] = r;
+  }
+  Bodies b;
+  b.of_vertex.assign(m.vertices.size(), -1);
+  b.of_triangle.resize(m.triangles.size());
+  std::vector<int> lowest(ns, static_cast<int>(m.vertices.size()));
+  for (std::size_t t = 0; t < m.triangles.size(); ++t)
+    for (int v : m.triangles[t]) lowest[owner[surface[t]]] = std::min(lowest[owner[surface[t]]], v);
+  std::vector<int> outer; // the bodies' outer surfaces, by lowest vertex
+  for (int s = 0; s < ns; ++s)
+    if (owner[s] == s) outer.push_back(s);
+  std::sort(outer.begin(), outer.end(), [&](int a, int c) { return lowest[a] < lowest[c]; });
+  std::vector<int> number(ns, -1);
+  for (std::size_t k = 0; k < outer.size(); ++k) number[outer[k]] = static_cast<int>(k);
+  b.count = static_cast<int>(outer.size());
+  for (std::size_t t = 0; t < m.triangles.size(); ++t) {
+    b.of_triangle[t] = number[owner[surface[t]]];
+    for (int v : m.triangles[t]) b.of_vertex[v] = b.of_triangle[t];
+  }
+  return b;
+}
+
+std::vector<int> node_bodies(const Discretization &disc)
+{
+  const Bodies b = find_bodies(disc.mesh());
+  if (b.count < 2) return {};
+  std::vector<int> out(disc.num_nodes());
+  for (int i = 0; i < disc.num_nodes(); ++i) out[i] = b.of_vertex[disc.node(i).vertex];
+  return out;
+}
+
+} // namespace hssbem

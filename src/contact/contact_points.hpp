@@ -1,0 +1,174 @@
+// Private to contact/: a frame's contact points (detect.cpp), their compliance from the
+// reference's columns (compliance.cpp), and the two solvers on it (normal_solver.cpp,
+// friction_solver.cpp). See contact_engine.hpp for the method.
+#pragma once
+
+#include "hssbem/bem/discretization.hpp"
+#include "hssbem/contact/bodies.hpp"
+#include "hssbem/contact/obstacle.hpp"
+#include "hssbem/scene/capacitance.hpp"
+#include "hssbem/scene/reference.hpp"
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <vector>
+
+namespace hssbem::contact_detail {
+
+/// One contact point: a dof node of a candidate vertex facing an obstacle or another body (every
+/// node of a sharp vertex is a point of its own, with the vertex's gap and normal: the
+/// non-penetration holds for the whole vertex, and each node's face group carries its own
+/// contact traction; the vertex's pressure is that of the node whose group faces the other side). Its
+/// relative displacement is Σ_i mw[i] u(node[i]) (the slave node, minus the master triangle's
+/// nodes interpolated), its contact traction λ (local frame) loads node[i] with lw[i] λ: the
+/// slave node with λ, the master's nodes with −β_i a_s / a_i λ (equal and opposite forces).
+struct ContactPoint {
+  int vertex = -1, node = -1;   ///< slave vertex and this point's dof node
+  bool facing = true;           ///< the node's face group faces the other side (the vertex's pressure)
+  int obstacle = -1;            ///< the obstacle, or -1 for a pair of bodies
+  int body = -1, other = -1;    ///< the slave's body; the master body (body pairs), else -1
+  int terms = 1;
+  std::array<int, 4> term_node{};
+  std::array<double, 4> mw{}, lw{};
+  std::array<Vec3, 3> frame{};  ///< n (from the obstacle or the master toward the slave), t1, t2
+  double g0 = 0;                ///< gap of the undeformed geometry
+  double mu = 0;                ///< Coulomb coefficient
+  double area = 0;              ///< the slave node's lumped area
+};
+
+/// What detection needs of the mesh, built once.
+struct Geometry {
+  const Discretization *disc = nullptr;
+  Bodies bodies;
+  std::vector<double> area;               ///< lumped area per dof node
+  std::vector<char> candidate;            ///< per vertex: may touch (where, and not held in all three components)
+  std::vector<TriangleBvh> body_bvh;      ///< per body, its triangles
+  std::vector<ObstacleGeometry> obstacles;
+  double friction = 0;                    ///< the global coefficient
+  bool bodies_touch = false;
+  double reach = 0;
+  const std::vector<char> *pattern = nullptr; ///< per unknown: 1 where u is prescribed (S₀)
+};
+
+/// The tangents of a unit normal: t1 ⟂ n along the coordinate axis least aligned with n, t2 = n × t1.
+std::array<Vec3, 3> local_frame(const Vec3 &n);
+
+/// The dof node of vertex v facing direction n (its smooth group's normal most opposite to n).
+int facing_node(const Discretization &disc, int v, const Vec3 &n);
+
+/// The obstacles' contact points at the placements `offsets` (one per obstacle): per candidate
+/// vertex the obstacle with the smallest gap, if it is within reach (or the vertex is in `forced`);
+/// a point per dof node of the vertex whose displacement along the normal is not prescribed.
+std::vector<ContactPoint> obstacle_points(const Geometry &g, const std::vector<Vec3> &offsets, const std::vector<char> &forced);
+
+/// The pairs of bodies: per candidate vertex of a slave body, the closest point of the other
+/// bodies' surfaces within reach (node-to-surface, one pass per pair: the body with the finer
+/// mesh near the contact is the slave).
+std::vector<ContactPoint> body_points(const Geometry &g);
+
+/// Per vertex, the points of one side: those with the smaller gap when a vertex has two; sorted
+/// by where their node's rows sit in the columns (`position`: per dof node).
+std::vector<ContactPoint> merge_points(std::vector<ContactPoint> a, const std::vector<ContactPoint> &b, int num_vertices, const std::vector<int> &position = {});
+
+/// The dof nodes in a spatial order (Morton's curve over their positions) as a row order of the
+/// unknowns (3 per node, kept together): a contact's candidates then sit in a few runs of rows.
+std::vector<int> spatial_row_order(const Discretization &disc);
+
+/// The compliance of a frame's points: with x = x_f − Σ_j W(:, j) v_j, their local relative
+/// displacements are w = w_f + D λ, D(ck, c'l) = −Σ m_ck(r) W(r, j) l_c'l(j) over the rows r
+/// where u is unknown and the loaded columns j where t is known.
+class Compliance {
+public:
+  /// Requires the columns the points load from `columns`.
+  Compliance(const std::vector<ContactPoint> &points, const std::vector<char> &pattern, ReferenceColumns &columns);
+
+  int size() const { return static_cast<int>(m_points->size()); }
+  const ContactPoint &point(int c) const { return (*m_points)[c]; }
+  /// D(c, c') in the local frames (row k of c, column l of c').
+  Mat3 block(int c, int cp) const;
+  /// D(c n, c' n): the normal-normal entry.
+  double normal(int c, int cp) const;
+  /// Local component k of point c is held: its displacement is prescribed (a roller along a
+  /// tangent, say), so it neither slips nor carries a contact traction.
+  bool held(int c, int k) const { return m_held[c][k] != 0; }
+  /// The free relative displacement of every point (local frame: gap, slip since u_prev) from
+  /// the nodal displacements u_free (prescribed where known) and u_prev (empty: zero).
+  std::vector<Vec3> free_w(const std::vector<Vec3> &u_free, const std::vector<Vec3> &u_prev) const;
+  /// out[r] += Σ_q D(rows[r] n, cols[q] :) λ[q]: the normal gaps of the points `rows` moved by
+  /// the tractions λ (local frames) at the points `cols`, column by column (each column's rows
+  /// read in increasing order: the points are sorted by their rows).
+  void apply_normal(const std::vector<int> &rows, const std::vector<int> &cols, const Vec3 *lambda, double *out) const;
+  /// The loads of the tractions λ (local frame, one per point): pairs (unknown j, value) with
+  /// the traction-known unknowns only.
+  void loads(const std::vector<Vec3> &lambda, std::vector<int> &unknowns, std::vector<double> &values) const;
+
+private:
+  /// Per point and term, the masked rows M (local k × Cartesian a: u unknown) and load columns L
+  /// (Cartesian b × local l: t known), weights included.
+  struct Terms {
+    std::array<Mat3, 4> M, L;
+    std::array<std::array<const double *, 3>, 4> col; ///< W's columns of the term's node (null: not loaded)
+    std::array<int, 4> row;                           ///< where the term's node's rows sit in a column
+  };
+  const std::vector<ContactPoint> *m_points;
+  std::vector<Terms> m_terms;
+  std::vector<std::array<char, 3>> m_held;
+  const std::vector<char> *m_pattern;
+};
+
+/// Frictionless contact: primal–dual active set on the normal compliance, the inverse of the
+/// active block kept by a CapacitanceInverse over dof nodes that lives from frame to frame.
+class NormalSolver {
+public:
+  explicit NormalSolver(int num_nodes);
+  struct Result {
+    int iterations = 0;
+    bool rebuilt = false;
+  };
+  /// λ_n per point (local frame, tangential 0) for free gaps wf[c][0], starting from the points
+  /// whose node is in `warm` (node flags); tol_gap: how deep an inactive point may sit before it
+  /// joins. Only the points of `zone` (per point) are watched: the caller checks the others'
+  /// gaps in the fields and solves again with them when one went through. Throws
+  /// std::runtime_error after max_it iterations. `monitor(it, active, changed)`.
+  Result solve(const Compliance &D, const std::vector<Vec3> &wf, const std::vector<char> &warm, const std::vector<char> &zone, double tol_gap, int max_it,
+               std::vector<Vec3> &lambda, const std::function<void(int, long long, long long)> &monitor);
+  /// λ_n of the current active set for other free gaps (the haptic call): the points must be
+  /// those of the last solve.
+  void resolve(const Compliance &D, const std::vector<Vec3> &wf, std::vector<Vec3> &lambda) const;
+
+private:
+  class Entries;
+  void sync(const Compliance &D, const std::vector<int> &active_nodes, bool *rebuilt);
+  std::shared_ptr<Entries> m_entries;
+  CapacitanceInverse m_cap;
+  std::vector<ContactPoint> m_signature; ///< per node in the capacitance set: the point it was added with
+  int m_updates = 0;
+};
+
+/// Coulomb friction: semismooth Newton on Alart–Curnier's function, warm-started from λ.
+class FrictionSolver {
+public:
+  struct Result {
+    int iterations = 0;
+  };
+  /// λ (local frames) for the free relative displacements wf; λ holds the initial guess.
+  /// status per point: 0 open, 1 stick, 2 slip. Newton runs on the points of `zone` (per
+  /// point): the others keep λ = 0; the caller checks their gaps in the fields, as for the
+  /// frictionless solver. Throws std::runtime_error after max_it iterations.
+  Result solve(const Compliance &D, const std::vector<Vec3> &wf, const std::vector<char> &zone, double tol, int max_it, std::vector<Vec3> &lambda,
+               std::vector<std::int8_t> &status, const std::function<void(int, long long, long long, double)> &monitor);
+  /// λ with the stick and slip states (and slip directions) of the last solve fixed, for other
+  /// free relative displacements: one solve with the factored linear system (the haptic call).
+  void resolve(const Compliance &D, const std::vector<Vec3> &wf, std::vector<Vec3> &lambda);
+
+private:
+  std::vector<double> m_lu;          ///< the fixed-state system of the last solve, factored (haptic)
+  std::vector<int> m_piv, m_rows;    ///< its pivots and the points it covers
+  std::vector<std::int8_t> m_state;
+  std::vector<Vec3> m_direction;     ///< slip directions (local tangential) of the last solve
+  bool m_factored = false;
+};
+
+} // namespace hssbem::contact_detail

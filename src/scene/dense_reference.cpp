@@ -1,0 +1,285 @@
+// The dense reference factorization of reference.hpp: H and G assembled by row chunks on the
+// OpenMP threads, A₀ = LU, and W's columns by blocked getrs; the column cache.
+#include "hssbem/scene/reference.hpp"
+
+#include "hssbem/core/lapack.hpp"
+#include "hssbem/core/timer.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <exception>
+#include <numeric>
+#include <stdexcept>
+#include <string>
+#include <unordered_set>
+
+namespace hssbem {
+
+namespace {
+
+std::size_t sq(int n) { return static_cast<std::size_t>(n) * n; }
+
+bool has_pressure(const SystemSelection &sel, int node) { return !sel.pressure.empty() && !std::isnan(sel.pressure[node]); }
+
+/// y += Σ_i coef[i] M(:, cols[i]) for the column-major n-row matrix M.
+void add_columns(const std::vector<double> &M, int n, const std::vector<int> &cols, const std::vector<double> &coef, double *y)
+{
+  for (std::size_t i = 0; i < cols.size(); ++i) {
+    const double *m = &M[static_cast<std::size_t>(cols[i]) * n];
+    const double c = coef[i];
+#pragma omp parallel for schedule(static) if (n > 20000)
+    for (int r = 0; r < n; ++r) y[r] += c * m[r];
+  }
+}
+
+} // namespace
+
+DenseReference::DenseReference(const BemOperator &op, std::vector<char> pattern, const DenseReferenceOptions &options)
+    : m_n(3 * op.num_nodes()), m_nodes(op.num_nodes()), m_opt(options), m_pattern(std::move(pattern))
+{
+  if (static_cast<int>(m_pattern.size()) != m_n) throw std::invalid_argument("DenseReference: the pattern needs one entry per unknown");
+  assemble(op);
+  if (!m_opt.node_body.empty()) separate_bodies(op);
+  factor();
+  if (!m_opt.keep_operator) drop_operator();
+}
+
+DenseReference::~DenseReference() = default;
+
+/// H and G (and Gn) column-major, rows in chunks per thread with their own workspaces.
+void DenseReference::assemble(const BemOperator &op)
+{
+  const int nn = m_nodes, N = m_n, chunk = 8;
+  m_H.assign(sq(N), 0.0);
+  m_G.assign(sq(N), 0.0);
+  if (m_opt.with_pressure) m_Gn.assign(static_cast<std::size_t>(N) * nn, 0.0);
+  std::vector<int> J(nn);
+  std::iota(J.begin(), J.end(), 0);
+  std::exception_ptr failure;
+#pragma omp parallel
+  {
+    std::unique_ptr<BemOperator::Workspace> ws;
+    std::vector<double> H, G, Gn;
+    try {
+      ws = std::make_unique<BemOperator::Workspace>(op);
+      H.resize(3 * chunk * static_cast<std::size_t>(N));
+      G.resize(H.size());
+      if (m_opt.with_pressure) Gn.resize(3 * chunk * static_cast<std::size_t>(nn));
+    } catch (...) {
+#pragma omp critical(hssbem_reference_assembly)
+      if (!failure) failure = std::current_exception();
+    }
+#pragma omp for schedule(dynamic, 1)
+    for (int r0 = 0; r0 < nn; r0 += chunk) {
+      if (!ws) continue;
+      try {
+        std::vector<int> I(std::min(chunk, nn - r0));
+        std::iota(I.begin(), I.end(), r0);
+        op.fill_hg(I, J, H.data(), G.data(), N, m_opt.with_pressure ? Gn.data() : nullptr, nn, *ws);
+        for (std::size_t r = 0; r < 3 * I.size(); ++r) {
+          const std::size_t row = 3 * static_cast<std::size_t>(r0) + r;
+          for (int c = 0; c < N; ++c) {
+            m_H[row + static_cast<std::size_t>(c) * N] = H[r * N + c];
+            m_G[row + static_cast<std::size_t>(c) * N] = G[r * N + c];
+          }
+          if (m_opt.with_pressure)
+            for (int c = 0; c < nn; ++c) m_Gn[row + static_cast<std::size_t>(c) * N] = Gn[r * nn + c];
+        }
+      } catch (...) {
+#pragma omp critical(hssbem_reference_assembly)
+        if (!failure) failure = std::current_exception();
+      }
+    }
+  }
+  if (failure) std::rethrow_exception(failure);
+}
+
+/// With H's row sums zero (a rigid translation gives no traction), the other bodies' part S of
+/// row i's sum is exactly what the rigid-body term took from them: S moves onto the columns that
+/// carry the term (rigid_body_columns: the node, or a moved node's triangle corners), and the
+/// other bodies' entries of H, G and Gn become zero. Each body's rows then sum to zero on their own.
+void DenseReference::separate_bodies(const BemOperator &op)
+{
+  const int N = m_n, nn = m_nodes;
+  if (static_cast<int>(m_opt.node_body.size()) != nn) throw std::invalid_argument("DenseReference: node_body needs one entry per dof node");
+  const std::vector<int> &body = m_opt.node_body;
+#pragma omp parallel for schedule(dynamic, 16)
+  for (int i = 0; i < nn; ++i) {
+    double S[9] = {0};
+    for (int j = 0; j < nn; ++j) {
+      if (body[j] == body[i]) continue;
+      for (int c = 0; c < 3; ++c) {
+        const std::size_t col = static_cast<std::size_t>(3 * j + c) * N;
+        for (int k = 0; k < 3; ++k) {
+          S[3 * k + c] += m_H[col + 3 * i + k];
+          m_H[col + 3 * i + k] = 0, m_G[col + 3 * i + k] = 0;
+        }
+      }
+      if (!m_Gn.empty())
+        for (int k = 0; k < 3; ++k) m_Gn[static_cast<std::size_t>(j) * N + 3 * i + k] = 0;
+    }
+    int cols[3];
+    double w[3];
+    const int nc = op.rigid_body_columns(i, cols, w);
+    for (int q = 0; q < nc; ++q)
+      for (int c = 0; c < 3; ++c)
+        for (int k = 0; k < 3; ++k) m_H[static_cast<std::size_t>(3 * cols[q] + c) * N + 3 * i + k] += w[q] * S[3 * k + c];
+  }
+}
+
+void DenseReference::factor()
+{
+  const int N = m_n;
+  m_lu.resize(sq(N));
+  system_matrix(m_pattern, m_lu.data());
+  double h2 = 0, g2 = 0;
+  for (std::size_t i = 0; i < m_H.size(); ++i) h2 += m_H[i] * m_H[i], g2 += m_G[i] * m_G[i];
+  m_scale_t = g2 > 0 ? std::sqrt(h2 / g2) : 1.0;
+  m_piv.resize(N);
+  const int info = lapack::getrf(N, m_lu.data(), N, m_piv.data());
+  if (info != 0) throw std::runtime_error("scene: the reference pattern's system is singular (LU pivot " + std::to_string(info) + " is zero); the base rules must hold the body");
+}
+
+void DenseReference::system_matrix(const std::vector<char> &pattern, double *A) const
+{
+  if (!has_operator()) throw std::invalid_argument("reference: the system matrix needs the operator (keep_operator)");
+  const int N = m_n;
+#pragma omp parallel for schedule(static)
+  for (int j = 0; j < N; ++j) {
+    const double *src = pattern[j] ? &m_G[static_cast<std::size_t>(j) * N] : &m_H[static_cast<std::size_t>(j) * N];
+    double *a = A + static_cast<std::size_t>(j) * N;
+    if (pattern[j])
+      for (int i = 0; i < N; ++i) a[i] = -src[i];
+    else std::copy_n(src, N, a);
+  }
+}
+
+void DenseReference::drop_operator()
+{
+  std::vector<double>().swap(m_H);
+  std::vector<double>().swap(m_G);
+  std::vector<double>().swap(m_Gn);
+}
+
+void DenseReference::solve(double *X, int nrhs) const
+{
+  if (nrhs > 0) lapack::getrs('N', m_n, nrhs, m_lu.data(), m_n, m_piv.data(), X, m_n);
+}
+
+void DenseReference::reference_column(int j, double *col) const
+{
+  const std::size_t off = static_cast<std::size_t>(j) * m_n;
+  if (m_pattern[j]) std::copy_n(&m_H[off], m_n, col);
+  else
+    for (int i = 0; i < m_n; ++i) col[i] = -m_G[off + i];
+}
+
+void DenseReference::columns(const std::vector<int> &js, double *out) const
+{
+  if (js.empty()) return;
+  if (!has_operator()) throw std::invalid_argument("reference: new columns of W need the operator (keep_operator)");
+  const int k = static_cast<int>(js.size());
+#pragma omp parallel for schedule(static)
+  for (int q = 0; q < k; ++q) {
+    if (js[q] < 0 || js[q] >= m_n) continue; // refused below, outside the parallel region
+    reference_column(js[q], out + static_cast<std::size_t>(q) * m_n);
+  }
+  for (int j : js)
+    if (j < 0 || j >= m_n) throw std::out_of_range("reference: column " + std::to_string(j) + " out of range");
+  solve(out, k);
+}
+
+void DenseReference::pressure_columns(const std::vector<int> &nodes, double *out) const
+{
+  if (m_Gn.empty()) throw std::invalid_argument("reference: pressure loads need a reference set up with pressure");
+  for (std::size_t q = 0; q < nodes.size(); ++q) std::copy_n(&m_Gn[static_cast<std::size_t>(nodes[q]) * m_n], m_n, out + q * m_n);
+  solve(out, static_cast<int>(nodes.size()));
+}
+
+void DenseReference::rhs(const SystemSelection &sel, const std::vector<char> &pattern, std::vector<double> &b) const
+{
+  if (!has_operator()) throw std::invalid_argument("scene: this strategy needs the operator (SceneOptions::keep_operator)");
+  b.assign(m_n, 0.0);
+  std::vector<int> hc, gc, pc;
+  std::vector<double> hv, gv, pv;
+  for (int j = 0; j < m_n; ++j) {
+    const int node = j / 3;
+    const double v = sel.known[node][j % 3];
+    if (pattern[j]) {
+      if (v != 0.0) hc.push_back(j), hv.push_back(-v);
+    } else if (!has_pressure(sel, node) && v != 0.0) gc.push_back(j), gv.push_back(v);
+  }
+  for (int node = 0; node < m_nodes; ++node)
+    if (has_pressure(sel, node)) pc.push_back(node), pv.push_back(-sel.pressure[node]);
+  if (!pc.empty() && m_Gn.empty()) throw std::invalid_argument("scene frame: pressure loads need a scene set up with pressure (SceneOptions::with_pressure)");
+  add_columns(m_H, m_n, hc, hv, b.data());
+  add_columns(m_G, m_n, gc, gv, b.data());
+  add_columns(m_Gn, m_n, pc, pv, b.data());
+}
+
+void DenseReference::apply(const std::vector<char> &pattern, const double *x, double *y) const
+{
+  if (!has_operator()) throw std::invalid_argument("reference: the product needs the operator (keep_operator)");
+  std::vector<double> xu(m_n), xt(m_n);
+  for (int j = 0; j < m_n; ++j) (pattern[j] ? xt : xu)[j] = x[j];
+  lapack::gemv('N', m_n, m_n, 1.0, m_H.data(), m_n, xu.data(), 0.0, y);
+  lapack::gemv('N', m_n, m_n, -1.0, m_G.data(), m_n, xt.data(), 1.0, y);
+}
+
+void DenseReference::free_response(const SystemSelection &sel, std::vector<double> &y) const
+{
+  if (static_cast<int>(sel.displacement_known.size()) != m_nodes) throw std::invalid_argument("reference: the values do not match the reference's nodes");
+  for (int j = 0; j < m_n; ++j)
+    if (static_cast<char>(sel.displacement_known[j / 3][j % 3]) != m_pattern[j])
+      throw std::invalid_argument("reference: the free response needs the reference pattern (unknown " + std::to_string(j) + " differs)");
+  rhs(sel, m_pattern, y);
+  solve(y.data(), 1);
+}
+
+std::size_t DenseReference::memory_bytes() const { return 8 * (m_H.size() + m_G.size() + m_Gn.size() + m_lu.size()) + 4 * m_piv.size(); }
+
+// --- the column cache ---------------------------------------------------------------------------
+
+ReferenceColumns::ReferenceColumns(const ReferenceFactorization &reference, std::vector<int> row_order) : m_ref(&reference), m_order(std::move(row_order))
+{
+  const int n = reference.num_unknowns();
+  if (m_order.empty()) return;
+  if (static_cast<int>(m_order.size()) != n) throw std::invalid_argument("ReferenceColumns: the row order needs one entry per unknown");
+  m_position.assign(n, -1);
+  for (int p = 0; p < n; ++p) {
+    if (m_order[p] < 0 || m_order[p] >= n || m_position[m_order[p]] >= 0) throw std::invalid_argument("ReferenceColumns: the row order is not a permutation");
+    m_position[m_order[p]] = p;
+  }
+}
+
+void ReferenceColumns::require(const std::vector<int> &js)
+{
+  std::vector<int> missing;
+  std::unordered_set<int> seen;
+  for (int j : js)
+    if (!has(j) && seen.insert(j).second) missing.push_back(j);
+  if (missing.empty()) return;
+  const Timer timer;
+  const std::size_t n = static_cast<std::size_t>(m_ref->num_unknowns()), k = missing.size();
+  std::unique_ptr<double[]> block(new double[n * k]);
+  std::unique_ptr<float[]> single(new float[n * k]);
+  m_ref->columns(missing, block.get());
+#pragma omp parallel for schedule(static)
+  for (std::size_t q = 0; q < k; ++q) {
+    double *col = block.get() + q * n;
+    if (!m_order.empty()) {
+      const std::vector<double> natural(col, col + n);
+      for (std::size_t p = 0; p < n; ++p) col[p] = natural[m_order[p]];
+    }
+    for (std::size_t p = 0; p < n; ++p) single[q * n + p] = static_cast<float>(col[p]);
+  }
+  for (std::size_t q = 0; q < k; ++q) m_index.emplace(missing[q], block.get() + q * n), m_single.emplace(missing[q], single.get() + q * n);
+  m_columns += k;
+  m_blocks.push_back(std::move(block));
+  m_single_blocks.push_back(std::move(single));
+  m_seconds += timer.seconds();
+}
+
+std::size_t ReferenceColumns::memory_bytes() const { return 12 * m_columns * static_cast<std::size_t>(m_ref->num_unknowns()); }
+
+} // namespace hssbem

@@ -1,0 +1,226 @@
+#!/usr/bin/python3
+"""Command-line tests of contact problems (a problem file with "contact"; docs/contact.md).
+
+Usage:
+    /usr/bin/python3 test_contact_cli.py --driver PATH/hssbem --meshes REPO/meshes [--mpiexec mpiexec]
+                                         [unittest arguments, e.g. ContactErrorTests]
+
+The harness (a temporary directory per case, the clean-failure assertions) is test_cli.py's.
+ContactErrorTests: every bad contact input ends with one "hssbem: error:" line naming the
+problem and leaves no file. ContactRunTests: the result layout (/contact, the frames' contact,
+the sidecar's pressure, the bodies' forces), a contact scene's frames against static runs of the
+same obstacle positions, and the same file from 1 and 2 ranks.
+"""
+
+import argparse
+import json
+import os
+import shutil
+import sys
+import unittest
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import test_cli  # noqa: E402
+from test_cli import CliTestCase, TIMEOUT_RUN  # noqa: E402
+
+NAN = None  # JSON null: a component left as it was
+
+TABLE = {"name": "table", "plane": {"point": [0, 0, 0], "normal": [0, 0, 1]}}
+
+
+class ContactCase(CliTestCase):
+    def cube_contact(self, contact, boundary=None, frames=None, name="problem.json", **extra):
+        """The shipped cube pushed down at its top, rollers on x0 and y0, over `contact`."""
+        if boundary is None:
+            boundary = [{"where": {"region": "z1"}, "displacement": [NAN, NAN, -0.01]},
+                        {"where": {"region": "x0"}, "displacement": [0, NAN, NAN]},
+                        {"where": {"region": "y0"}, "displacement": [NAN, 0, NAN]}]
+        if frames is not None:
+            extra["frames"] = frames
+        return self.problem(mesh=self.copy_mesh("cube_l0.msh"), boundary=boundary, contact=contact, name=name,
+                            **extra)
+
+
+class ContactErrorTests(ContactCase):
+    def test_frame_names_an_unknown_obstacle(self):
+        self.cube_contact({"obstacles": [TABLE]}, frames=[{"obstacles": {"table": {"translate": [0, 0, 0]}}},
+                                                          {"obstacles": {"tool": {"translate": [0, 0, 1]}}}])
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"problem\.json: frames\[1\]\.obstacles: no obstacle named 'tool' \(known: table\)")
+        self.assertErrorLine(r)
+
+    def test_duplicate_obstacle_name(self):
+        self.cube_contact({"obstacles": [TABLE, TABLE]})
+        self.assertFailsCleanly(self.run_problem(), r"contact\.obstacles\[1\]\.name: duplicate obstacle name 'table'")
+
+    def test_zero_normal(self):
+        self.cube_contact({"obstacles": [{"name": "t", "plane": {"point": [0, 0, 0], "normal": [0, 0, 0]}}]})
+        self.assertFailsCleanly(self.run_problem(), r"contact\.obstacles\[0\]\.plane\.normal: the normal is zero")
+
+    def test_negative_friction(self):
+        self.cube_contact({"obstacles": [TABLE], "friction": -0.2})
+        self.assertFailsCleanly(self.run_problem(), r"contact\.friction: the friction coefficient must be >= 0")
+
+    def test_negative_obstacle_friction(self):
+        self.cube_contact({"obstacles": [dict(TABLE, friction=-1)]})
+        self.assertFailsCleanly(self.run_problem(), r"contact\.obstacles\[0\]\.friction: the friction coefficient must be >= 0")
+
+    def test_radius_not_positive(self):
+        self.cube_contact({"obstacles": [{"name": "tool", "sphere": {"center": [0, 0, 2], "radius": 0}}]})
+        self.assertFailsCleanly(self.run_problem(), r"contact\.obstacles\[0\]\.sphere\.radius: the radius must be > 0")
+
+    def test_obstacle_mesh_cannot_be_read(self):
+        self.cube_contact({"obstacles": [{"name": "wall", "mesh": "no_such_wall.off"}]})
+        self.assertFailsCleanly(self.run_problem(), r"problem\.json: contact\.obstacles\[0\]\.mesh: cannot open mesh file .*no_such_wall\.off")
+
+    def test_obstacle_mesh_with_a_degenerate_triangle(self):
+        self.write("wall.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n2 0 0\n3 0 1 2\n")
+        self.cube_contact({"obstacles": [{"name": "wall", "mesh": "wall.off"}]})
+        self.assertFailsCleanly(self.run_problem(), r"contact\.obstacles\[0\].*wall\.off.*degenerate")
+
+    def test_free_rigid_motions(self):
+        # Pressed onto a frictionless table by a load alone: it may slide and turn.
+        self.cube_contact({"obstacles": [TABLE]}, boundary=[{"where": {"region": "z1"}, "traction": [0, 0, -1]}])
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"body 0 .*held only by frictionless contact.*translation x.*rotation about z")
+        self.assertErrorLine(r)
+
+    def test_compressed_operator_refused(self):
+        self.cube_contact({"obstacles": [TABLE]})
+        self.assertFailsCleanly(self.run_problem("problem.json", "-bem_mat_type", "h2"),
+                                r"contact runs on the dense reference factorization")
+
+    def test_frame_that_changes_the_pattern(self):
+        self.cube_contact({"obstacles": [TABLE]},
+                          frames=[{"boundary": [{"where": {"region": "x1"}, "displacement": [0, 0, 0]}]}])
+        self.assertFailsCleanly(self.run_problem(), r"frames\[0\]\.boundary: a contact scene's frames may change the values")
+
+    def test_bad_contact_option(self):
+        self.cube_contact({"obstacles": [TABLE]})
+        self.assertFailsCleanly(self.run_problem("problem.json", "-contact_tol", "2"), r"-contact_tol must lie in \(0, 1\)")
+
+    def test_too_few_iterations(self):
+        # The cube on the table takes two active-set iterations (the bottom edges' side nodes let go).
+        self.cube_contact({"obstacles": [TABLE]})
+        r = self.run_problem("problem.json", "-contact_max_it", "1")
+        self.assertFailsCleanly(r, r"the active set did not settle in 1 iterations \(-contact_max_it\)")
+        self.assertErrorLine(r)
+
+
+class ContactRunTests(ContactCase):
+    def read(self, name):
+        import h5py
+        data = {}
+        with h5py.File(self.path(name), "r") as f:
+            f.visititems(lambda n, o: data.__setitem__(n, o[()]) if isinstance(o, h5py.Dataset) else None)
+            attrs = {k: f.attrs[k] for k in f.attrs}
+            contact = {k: f["/contact"].attrs[k] for k in f["/contact"].attrs} if "contact" in f else {}
+        return data, attrs, contact
+
+    def test_single_solve_layout_and_monitor(self):
+        import numpy as np
+        self.cube_contact({"obstacles": [TABLE]})
+        r = self.run_problem("problem.json", "-contact_monitor", timeout=TIMEOUT_RUN)
+        self.assertSucceeds(r, self.out, self.path("out.xdmf"))
+        self.assertRegex(r.stdout, r"contact: frame 0 iteration 1: \d+ touching")
+        data, attrs, contact = self.read("out.h5")
+        p, status, gap = data["contact/pressure"], data["contact/status"], data["contact/gap"]
+        x = data["mesh/vertices"]
+        bottom = np.abs(x[:, 2]) < 1e-12
+        self.assertEqual(int(contact["active_vertices"]), int(bottom.sum()))
+        self.assertGreaterEqual(int(contact["iterations"]), 1)
+        self.assertLess(np.max(np.abs(p[bottom] - 10.0)), 1e-3)  # E delta = 1000 * 0.01
+        self.assertTrue(np.all(p[~bottom] == 0) and np.all(status[bottom] == 2) and np.all(status[~bottom] == 0))
+        self.assertTrue(np.all(np.isnan(gap[x[:, 2] > 0.5])))
+        self.assertLess(np.max(np.abs(data["contact/forces/table"] - [0, 0, 10.0])), 1e-3)
+        self.assertEqual(attrs["solver"], "contact")
+        with open(self.path("out.xdmf")) as f:
+            xdmf = f.read()
+        self.assertIn("/contact/pressure", xdmf)
+        self.assertIn("/contact/status", xdmf)
+
+    def test_scene_frames_equal_static_runs(self):
+        # The table rises under the cube frame by frame; each frictionless frame is the static
+        # problem with the table at that frame's place (its own run, -bem_mat_type dense).
+        import h5py
+        import numpy as np
+        rises = [0.0, 0.004, 0.008, 0.002]
+        self.cube_contact({"obstacles": [dict(TABLE, plane={"point": [0, 0, -0.005], "normal": [0, 0, 1]})]},
+                          frames=[{"obstacles": {"table": {"translate": [0, 0, z]}}} for z in rises], name="scene.json")
+        r = self.run_driver("-problem", "scene.json", "-o", self.out, timeout=TIMEOUT_RUN)
+        self.assertSucceeds(r, self.out)
+        with h5py.File(self.out, "r") as f:
+            self.assertEqual(int(f.attrs["num_frames"]), len(rises))
+            frames = [(f["/frames/%d/displacement" % i][()], f["/frames/%d/contact/pressure" % i][()]) for i in range(len(rises))]
+        with open(self.path("out.xdmf")) as f:
+            self.assertIn("/frames/3/contact/pressure", f.read())
+        for i, z in enumerate(rises):
+            self.cube_contact({"obstacles": [dict(TABLE, plane={"point": [0, 0, -0.005 + z], "normal": [0, 0, 1]})]},
+                              name="static%d.json" % i)
+            out = self.path("static%d.h5" % i)
+            r = self.run_driver("-problem", "static%d.json" % i, "-o", out, "-bem_mat_type", "dense", timeout=TIMEOUT_RUN)
+            self.assertSucceeds(r, out)
+            with h5py.File(out, "r") as f:
+                u, p = f["/fields/displacement"][()], f["/contact/pressure"][()]
+            self.assertLess(np.max(np.abs(frames[i][0] - u)), 1e-6 * np.max(np.abs(u)), "frame %d" % i)
+            self.assertLess(np.max(np.abs(frames[i][1] - p)), 1e-6 * max(np.max(p), 1e-12), "frame %d" % i)
+        self.assertGreater(np.max(frames[2][1]), np.max(frames[0][1]))  # the higher table presses harder
+
+    def test_two_bodies_forces(self):
+        # Two unit cubes (12 triangles each), the upper g above the lower, pushed together by
+        # delta at the top: each side of the contact carries E (delta - g) / 2 (the engine's
+        # test measures the same on finer cubes, tests/verification/test_contact.cpp).
+        import numpy as np
+        from test_cli import CUBE_TRIANGLES, CUBE_VERTICES, off_text
+        g, delta = 0.001, 0.01
+        upper = [(x, y, z + 1 + g) for x, y, z in CUBE_VERTICES]
+        tris = CUBE_TRIANGLES + [tuple(i + 8 for i in t) for t in CUBE_TRIANGLES]
+        self.write("two.off", off_text(CUBE_VERTICES + upper, tris))
+        box = lambda lo, hi: {"box": [lo, hi]}  # noqa: E731
+        boundary = [{"where": box([-1, -1, -1e-9], [2, 2, 1e-9]), "displacement": [NAN, NAN, 0]},
+                    {"where": box([-1, -1, 2 + g - 1e-9], [2, 2, 3]), "displacement": [NAN, NAN, -delta]},
+                    {"where": box([-1e-9, -1, -1], [1e-9, 2, 3]), "displacement": [0, NAN, NAN]},
+                    {"where": box([-1, -1e-9, -1], [2, 1e-9, 3]), "displacement": [NAN, 0, NAN]}]
+        self.problem(mesh="two.off", boundary=boundary, contact={"bodies": True})
+        r = self.run_problem("problem.json", timeout=TIMEOUT_RUN)
+        self.assertSucceeds(r, self.out)
+        data, attrs, contact = self.read("out.h5")
+        f0, f1 = data["contact/forces/body_0"], data["contact/forces/body_1"]
+        load = 0.5 * 1000.0 * (delta - g)
+        p = data["contact/pressure"]
+        self.assertLess(np.max(np.abs(f0 + f1)), 1e-9 * load)
+        self.assertLess(np.max(np.abs(f1 - [0, 0, load])), 5e-5 * load)  # measured 1.2e-5
+        self.assertTrue(np.all(data["contact/status"][4:12] == 2) and np.all(p[4:12] > 0.5 * load))
+        self.assertEqual(attrs["solver"], "contact")
+        self.assertGreaterEqual(int(contact["iterations"]), 1)
+
+    def test_same_file_from_one_and_two_ranks(self):
+        import numpy as np
+        self.cube_contact({"obstacles": [TABLE], "friction": 0.5})
+        for np_ in (1, 2):
+            r = self.run_driver("-problem", "problem.json", "-o", self.path("r%d.h5" % np_), np=np_, timeout=TIMEOUT_RUN)
+            self.assertSucceeds(r, self.path("r%d.h5" % np_))
+        a, attrs_a, ca = self.read("r1.h5")
+        b, attrs_b, cb = self.read("r2.h5")
+        self.assertEqual(sorted(a), sorted(b))
+        self.assertIn("contact/forces/table", a)
+        for name in a:
+            self.assertTrue(np.array_equal(a[name], b[name], equal_nan=True), name)
+        self.assertEqual(ca, cb)
+        self.assertEqual((int(attrs_a["ranks"]), int(attrs_b["ranks"])), (1, 2))
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--driver", required=True, help="path of the hssbem executable")
+    parser.add_argument("--meshes", required=True, help="the repository's meshes/ directory")
+    parser.add_argument("--mpiexec", default=shutil.which("mpiexec") or "", help="MPI launcher for the multi-rank cases")
+    args, rest = parser.parse_known_args()
+    test_cli.DRIVER = os.path.abspath(args.driver)
+    test_cli.MESHES = os.path.abspath(args.meshes)
+    test_cli.MPIEXEC = args.mpiexec
+    unittest.main(argv=[sys.argv[0]] + rest, verbosity=1)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,387 @@
+// Contact as physics (contact/): the exact cases on the cube (a frictionless plane gives the
+// uniform pressure and the linear field; a gap wider than the push gives nothing; friction that
+// sticks equals the clamped bottom; a push sideways slides with |F_t| = μ F_n), the plane as a
+// rigid mesh, two bodies, moving obstacles against cold static solves, warm starts, the haptic
+// call, and the free-motion errors. Independent references are static dense solves
+// (DenseReference of another pattern).
+#include "solve_helpers.hpp"
+
+#include "hssbem/contact/contact_engine.hpp"
+#include "hssbem/contact/contact_scene.hpp"
+#include "hssbem/scene/reference.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <memory>
+
+using namespace hssbem;
+using namespace hssbem::test;
+
+namespace {
+
+using Kind = BoundaryRule::Kind;
+constexpr double k_nan = std::numeric_limits<double>::quiet_NaN();
+constexpr double E = 1000, nu = 0.3, delta = 0.01;
+
+std::vector<char> pattern_of(const NodeConditions &nc)
+{
+  std::vector<char> p(3 * nc.displacement_prescribed.size());
+  for (std::size_t i = 0; i < nc.displacement_prescribed.size(); ++i)
+    for (int c = 0; c < 3; ++c) p[3 * i + c] = nc.displacement_prescribed[i][c];
+  return p;
+}
+
+/// A contact problem set up in code, on the dense reference of its base rules.
+struct Case {
+  ProblemSetup s;
+  std::unique_ptr<BemOperator> op;
+  NodeConditions base;
+  std::unique_ptr<DenseReference> ref;
+  std::unique_ptr<ContactEngine> engine;
+  ContactSolution sol;
+  ContactFrameReport rep;
+
+  Case(ProblemSpec spec, std::vector<Obstacle> obstacles, const ContactSettings &settings = {}, const ContactOptions &opt = {})
+  {
+    spec.contact.present = true;
+    s = setup_problem(std::move(spec), ProblemOverrides{});
+    op = std::make_unique<BemOperator>(*s.disc, s.material);
+    base = apply_rules(s.spec.rules, *s.disc, s.spec.file);
+    check_bodies_held(*s.disc, base.displacement_prescribed, obstacles, settings, opt);
+    ref = std::make_unique<DenseReference>(*op, pattern_of(base));
+    engine = std::make_unique<ContactEngine>(*s.disc, *ref, std::move(obstacles), settings, opt);
+  }
+  const ContactFrameReport &solve(const std::vector<Vec3> &offsets)
+  {
+    rep = engine->solve(selection_of(base), offsets, sol);
+    return rep;
+  }
+};
+
+/// The cube pushed down by delta at its top, rollers on x0 and y0 (or the top held whole).
+ProblemSpec cube_spec(bool rollers = true, Vec3 top = {k_nan, k_nan, -delta})
+{
+  ProblemSpec spec = spec_for("cube_l0.msh", E, nu);
+  spec.rules = {rule(Kind::Displacement, region("z1"), {top})};
+  if (rollers) spec.rules.push_back(rule(Kind::Displacement, region("x0"), {{0, k_nan, k_nan}})), spec.rules.push_back(rule(Kind::Displacement, region("y0"), {{k_nan, 0, k_nan}}));
+  return spec;
+}
+
+/// The static dense solve of `spec` (another reference pattern: an independent factorization).
+NodalSolution static_solve(const ProblemSpec &spec, const Discretization &disc, const BemOperator &op)
+{
+  const NodeConditions nc = apply_rules(spec.rules, disc, spec.file);
+  const DenseReference ref(op, pattern_of(nc));
+  std::vector<double> x;
+  ref.free_response(selection_of(nc), x);
+  return split_unknowns(selection_of(nc), x);
+}
+
+double max_norm_diff(const std::vector<Vec3> &a, const std::vector<Vec3> &b)
+{
+  double d = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) d = std::max(d, norm(a[i] - b[i]));
+  return d;
+}
+
+std::vector<int> bottom_vertices(const SurfaceMesh &m)
+{
+  std::vector<int> out;
+  for (int v = 0; v < m.num_vertices(); ++v)
+    if (std::abs(m.vertices[v][2]) < 1e-12) out.push_back(v);
+  return out;
+}
+
+} // namespace
+
+TEST(Contact, CubeOnAFrictionlessPlaneIsUniaxial)
+{
+  Case c(cube_spec(), {Obstacle::plane("table", {0, 0, 0}, {0, 0, 1})});
+  c.solve({{0, 0, 0}});
+  const Discretization &disc = *c.s.disc;
+  double uerr = 0, terr = 0;
+  for (int i = 0; i < disc.num_nodes(); ++i) {
+    const Vec3 x = disc.node_position(i);
+    uerr = std::max(uerr, norm(c.sol.u[i] - Vec3{nu * delta * x[0], nu * delta * x[1], -delta * x[2]}));
+    const Vec3 n = disc.node(i).normal;
+    terr = std::max(terr, norm(c.sol.t[i] - Vec3{0, 0, -E * delta * n[2]}) / (E * delta));
+  }
+  double perr = 0;
+  const std::vector<int> bottom = bottom_vertices(disc.mesh());
+  for (int v : bottom) perr = std::max(perr, std::abs(c.sol.pressure[v] - E * delta) / (E * delta));
+  std::printf("cube on a plane: |u - exact| %.2e (delta %.0e), |t - exact| / (E delta) %.2e, pressure %.2e; %lld touching of %zu, %lld iterations\n", uerr, delta, terr, perr,
+              c.rep.active_vertices, bottom.size(), c.rep.iterations);
+  EXPECT_EQ(c.rep.active_vertices, static_cast<long long>(bottom.size()));
+  EXPECT_LE(uerr, 1e-6);  // measured 9.0e-8: the BEM's own error on the linear field (cf. the patch tests)
+  EXPECT_LE(terr, 1e-4);  // measured 7.1e-5
+  EXPECT_LE(perr, 1e-4);
+  for (int v : bottom) EXPECT_EQ(c.sol.status[v], 2);
+  EXPECT_NEAR(c.sol.obstacle_force[0][2], E * delta, 1e-4 * E * delta); // the unit face's load
+  const auto R = reactions(disc, c.sol.t);
+  EXPECT_NEAR(R.at("z1")[2], -E * delta, 1e-4 * E * delta);
+}
+
+TEST(Contact, RigidMeshPlaneGivesThePlanesAnswer)
+{
+  SurfaceMesh wall;
+  wall.vertices = {{-1, -1, 0}, {2, -1, 0}, {2, 2, 0}, {-1, 2, 0}};
+  wall.triangles = {{0, 1, 2}, {0, 2, 3}};
+  Case a(cube_spec(), {Obstacle::plane("table", {0, 0, 0}, {0, 0, 1})}), b(cube_spec(), {Obstacle::mesh("table", wall)});
+  a.solve({{0, 0, 0}});
+  b.solve({{0, 0, 0}});
+  EXPECT_LE(max_norm_diff(a.sol.u, b.sol.u), 1e-6 * delta);
+  EXPECT_LE(max_norm_diff(a.sol.t, b.sol.t), 1e-6 * E * delta);
+}
+
+TEST(Contact, AGapWiderThanThePushLeavesNoContactAndNoStress)
+{
+  Case c(cube_spec(), {Obstacle::plane("table", {0, 0, -2 * delta}, {0, 0, 1})});
+  c.solve({{0, 0, 0}});
+  EXPECT_EQ(c.rep.active_vertices, 0);
+  EXPECT_GT(c.rep.candidates, 0);
+  double t = 0, u = 0;
+  for (std::size_t i = 0; i < c.sol.t.size(); ++i) t = std::max(t, norm(c.sol.t[i])), u = std::max(u, norm(c.sol.u[i] - Vec3{0, 0, -delta}));
+  for (double p : c.sol.pressure) EXPECT_EQ(p, 0.0);
+  std::printf("gap wider than the push: max |t| %.2e (E delta = %.0f), max |u - rigid| %.2e\n", t, E * delta, u);
+  EXPECT_LE(t, 1e-6 * E * delta);
+  EXPECT_LE(u, 1e-8 * delta);
+}
+
+TEST(Contact, FrictionThatSticksEqualsTheClampedBottom)
+{
+  // The top held whole and pushed down: the clamped bottom's tractions press on the plane at
+  // every node (with rollers on x0 and y0 they pull at those faces' bottom edges, and contact lets go).
+  ContactSettings rough;
+  rough.friction = 10;
+  Case c(cube_spec(false, {0, 0, -delta}), {Obstacle::plane("table", {0, 0, 0}, {0, 0, 1})}, rough);
+  c.solve({{0, 0, 0}});
+  ProblemSpec clamped = cube_spec(false, {0, 0, -delta});
+  clamped.rules.push_back(rule(Kind::Displacement, region("z0"), {{0, 0, 0}}));
+  const NodalSolution ref = static_solve(clamped, *c.s.disc, *c.op);
+  const double du = max_norm_diff(c.sol.u, ref.u) / delta, dt = max_norm_diff(c.sol.t, ref.t) / (E * delta);
+  std::printf("sticking cube against the clamped bottom: |du| / delta %.2e, |dt| / (E delta) %.2e; %lld stick, %lld slip, %lld Newton steps\n", du, dt, c.rep.stick, c.rep.slip,
+              c.rep.iterations);
+  EXPECT_EQ(c.rep.stick, static_cast<long long>(bottom_vertices(c.s.disc->mesh()).size()));
+  EXPECT_LE(du, 1e-8);
+  EXPECT_LE(dt, 1e-8);
+}
+
+TEST(Contact, PushedSidewaysItSlidesAtTheCoulombLimit)
+{
+  ContactSettings rough;
+  rough.friction = 0.3;
+  Case c(cube_spec(false, {5 * delta, 0, -delta}), {Obstacle::plane("table", {0, 0, 0}, {0, 0, 1})}, rough);
+  c.solve({{0, 0, 0}});
+  const Vec3 F = c.sol.obstacle_force[0];
+  const double ft = std::hypot(F[0], F[1]);
+  const std::vector<int> bottom = bottom_vertices(c.s.disc->mesh());
+  long long slipping = 0;
+  for (int v : bottom) slipping += c.sol.status[v] == 2;
+  // Every point slides at the limit; their directions differ a little (the Poisson expansion
+  // slides outward), so the net tangential force is a hair below μ F_n.
+  double limit = 0, normal = 0;
+  for (int v : bottom) {
+    const int i = c.s.disc->first_node(v); // the cube's bottom-face node of a bottom vertex
+    for (int k = i; k < i + c.s.disc->node_count(v); ++k)
+      if (c.s.disc->node(k).normal[2] < -0.9) limit += std::hypot(c.sol.t[k][0], c.sol.t[k][1]), normal += c.sol.t[k][2];
+  }
+  std::printf("sliding cube: F = (%.4f, %.4f, %.4f), |F_t| / F_n = %.6f (mu 0.3), per point %.9f; %lld of %zu bottom vertices slip; %lld Newton steps\n", F[0], F[1], F[2],
+              ft / F[2], limit / normal, slipping, bottom.size(), c.rep.iterations);
+  EXPECT_GT(F[2], 0);
+  EXPECT_LT(F[0], 0); // friction opposes the slide along +x
+  EXPECT_NEAR(limit, 0.3 * normal, 1e-8 * normal);
+  EXPECT_NEAR(ft, 0.3 * F[2], 2e-3 * F[2]); // measured 6.1e-4
+  EXPECT_GE(slipping, static_cast<long long>(0.9 * bottom.size()));
+}
+
+TEST(Contact, MovingObstacleFramesEqualColdStaticSolves)
+{
+  // The table rises through the frames: warm frames (active set and capacitance kept) against a
+  // cold engine per frame; the warm ones take fewer iterations.
+  Case warm(cube_spec(), {Obstacle::plane("table", {0, 0, -0.5 * delta}, {0, 0, 1})});
+  long long warm_its = 0, cold_its = 0;
+  double worst = 0;
+  for (int f = 0; f < 6; ++f) {
+    const std::vector<Vec3> offsets{{0, 0, 0.2 * delta * f}};
+    warm.solve(offsets);
+    warm_its += warm.rep.iterations;
+    Case cold(cube_spec(), {Obstacle::plane("table", {0, 0, -0.5 * delta}, {0, 0, 1})});
+    cold.solve(offsets);
+    cold_its += cold.rep.iterations;
+    worst = std::max(worst, max_norm_diff(warm.sol.u, cold.sol.u) / delta);
+    EXPECT_EQ(warm.rep.active_vertices, cold.rep.active_vertices) << "frame " << f;
+  }
+  std::printf("moving table: warm frames against cold solves %.2e; iterations warm %lld, cold %lld\n", worst, warm_its, cold_its);
+  EXPECT_LE(worst, 1e-10);
+  EXPECT_LE(warm_its, cold_its);
+}
+
+TEST(Contact, HapticForcesMatchTheFullSolve)
+{
+  Case c(cube_spec(), {Obstacle::plane("table", {0, 0, 0}, {0, 0, 1})});
+  c.solve({{0, 0, 0}});
+  const std::vector<Vec3> moved{{0, 0, 0.3 * delta}};
+  const std::vector<Vec3> haptic = c.engine->haptic_forces(moved);
+  c.solve(moved);
+  std::printf("haptic: F_z %.6f against the full solve's %.6f\n", haptic[0][2], c.sol.obstacle_force[0][2]);
+  EXPECT_NEAR(haptic[0][2], c.sol.obstacle_force[0][2], 1e-10 * std::abs(c.sol.obstacle_force[0][2]));
+  EXPECT_NEAR(c.sol.obstacle_force[0][2], 1.3 * E * delta, 1e-4 * E * delta);
+}
+
+TEST(Contact, TwoStackedCubesShareTheLoad)
+{
+  // Two unit cubes, one on the other with a gap g, pushed together by δ: each carries E (δ − g) / 2.
+  const double g = 0.1 * delta, p = 0.5 * E * (delta - g); // gap/h = 0.004
+  SurfaceMesh two = read_mesh(mesh_file("cube_l0.msh"));
+  const SurfaceMesh one = two;
+  for (const Vec3 &v : one.vertices) two.vertices.push_back(v + Vec3{0, 0, 1 + g});
+  for (const auto &t : one.triangles) two.triangles.push_back({t[0] + one.num_vertices(), t[1] + one.num_vertices(), t[2] + one.num_vertices()});
+  two.triangle_region.insert(two.triangle_region.end(), one.triangle_region.begin(), one.triangle_region.end());
+  std::vector<std::string> notices;
+  validate_and_orient(two, notices);
+  const Discretization disc(two, 40.0);
+  const BemOperator op(disc, Material{E, nu});
+  std::vector<std::array<bool, 3>> held(disc.num_nodes(), {false, false, false});
+  SystemSelection sel{held, std::vector<Vec3>(disc.num_nodes(), Vec3{0, 0, 0}), {}};
+  for (int i = 0; i < disc.num_nodes(); ++i) {
+    const Vec3 x = disc.node_position(i);
+    const Vec3 n = disc.node(i).normal;
+    if (x[2] < 1e-12 && n[2] < -0.9) sel.displacement_known[i] = {false, false, true};                       // bottom: u_z = 0
+    if (x[2] > 2 && n[2] > 0.9) sel.displacement_known[i] = {false, false, true}, sel.known[i][2] = -delta; // top: pushed
+    if (x[0] < 1e-12) sel.displacement_known[i][0] = true;                                                   // rollers x0, y0
+    if (x[1] < 1e-12) sel.displacement_known[i][1] = true;
+  }
+  std::vector<char> pattern(3 * disc.num_nodes());
+  for (int i = 0; i < disc.num_nodes(); ++i)
+    for (int c = 0; c < 3; ++c) pattern[3 * i + c] = sel.displacement_known[i][c];
+  ContactSettings s;
+  s.bodies = true;
+  check_bodies_held(disc, sel.displacement_known, {}, s);
+  DenseReferenceOptions ro;
+  ro.node_body = node_bodies(disc);
+  const DenseReference ref(op, pattern, ro);
+  ContactEngine engine(disc, ref, {}, s);
+  ContactSolution sol;
+  const ContactFrameReport rep = engine.solve(sel, {}, sol);
+  double perr = 0;
+  int touching = 0;
+  for (int v = 0; v < two.num_vertices(); ++v)
+    if (std::abs(two.vertices[v][2] - 1) < 1e-12 || std::abs(two.vertices[v][2] - 1 - g) < 1e-12) perr = std::max(perr, std::abs(sol.pressure[v] - p) / p), touching += sol.status[v] != 0;
+  std::printf("stacked cubes: %d bodies, %lld points touching, pressure error %.2e, body forces %.6f %.6f\n", engine.bodies().count, rep.active_vertices, perr, sol.body_force[0][2],
+              sol.body_force[1][2]);
+  EXPECT_EQ(engine.bodies().count, 2);
+  EXPECT_EQ(touching, 2 * static_cast<int>(bottom_vertices(one).size()));
+  EXPECT_LE(perr, 1e-4); // measured 6.0e-5; 8.3e-3 with the bodies' blocks coupled (DenseReferenceOptions::node_body)
+  EXPECT_NEAR(sol.body_force[0][2] + sol.body_force[1][2], 0.0, 1e-12 * p);
+  EXPECT_NEAR(sol.body_force[1][2], p, 1e-4 * p); // the upper cube is pushed up by the lower
+}
+
+TEST(Contact, AnInterferenceIsClosedByDeformation)
+{
+  // The table's base place overlaps the undeformed cube by delta (a negative initial gap); the
+  // top held along z, rollers on x0 and y0: the bottom is pushed up by delta, the uniaxial field
+  // u = (nu delta x, nu delta y, delta (1 - z)), t = -E delta n_z e_z.
+  Case c(cube_spec(true, {k_nan, k_nan, 0}), {Obstacle::plane("table", {0, 0, delta}, {0, 0, 1})});
+  c.solve({{0, 0, 0}});
+  const Discretization &disc = *c.s.disc;
+  double uerr = 0, terr = 0, gmin = 0;
+  for (int i = 0; i < disc.num_nodes(); ++i) {
+    const Vec3 x = disc.node_position(i);
+    uerr = std::max(uerr, norm(c.sol.u[i] - Vec3{nu * delta * x[0], nu * delta * x[1], delta * (1 - x[2])}));
+    terr = std::max(terr, norm(c.sol.t[i] - Vec3{0, 0, -E * delta * disc.node(i).normal[2]}) / (E * delta));
+  }
+  for (int v : bottom_vertices(disc.mesh())) gmin = std::min(gmin, c.sol.gap[v]);
+  std::printf("interference closed: |u - exact| %.2e (delta %.0e), |t - exact| / (E delta) %.2e, min gap %.2e; %lld touching\n", uerr, delta, terr, gmin, c.rep.active_vertices);
+  EXPECT_EQ(c.rep.active_vertices, static_cast<long long>(bottom_vertices(disc.mesh()).size()));
+  EXPECT_LE(uerr, 1e-6); // measured 9.0e-8, as when pushed from the top
+  EXPECT_LE(terr, 1e-4); // measured 7.1e-5
+  EXPECT_GE(gmin, -1e-10 * delta);
+  EXPECT_NEAR(c.sol.obstacle_force[0][2], E * delta, 1e-4 * E * delta);
+}
+
+TEST(Contact, PrescribedVerticesAreNoCandidates)
+{
+  // The bottom clamped (all three components) and the table through it: its rules win, nothing
+  // touches, and the answer is the static problem without the table.
+  ProblemSpec spec = cube_spec();
+  spec.rules.push_back(rule(Kind::Displacement, region("z0"), {{0, 0, 0}}));
+  Case c(spec, {Obstacle::plane("table", {0, 0, 0.5 * delta}, {0, 0, 1})});
+  c.solve({{0, 0, 0}});
+  const NodalSolution ref = static_solve(spec, *c.s.disc, *c.op);
+  EXPECT_EQ(c.rep.active_vertices, 0);
+  EXPECT_EQ(c.rep.candidates, 0); // the side vertices nearest the table (z = 0.25) are beyond reach
+  for (int v : bottom_vertices(c.s.disc->mesh())) EXPECT_TRUE(std::isnan(c.sol.gap[v]) && c.sol.pressure[v] == 0 && c.sol.status[v] == 0) << v;
+  EXPECT_LE(max_norm_diff(c.sol.u, ref.u), 1e-12 * delta);
+  EXPECT_EQ(c.sol.obstacle_force[0], (Vec3{0, 0, 0}));
+}
+
+TEST(Contact, EachObstacleReportsItsOwnForce)
+{
+  // The cube on the table (rollers, top pushed down) and a tool (sphere) pressed into the middle
+  // of its x1 face: the tool's force is the x1 face's reaction along x (the table's tractions
+  // there are along z), and the two forces balance the held faces' reactions.
+  const double r = 0.3;
+  Case c(cube_spec(), {Obstacle::plane("table", {0, 0, 0}, {0, 0, 1}), Obstacle::sphere("tool", {1 + r - 0.5 * delta, 0.5, 0.5}, r)});
+  c.solve({{0, 0, 0}, {0, 0, 0}});
+  const Vec3 table = c.sol.obstacle_force[0], tool = c.sol.obstacle_force[1];
+  const auto R = reactions(*c.s.disc, c.sol.t);
+  const Vec3 held = R.at("z1") + R.at("x0") + R.at("y0");
+  const double scale = norm(table), balance = norm(table + tool + held) / scale, tool_x = std::abs(tool[0] - R.at("x1")[0]) / std::abs(tool[0]);
+  std::printf("two obstacles: table (%.4f, %.4f, %.4f), tool (%.4f, %.4f, %.4f); |sum + held reactions| / |F_table| %.2e; tool_x against R(x1)_x %.2e\n", table[0], table[1],
+              table[2], tool[0], tool[1], tool[2], balance, tool_x);
+  EXPECT_GT(table[2], 0.5 * E * delta);
+  EXPECT_LT(tool[0], -1e-3 * E * delta); // the tool pushes along -x, and does push
+  EXPECT_LE(tool_x, 1e-14);              // measured 1.8e-16: the same lumped areas
+  EXPECT_LE(balance, 1e-2);              // measured 7.7e-3 (the coarse cube under a point-like tool)
+}
+
+TEST(Contact, ABodyHeldOnlyByFrictionlessContactIsRefused)
+{
+  ProblemSpec spec = spec_for("cube_l0.msh", E, nu);
+  spec.rules = {rule(Kind::Traction, region("z1"), {{0, 0, -1}})};
+  spec.contact.present = true;
+  const ProblemSetup s = setup_problem(spec, ProblemOverrides{});
+  const NodeConditions nc = apply_rules(s.spec.rules, *s.disc, s.spec.file);
+  try {
+    check_bodies_held(*s.disc, nc.displacement_prescribed, {Obstacle::plane("table", {0, 0, 0}, {0, 0, 1})}, {});
+    FAIL() << "no error";
+  } catch (const ConstraintError &e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("body 0"), std::string::npos) << m;
+    EXPECT_NE(m.find("held only by frictionless contact"), std::string::npos) << m;
+    EXPECT_NE(m.find("translation x"), std::string::npos) << m;
+    EXPECT_NE(m.find("rotation about z"), std::string::npos) << m;
+    EXPECT_EQ(m.find("translation z"), std::string::npos) << m;
+  }
+}
+
+TEST(Contact, ContactSceneApiDrivesFrames)
+{
+  // The simulator API: the cube held at its top, a table raised under it frame by frame.
+  const SurfaceMesh mesh = read_mesh(mesh_file("cube_l0.msh"));
+  ContactScene::Pattern held(mesh.vertices.size(), {false, false, false});
+  for (std::size_t v = 0; v < held.size(); ++v)
+    if (mesh.vertices[v][2] > 1 - 1e-12) held[v] = {true, true, true};
+  ContactScene scene(mesh, Material{E, nu}, held, {Obstacle::plane("table", {0, 0, -delta}, {0, 0, 1})});
+  double previous = 0;
+  for (int f = 1; f <= 3; ++f) {
+    scene.set_obstacle_offset("table", {0, 0, f * delta}); // the table now 0, delta, 2 delta above the bottom
+    const ContactFrameReport &rep = scene.solve();
+    const double F = scene.obstacle_forces()[0][2];
+    if (f == 1) EXPECT_EQ(rep.active_vertices, 0);
+    else {
+      EXPECT_EQ(rep.active_vertices, static_cast<long long>(bottom_vertices(mesh).size()));
+      EXPECT_GT(F, previous);
+    }
+    EXPECT_EQ(scene.active_vertices().size(), static_cast<std::size_t>(rep.active_vertices));
+    previous = F;
+  }
+  // The bottom pushed up by 2 delta, the top held: u_z at the bottom is 2 delta (the vertex
+  // averages: a bottom edge's side nodes sit 9e-6 higher, measured).
+  for (int v : bottom_vertices(mesh)) EXPECT_NEAR(scene.displacement()[v][2], 2 * delta, 3e-5);
+  const std::vector<Vec3> F = scene.haptic_forces({{0, 0, 2.5 * delta}});
+  EXPECT_NEAR(F[0][2] / previous, 0.75, 1e-10); // the table at 1.5 delta instead of 2 delta: 3/4 of the force
+  EXPECT_THROW(scene.set_obstacle_offset("tool", {0, 0, 0}), std::invalid_argument);
+}
