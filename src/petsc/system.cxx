@@ -222,7 +222,7 @@ PetscErrorCode HssbemCreateSystem(MPI_Comm comm, const hssbem::BemOperator &op, 
     break;
   case hssbem::OperatorType::H2: {
     ctx->h2_options.pressure_columns = pressure;
-    /* The driver's defaults (README, "Choosing the operator"): 1e-5 keeps the H² solution within
+    /* The driver's defaults (docs/performance.md, "Choosing the operator"): 1e-5 keeps the H² solution within
        ~5e-6 of dense LU's, well below the discretisation error of any mesh it pays on, and
        single-precision (low-rank) blocks halve the memory at that tolerance. */
     ctx->h2_options.rel_tol          = 1e-5;
