@@ -4,10 +4,19 @@
 Usage:
     /usr/bin/python3 scripts/render.py result.h5 [-o outdir] [--frames 0,5,10|all] [--gif anim.gif]
                                        [--scale s] [--view elev,azim] [--fps n] [--size WxH]
+                                       [--field NAME]
 
 The surface is /mesh/vertices + scale * displacement over /mesh/triangles, each triangle coloured
-by the mean |u| of its corners. The colour scale and the axes are the same for every frame (taken
-over all frames of the file), so pictures of one file can be compared and put in sequence.
+by the mean of its corners' values: |u| by default, or the per-vertex dataset given by --field
+NAME (e.g. von_mises, or pressure in a contact result). NAME is looked up as /fields/NAME, then
+/contact/NAME; in a result with frames as /frames/<i>/NAME, then /frames/<i>/contact/NAME; a NAME
+with a slash is a path as given. A dataset with several columns per vertex (a vector, the Voigt
+stress) is coloured by the norm of its rows, or by one column with NAME:COLUMN: a column number
+from 0, or for six columns a Voigt label xx, yy, zz, yz, xz, xy (stress:xx, stress:yz), for three
+columns x, y, z, and for principal_stress 1, 2, 3 (largest first: principal_stress:1);
+e.g. displacement:z; NaN values (vertices without one) count as 0. The
+colour scale and the axes are the same for every frame (taken over all frames of the file), so
+pictures of one file can be compared and put in sequence.
 
 A result with frames (/frames/<i>/displacement, i = 0, 1, ...) gives outdir/frame_0000.png, ...
 (the number is the frame index), titled with the frame index and the frame's `strategy` and
@@ -49,23 +58,29 @@ class RenderError(Exception):
 
 
 class Frame:
-    """One picture: a displacement field (nv x 3) and what its title shows."""
+    """One picture: a displacement field (nv x 3), the colour values (nv) and what its title
+    shows."""
 
     def __init__(self, index, displacement, strategy=None, seconds=None):
         self.index = index  # frame number, or None for /fields/displacement
         self.displacement = displacement
         self.strategy = strategy
         self.seconds = seconds
+        self.colour = np.nan_to_num(np.linalg.norm(displacement, axis=1))
+        self.field = None  # the dataset that colours it; None: |u|
 
     def file_name(self):
         """The PNG name of this frame in the output directory."""
         if self.index is None:
-            return "displacement.png"
+            return "displacement.png" if self.field is None else \
+                "%s.png" % self.field.strip("/").replace("/", "_").replace(":", "_")
         return "frame_%04d.png" % self.index
 
     def title(self):
         """Frame index, strategy and solve time, as far as the file tells them."""
         if self.index is None:
+            if self.field is not None:
+                return "%s on the deformed surface" % self.field
             return "displacement (/fields/displacement)"
         parts = ["frame %d" % self.index]
         if self.strategy:
@@ -150,8 +165,69 @@ def read_frame(h5, index, nv):
                  float(seconds) if seconds is not None else None)
 
 
-def load_result(path, wanted):
-    """(vertices, triangles, frames) of result file `path`."""
+VOIGT = ("xx", "yy", "zz", "yz", "xz", "xy")
+
+
+def split_column(spec):
+    """(NAME, COLUMN label or None) of --field NAME[:COLUMN]."""
+    name, _, column = spec.partition(":")
+    return name, (column or None)
+
+
+def column_index(label, columns, where):
+    """The 0-based column that `label` names in the dataset `where` of `columns` columns: 1, 2, 3
+    for principal_stress (sigma_1 >= sigma_2 >= sigma_3), otherwise a number from 0, a Voigt
+    label (six columns) or x, y, z (three)."""
+    if columns == 3 and where.endswith("principal_stress"):
+        if label in ("1", "2", "3"):
+            return int(label) - 1
+        raise RenderError("%s: no column '%s' (1, 2 or 3: the principal stresses, largest first)"
+                          % (where, label))
+    if label.isdigit() and int(label) < columns:
+        return int(label)
+    if columns == 6 and label in VOIGT:
+        return VOIGT.index(label)
+    if columns == 3 and label in ("x", "y", "z"):
+        return "xyz".index(label)
+    raise RenderError("%s has %d columns: no column '%s' (a number from 0%s)"
+                      % (where, columns, label, {6: ", or xx, yy, zz, yz, xz, xy",
+                                                  3: ", or x, y, z"}.get(columns, "")))
+
+
+def field_candidates(name, index):
+    """Where --field NAME is looked for, in order, for frame `index` (None: no frames)."""
+    if "/" in name:
+        return [name]
+    if index is None:
+        return ["/fields/%s" % name, "/contact/%s" % name]
+    return ["/frames/%d/%s" % (index, name), "/frames/%d/contact/%s" % (index, name)]
+
+
+def read_field(h5, name, index, nv):
+    """(path, values per vertex) of --field NAME[:COLUMN]: the dataset's rows, their norms when it
+    has several columns, or the column asked for; NaN counts as 0."""
+    name, column = split_column(name)
+    candidates = field_candidates(name, index)
+    found = [p for p in candidates if p in h5 and isinstance(h5[p], h5py.Dataset)]
+    if not found:
+        raise RenderError("%s: no dataset %s" % (h5.filename, " or ".join(candidates)))
+    data = np.asarray(h5[found[0]], dtype=float)
+    if data.ndim == 0 or data.shape[0] != nv or data.ndim > 2:
+        raise RenderError("%s: %s has shape %s, expected (%d,) or (%d, k): one value or row per "
+                          "vertex" % (h5.filename, found[0], data.shape, nv, nv))
+    if column is not None:
+        if data.ndim != 2:
+            raise RenderError("%s: %s has one value per vertex: no column '%s'"
+                              % (h5.filename, found[0], column))
+        data = data[:, column_index(column, data.shape[1], "%s: %s" % (h5.filename, found[0]))]
+        return "%s:%s" % (found[0], column), np.nan_to_num(data)
+    if data.ndim == 2:
+        data = np.linalg.norm(np.nan_to_num(data), axis=1)
+    return found[0], np.nan_to_num(data)
+
+
+def load_result(path, wanted, field=None):
+    """(vertices, triangles, frames) of result file `path`, coloured by `field` if given."""
     if not os.path.isfile(path):
         raise RenderError("%s: no such file" % path)
     try:
@@ -160,7 +236,11 @@ def load_result(path, wanted):
         raise RenderError("%s: not a readable HDF5 file (%s)" % (path, exc))
     with h5:
         vertices, triangles = read_mesh(h5)
-        return vertices, triangles, read_frames(h5, len(vertices), wanted)
+        frames = read_frames(h5, len(vertices), wanted)
+        if field is not None:
+            for frame in frames:
+                frame.field, frame.colour = read_field(h5, field, frame.index, len(vertices))
+        return vertices, triangles, frames
 
 
 # ---------------------------------------------------------------------------------------------
@@ -202,17 +282,18 @@ def axis_limits(vertices, frames, scale):
 class Renderer:
     """One figure reused for every frame: the surface is replaced, axes and colour bar stay."""
 
-    def __init__(self, vertices, triangles, limits, vmax, view, size):
+    def __init__(self, vertices, triangles, limits, vrange, view, size, label="|u|"):
         self.vertices = vertices
         self.triangles = triangles
-        self.norm = matplotlib.colors.Normalize(vmin=0.0, vmax=vmax if vmax > 0 else 1.0)
+        vmin, vmax = vrange
+        self.norm = matplotlib.colors.Normalize(vmin=vmin, vmax=vmax if vmax > vmin else vmin + 1.0)
         self.cmap = plt.get_cmap(COLORMAP)
         self.figure = plt.figure(figsize=(size[0] / DPI, size[1] / DPI), dpi=DPI)
         self.axes = self.figure.add_subplot(projection="3d")
         self.surface = None
         self.set_up_axes(limits, view)
         mappable = matplotlib.cm.ScalarMappable(norm=self.norm, cmap=self.cmap)
-        self.figure.colorbar(mappable, ax=self.axes, shrink=0.7, pad=0.1, label="|u|")
+        self.figure.colorbar(mappable, ax=self.axes, shrink=0.7, pad=0.1, label=label)
 
     def set_up_axes(self, limits, view):
         """Fixed limits, equal scale along x, y, z, and the camera direction."""
@@ -229,7 +310,7 @@ class Renderer:
     def draw(self, frame, scale):
         """Put this frame's deformed surface in the figure."""
         points = deformed(self.vertices, frame, scale)
-        colour = magnitudes(frame)[self.triangles].mean(axis=1)
+        colour = frame.colour[self.triangles].mean(axis=1)
         if self.surface is not None:
             self.surface.remove()
         self.surface = Poly3DCollection(points[self.triangles],
@@ -249,9 +330,11 @@ def render(vertices, triangles, frames, args):
         scale, largest = default_scale(vertices, frames)
         print("%s: scale %.4g (largest |u| %.4g drawn as %d %% of the body's size %.4g)"
               % (PROG, scale, largest, round(100 * DEFAULT_SCALE_FRACTION), body_size(vertices)))
-    vmax = max(float(magnitudes(f).max()) for f in frames)
-    renderer = Renderer(vertices, triangles, axis_limits(vertices, frames, scale), vmax,
-                        args.view, args.size)
+    vmin = min(0.0, min(float(f.colour.min()) for f in frames))
+    vmax = max(float(f.colour.max()) for f in frames)
+    label = "|u|" if args.field is None else args.field
+    renderer = Renderer(vertices, triangles, axis_limits(vertices, frames, scale), (vmin, vmax),
+                        args.view, args.size, label)
     try:
         return write_pictures(renderer, frames, scale, args)
     finally:
@@ -348,6 +431,14 @@ def make_parser():
                         help="GIF frames per second (default 8)")
     parser.add_argument("--size", type=parse_size, default=(800, 600),
                         help="picture size in pixels, WxH (default 800x600)")
+    parser.add_argument("--field", metavar="NAME",
+                        help="colour by this per-vertex dataset instead of |u|: /fields/NAME, "
+                        "else /contact/NAME (with frames /frames/<i>/NAME, else "
+                        "/frames/<i>/contact/NAME); a NAME with a slash is a path as given; "
+                        "rows of several values (vectors, stress) colour by their norm, or by "
+                        "one column with NAME:COLUMN (a number from 0; xx, yy, zz, yz, xz, xy "
+                        "of the Voigt stress; x, y, z; 1, 2, 3 of principal_stress); "
+                        "e.g. --field von_mises, stress:zz, principal_stress:1, pressure")
     return parser
 
 
@@ -356,7 +447,7 @@ def main(argv=None):
     if args.outdir is None:
         args.outdir = os.path.splitext(args.result)[0] + "_render"
     try:
-        vertices, triangles, frames = load_result(args.result, args.frames)
+        vertices, triangles, frames = load_result(args.result, args.frames, args.field)
         paths = render(vertices, triangles, frames, args)
     except (RenderError, OSError) as exc:
         print("%s: error: %s" % (PROG, exc), file=sys.stderr)

@@ -6,6 +6,7 @@
 
 #include "hssbem/app/petsc_call.hpp"
 #include "hssbem/petsc/system.h"
+#include "stress_post.hpp"
 
 #include <climits>
 #include <cstring>
@@ -190,6 +191,7 @@ AppOptions read_app_options(MPI_Comm comm)
 {
   AppOptions opts;
   HssbemCallThrow(ProcessOptions_Private(comm, &opts));
+  HssbemCallThrow(InteriorOptionsFromDatabase_Private(comm, &opts.interior));
   return opts;
 }
 

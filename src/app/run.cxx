@@ -1,6 +1,7 @@
 // The hssbem application: problem file → operator → solve → post-processing → result file (see run.hpp).
 #include "hssbem/app/run.hpp"
 #include "result_base.hpp"
+#include "stress_post.hpp"
 
 #include "hssbem/app/options.hpp"
 #include "hssbem/app/petsc_call.hpp"
@@ -34,21 +35,10 @@ ProblemSetup set_up(MPI_Comm comm, const std::string &file, const ProblemOverrid
   HssbemCallMPIThrow(MPI_Comm_rank(comm, &rank));
   run_collectively(comm, [&] {
     s.emplace(setup_problem(file, ov));
+    check_interior_points(*s);
     if (rank == 0 && !s->output.empty()) check_output_path(s->output);
   });
   return std::move(*s);
-}
-
-void check_interior_points(const BemOperator &op, const ProblemSpec &spec)
-{
-  for (std::size_t p = 0; p < spec.interior_points.size(); ++p) {
-    const double c = inside_indicator(op, spec.interior_points[p]);
-    if (std::abs(c - 1.0) > 0.05) {
-      const auto &x = spec.interior_points[p];
-      throw ProblemError(spec.file + ": interior_points[" + std::to_string(p) + "] = (" + std::to_string(x[0]) + ", " + std::to_string(x[1]) + ", " + std::to_string(x[2]) +
-                         ") is not inside the body (or too close to its surface)");
-    }
-  }
 }
 
 /// The whole solution vector on rank 0 (empty elsewhere), or on every rank.
@@ -76,7 +66,8 @@ std::vector<double> gather(Vec x, bool to_all)
   return out;
 }
 
-void fill_result(const ProblemSetup &s, const BemOperator &op, const std::vector<double> &x, ResultData &r)
+/// The surface's fields of the solution x; returns the solution per dof node.
+NodalSolution fill_result(const ProblemSetup &s, const std::vector<double> &x, ResultData &r)
 {
   const Discretization &disc = *s.disc;
   fault_point("Post");
@@ -87,9 +78,7 @@ void fill_result(const ProblemSetup &s, const BemOperator &op, const std::vector
   r.traction_corner         = corner_values(disc, sol.t);
   r.displacement_prescribed = s.vertex_displacement_prescribed;
   r.reactions       = reactions(disc, sol.t);
-  r.interior_points = s.spec.interior_points;
-  const EventScope event(BEM_Interior);
-  r.interior_displacement = interior_displacement(op, sol, s.spec.interior_points);
+  return sol;
 }
 
 /// The solve's part of the root attributes, added to result_base()'s.
@@ -109,20 +98,27 @@ void describe(const ProblemSetup &s, const HssbemSolveInfo &info, OperatorType t
 
 /// Every rank post-processes the whole solution (cheap beside the solve) and the ranks write the
 /// result file together, each its rows (write_result); a failure on any rank is raised on every rank.
-void write_collectively(MPI_Comm comm, const ProblemSetup &s, const BemOperator &op, const std::vector<double> &xall, const HssbemSolveInfo &info, OperatorType type,
-                        std::map<std::string, double> seconds)
+void write_collectively(MPI_Comm comm, const ProblemSetup &s, const std::vector<double> &xall, const HssbemSolveInfo &info, OperatorType type,
+                        const InteriorRunOptions &interior, std::map<std::string, double> seconds)
 {
-  PetscMPIInt size;
-  ResultData  r;
+  PetscMPIInt             size;
+  ResultData              r;
+  NodalSolution           sol;
+  std::vector<NodeStress> nodes;
 
   HssbemCallMPIThrow(MPI_Comm_size(comm, &size));
   run_collectively(comm, [&] {
     r = result_base(s, size);
     const Timer      timer;
     const EventScope event(BEM_Post);
-    fill_result(s, op, xall, r);
+    sol = fill_result(s, xall, r);
     seconds["post"] += timer.seconds();
+    const Timer      stress_timer;
+    const EventScope stress_event(BEM_Stress);
+    r.stress = surface_stress_fields(s, sol, nodes, true);
+    seconds["stress"] += stress_timer.seconds();
   });
+  interior_fields(comm, s, sol, nodes, interior, r, seconds);
   describe(s, info, type, r);
   r.timings = seconds; // rank 0's are written
   if (s.output.empty()) return;
@@ -206,7 +202,7 @@ OperatorType resolve_operator(MPI_Comm comm, std::optional<OperatorType> asked, 
 }
 
 void run_problem(MPI_Comm comm, const std::string &problem_file, const ProblemOverrides &overrides, const QuadratureOptions &quad, std::optional<OperatorType> asked,
-                 const SceneRunOptions &scene, const ContactRunOptions &contact)
+                 const SceneRunOptions &scene, const InteriorRunOptions &interior, const ContactRunOptions &contact)
 {
   std::map<std::string, double> seconds; // per phase, for the result file
   const Timer                   timer;
@@ -221,7 +217,6 @@ void run_problem(MPI_Comm comm, const std::string &problem_file, const ProblemOv
   run_collectively(comm, [&] {
     fault_point("Operator");
     built.emplace(*s.disc, s.material, quad);
-    check_interior_points(*built, s.spec);
   });
   const BemOperator &op = *built;
   seconds["setup"] += timer.seconds();
@@ -248,14 +243,14 @@ void run_problem(MPI_Comm comm, const std::string &problem_file, const ProblemOv
   HssbemCallThrow(PetscPrintf(comm, "hssbem: solved with %s/%s%s%s: %" PetscInt_FMT " iterations, relative residual %.3e\n", info.ksp_type.c_str(), info.pc_type.c_str(),
                               info.solver_type.empty() ? "" : "/", info.solver_type.c_str(), info.iterations, (double)info.residual));
   check_unused_options(comm, false);
-  write_collectively(comm, s, op, xall, info, type, seconds);
+  write_collectively(comm, s, xall, info, type, interior, seconds);
 }
 
 void run_driver(MPI_Comm comm)
 {
   const AppOptions opts = read_app_options(comm);
   if (!opts.problem.empty()) {
-    run_problem(comm, opts.problem, opts.overrides, opts.quad, opts.operator_type, opts.scene, opts.contact);
+    run_problem(comm, opts.problem, opts.overrides, opts.quad, opts.operator_type, opts.scene, opts.interior, opts.contact);
     return;
   }
   if (!opts.help) throw std::runtime_error("no problem file; give -problem FILE.json (-help lists the options)");

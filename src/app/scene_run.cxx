@@ -2,6 +2,7 @@
 // (scene/dense_scene.hpp) and streamed into one result file (io/ FrameWriter). See run.hpp.
 #include "hssbem/app/run.hpp"
 #include "result_base.hpp"
+#include "stress_post.hpp"
 
 #include "hssbem/app/petsc_call.hpp"
 #include "hssbem/bem/post.hpp"
@@ -108,6 +109,8 @@ void run_scene(MPI_Comm comm, const ProblemSetup &s, const BemOperator &op, std:
       f.displacement            = vertex_average(*s.disc, sol.u);
       f.traction                = vertex_average(*s.disc, sol.t);
       f.displacement_prescribed = vertex_displacement_prescribed(*s.disc, nc);
+      std::vector<NodeStress> nodes;
+      f.stress                  = surface_stress_fields(s, sol, nodes, false);
       f.attributes_real         = {{"seconds", rep.seconds}, {"predicted_seconds", rep.predicted}};
       f.attributes_int          = {{"switched_unknowns", rep.switched}, {"changed_unknowns", rep.changed}, {"iterations", rep.iterations}, {"capacitance_rebuilt", rep.rebuilt}};
       f.attributes_str          = {{"strategy", scene_strategy_name(rep.strategy)}};

@@ -1,6 +1,8 @@
 // Proxy-sphere skeletonization of K = [H, G(, Gn)], one tree level at a time (see skeletonizer.hpp).
 #include "hssbem/compress/skeletonizer.hpp"
 
+#include "hssbem/compress/compression.hpp"
+
 #include "hssbem/core/blas_threads.hpp"
 #include "hssbem/core/interpolative.hpp"
 #include "hssbem/core/timer.hpp"
@@ -34,18 +36,6 @@ int max_threads()
 #else
   return 1;
 #endif
-}
-
-/// n nearly uniform points on the unit sphere (Fibonacci lattice).
-std::vector<Vec3> unit_sphere_points(int n)
-{
-  std::vector<Vec3> p(n);
-  const double golden = M_PI * (3.0 - std::sqrt(5.0));
-  for (int i = 0; i < n; ++i) {
-    const double z = 1.0 - (2.0 * i + 1.0) / n, r = std::sqrt(std::max(0.0, 1.0 - z * z)), phi = golden * i;
-    p[i] = {r * std::cos(phi), r * std::sin(phi), z};
-  }
-  return p;
 }
 
 /// A skeleton chosen from candidates: local indices and the interpolation matrix (candidates × k).

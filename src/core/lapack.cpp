@@ -50,6 +50,18 @@ void gemm(char transa, char transb, int m, int n, int k, double alpha, const dou
   dgemm_(&transa, &transb, &m, &n, &k, &alpha, a, &lda, b, &ldb, &beta, c, &ldc);
 }
 
+int gesvd(int m, int n, double *a, int lda, double *s, double *u, int ldu, double *vt, int ldvt)
+{
+  int info = 0, lwork = -1;
+  double query = 0;
+  dgesvd_("S", "S", &m, &n, a, &lda, s, u, &ldu, vt, &ldvt, &query, &lwork, &info);
+  if (info != 0) return info;
+  lwork = std::max(1, static_cast<int>(query + 0.5));
+  std::vector<double> work(static_cast<std::size_t>(lwork));
+  dgesvd_("S", "S", &m, &n, a, &lda, s, u, &ldu, vt, &ldvt, work.data(), &lwork, &info);
+  return info;
+}
+
 int syev(int n, double *a, double *w)
 {
   int info = 0, lwork = -1;

@@ -183,7 +183,17 @@ void check_same_shape(MPI_Comm comm, const std::string &path, const ResultData &
       {"/fields/traction_corner", d.traction_corner.size()},
       {"/bc/displacement_prescribed", d.displacement_prescribed.size()},
       {"/interior/points", d.interior_points.size()},
-      {"/interior/displacement", d.interior_displacement.size()}};
+      {"/interior/displacement", d.interior_displacement.size()},
+      {"/fields/stress", d.stress.stress.size()},
+      {"/fields/von_mises", d.stress.von_mises.size()},
+      {"/fields/principal_stress", d.stress.principal.size()},
+      {"/fields/stress_corner", d.stress.corner.size()},
+      {"/interior/stress", d.interior_stress.size()},
+      {"/interior/von_mises", d.interior_von_mises.size()},
+      {"/interior/grid/displacement", d.interior_grid.displacement.size()},
+      {"/interior/grid/stress", d.interior_grid.stress.size()},
+      {"/interior/grid/von_mises", d.interior_grid.von_mises.size()},
+      {"/interior/grid/inside", d.interior_grid.inside.size()}};
   std::vector<long long> low, high;
   for (const auto &s : sizes)
     low.push_back(static_cast<long long>(s.second)), high.push_back(-low.back());

@@ -34,6 +34,7 @@ void check_frame(const std::string &path, std::size_t expected, std::size_t i, c
   detail::check_size(path, g + "/traction", f.traction.size(), nv, "vertex", true);
   detail::check_size(path, g + "/displacement_prescribed", f.displacement_prescribed.size(), nv,
                      "vertex", false);
+  detail::check_stress_sizes(path, g, f.stress, nv, 0); // no stress_corner in frames
   detail::check_contact(path, g + "/contact", f.contact, nv);
 }
 
@@ -45,6 +46,7 @@ void write_frame(H5Writer &w, std::size_t i, const FrameData &f)
   detail::write_vec3s(w, g, name, "traction", f.traction);
   if (!f.displacement_prescribed.empty())
     detail::write_mask(w, g, name, "displacement_prescribed", f.displacement_prescribed);
+  detail::write_stress(w, g, name, f.stress);
   if (f.contact.present())
     detail::write_contact(w, name + "/contact", f.contact);
   detail::write_attributes(w, g.get(), name, {f.attributes_real, f.attributes_int, f.attributes_str});
@@ -66,6 +68,7 @@ struct FrameWriter::Impl {
   std::map<std::string, double> base_timings;
   std::size_t num_vertices;
   std::vector<bool> has_mask; ///< one entry per frame appended: displacement_prescribed written
+  std::vector<StressFields> stress_shape; ///< per frame: which stress fields it holds (sizes only, no values)
   std::vector<bool> has_contact; ///< one entry per frame appended: contact written
   bool broken = false, committed = false;
   // Destroyed in reverse order: the HDF5 file is closed before its temporary name is removed.
@@ -111,6 +114,8 @@ std::string FrameWriter::Impl::sidecar() const
     if (has_mask[i])
       fields.push_back(detail::node_vectors("displacement_prescribed", g + "/displacement_prescribed",
                                             num_vertices, detail::XdmfNumber::int8));
+    const auto stress = detail::stress_attributes(g, stress_shape[i], num_vertices);
+    fields.insert(fields.end(), stress.begin(), stress.end());
     if (has_contact[i])
       for (const detail::XdmfAttribute &a : detail::contact_attributes(g + "/contact", num_vertices))
         fields.push_back(a);
@@ -144,6 +149,11 @@ void FrameWriter::append(std::size_t i, const FrameData &frame)
   write_frame(w, i, frame);
   w.flush();
   m_impl->has_mask.push_back(!frame.displacement_prescribed.empty());
+  StressFields shape; // one entry each where the frame has the field: enough for the sidecar
+  if (!frame.stress.stress.empty()) shape.stress.resize(1);
+  if (!frame.stress.von_mises.empty()) shape.von_mises.resize(1);
+  if (!frame.stress.principal.empty()) shape.principal.resize(1);
+  m_impl->stress_shape.push_back(std::move(shape));
   m_impl->has_contact.push_back(frame.contact.present());
   m_impl->broken = false;
 }

@@ -56,6 +56,7 @@ void write_fields(H5Writer &w, const ResultData &d)
     w.dataset(g.get(), "/fields", "traction_corner",
               doubles(flat, {count(d.traction_corner.size()), 3, 3}));
   }
+  write_stress(w, g, "/fields", d.stress);
   w.end_group(g, "/fields");
 }
 
@@ -77,12 +78,15 @@ void write_reactions(H5Writer &w, const std::map<std::string, Vec3> &reactions)
 
 void write_interior(H5Writer &w, const ResultData &d)
 {
-  if (d.interior_points.empty())
+  if (d.interior_points.empty() && d.interior_grid.empty())
     return;
   H5Handle g = w.group("/interior");
-  write_vec3s(w, g, "/interior", "points", d.interior_points);
+  if (!d.interior_points.empty())
+    write_vec3s(w, g, "/interior", "points", d.interior_points);
   if (!d.interior_displacement.empty())
     write_vec3s(w, g, "/interior", "displacement", d.interior_displacement);
+  write_interior_stress(w, g, d);
+  write_interior_grid(w, d.interior_grid);
   w.end_group(g, "/interior");
 }
 
@@ -171,6 +175,11 @@ XdmfGrid mesh_grid(const std::string &path, const ResultData &d)
   return grid;
 }
 
+std::string result_sidecar(const std::string &path, const ResultData &d)
+{
+  return xdmf_document(result_grid(path, d), interior_grid_view(fs::path(path).filename().string(), d.interior_grid));
+}
+
 XdmfGrid result_grid(const std::string &path, const ResultData &d)
 {
   const std::size_t nv = d.vertices.size();
@@ -182,6 +191,8 @@ XdmfGrid result_grid(const std::string &path, const ResultData &d)
   if (!d.displacement_prescribed.empty())
     fields.push_back(node_vectors("displacement_prescribed", "/bc/displacement_prescribed", nv,
                                   XdmfNumber::int8));
+  const std::vector<XdmfAttribute> stress = stress_attributes("/fields", d.stress, nv);
+  fields.insert(fields.end(), stress.begin(), stress.end());
   if (d.contact.present())
     for (const XdmfAttribute &a : contact_attributes("/contact", nv))
       fields.push_back(a);
@@ -230,6 +241,8 @@ void check_sizes(const std::string &path, const ResultData &d)
              false);
   check_size(path, "/interior/displacement", d.interior_displacement.size(),
              d.interior_points.size(), "interior point", false);
+  check_stress_sizes(path, "/fields", d.stress, nv, nt);
+  check_interior_stress(path, d);
 }
 
 /// A region name becomes an HDF5 link name, where '/' would nest and "." means the group.
@@ -335,7 +348,7 @@ void write_result_collectively(MPI_Comm comm, const std::string &path, const Res
   run_agreed(comm, [&] {
     if (root) {
       sync_file(h5_tmp, path);
-      write_text_file(xdmf_tmp, xdmf_document(result_grid(path, d)), path);
+      write_text_file(xdmf_tmp, result_sidecar(path, d), path);
     }
     fault_point("Write"); // tests: the temporary files are complete, nothing is renamed yet
   });
@@ -365,7 +378,7 @@ void write_result(const std::string &path, const ResultData &data)
   const std::string h5_tmp = files.add(path), xdmf_tmp = files.add(xdmf_path(path));
   write_h5(h5_tmp, path, data, metadata_of(data), MPI_COMM_NULL);
   sync_file(h5_tmp, path);
-  write_text_file(xdmf_tmp, xdmf_document(result_grid(path, data)), path);
+  write_text_file(xdmf_tmp, result_sidecar(path, data), path);
   fault_point("Write"); // tests: the temporary files are complete, nothing is renamed yet
   // The h5 goes first: a sidecar must never point at a file that is not there yet.
   files.commit();

@@ -56,4 +56,25 @@ XdmfGrid mesh_grid(const std::string &path, const ResultData &d);
 /// written, so the sidecar never points at a missing one.
 XdmfGrid result_grid(const std::string &path, const ResultData &d);
 
+/// write_result's sidecar: result_grid, and the interior grid's rectilinear grid if any.
+std::string result_sidecar(const std::string &path, const ResultData &d);
+
+// --- the stress part of the layout (stress_output.cpp) -------------------------------------
+
+/// <group>/{stress, von_mises, principal_stress, stress_corner}: those of f that are not empty.
+void write_stress(H5Writer &w, const H5Handle &g, const std::string &group, const StressFields &f);
+/// /interior/{stress, von_mises} into the open group /interior (g).
+void write_interior_stress(H5Writer &w, const H5Handle &g, const ResultData &d);
+/// /interior/grid (x, y, z, displacement, stress, von_mises, inside; origin, spacing and points
+/// as attributes), when there is a grid; /interior must exist.
+void write_interior_grid(H5Writer &w, const InteriorGridData &g);
+/// Each non-empty field of f has one entry per vertex (nv) or triangle (nt).
+void check_stress_sizes(const std::string &path, const std::string &group, const StressFields &f, std::size_t nv, std::size_t nt);
+/// One stress per interior point, and a consistent grid.
+void check_interior_stress(const std::string &path, const ResultData &d);
+/// The sidecar's attributes of f in `group`: von_mises, principal_stress and stress_xx ... stress_xy.
+std::vector<XdmfAttribute> stress_attributes(const std::string &group, const StressFields &f, std::size_t nv);
+/// The sidecar's rectilinear grid of the interior grid (none when empty).
+std::vector<XdmfRectGrid> interior_grid_view(const std::string &h5_name, const InteriorGridData &g);
+
 } // namespace hssbem::detail

@@ -32,6 +32,21 @@ std::string dimensions(const std::vector<std::size_t> &dims)
 void put_data_item(std::ostream &out, const std::string &h5_name, const XdmfDataset &d,
                    const std::string &pad)
 {
+  if (d.column >= 0) { // one column of the last dimension: a HyperSlab of the whole dataset
+    std::vector<std::size_t> start(d.dims.size(), 0), stride(d.dims.size(), 1), count = d.dims;
+    start.back() = static_cast<std::size_t>(d.column);
+    count.back() = 1;
+    XdmfDataset whole = d;
+    whole.column = -1;
+    out << pad << R"(<DataItem ItemType="HyperSlab" Dimensions=")" << dimensions(count) << "\" "
+        << number_type(d.number) << ">\n"
+        << pad << R"(  <DataItem Dimensions="3 )" << d.dims.size() << R"(" Format="XML">)"
+        << dimensions(start) << " " << dimensions(stride) << " " << dimensions(count)
+        << "</DataItem>\n";
+    put_data_item(out, h5_name, whole, pad + "  ");
+    out << pad << "</DataItem>\n";
+    return;
+  }
   out << pad << R"(<DataItem Format="HDF" Dimensions=")" << dimensions(d.dims) << "\" "
       << number_type(d.number) << ">" << xml_escape(h5_name) << ":" << xml_escape(d.path)
       << "</DataItem>\n";
@@ -66,6 +81,22 @@ void put_grid(std::ostream &out, const XdmfGrid &grid, const std::string &pad)
   out << pad << "</Grid>\n";
 }
 
+/// A rectilinear grid whose <Grid> line is indented by `pad`.
+void put_rect_grid(std::ostream &out, const XdmfRectGrid &grid, const std::string &pad)
+{
+  const std::string in = pad + "  ";
+  out << pad << "<Grid Name=\"" << xml_escape(grid.name) << "\" GridType=\"Uniform\">\n";
+  out << in << R"(<Topology TopologyType="3DRectMesh" Dimensions=")" << grid.points[2] << " "
+      << grid.points[1] << " " << grid.points[0] << "\"/>\n";
+  out << in << "<Geometry GeometryType=\"VXVYVZ\">\n";
+  for (int a = 0; a < 3; ++a)
+    put_data_item(out, grid.h5_name, {grid.axes[a], {grid.points[a]}, XdmfNumber::float64}, in + "  ");
+  out << in << "</Geometry>\n";
+  for (const XdmfAttribute &a : grid.attributes)
+    put_attribute(out, grid.h5_name, a, in);
+  out << pad << "</Grid>\n";
+}
+
 const char *k_head = "<?xml version=\"1.0\" ?>\n"
                      "<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n"
                      "<Xdmf Version=\"3.0\" xmlns:xi=\"http://www.w3.org/2001/XInclude\">\n"
@@ -92,11 +123,13 @@ std::string xml_escape(const std::string &text)
   return out;
 }
 
-std::string xdmf_document(const XdmfGrid &grid)
+std::string xdmf_document(const XdmfGrid &grid, const std::vector<XdmfRectGrid> &rect)
 {
   std::ostringstream out;
   out << k_head;
   put_grid(out, grid, "    ");
+  for (const XdmfRectGrid &r : rect)
+    put_rect_grid(out, r, "    ");
   out << k_tail;
   return out.str();
 }

@@ -2,6 +2,7 @@
 /// Private to the result writer: the XDMF sidecar text that points ParaView into the HDF5 file.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <optional>
 #include <string>
@@ -17,6 +18,7 @@ struct XdmfDataset {
   std::string path;                ///< absolute path inside the HDF5 file, e.g. /mesh/vertices
   std::vector<std::size_t> dims;   ///< dataset shape, slowest dimension first
   XdmfNumber number = XdmfNumber::float64;
+  int column = -1;                 ///< ≥ 0: only this column of the last dimension (a HyperSlab)
 };
 
 /// A field shown in ParaView: AttributeType is "Scalar" or "Vector", Center "Node" or "Cell".
@@ -37,8 +39,20 @@ struct XdmfGrid {
   std::optional<double> time;   ///< its Time Value, for a grid in a temporal collection
 };
 
-/// The XDMF 3 document for `grid`: one Uniform grid, Triangle topology, XYZ geometry.
-std::string xdmf_document(const XdmfGrid &grid);
+/// A rectilinear grid of points (3DRectMesh topology, VXVYVZ geometry: the coordinates along
+/// each axis from HDF5 datasets), whose attributes are node-centred with dimensions
+/// (points z, points y, points x, components).
+struct XdmfRectGrid {
+  std::string h5_name;
+  std::string name;
+  std::array<std::size_t, 3> points{}; ///< along x, y, z
+  std::array<std::string, 3> axes;     ///< datasets of the coordinates along x, y, z
+  std::vector<XdmfAttribute> attributes;
+};
+
+/// The XDMF 3 document for `grid`: one Uniform grid, Triangle topology, XYZ geometry; and after
+/// it the rectilinear grids `rect`, if any.
+std::string xdmf_document(const XdmfGrid &grid, const std::vector<XdmfRectGrid> &rect = {});
 
 /// The XDMF 3 document of a sequence: one Collection grid of CollectionType "Temporal" holding
 /// `steps` (each a Uniform grid as in xdmf_document, with its Time), which ParaView plays as

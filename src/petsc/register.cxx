@@ -11,7 +11,7 @@
 #include <unistd.h>
 
 PetscClassId  HSSBEM_CLASSID;
-PetscLogEvent BEM_Mesh, BEM_Assembly, BEM_Partition, BEM_Solve, BEM_Post, BEM_Interior, BEM_Output;
+PetscLogEvent BEM_Mesh, BEM_Assembly, BEM_Partition, BEM_Solve, BEM_Post, BEM_Stress, BEM_Interior, BEM_Output;
 PetscLogEvent HSS_Tree, HSS_Compress, HSS_NearField, HSS_Truncate, HSS_Factor, HSS_Solve, HSS_MatMult, HSS_FactorTop, HSS_SolveTop;
 PetscLogEvent H2_Tree, H2_Compress, H2_NearField, H2_MatMult, H2F_Factor, H2F_Sketch, H2F_Eliminate, H2F_Merge, H2F_Top, H2F_Solve;
 PetscLogEvent SCN_Setup, SCN_Update, SCN_Apply, SCN_Refactor, SCN_Krylov, SCN_Frame;
@@ -146,6 +146,7 @@ PetscErrorCode HssbemInitializePackage(void)
   PetscCall(PetscLogEventRegister(" BEMPartition", HSSBEM_CLASSID, &BEM_Partition));
   PetscCall(PetscLogEventRegister("BEMSolve", HSSBEM_CLASSID, &BEM_Solve));
   PetscCall(PetscLogEventRegister("BEMPost", HSSBEM_CLASSID, &BEM_Post));
+  PetscCall(PetscLogEventRegister(" BEMStress", HSSBEM_CLASSID, &BEM_Stress));
   PetscCall(PetscLogEventRegister(" BEMInterior", HSSBEM_CLASSID, &BEM_Interior));
   PetscCall(PetscLogEventRegister("BEMOutput", HSSBEM_CLASSID, &BEM_Output));
   PetscCall(PetscLogEventRegister("HSSTree", HSSBEM_CLASSID, &HSS_Tree));

@@ -344,6 +344,56 @@ json parse_json(const std::string &text, const Where &w)
   }
 }
 
+/// A count of cells: an integer from 1 to max.
+int read_cells(const json &j, const Where &w)
+{
+  if (!j.is_number_integer())
+    w.fail(std::string("expected a whole number of cells, got ") + (j.is_number() ? j.dump() : j.type_name()));
+  if (j.is_number_unsigned() && j.get<std::uint64_t>() >= 1 && j.get<std::uint64_t>() <= 100000)
+    return static_cast<int>(j.get<std::uint64_t>());
+  w.fail("the number of cells must lie between 1 and 100000, got " + j.dump());
+}
+
+InteriorGrid read_grid(const json &j, const Where &w)
+{
+  check_keys(j, w, {"box", "cells"});
+  if (!j.contains("box") || !j.contains("cells"))
+    w.fail("expected {\"box\": [[xlo, ylo, zlo], [xhi, yhi, zhi]], \"cells\": [nx, ny, nz]}");
+  InteriorGrid g;
+  const json &box = j["box"], &cells = j["cells"];
+  if (!box.is_array() || box.size() != 2)
+    w.at("box").fail("expected [[xlo, ylo, zlo], [xhi, yhi, zhi]]");
+  g.lo = read_vec3(box[0], w.at("box").at(0));
+  g.hi = read_vec3(box[1], w.at("box").at(1));
+  for (int c = 0; c < 3; ++c)
+    if (!(g.lo[c] < g.hi[c]))
+      w.at("box").fail("the upper corner must exceed the lower corner in every component (component " + std::to_string(c) + ": " + box[0][c].dump() + " to " +
+                       box[1][c].dump() + ")");
+  if (!cells.is_array() || cells.size() != 3)
+    w.at("cells").fail("expected [nx, ny, nz], the number of cells along x, y and z");
+  for (std::size_t c = 0; c < 3; ++c) g.cells[c] = read_cells(cells[c], w.at("cells").at(c));
+  if (g.num_points() > max_grid_points)
+    w.fail("the grid has " + std::to_string(g.num_points()) + " points, more than " + std::to_string(max_grid_points));
+  return g;
+}
+
+/// "interior_points": a list of points, or {"points": [...], "grid": {...}} (either or both).
+void read_interior_points(const json &j, const Where &w, ProblemSpec &spec)
+{
+  if (j.is_array()) {
+    if (!j.empty())
+      spec.interior_points = read_vec3_list(j, w, false);
+    return;
+  }
+  check_keys(j, w, {"points", "grid"});
+  if (j.empty())
+    w.fail("expected a list of points [[x, y, z], ...] or {\"grid\": {...}} with or without \"points\"");
+  if (j.contains("points"))
+    spec.interior_points = read_vec3_list(j["points"], w.at("points"), false);
+  if (j.contains("grid"))
+    spec.interior_grid = read_grid(j["grid"], w.at("grid"));
+}
+
 void read_top_level(const json &j, const Where &w, ProblemSpec &spec)
 {
   check_keys(j, w, {"mesh", "material", "boundary", "frames", "interior_points", "output", "contact"});
@@ -355,8 +405,8 @@ void read_top_level(const json &j, const Where &w, ProblemSpec &spec)
   read_material(j["material"], w.at("material"), spec);
   if (j.contains("output"))
     spec.output = read_string(j["output"], w.at("output"));
-  if (j.contains("interior_points") && !(j["interior_points"].is_array() && j["interior_points"].empty()))
-    spec.interior_points = read_vec3_list(j["interior_points"], w.at("interior_points"), false);
+  if (j.contains("interior_points"))
+    read_interior_points(j["interior_points"], w.at("interior_points"), spec);
 }
 
 /// A "boundary" list, the base one or a frame's: the same grammar for both.
@@ -535,6 +585,18 @@ ProblemSpec parse_problem(const std::string &json_text, const std::string &origi
     spec.contact = read_contact(j["contact"], top.at("contact"), spec.file);
   check_frame_obstacles(spec, top);
   return spec;
+}
+
+std::vector<Vec3> InteriorGrid::points() const
+{
+  const auto n = points_per_axis();
+  const Vec3 h = spacing();
+  std::vector<Vec3> p;
+  p.reserve(static_cast<std::size_t>(num_points()));
+  for (int k = 0; k < n[2]; ++k)
+    for (int j = 0; j < n[1]; ++j)
+      for (int i = 0; i < n[0]; ++i) p.push_back({lo[0] + i * h[0], lo[1] + j * h[1], lo[2] + k * h[2]});
+  return p;
 }
 
 ProblemSpec read_problem(const std::string &path)

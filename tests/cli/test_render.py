@@ -7,8 +7,9 @@ Usage:
 
 RenderTests write small synthetic result files with h5py (an octahedron, with and without three
 frames) into a temporary directory, run render.py on them and check the PNGs and the GIF (count,
-size, frames counted with Pillow), and that every error case exits non-zero with a message
-naming the fault and writes no picture. SceneTests run make_scenes.py on meshes/cardioid_832.msh
+size, frames counted with Pillow), the colour values of --field (per-vertex datasets looked up in
+/fields, /contact or a frame's group, vectors by their norm), and that every error case exits
+non-zero with a message naming the fault and writes no picture. SceneTests run make_scenes.py on meshes/cardioid_832.msh
 and check the problem file it writes (and the shipped scenes): frame count, well-formed per-vertex
 rules, the contact fraction, and a patch centre that moves from frame to frame.
 
@@ -41,8 +42,9 @@ OCTA_TRIANGLES = np.array([[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4],
                            [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]], dtype=np.int32)
 
 
-def write_result(path, frames=3, fields=True, frame_displacement=True):
-    """A result file shaped like the driver's: /mesh, /fields and, if frames > 0, /frames/<i>."""
+def write_result(path, frames=3, fields=True, frame_displacement=True, extra=None):
+    """A result file shaped like the driver's: /mesh, /fields and, if frames > 0, /frames/<i>;
+    `extra` maps further dataset paths to their values."""
     with h5py.File(path, "w") as f:
         f["/mesh/vertices"] = OCTA_VERTICES
         f["/mesh/triangles"] = OCTA_TRIANGLES
@@ -60,6 +62,8 @@ def write_result(path, frames=3, fields=True, frame_displacement=True):
             group.attrs["strategy"] = "refactor" if i == 0 else "update"
             group.attrs["iterations"] = np.int32(3)
         f.create_group("/timings").attrs["solve"] = 0.1
+        for name, value in (extra or {}).items():
+            f[name] = value
 
 
 def run_script(name, *args):
@@ -179,6 +183,84 @@ class RenderTests(TempDirTest):
     def test_frames_on_a_file_without_frames(self):
         write_result(self.path("r.h5"), frames=0)
         self.assertFails(self.render("r.h5", "--frames", "0"), r"no /frames group")
+
+    def test_field_von_mises_and_contact_fallback(self):
+        von_mises = np.arange(6, dtype=float)
+        write_result(self.path("r.h5"), frames=0,
+                     extra={"/fields/von_mises": von_mises, "/contact/pressure": 2 * von_mises})
+        r = self.render("r.h5", "--field", "von_mises")
+        self.assertEqual(r.returncode, 0, describe(r))
+        self.assertEqual(self.pictures(), ["fields_von_mises.png"])
+        self.assertPng("fields_von_mises.png")
+        r = self.render("r.h5", "--field", "pressure")  # not in /fields: /contact/pressure
+        self.assertEqual(r.returncode, 0, describe(r))
+        self.assertIn("contact_pressure.png", self.pictures())
+
+    def test_field_values_vectors_and_paths(self):
+        sys.path.insert(0, SCRIPTS)
+        import render
+        stress = np.zeros((6, 6))
+        stress[:, 2] = 3.0
+        stress[:, 3] = 4.0
+        extra = {"/fields/stress": stress, "/fields/von_mises": np.array([1, np.nan, 2, 3, 4, 5.0])}
+        write_result(self.path("r.h5"), frames=0, extra=extra)
+        _, _, frames = render.load_result(self.path("r.h5"), None, "stress")
+        self.assertEqual(frames[0].field, "/fields/stress")
+        np.testing.assert_allclose(frames[0].colour, 5.0)  # rows colour by their norm
+        _, _, frames = render.load_result(self.path("r.h5"), None, "/fields/von_mises")
+        np.testing.assert_allclose(frames[0].colour, [1, 0, 2, 3, 4, 5])  # NaN counts as 0
+        _, _, frames = render.load_result(self.path("r.h5"), None, None)
+        np.testing.assert_allclose(frames[0].colour, 0.01)  # default: |u|
+
+    def test_field_columns(self):
+        sys.path.insert(0, SCRIPTS)
+        import render
+        stress = np.tile(np.arange(6, dtype=float), (6, 1))  # column k holds k
+        principal = np.tile([3.0, 2.0, -1.0], (6, 1))
+        write_result(self.path("r.h5"), frames=0,
+                     extra={"/fields/stress": stress, "/fields/principal_stress": principal})
+        for spec, value in (("stress:xx", 0), ("stress:zz", 2), ("stress:yz", 3), ("stress:xy", 5),
+                            ("stress:4", 4), ("principal_stress:1", 3), ("principal_stress:3", -1),
+                            ("displacement", 0.01), ("displacement:z", 0.01 * OCTA_VERTICES[:, 2])):
+            _, _, frames = render.load_result(self.path("r.h5"), None, spec)
+            np.testing.assert_allclose(frames[0].colour, value, err_msg=spec)
+        self.assertEqual(frames[0].field, "/fields/displacement:z")
+        for spec, pattern in (("stress:zx", r"/fields/stress has 6 columns: no column 'zx' \(a "
+                               "number from 0, or xx"),
+                              ("principal_stress:0", r"r\.h5: /fields/principal_stress: no column "
+                               "'0' \(1, 2 or 3"),
+                              ("stress:6", r"no column '6'"),
+                              ("displacement:xx", r"has 3 columns: no column 'xx'")):
+            with self.assertRaisesRegex(render.RenderError, pattern):
+                render.load_result(self.path("r.h5"), None, spec)
+        r = self.render("r.h5", "--field", "stress:zz")
+        self.assertEqual(r.returncode, 0, describe(r))
+        self.assertEqual(self.pictures(), ["fields_stress_zz.png"])
+
+    def test_field_in_frames(self):
+        extra = {"/frames/%d/von_mises" % i: np.full(6, float(i)) for i in range(3)}
+        extra.update({"/frames/%d/contact/pressure" % i: np.full(6, 2.0 * i) for i in range(3)})
+        write_result(self.path("r.h5"), extra=extra)
+        sys.path.insert(0, SCRIPTS)
+        import render
+        _, _, frames = render.load_result(self.path("r.h5"), None, "pressure")
+        self.assertEqual([f.field for f in frames], ["/frames/%d/contact/pressure" % i for i in range(3)])
+        self.assertEqual(frames[2].colour[0], 4.0)
+        r = self.render("r.h5", "--field", "von_mises", "--gif", self.path("a.gif"))
+        self.assertEqual(r.returncode, 0, describe(r))
+        self.assertEqual(self.pictures(), ["frame_0000.png", "frame_0001.png", "frame_0002.png"])
+        self.assertGif(self.path("a.gif"), 3)
+
+    def test_field_errors(self):
+        write_result(self.path("r.h5"), frames=0, extra={"/fields/bad": np.ones(4)})
+        self.assertFails(self.render("r.h5", "--field", "nope"),
+                         r"r\.h5: no dataset /fields/nope or /contact/nope")
+        self.assertFails(self.render("r.h5", "--field", "bad"),
+                         r"/fields/bad has shape \(4,\), expected \(6,\) or \(6, k\)")
+        self.assertFails(self.render("r.h5", "--field", "/no/such"), r"no dataset /no/such")
+        write_result(self.path("s.h5"))
+        self.assertFails(self.render("s.h5", "--field", "von_mises"),
+                         r"no dataset /frames/0/von_mises or /frames/0/contact/von_mises")
 
     def test_bad_arguments(self):
         write_result(self.path("r.h5"))

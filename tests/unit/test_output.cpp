@@ -783,3 +783,97 @@ TEST_F(OutputTest, FrameWriterRefusesInconsistentBaseBeforeAnyFileIsCreated)
   EXPECT_THROW(FrameWriter((dir_ / "missing" / "out.h5").string(), tetrahedron()), OutputError);
   EXPECT_TRUE(listing().empty());
 }
+
+// --- stress: surface fields, interior stress, the interior grid -------------------------------
+
+namespace {
+
+std::vector<Voigt> voigts(int field, std::size_t n)
+{
+  std::vector<Voigt> v(n);
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t k = 0; k < 6; ++k) v[i][k] = value(field, i, k);
+  return v;
+}
+
+std::vector<double> flat6(const std::vector<Voigt> &v)
+{
+  std::vector<double> out;
+  for (const Voigt &s : v) out.insert(out.end(), s.begin(), s.end());
+  return out;
+}
+
+/// The tetrahedron with stress fields, interior stress and a 3 x 2 x 2 grid.
+ResultData tetrahedron_with_stress()
+{
+  ResultData d = tetrahedron();
+  d.stress.stress = voigts(6, 4);
+  d.stress.von_mises = {1, 2, 3, 4};
+  d.stress.principal = vectors(7, 4);
+  d.stress.corner.resize(4);
+  for (std::size_t t = 0; t < 4; ++t) d.stress.corner[t] = {voigts(8, 3)[0], voigts(8, 3)[1], voigts(8, 3)[2]};
+  d.interior_stress = voigts(9, 2);
+  d.interior_von_mises = {5, 6};
+  InteriorGridData &g = d.interior_grid;
+  g.origin = {0.1, 0.2, 0.3};
+  g.spacing = {0.5, 0.25, 0.125};
+  g.points = {3, 2, 2};
+  g.displacement = vectors(10, 12);
+  g.stress = voigts(11, 12);
+  g.von_mises.assign(12, 7.0);
+  g.inside = {1, 1, 0, 1, 0, 1, 1, 1, 0, 0, 1, 1};
+  return d;
+}
+
+} // namespace
+
+TEST_F(OutputTest, StressAndGridDatasets)
+{
+  const ResultData d = tetrahedron_with_stress();
+  write_result(h5_, d);
+  Id file{H5Fopen(h5_.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose};
+  ASSERT_GE(file.id, 0);
+  const auto s = read_dataset<double>(file.id, "/fields/stress", H5T_NATIVE_DOUBLE);
+  EXPECT_EQ(s.dims, (std::vector<hsize_t>{4, 6}));
+  EXPECT_EQ(s.values, flat6(d.stress.stress));
+  EXPECT_EQ(read_dataset<double>(file.id, "/fields/von_mises", H5T_NATIVE_DOUBLE).values, d.stress.von_mises);
+  EXPECT_EQ(read_dataset<double>(file.id, "/fields/principal_stress", H5T_NATIVE_DOUBLE).values, flat(d.stress.principal));
+  EXPECT_EQ(read_dataset<double>(file.id, "/fields/stress_corner", H5T_NATIVE_DOUBLE).dims, (std::vector<hsize_t>{4, 3, 6}));
+  EXPECT_EQ(read_dataset<double>(file.id, "/interior/stress", H5T_NATIVE_DOUBLE).values, flat6(d.interior_stress));
+  EXPECT_EQ(read_dataset<double>(file.id, "/interior/von_mises", H5T_NATIVE_DOUBLE).values, d.interior_von_mises);
+  const auto gs = read_dataset<double>(file.id, "/interior/grid/stress", H5T_NATIVE_DOUBLE);
+  EXPECT_EQ(gs.dims, (std::vector<hsize_t>{2, 2, 3, 6})); // z, y, x, components
+  EXPECT_EQ(gs.values, flat6(d.interior_grid.stress));
+  EXPECT_EQ(read_dataset<double>(file.id, "/interior/grid/displacement", H5T_NATIVE_DOUBLE).dims, (std::vector<hsize_t>{2, 2, 3, 3}));
+  EXPECT_EQ(read_dataset<double>(file.id, "/interior/grid/y", H5T_NATIVE_DOUBLE).values, (std::vector<double>{0.2, 0.45}));
+  const auto inside = read_dataset<int>(file.id, "/interior/grid/inside", H5T_NATIVE_INT);
+  EXPECT_EQ(inside.type_size, 1u);
+  EXPECT_EQ(inside.values, d.interior_grid.inside);
+  Id grid{H5Gopen2(file.id, "/interior/grid", H5P_DEFAULT), H5Gclose};
+  EXPECT_EQ(read_attribute<double>(grid.id, "spacing_z", H5T_NATIVE_DOUBLE), 0.125);
+  EXPECT_EQ(read_attribute<long long>(grid.id, "points_x", H5T_NATIVE_LLONG), 3);
+  const std::string x = slurp(xdmf_);
+  EXPECT_NE(x.find(R"(<Grid Name="interior_grid" GridType="Uniform">)"), std::string::npos) << x;
+  EXPECT_NE(x.find(R"(<Topology TopologyType="3DRectMesh" Dimensions="2 2 3"/>)"), std::string::npos) << x;
+  EXPECT_NE(x.find(R"(<DataItem Dimensions="3 4" Format="XML">0 0 0 2 1 1 1 1 2 2 3 1</DataItem>)"), std::string::npos) << x; // stress_zz
+  EXPECT_NE(x.find(R"(<DataItem Dimensions="3 2" Format="XML">0 5 1 1 4 1</DataItem>)"), std::string::npos) << x; // surface stress_xy
+  EXPECT_EQ(occurrences(x, "<DataItem "), occurrences(x, "</DataItem>"));
+  EXPECT_EQ(occurrences(x, "<Grid "), occurrences(x, "</Grid>"));
+}
+
+TEST_F(OutputTest, InconsistentStressIsRejectedBeforeAnyFileIsCreated)
+{
+  ResultData a = tetrahedron_with_stress();
+  a.stress.von_mises.pop_back();
+  EXPECT_THROW(write_result(h5_, a), OutputError);
+  ResultData b = tetrahedron_with_stress();
+  b.interior_stress.pop_back();
+  EXPECT_THROW(write_result(h5_, b), OutputError);
+  ResultData c = tetrahedron_with_stress();
+  c.interior_grid.inside.pop_back();
+  EXPECT_THROW(write_result(h5_, c), OutputError);
+  ResultData e = tetrahedron_with_stress();
+  e.interior_grid.spacing[1] = 0;
+  EXPECT_THROW(write_result(h5_, e), OutputError);
+  EXPECT_TRUE(listing().empty());
+}

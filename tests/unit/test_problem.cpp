@@ -109,6 +109,48 @@ TEST(ProblemFile, TopLevelKeysAndPaths)
   EXPECT_TRUE(spec.rules.empty());
 }
 
+TEST(ProblemFile, InteriorGrid)
+{
+  const ProblemSpec spec = parse_problem(k_head + R"("interior_points": {"points": [[0.5, 0.5, 0.5]],
+      "grid": {"box": [[0, -1, 2], [1, 1, 3]], "cells": [2, 4, 1]}}})", "p.json");
+  ASSERT_EQ(spec.interior_points.size(), 1u);
+  ASSERT_TRUE(spec.interior_grid);
+  const InteriorGrid &g = *spec.interior_grid;
+  EXPECT_EQ(g.num_points(), 3 * 5 * 2);
+  EXPECT_EQ(g.spacing(), (Vec3{0.5, 0.5, 1.0}));
+  const std::vector<Vec3> p = g.points();
+  ASSERT_EQ(p.size(), 30u);
+  EXPECT_EQ(p[0], (Vec3{0, -1, 2}));
+  EXPECT_EQ(p[1], (Vec3{0.5, -1, 2})); // x fastest, then y, then z
+  EXPECT_EQ(p[3], (Vec3{0, -0.5, 2}));
+  EXPECT_EQ(p[29], (Vec3{1, 1, 3}));
+  const ProblemSpec only = parse_problem(k_head + R"("interior_points": {"grid": {"box": [[0, 0, 0], [1, 1, 1]], "cells": [1, 1, 1]}}})", "p.json");
+  EXPECT_TRUE(only.interior_points.empty());
+  EXPECT_EQ(only.interior_grid->num_points(), 8);
+  EXPECT_FALSE(parse_problem(k_head + R"("interior_points": []})", "p.json").interior_grid);
+}
+
+TEST(ProblemFile, MalformedGridsAreRefused)
+{
+  auto grid = [](const std::string &g) { return k_head + R"("interior_points": {"grid": )" + g + "}}"; };
+  expect_parse_error(grid(R"({"box": [[0, 0, 0], [1, 1, 1]], "cells": [4, 0, 4]})"), {"interior_points.grid.cells[1]", "between 1 and 100000, got 0"});
+  expect_parse_error(grid(R"({"box": [[0, 0, 0], [1, 1, 1]], "cells": [4, -2, 4]})"), {"interior_points.grid.cells[1]", "got -2"});
+  expect_parse_error(grid(R"({"box": [[0, 0, 1], [1, 1, 0]], "cells": [4, 4, 4]})"), {"interior_points.grid.box", "upper corner must exceed", "component 2"});
+  expect_parse_error(grid(R"({"box": [[0, 0, 0], [0, 1, 1]], "cells": [4, 4, 4]})"), {"interior_points.grid.box", "component 0"});
+  expect_parse_error(grid(R"({"box": [[0, 0, 0], [1, 1, 1]], "cells": [4, 4.5, 4]})"), {"cells[1]", "whole number of cells, got 4.5"});
+  expect_parse_error(grid(R"({"box": [[0, 0, 0], [1, 1, 1]], "cells": [4, "4", 4]})"), {"cells[1]", "got string"});
+  expect_parse_error(grid(R"({"box": [[0, 0, 0], [1, 1, 1]], "cells": 4})"), {"interior_points.grid.cells", "[nx, ny, nz]"});
+  expect_parse_error(grid(R"({"box": [[0, 0, 0]], "cells": [4, 4, 4]})"), {"interior_points.grid.box", "[[xlo, ylo, zlo], [xhi, yhi, zhi]]"});
+  expect_parse_error(grid(R"({"box": [[0, 0, 0], [1, 1, "a"]], "cells": [4, 4, 4]})"), {"interior_points.grid.box[1][2]"});
+  expect_parse_error(grid(R"({"cells": [4, 4, 4]})"), {"interior_points.grid", "\"box\""});
+  expect_parse_error(grid(R"({"box": [[0, 0, 0], [1, 1, 1]], "cells": [4, 4, 4], "size": 1})"), {"unknown key 'size'"});
+  expect_parse_error(grid(R"({"box": [[0, 0, 0], [1, 1, 1]], "cells": [400, 400, 400]})"), {"interior_points.grid", "64481201 points, more than 50000000"});
+  expect_parse_error(grid("[1, 2]"), {"interior_points.grid", "expected an object"});
+  expect_parse_error(k_head + R"("interior_points": {}})", {"interior_points", "expected a list of points"});
+  expect_parse_error(k_head + R"("interior_points": {"points": []}})", {"interior_points.points", "non-empty list"});
+  expect_parse_error(k_head + R"("interior_points": 3})", {"interior_points", "expected an object"});
+}
+
 TEST(ProblemFile, MeshPathResolution)
 {
   const std::string lame = R"(, "material": {"lambda": 5, "mu": 2}})";

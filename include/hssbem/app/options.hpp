@@ -4,7 +4,10 @@
 /// petsc/system.h), and the check that every option given was used.
 #pragma once
 
+#include "hssbem/bem/interior_stress.hpp"
+#include "hssbem/bem/near_surface.hpp"
 #include "hssbem/bem/quadrature.hpp"
+#include "hssbem/compress/interior_evaluation.hpp"
 #include "hssbem/core/operator_type.hpp"
 #include "hssbem/core/size_limits.hpp"
 #include "hssbem/problem/setup.hpp"
@@ -26,6 +29,13 @@ struct SceneRunOptions {
   bool monitor = false;                         ///< -scene_monitor: one line per frame
 };
 
+/// Displacement and stress inside the body (interior points and grids), -bem_interior_*.
+struct InteriorRunOptions {
+  InteriorQuadrature quad;        ///< -bem_interior_near_ratio, -bem_interior_max_depth
+  InteriorPlanOptions plan;       ///< -bem_interior_band
+  InteriorEvaluationOptions fast; ///< -bem_interior_equivalent_points, _source_leaf, _target_leaf, _direct
+};
+
 /// The options of a contact problem (a problem file with "contact"), -contact_*.
 struct ContactRunOptions {
   double tol = 1e-10;   ///< -contact_tol: relative tolerance of the gaps and of friction's Newton residual
@@ -41,6 +51,7 @@ struct AppOptions {
   std::optional<OperatorType> operator_type;      ///< -bem_mat_type: hss, h2 or dense; none: auto (the default, see choose_operator())
   QuadratureOptions quad;                         ///< -mat_bem_*
   SceneRunOptions scene;                          ///< -scene_*
+  InteriorRunOptions interior;                    ///< -bem_interior_*
   ContactRunOptions contact;                      ///< -contact_*
   bool help = false;                              ///< -help: list the options (PETSc prints each as it is read)
 };

@@ -34,7 +34,7 @@ void run_driver(MPI_Comm comm);
 /// once the problem's size is known, and the log line says so.
 /// A problem file with "frames" is a scene: see run_scene().
 void run_problem(MPI_Comm comm, const std::string &problem_file, const ProblemOverrides &overrides, const QuadratureOptions &quad, std::optional<OperatorType> type,
-                 const SceneRunOptions &scene = {}, const ContactRunOptions &contact = {});
+                 const SceneRunOptions &scene = {}, const InteriorRunOptions &interior = {}, const ContactRunOptions &contact = {});
 
 /// Solve a scene (s.spec.frames not empty) on rank 0 with the dense scene engine: the reference
 /// pattern (the base rules, or frame 0's when they do not hold the body) factored once, then

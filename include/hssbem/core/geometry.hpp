@@ -10,6 +10,8 @@ namespace hssbem {
 
 using Vec3 = std::array<double, 3>;
 using Mat3 = std::array<double, 9>; ///< row-major 3x3
+/// A symmetric 3x3 tensor (stress) in Voigt order: xx, yy, zz, yz, xz, xy.
+using Voigt = std::array<double, 6>;
 
 inline Vec3 operator+(const Vec3 &a, const Vec3 &b) { return {a[0] + b[0], a[1] + b[1], a[2] + b[2]}; }
 inline Vec3 operator-(const Vec3 &a, const Vec3 &b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }

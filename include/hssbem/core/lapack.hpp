@@ -9,6 +9,7 @@
 #pragma once
 
 extern "C" {
+void dgesvd_(const char *jobu, const char *jobvt, const int *m, const int *n, double *a, const int *lda, double *s, double *u, const int *ldu, double *vt, const int *ldvt, double *work, const int *lwork, int *info);
 void dsyev_(const char *jobz, const char *uplo, const int *n, double *a, const int *lda, double *w, double *work, const int *lwork, int *info);
 void dgesv_(const int *n, const int *nrhs, double *a, const int *lda, int *ipiv, double *b, const int *ldb, int *info);
 void dgeqp3_(const int *m, const int *n, double *a, const int *lda, int *jpvt, double *tau, double *work, const int *lwork, int *info);
@@ -37,6 +38,9 @@ namespace hssbem::lapack {
 
 /// Eigenvalues (ascending, in w) and eigenvectors (columns of a, column-major) of a symmetric n×n.
 int syev(int n, double *a, double *w);
+/// Thin SVD A = U diag(s) Vᵀ of the m×n matrix a (destroyed; column-major): s gets min(m, n)
+/// singular values (descending), u m × min(m, n), vt min(m, n) × n (dgesvd 'S', 'S'). Returns info.
+int gesvd(int m, int n, double *a, int lda, double *s, double *u, int ldu, double *vt, int ldvt);
 /// Solve A X = B in place (column-major); returns LAPACK's info.
 int gesv(int n, int nrhs, double *a, double *b);
 

@@ -23,6 +23,29 @@ public:
   using std::runtime_error::runtime_error;
 };
 
+/// The stress fields of the surface (a solve's, or one frame's), in mesh vertex order; Voigt
+/// order xx, yy, zz, yz, xz, xy. Empty: not written.
+struct StressFields {
+  std::vector<Voigt> stress;               ///< nv x 6 (mean over a vertex's dof nodes)
+  std::vector<double> von_mises;           ///< nv
+  std::vector<Vec3> principal;             ///< nv x 3, largest first
+  std::vector<std::array<Voigt, 3>> corner; ///< nt x 3 x 6: triangle t at its corner c (empty in frames)
+};
+
+/// Displacement and stress on a regular grid of interior points (/interior/grid): points per
+/// axis n = (nx, ny, nz), point (i, j, k) at origin + (i, j, k) * spacing, stored [k][j][i]
+/// (x fastest), NaN where the point lies outside the body.
+struct InteriorGridData {
+  Vec3 origin{}, spacing{};
+  std::array<int, 3> points{};
+  std::vector<Vec3> displacement;
+  std::vector<Voigt> stress;
+  std::vector<double> von_mises;
+  std::vector<int> inside; ///< 1 inside the body (or on its surface), 0 outside
+  std::size_t size() const { return static_cast<std::size_t>(points[0]) * points[1] * points[2]; }
+  bool empty() const { return displacement.empty(); }
+};
+
 /// A contact's results (contact/), in mesh vertex order: /contact (or /frames/<i>/contact).
 struct ContactData {
   std::vector<double> pressure;        ///< /contact/pressure (nv): normal contact traction, >= 0
@@ -48,6 +71,10 @@ struct ResultData {
   std::map<std::string, Vec3> reactions;            ///< /reactions/<region>: integral of traction
   std::vector<Vec3> interior_points;                ///< /interior/points
   std::vector<Vec3> interior_displacement;          ///< /interior/displacement
+  StressFields stress;                              ///< /fields/{stress, von_mises, principal_stress, stress_corner}
+  std::vector<Voigt> interior_stress;               ///< /interior/stress (m x 6)
+  std::vector<double> interior_von_mises;           ///< /interior/von_mises
+  InteriorGridData interior_grid;                   ///< /interior/grid/...
   std::map<std::string, double> attributes_real;    ///< root attributes (E, nu, residual, ...)
   std::map<std::string, long long> attributes_int;  ///< root attributes (iterations, ranks, ...)
   std::map<std::string, std::string> attributes_str;///< root attributes (solver, version, ...)
@@ -90,6 +117,7 @@ struct FrameData {
   std::vector<Vec3> displacement;                           ///< nv x 3, required
   std::vector<Vec3> traction;                               ///< nv x 3, required
   std::vector<std::array<bool, 3>> displacement_prescribed; ///< nv x 3 or empty (not written)
+  StressFields stress;                                      ///< stress, von_mises, principal_stress (nv each) or empty
   std::map<std::string, double> attributes_real;            ///< e.g. "seconds"
   std::map<std::string, long long> attributes_int;          ///< e.g. "iterations"
   std::map<std::string, std::string> attributes_str;        ///< e.g. "strategy"

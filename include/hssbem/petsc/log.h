@@ -6,7 +6,7 @@
 #include <petscsys.h>
 
 PETSC_EXTERN PetscClassId  HSSBEM_CLASSID;
-PETSC_EXTERN PetscLogEvent BEM_Mesh, BEM_Assembly, BEM_Partition, BEM_Solve, BEM_Post, BEM_Interior, BEM_Output;
+PETSC_EXTERN PetscLogEvent BEM_Mesh, BEM_Assembly, BEM_Partition, BEM_Solve, BEM_Post, BEM_Stress, BEM_Interior, BEM_Output;
 /* Phases of the engines (hssbem::Phase), reported through their phase hook, each event named after
    the format that does the work. HSS: tree, compression, near field, truncation, ULV
    factorization and solve, product; HSS_FactorTop and HSS_SolveTop: the distributed ULV's

@@ -74,6 +74,23 @@ struct ContactSpec {
   std::optional<Selector> where;         ///< "where": candidate vertices (default all)
 };
 
+/// A regular grid of interior points ("interior_points": {"grid": {"box": [[lo], [hi]], "cells":
+/// [nx, ny, nz]}}): cells[a] + 1 points along axis a from lo[a] to hi[a], numbered x fastest,
+/// then y, then z.
+struct InteriorGrid {
+  Vec3 lo{}, hi{};
+  std::array<int, 3> cells{};
+  /// Points per axis (cells + 1).
+  std::array<int, 3> points_per_axis() const { return {cells[0] + 1, cells[1] + 1, cells[2] + 1}; }
+  long long num_points() const { return 1LL * (cells[0] + 1) * (cells[1] + 1) * (cells[2] + 1); }
+  Vec3 spacing() const { return {(hi[0] - lo[0]) / cells[0], (hi[1] - lo[1]) / cells[1], (hi[2] - lo[2]) / cells[2]}; }
+  /// Every point, x fastest.
+  std::vector<Vec3> points() const;
+};
+
+/// The most points a grid may have (its fields take about 100 bytes per point).
+constexpr long long max_grid_points = 50'000'000;
+
 /// Parsed problem file, before it meets a mesh. Paths are resolved relative to the file.
 struct ProblemSpec {
   std::string file;            ///< problem file path (for messages)
@@ -82,7 +99,8 @@ struct ProblemSpec {
   std::vector<BoundaryRule> rules; ///< base rules ("boundary")
   std::vector<FrameSpec> frames;   ///< "frames" in file order; empty: an ordinary single solve
   ContactSpec contact;             ///< "contact"; contact.present false: none
-  std::vector<Vec3> interior_points;
+  std::vector<Vec3> interior_points;  ///< explicit points: each must lie inside the body
+  std::optional<InteriorGrid> interior_grid; ///< grid points: those outside the body are masked
   std::string output;          ///< may be empty
 };
 

@@ -1,0 +1,170 @@
+// Interior points: outside, on the surface, in the band along it, or deep (see near_surface.hpp).
+#include "hssbem/bem/near_surface.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace hssbem {
+
+namespace {
+
+/// A support point at depth s along the line must lie at least this fraction of s from the
+/// surface: its nearest surface is (nearly) the one the line starts from, so the line does not
+/// reach across a thin wall or towards another face.
+constexpr double support_clearance = 0.9;
+
+double longest_edge(const SurfaceMesh &mesh, int t)
+{
+  const auto &v = mesh.triangles[t];
+  const Vec3 &a = mesh.vertices[v[0]], &b = mesh.vertices[v[1]], &c = mesh.vertices[v[2]];
+  return std::sqrt(std::max({dot(b - a, b - a), dot(c - b, c - b), dot(a - c, a - c)}));
+}
+
+double max_edge(const SurfaceMesh &mesh)
+{
+  double h = 0;
+  for (int t = 0; t < mesh.num_triangles(); ++t) h = std::max(h, longest_edge(mesh, t));
+  return h;
+}
+
+/// Whether y is inside and at least `clearance` from the surface.
+bool clear_of_surface(const SurfaceLocator &locator, const Vec3 &y, double clearance)
+{
+  return locator.nearest(y).distance >= clearance && locator.inside(y);
+}
+
+} // namespace
+
+InteriorPlan::Recipe InteriorPlan::band_recipe(const SurfaceLocator &locator, const SurfaceMesh &mesh, const Vec3 &x, const SurfaceLocator::Nearest &n,
+                                               double delta)
+{
+  Recipe r;
+  r.kind = PointKind::Band;
+  r.triangle = n.triangle;
+  r.bary = n.bary;
+  const double d = n.distance;
+  const Vec3 dir = d > 0 ? (1.0 / d) * (x - n.point) : -1.0 * mesh.triangle_normal(n.triangle);
+  for (int halve = 0; halve < 3 && d < delta; ++halve, delta *= 0.5) {
+    const Vec3 x1 = n.point + delta * dir, x2 = n.point + (2 * delta) * dir;
+    if (!clear_of_surface(locator, x1, support_clearance * delta)) continue;
+    const double s = d / delta;
+    const int at = static_cast<int>(m_eval.size());
+    m_eval.push_back(x1);
+    r.eval[0] = at;
+    if (clear_of_surface(locator, x2, 2 * support_clearance * delta)) { // quadratic through 0, δ, 2δ
+      m_eval.push_back(x2);
+      r.eval[1] = at + 1;
+      r.w_surface = 0.5 * (s - 1) * (s - 2);
+      r.w[0] = s * (2 - s);
+      r.w[1] = 0.5 * s * (s - 1);
+    } else { // linear through 0, δ
+      r.w_surface = 1 - s;
+      r.w[0] = s;
+    }
+    return r;
+  }
+  r = Recipe{}; // no clear line: integrate where the point is
+  r.kind = PointKind::Deep;
+  r.eval[0] = static_cast<int>(m_eval.size());
+  r.w[0] = 1;
+  m_eval.push_back(x);
+  return r;
+}
+
+InteriorPlan::InteriorPlan(const SurfaceLocator &locator, const SurfaceMesh &mesh, const std::vector<Vec3> &points, const InteriorPlanOptions &o,
+                           const std::vector<signed char> *inside)
+  : m_recipe(points.size())
+{
+  const double on = o.on_surface * locator.size(), reach = std::max(on, o.band * max_edge(mesh));
+  for (std::size_t p = 0; p < points.size(); ++p) {
+    const Vec3 &x = points[p];
+    const SurfaceLocator::Nearest n = locator.nearest(x, reach * (1 + 1e-12));
+    Recipe &r = m_recipe[p];
+    if (n.triangle >= 0 && n.distance <= on) {
+      r.kind = PointKind::Surface, r.triangle = n.triangle, r.bary = n.bary, r.w_surface = 1;
+      continue;
+    }
+    if (inside && (*inside)[p] >= 0 ? (*inside)[p] == 0 : !locator.inside(x)) continue; // Outside
+    const double delta = n.triangle >= 0 ? o.band * longest_edge(mesh, n.triangle) : 0.0;
+    if (n.triangle >= 0 && n.distance < delta) {
+      r = band_recipe(locator, mesh, x, n, delta);
+      continue;
+    }
+    r.kind = PointKind::Deep, r.eval[0] = static_cast<int>(m_eval.size()), r.w[0] = 1;
+    m_eval.push_back(x);
+  }
+}
+
+namespace {
+
+/// Union-find over grid points.
+int find_root(std::vector<int> &parent, int i)
+{
+  while (parent[i] != i) i = parent[i] = parent[parent[i]];
+  return i;
+}
+
+} // namespace
+
+std::vector<signed char> grid_inside(const SurfaceLocator &locator, const Vec3 &origin, const Vec3 &spacing, const std::array<int, 3> &n)
+{
+  const long long total = 1LL * n[0] * n[1] * n[2];
+  const double step = std::max({spacing[0], spacing[1], spacing[2]}) * (1 + 1e-9);
+  auto point = [&](long long p) {
+    const long long i = p % n[0], j = (p / n[0]) % n[1], k = p / (1LL * n[0] * n[1]);
+    return Vec3{origin[0] + i * spacing[0], origin[1] + j * spacing[1], origin[2] + k * spacing[2]};
+  };
+  std::vector<signed char> side(static_cast<std::size_t>(total), -1);
+  std::vector<char> clear(static_cast<std::size_t>(total));
+#pragma omp parallel for schedule(dynamic, 256)
+  for (long long p = 0; p < total; ++p) {
+    const Vec3 x = point(p);
+    clear[p] = locator.nearest(x, step).triangle < 0;
+    if (!clear[p]) side[p] = locator.inside(x);
+  }
+  std::vector<int> parent(static_cast<std::size_t>(total));
+  for (long long p = 0; p < total; ++p) parent[p] = static_cast<int>(p);
+  const long long stride[3] = {1, n[0], 1LL * n[0] * n[1]};
+  for (long long p = 0; p < total; ++p) {
+    const long long idx[3] = {p % n[0], (p / n[0]) % n[1], p / stride[2]};
+    for (int a = 0; a < 3; ++a)
+      if (idx[a] + 1 < n[a] && (clear[p] || clear[p + stride[a]])) parent[find_root(parent, static_cast<int>(p))] = find_root(parent, static_cast<int>(p + stride[a]));
+  }
+  std::vector<signed char> root_side(static_cast<std::size_t>(total), -1);
+  for (long long p = 0; p < total; ++p)
+    if (side[p] >= 0) root_side[find_root(parent, static_cast<int>(p))] = side[p];
+  for (long long p = 0; p < total; ++p) {
+    if (side[p] >= 0) continue;
+    signed char &r = root_side[find_root(parent, static_cast<int>(p))];
+    if (r < 0) r = locator.inside(point(p)); // a component that never nears the surface
+    side[p] = r;
+  }
+  return side;
+}
+
+std::vector<FieldValue> InteriorPlan::finish(const std::vector<double> &values, const std::vector<std::array<Vec3, 3>> &corner_u,
+                                             const std::vector<std::array<Voigt, 3>> &corner_stress) const
+{
+  FieldValue none;
+  none.fill(std::numeric_limits<double>::quiet_NaN());
+  std::vector<FieldValue> out(m_recipe.size(), none);
+  for (std::size_t p = 0; p < m_recipe.size(); ++p) {
+    const Recipe &r = m_recipe[p];
+    if (r.kind == PointKind::Outside) continue;
+    FieldValue v{};
+    if (r.w_surface != 0)
+      for (int c = 0; c < 3; ++c) {
+        const double w = r.w_surface * r.bary[c];
+        for (int k = 0; k < 3; ++k) v[k] += w * corner_u[r.triangle][c][k];
+        for (int k = 0; k < 6; ++k) v[3 + k] += w * corner_stress[r.triangle][c][k];
+      }
+    for (int s = 0; s < 2; ++s)
+      if (r.eval[s] >= 0)
+        for (int k = 0; k < field_outputs; ++k) v[k] += r.w[s] * values[static_cast<std::size_t>(r.eval[s]) * field_outputs + k];
+    out[p] = v;
+  }
+  return out;
+}
+
+} // namespace hssbem

@@ -1,0 +1,148 @@
+// Nearest surface points and winding numbers through a bounding-ball tree (see surface_locator.hpp).
+#include "hssbem/bem/surface_locator.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace hssbem {
+
+namespace {
+
+/// Clusters beyond this many radii count through their dipole.
+constexpr double far_ratio = 4.0;
+
+std::vector<Vec3> centroids(const SurfaceMesh &mesh)
+{
+  std::vector<Vec3> c(mesh.triangles.size());
+  for (int t = 0; t < mesh.num_triangles(); ++t) {
+    const auto &v = mesh.triangles[t];
+    c[t] = (1.0 / 3) * (mesh.vertices[v[0]] + mesh.vertices[v[1]] + mesh.vertices[v[2]]);
+  }
+  return c;
+}
+
+/// Solid angle of triangle (a, b, c) seen from x, positive when x lies behind its normal.
+double solid_angle(const Vec3 &x, const Vec3 &pa, const Vec3 &pb, const Vec3 &pc)
+{
+  const Vec3 a = pa - x, b = pb - x, c = pc - x;
+  const double la = norm(a), lb = norm(b), lc = norm(c);
+  const double num = dot(a, cross(b, c));
+  const double den = la * lb * lc + dot(a, b) * lc + dot(a, c) * lb + dot(b, c) * la;
+  return 2.0 * std::atan2(num, den);
+}
+
+ClusterTreeOptions small_leaves()
+{
+  ClusterTreeOptions o;
+  o.leaf_size = 8;
+  o.refine_splits = false;
+  return o;
+}
+
+} // namespace
+
+Vec3 closest_point_on_triangle(const Vec3 &x, const Vec3 &a, const Vec3 &b, const Vec3 &c, Vec3 &bary)
+{
+  // Ericson, Real-Time Collision Detection §5.1.5: the Voronoi regions of corners, edges, face.
+  const Vec3 ab = b - a, ac = c - a, ap = x - a;
+  const double d1 = dot(ab, ap), d2 = dot(ac, ap);
+  if (d1 <= 0 && d2 <= 0) return bary = {1, 0, 0}, a;
+  const Vec3 bp = x - b;
+  const double d3 = dot(ab, bp), d4 = dot(ac, bp);
+  if (d3 >= 0 && d4 <= d3) return bary = {0, 1, 0}, b;
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) {
+    const double v = d1 / (d1 - d3);
+    return bary = {1 - v, v, 0}, a + v * ab;
+  }
+  const Vec3 cp = x - c;
+  const double d5 = dot(ab, cp), d6 = dot(ac, cp);
+  if (d6 >= 0 && d5 <= d6) return bary = {0, 0, 1}, c;
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) {
+    const double w = d2 / (d2 - d6);
+    return bary = {1 - w, 0, w}, a + w * ac;
+  }
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
+    const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+    return bary = {0, 1 - w, w}, b + w * (c - b);
+  }
+  const double denom = 1.0 / (va + vb + vc), v = vb * denom, w = vc * denom;
+  return bary = {1 - v - w, v, w}, a + v * ab + w * ac;
+}
+
+SurfaceLocator::SurfaceLocator(const SurfaceMesh &mesh) : m_mesh(&mesh), m_tree(centroids(mesh), small_leaves())
+{
+  Vec3 lo = mesh.vertices.empty() ? Vec3{} : mesh.vertices[0], hi = lo;
+  for (const auto &v : mesh.vertices)
+    for (int c = 0; c < 3; ++c) lo[c] = std::min(lo[c], v[c]), hi[c] = std::max(hi[c], v[c]);
+  m_size = norm(hi - lo);
+  m_ball.resize(m_tree.num_clusters());
+  const std::vector<int> &perm = m_tree.perm();
+  for (int k = 0; k < m_tree.num_clusters(); ++k) {
+    const Cluster &cl = m_tree.cluster(k);
+    Ball &b = m_ball[k];
+    double area = 0;
+    for (int p = cl.begin; p < cl.end; ++p) {
+      const int t = perm[p];
+      const auto &v = mesh.triangles[t];
+      const double A = mesh.triangle_area(t);
+      b.centre = b.centre + (A / 3) * (mesh.vertices[v[0]] + mesh.vertices[v[1]] + mesh.vertices[v[2]]);
+      b.dipole = b.dipole + A * mesh.triangle_normal(t);
+      area += A;
+    }
+    b.centre = (1.0 / area) * b.centre;
+    for (int p = cl.begin; p < cl.end; ++p)
+      for (int v : mesh.triangles[perm[p]]) b.radius = std::max(b.radius, norm(mesh.vertices[v] - b.centre));
+  }
+}
+
+void SurfaceLocator::nearest_in(int c, const Vec3 &x, Nearest &best) const
+{
+  if (norm(x - m_ball[c].centre) - m_ball[c].radius >= best.distance) return;
+  const Cluster &cl = m_tree.cluster(c);
+  if (cl.left < 0) {
+    for (int p = cl.begin; p < cl.end; ++p) {
+      const int t = m_tree.perm()[p];
+      const auto &v = m_mesh->triangles[t];
+      Vec3 bary;
+      const Vec3 q = closest_point_on_triangle(x, m_mesh->vertices[v[0]], m_mesh->vertices[v[1]], m_mesh->vertices[v[2]], bary);
+      const double d = norm(x - q);
+      if (d < best.distance) best = {t, q, bary, d};
+    }
+    return;
+  }
+  const double dl = norm(x - m_ball[cl.left].centre), dr = norm(x - m_ball[cl.right].centre);
+  nearest_in(dl <= dr ? cl.left : cl.right, x, best);
+  nearest_in(dl <= dr ? cl.right : cl.left, x, best);
+}
+
+SurfaceLocator::Nearest SurfaceLocator::nearest(const Vec3 &x, double limit) const
+{
+  Nearest best;
+  best.distance = limit;
+  nearest_in(0, x, best);
+  return best;
+}
+
+double SurfaceLocator::winding_in(int c, const Vec3 &x) const
+{
+  const Ball &b = m_ball[c];
+  const Vec3 d = b.centre - x;
+  const double r = norm(d);
+  if (r > far_ratio * b.radius) return dot(b.dipole, d) / (r * r * r);
+  const Cluster &cl = m_tree.cluster(c);
+  if (cl.left >= 0) return winding_in(cl.left, x) + winding_in(cl.right, x);
+  double sum = 0;
+  for (int p = cl.begin; p < cl.end; ++p) {
+    const auto &v = m_mesh->triangles[m_tree.perm()[p]];
+    sum += solid_angle(x, m_mesh->vertices[v[0]], m_mesh->vertices[v[1]], m_mesh->vertices[v[2]]);
+  }
+  return sum;
+}
+
+double SurfaceLocator::winding_number(const Vec3 &x) const { return winding_in(0, x) / (4.0 * M_PI); }
+
+} // namespace hssbem

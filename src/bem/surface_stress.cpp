@@ -1,0 +1,228 @@
+// The stress tensor at the dof nodes from the traction and the tangential gradient of the
+// displacement (see surface_stress.hpp).
+#include "hssbem/bem/surface_stress.hpp"
+
+#include "hssbem/core/lapack.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace hssbem {
+
+namespace {
+
+constexpr double nan_value = std::numeric_limits<double>::quiet_NaN();
+
+/// A unit vector orthogonal to n, and the third of the right-handed frame (e1, e2, n).
+void tangent_frame(const Vec3 &n, Vec3 &e1, Vec3 &e2)
+{
+  const Vec3 a = std::abs(n[0]) < 0.6 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
+  e1 = normalized(a - dot(a, n) * n);
+  e2 = cross(n, e1);
+}
+
+/// One neighbour of a node: its position in the tangent frame and its displacement minus the node's.
+struct Sample {
+  double xi, eta, w; ///< offset along e1, e2 and the normal
+  Vec3 du;
+};
+
+/// Least squares min ‖A X − B‖ by Householder QR, A m × k (column-major, m ≥ k), B m × 3; the
+/// solution in X (k × 3, column-major). False when A is numerically rank deficient.
+bool least_squares(std::vector<double> A, int m, int k, std::vector<double> B, double *X)
+{
+  for (int j = 0; j < k; ++j) {
+    double *a = &A[static_cast<std::size_t>(j) * m];
+    double s = 0;
+    for (int i = j; i < m; ++i) s += a[i] * a[i];
+    const double alpha = a[j] > 0 ? -std::sqrt(s) : std::sqrt(s);
+    if (std::abs(alpha) < 1e-10) return false; // columns are scaled to about unit size
+    a[j] -= alpha;
+    double vn = 0;
+    for (int i = j; i < m; ++i) vn += a[i] * a[i];
+    auto reflect = [&](double *c) {
+      double d = 0;
+      for (int i = j; i < m; ++i) d += a[i] * c[i];
+      d *= 2.0 / vn;
+      for (int i = j; i < m; ++i) c[i] -= d * a[i];
+    };
+    for (int c = j + 1; c < k; ++c) reflect(&A[static_cast<std::size_t>(c) * m]);
+    for (int c = 0; c < 3; ++c) reflect(&B[static_cast<std::size_t>(c) * m]);
+    a[j] = alpha; // R_jj; the reflector below the diagonal is no longer needed
+  }
+  for (int c = 0; c < 3; ++c)
+    for (int j = k - 1; j >= 0; --j) {
+      double s = B[static_cast<std::size_t>(c) * m + j];
+      for (int l = j + 1; l < k; ++l) s -= A[static_cast<std::size_t>(l) * m + j] * X[static_cast<std::size_t>(c) * k + l];
+      X[static_cast<std::size_t>(c) * k + j] = s / A[static_cast<std::size_t>(j) * m + j];
+    }
+  return true;
+}
+
+/// The corners of node i's triangles other than its own, in its tangent frame (each node once).
+std::vector<Sample> neighbour_samples(const Discretization &disc, int i, const std::vector<Vec3> &u, const Vec3 &e1, const Vec3 &e2, const Vec3 &n)
+{
+  std::vector<int> seen;
+  std::vector<Sample> out;
+  const Vec3 &x0 = disc.node_position(i);
+  for (const int *t = disc.support_begin(i); t != disc.support_end(i); ++t)
+    for (int c = 0; c < 3; ++c) {
+      const int j = disc.element_node(*t, c);
+      if (j == i || std::find(seen.begin(), seen.end(), j) != seen.end()) continue;
+      seen.push_back(j);
+      const Vec3 d = disc.node_position(j) - x0;
+      out.push_back({dot(d, e1), dot(d, e2), dot(d, n), u[j] - u[i]});
+    }
+  return out;
+}
+
+/// ∂u/∂e1 and ∂u/∂e2 at the node from its samples, each sample's change of u less w · dun (its
+/// normal offset times ∂u/∂n): quadratic least squares when `quadratic` and well posed, else
+/// linear. False when even the linear fit is not.
+bool fit_gradient(const std::vector<Sample> &s, bool quadratic, const Vec3 &dun, Vec3 &du1, Vec3 &du2)
+{
+  const int m = static_cast<int>(s.size());
+  double h = 0;
+  for (const Sample &p : s) h += std::sqrt(p.xi * p.xi + p.eta * p.eta);
+  if (m < 2 || !(h > 0)) return false;
+  h /= m; // scale: columns of about unit size
+  for (int k : {quadratic && m >= 6 ? 5 : 2, 2}) {
+    std::vector<double> A(static_cast<std::size_t>(m) * k), B(static_cast<std::size_t>(m) * 3), X(static_cast<std::size_t>(k) * 3);
+    for (int r = 0; r < m; ++r) {
+      const double a = s[r].xi / h, b = s[r].eta / h;
+      const double col[5] = {a, b, a * a, a * b, b * b};
+      for (int c = 0; c < k; ++c) A[static_cast<std::size_t>(c) * m + r] = col[c];
+      for (int c = 0; c < 3; ++c) B[static_cast<std::size_t>(c) * m + r] = s[r].du[c] - s[r].w * dun[c];
+    }
+    if (!least_squares(A, m, k, B, X.data())) continue;
+    for (int c = 0; c < 3; ++c) {
+      du1[c] = X[static_cast<std::size_t>(c) * k] / h;
+      du2[c] = X[static_cast<std::size_t>(c) * k + 1] / h;
+    }
+    return true;
+  }
+  return false;
+}
+
+/// σ and the displacement gradient from the traction t on the plane of normal n and the
+/// tangential derivatives du1 = ∂u/∂e1, du2 = ∂u/∂e2.
+NodeStress stress_from_surface(const Material &mat, const Vec3 &n, const Vec3 &e1, const Vec3 &e2, const Vec3 &t, const Vec3 &du1, const Vec3 &du2)
+{
+  const double lambda = mat.lambda(), mu = mat.mu();
+  const Vec3 frame[3] = {e1, e2, n};
+  double s[3][3];
+  const double e11 = dot(du1, e1), e22 = dot(du2, e2), e12 = 0.5 * (dot(du1, e2) + dot(du2, e1));
+  for (int k = 0; k < 3; ++k) s[2][k] = s[k][2] = dot(t, frame[k]);
+  const double e33 = (s[2][2] - lambda * (e11 + e22)) / (lambda + 2 * mu), tr = e11 + e22 + e33;
+  s[0][0] = lambda * tr + 2 * mu * e11;
+  s[1][1] = lambda * tr + 2 * mu * e22;
+  s[0][1] = s[1][0] = 2 * mu * e12;
+  // ∂u/∂n from σ_13 = μ (∂u_1/∂n + ∂u_n/∂e1), likewise for e2, and ε_33.
+  const Vec3 dun = (s[0][2] / mu - dot(du1, n)) * e1 + (s[1][2] / mu - dot(du2, n)) * e2 + e33 * n;
+  const Vec3 dloc[3] = {du1, du2, dun};
+  NodeStress out;
+  for (int v = 0; v < 6; ++v) {
+    const int i = voigt_row[v], j = voigt_col[v];
+    double sum = 0;
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) sum += frame[a][i] * s[a][b] * frame[b][j];
+    out.stress[v] = sum;
+  }
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      for (int a = 0; a < 3; ++a) out.gradient[3 * i + j] += dloc[a][i] * frame[a][j];
+  return out;
+}
+
+} // namespace
+
+std::array<double, 3> principal_stresses(const Voigt &s)
+{
+  double a[9] = {s[0], s[5], s[4], s[5], s[1], s[3], s[4], s[3], s[2]}, w[3];
+  if (!std::isfinite(s[0] + s[1] + s[2] + s[3] + s[4] + s[5]) || lapack::syev(3, a, w) != 0) return {nan_value, nan_value, nan_value};
+  return {w[2], w[1], w[0]};
+}
+
+Voigt hooke_stress(const Material &m, const Mat3 &G)
+{
+  const double tr = G[0] + G[4] + G[8];
+  Voigt s;
+  for (int v = 0; v < 6; ++v) {
+    const int i = voigt_row[v], j = voigt_col[v];
+    s[v] = m.mu() * (G[3 * i + j] + G[3 * j + i]) + (i == j ? m.lambda() * tr : 0.0);
+  }
+  return s;
+}
+
+std::vector<NodeStress> node_stresses(const Discretization &disc, const Material &material, const std::vector<Vec3> &u, const std::vector<Vec3> &t)
+{
+  std::vector<NodeStress> out(disc.num_nodes());
+  for (int i = 0; i < disc.num_nodes(); ++i) {
+    const DofNode &node = disc.node(i);
+    const Vec3 &n = node.normal;
+    Vec3 e1, e2, du1{}, du2{}, dun{};
+    tangent_frame(n, e1, e2);
+    const std::vector<Sample> samples = neighbour_samples(disc, i, u, e1, e2, n);
+    const bool smooth = disc.node_count(node.vertex) == 1;
+    // The neighbours of a curved surface lie off the tangent plane by w = O(h²): their change of
+    // u holds w ∂u/∂n, which the traction gives once the tangential gradient is known: a fixed
+    // point that gains a factor ~h/R a round and makes a linear field exact on any surface.
+    for (int round = 0; round < 10; ++round) {
+      const Vec3 previous = dun;
+      if (!fit_gradient(samples, smooth, dun, du1, du2)) {
+        out[i].stress.fill(nan_value);
+        out[i].gradient.fill(nan_value);
+        break;
+      }
+      out[i] = stress_from_surface(material, n, e1, e2, t[i], du1, du2);
+      const Mat3 &G = out[i].gradient;
+      for (int r = 0; r < 3; ++r) dun[r] = G[3 * r] * n[0] + G[3 * r + 1] * n[1] + G[3 * r + 2] * n[2];
+      if (norm(dun - previous) <= 1e-14 * (norm(dun) + norm(du1) + norm(du2))) break;
+    }
+  }
+  return out;
+}
+
+std::vector<Voigt> vertex_stress(const Discretization &disc, const std::vector<NodeStress> &nodes)
+{
+  Voigt none;
+  none.fill(nan_value);
+  std::vector<Voigt> out(disc.mesh().vertices.size(), none);
+  for (int v = 0; v < disc.mesh().num_vertices(); ++v) {
+    const int k = disc.node_count(v);
+    if (k == 0) continue;
+    Voigt sum{};
+    for (int i = disc.first_node(v); i < disc.first_node(v) + k; ++i)
+      for (int c = 0; c < 6; ++c) sum[c] += nodes[i].stress[c] / k;
+    out[v] = sum;
+  }
+  return out;
+}
+
+std::vector<std::array<Voigt, 3>> corner_stress(const Discretization &disc, const std::vector<NodeStress> &nodes)
+{
+  std::vector<std::array<Voigt, 3>> out(disc.mesh().triangles.size());
+  for (std::size_t t = 0; t < out.size(); ++t)
+    for (int c = 0; c < 3; ++c) out[t][c] = nodes[disc.element_node(static_cast<int>(t), c)].stress;
+  return out;
+}
+
+std::vector<double> von_mises_of(const std::vector<Voigt> &stress)
+{
+  std::vector<double> out(stress.size());
+  for (std::size_t i = 0; i < stress.size(); ++i) out[i] = von_mises(stress[i]);
+  return out;
+}
+
+std::vector<Vec3> principal_of(const std::vector<Voigt> &stress)
+{
+  std::vector<Vec3> out(stress.size());
+  for (std::size_t i = 0; i < stress.size(); ++i) {
+    const auto p = principal_stresses(stress[i]);
+    out[i] = {p[0], p[1], p[2]};
+  }
+  return out;
+}
+
+} // namespace hssbem

@@ -1,0 +1,82 @@
+// Private to the fast interior evaluation: the fits on spheres and the source side
+// (interior_evaluation.cpp), shared with the target side (interior_targets.cpp).
+#pragma once
+
+#include "hssbem/compress/interior_evaluation.hpp"
+
+#include <vector>
+
+namespace hssbem::detail {
+
+/// Points on a sphere, structure of arrays.
+struct SpherePoints {
+  std::vector<double> x, y, z;
+  int size() const { return static_cast<int>(x.size()); }
+};
+
+/// u[0..3) += the displacement at x of the forces q (SoA: q[j], q[n + j], q[2n + j]) at the
+/// points centre + r · s.
+void add_forces_at(const SomiglianaConstants &k, const Vec3 &x, const Vec3 &centre, double r, const SpherePoints &s, const double *q, double *u);
+
+/// One unit configuration of the fits: equivalent points (where the fitted forces sit, radius
+/// r_equiv) and check points (where the field is matched, radius r_check), and the
+/// pseudo-inverse of U(check, equivalent). A cluster of radius R scales both spheres by R.
+struct Fit {
+  SpherePoints equiv, check;
+  double r_equiv = 0, r_check = 0;
+  std::vector<double> pinv; ///< 3 pe × 3 pc, column-major
+
+  Fit(const SomiglianaConstants &k, int pe, int pc, double r_equiv, double r_check);
+  int pe() const { return equiv.size(); }
+  int pc() const { return check.size(); }
+  /// The forces (SoA, 3 pe) whose field matches `field` (SoA, 3 pc) at the check points of a
+  /// cluster of radius R: R · pinv · field.
+  void solve(double R, const std::vector<double> &field, std::vector<double> &forces) const;
+  /// The check point i of a cluster at `centre` of radius R.
+  Vec3 check_point(const Vec3 &centre, double R, int i) const
+  {
+    const double s = R * r_check;
+    return {centre[0] + s * check.x[i], centre[1] + s * check.y[i], centre[2] + s * check.z[i]};
+  }
+};
+
+/// The sources' particles in the order of the source tree (a leaf's are contiguous), each with
+/// its triangle's centroid and squared near radius, for SIMD loops over a leaf.
+struct OrderedParticles {
+  std::vector<double> y[3], f[3], m[3], n[3], c[3], r2;
+  /// out[0..9) += the field at x of particles [begin, end) whose triangle is regular at x.
+  void add_regular(const SomiglianaConstants &k, const Vec3 &x, std::size_t begin, std::size_t end, double *out) const;
+};
+
+} // namespace hssbem::detail
+
+namespace hssbem {
+
+struct InteriorEvaluator::Impl {
+  const SomiglianaSources &src;
+  InteriorEvaluationOptions opt;
+  detail::Fit up;   ///< sources: equivalent sphere inside, check sphere outside
+  detail::Fit down; ///< targets: check sphere inside, equivalent sphere outside
+  ClusterTree tree; ///< over the triangles' centroids
+  std::vector<double> R, reach;       ///< per source cluster: ball of its triangles, of their near zones
+  std::vector<std::vector<double>> q; ///< per source cluster: equivalent forces (SoA, 3 pe)
+  detail::OrderedParticles particles; ///< in the tree's order
+
+  Impl(const SomiglianaSources &s, const InteriorEvaluationOptions &o);
+
+  void order_particles();
+  /// out[0..9) += the field at x of the triangles of source leaf b: through its equivalent
+  /// forces where x is far from it, else its particles (adaptive where near). Counts the kernel
+  /// evaluations into `s`.
+  void add_leaf(const Vec3 &x, int b, double *out, InteriorEvaluationStats &s) const;
+  /// out[0..9) += the field at x of source cluster b's equivalent forces.
+  void add_equivalent(const Vec3 &x, int b, double *out) const;
+  void source_radii();
+  void upward_leaf(int c);
+  void upward_inner(int c);
+  void upward();
+  /// Whether source cluster b is far from a target ball (centre ca, radius Ra).
+  bool far(const Vec3 &ca, double Ra, int b) const;
+};
+
+} // namespace hssbem
