@@ -40,14 +40,6 @@ struct PickTable {
 };
 constexpr PickTable pick_table;
 
-/// acc += one corner's sums v; with Gn, also G n.
-inline void add_sums(double *__restrict acc, const double *__restrict v, const Vec3 &n, bool gn)
-{
-  for (int m = 0; m < CornerSums::size; ++m) acc[m] += v[m];
-  if (!gn) return;
-  for (int a = 0; a < 3; ++a) acc[acc_gn + a] += v[sym_index(a, 0)] * n[0] + v[sym_index(a, 1)] * n[1] + v[sym_index(a, 2)] * n[2];
-}
-
 } // namespace
 
 EntrySelection::Group EntrySelection::group(std::vector<Item> &items)

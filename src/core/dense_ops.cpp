@@ -53,6 +53,17 @@ DenseMatrix product(const DenseMatrix &A, char ta, const DenseMatrix &B, char tb
   return C;
 }
 
+bool lu_regular(DenseMatrix &A, std::vector<int> &piv)
+{
+  const double amax = max_abs(A);
+  piv.resize(A.m);
+  if (A.m == 0) return true;
+  if (lapack::getrf(A.m, A.data(), A.ld(), piv.data()) != 0) return false;
+  double umin = HUGE_VAL;
+  for (int i = 0; i < A.m; ++i) umin = std::min(umin, std::abs(A(i, i)));
+  return umin > 1e-14 * amax; // the HSS factorization's test (ulv.cpp)
+}
+
 double max_abs(const DenseMatrix &M)
 {
   double v = 0;

@@ -27,6 +27,18 @@ void trsm(char side, char uplo, char transa, char diag, int m, int n, double alp
   dtrsm_(&side, &uplo, &transa, &diag, &m, &n, &alpha, a, &lda, b, &ldb);
 }
 
+void laswp(int ncols, double *a, int lda, int k, const int *piv)
+{
+  const int one = 1;
+  if (k > 0 && ncols > 0) dlaswp_(&ncols, a, &lda, &one, &k, piv, &one);
+}
+
+void trsv(char uplo, char diag, int n, const double *a, int lda, double *x)
+{
+  const int one = 1;
+  if (n > 0) dtrsv_(&uplo, "N", &diag, &n, a, &lda, x, &one);
+}
+
 void gemm(char transa, char transb, int m, int n, int k, double alpha, const double *a, int lda, const double *b, int ldb, double beta, double *c, int ldc)
 {
   if (m == 0 || n == 0) return;

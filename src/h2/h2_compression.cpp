@@ -8,6 +8,7 @@
 #include "hssbem/core/blas_threads.hpp"
 #include "hssbem/core/dense_ops.hpp"
 #include "hssbem/core/phase.hpp"
+#include "hssbem/core/progress.hpp"
 #include "hssbem/core/timer.hpp"
 #include "hssbem/core/tree_ownership.hpp"
 #include "hssbem/h2/h2_distributed.hpp"
@@ -148,7 +149,8 @@ H2Matrix compress_bem_operator_h2(const BemOperator &op, const H2Options &option
   if (!node_part.empty() && static_cast<int>(node_part.size()) != op.num_nodes()) throw std::invalid_argument("H2: one part per dof node expected");
   if (ranks > 1 && nparts != ranks) throw std::invalid_argument("H2: the node partition has " + std::to_string(nparts) + " parts for " + std::to_string(ranks) + " ranks");
   Timer timer;
-  std::optional<PhaseScope> phase(Phase::Tree);
+  const Progress progress("H2 compression"); // the levels' bases, then the far and the near blocks
+  std::optional<PhaseScope> phase(Phase::H2Tree);
   const int w = k_columns_per_node(options.pressure_columns);
   const ClusterTreeOptions topts{options.leaf_size};
   // Until the tree levels are skeletonized, a rank that fails says so at the others' next
@@ -164,7 +166,7 @@ H2Matrix compress_bem_operator_h2(const BemOperator &op, const H2Options &option
     K.set_owners(cluster_owners(tree, ranks), comm.rank());
     early_far.resize(tree.num_clusters());
     phase.reset();
-    phase.emplace(Phase::Compression);
+    phase.emplace(Phase::H2Compress);
     K.set_col_scales(kernel_column_scales(op, w));
     std::vector<double> scales(w);
     for (int q = 0; q < w; ++q) scales[q] = K.col_scale(q);
@@ -206,6 +208,7 @@ H2Matrix compress_bem_operator_h2(const BemOperator &op, const H2Options &option
     for (int l = tree.levels() - 1; l >= 1; --l) {
       skel->skeletonize_level(l, sources, &part.has_far, &part.has_far, ranks > 1 ? &skip : nullptr, sync);
       K.store_level_bases(l, options.single_precision);
+      progress.report(0.5 * (tree.levels() - l) / tree.levels());
     }
   } catch (const PeerFault &) {
     throw;
@@ -245,10 +248,11 @@ H2Matrix compress_bem_operator_h2(const BemOperator &op, const H2Options &option
     });
   });
   K.stats().time_far = timer.seconds();
+  progress.report(0.6);
   phase.reset();
 
   // Near blocks (true entries) of this rank's leaves and the rigid-body terms.
-  phase.emplace(Phase::NearField);
+  phase.emplace(Phase::H2NearField);
   timer.restart();
   collectively(comm, [&] {
     const std::vector<std::vector<int>> rigid = rigid_term_leaves(op, tree);

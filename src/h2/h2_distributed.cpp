@@ -193,7 +193,7 @@ void H2DistributedProduct::far_potentials(const double *X, int ldx, int nrhs, st
 
 void H2DistributedProduct::apply(const double *X, int ldx, double *Y, int ldy, int nrhs) const
 {
-  PhaseScope phase(Phase::Matvec);
+  PhaseScope phase(Phase::H2Matvec);
   const H2Matrix &K = m_K;
   const ClusterTree &tree = K.tree();
   const int nc = tree.num_clusters(), w = K.col_block(), rb = K.row_block();

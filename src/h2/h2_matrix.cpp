@@ -212,7 +212,7 @@ std::vector<DenseMatrix> H2Matrix::skeleton_far_field_transposed(const double *Y
 
 void H2Matrix::apply(const double *X, int ldx, double *Y, int ldy, int nrhs) const
 {
-  PhaseScope phase(Phase::Matvec);
+  PhaseScope phase(Phase::H2Matvec);
   const std::vector<DenseMatrix> yh = skeleton_far_field(X, ldx, nrhs);
   // Leaves: the far field through their row bases, plus their near blocks.
   for_each_cluster(m_tree.leaves(), [&](int c) {

@@ -1,24 +1,17 @@
 // One box of the H² factorization: its joint skeleton, the sparsification and elimination of its
-// redundant unknowns, and how the solve replays that step (see frontier.hpp).
+// redundant unknowns (see frontier.hpp; the solve replays them: elimination_step.cpp).
 #include "frontier.hpp"
 
 #include "hssbem/core/dense_ops.hpp"
 #include "hssbem/core/interpolative.hpp"
 #include "hssbem/core/lapack.hpp"
-#include "hssbem/h2factor/h2_factorization.hpp"
+#include "hssbem/h2factor/h2_breakdown.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <numeric>
 #include <string>
 
-extern "C" {
-void dsyrk_(const char *uplo, const char *trans, const int *n, const int *k, const double *alpha, const double *a, const int *lda, const double *beta, double *c,
-            const int *ldc);
-void dpstrf_(const char *uplo, const int *n, double *a, const int *lda, int *piv, int *rank, const double *tol, double *work, int *info);
-void dlaswp_(const int *n, double *a, const int *lda, const int *k1, const int *k2, const int *ipiv, const int *incx);
-void dtrsv_(const char *uplo, const char *trans, const char *diag, const int *n, const double *a, const int *lda, double *x, const int *incx);
-}
 
 namespace hssbem::h2f {
 
@@ -32,13 +25,6 @@ void gram_add(DenseMatrix &G, const DenseMatrix &P, char trans)
   const double one = 1.0;
   const int ld = P.ld();
   dsyrk_("U", &trans, &m, &q, &one, P.data(), &ld, &one, G.data(), &m);
-}
-
-DenseMatrix product(const DenseMatrix &A, const DenseMatrix &B)
-{
-  DenseMatrix C(A.m, B.n);
-  if (A.m > 0 && B.n > 0 && A.n > 0) lapack::gemm('N', 'N', A.m, B.n, A.n, 1.0, A.data(), A.ld(), B.data(), B.ld(), 0.0, C.data(), C.ld());
-  return C;
 }
 
 /// Skeleton from the Gram G of the features (rows = candidates): a pivoted Cholesky of G is the
@@ -117,43 +103,6 @@ void keep_columns(DenseMatrix &M, int k)
   M.n = k;
 }
 
-void laswp(int ncols, double *a, int lda, int r, const int *piv)
-{
-  const int one = 1;
-  if (r > 0 && ncols > 0) dlaswp_(&ncols, a, &lda, &one, &r, piv, &one);
-}
-
-void trsv(char uplo, char diag, int n, const double *a, int lda, double *x)
-{
-  const int one = 1;
-  if (n > 0) dtrsv_(&uplo, "N", &diag, &n, a, &lda, x, &one);
-}
-
-/// y += alpha A x for a column-major float matrix A (m × n).
-void gemv_single(int m, int n, double alpha, const float *A, const double *x, double *y)
-{
-  for (int j = 0; j < n; ++j) {
-    const float *a = A + static_cast<std::size_t>(j) * m;
-    const double xj = alpha * x[j];
-    for (int i = 0; i < m; ++i) y[i] += static_cast<double>(a[i]) * xj;
-  }
-}
-
-} // namespace
-
-bool lu_regular(DenseMatrix &A, std::vector<int> &piv)
-{
-  const double amax = dense::max_abs(A);
-  piv.resize(A.m);
-  if (A.m == 0) return true;
-  if (lapack::getrf(A.m, A.data(), A.ld(), piv.data()) != 0) return false;
-  double umin = HUGE_VAL;
-  for (int i = 0; i < A.m; ++i) umin = std::min(umin, std::abs(A(i, i)));
-  return umin > 1e-14 * amax; // the HSS factorization's test (ulv.cpp)
-}
-
-namespace {
-
 /// A⁻¹ from its getrf factors (m × m).
 DenseMatrix inverse(const DenseMatrix &LU, const std::vector<int> &piv)
 {
@@ -216,7 +165,7 @@ void Frontier::precondition(int X, Step *st)
   DenseMatrix &XX = open(X, m_M[X].at(X));
   st->box = m_D[X];
   st->D = XX;
-  if (!lu_regular(st->D, st->dpiv))
+  if (!dense::lu_regular(st->D, st->dpiv))
     throw H2Breakdown("H2 factorization broke down: the diagonal block of box " + std::to_string(X) + " (" + std::to_string(XX.m) + " unknowns) is singular to working precision");
   const int m = XX.m;
   XX = DenseMatrix(m, m);
@@ -245,8 +194,8 @@ BoxSkeleton Frontier::skeleton(int X, double tol) const
 {
   const int m = static_cast<int>(m_D[X].size());
   std::vector<DenseMatrix> parts; // features as columns (rows = candidates)
-  if (m_Eu[X].cols() > 0 && m_sketch.row[X].n > 0) parts.push_back(product(m_Eu[X].value(), m_sketch.row[X]));
-  if (m_Ew[X].cols() > 0 && m_sketch.col[X].n > 0) parts.push_back(product(m_Ew[X].value(), m_sketch.col[X]));
+  if (m_Eu[X].cols() > 0 && m_sketch.row[X].n > 0) parts.push_back(dense::product(m_Eu[X].value(), 'N', m_sketch.row[X], 'N'));
+  if (m_Ew[X].cols() > 0 && m_sketch.col[X].n > 0) parts.push_back(dense::product(m_Ew[X].value(), 'N', m_sketch.col[X], 'N'));
   if (m_pat.regularised())
     for (const DenseMatrix *R : {&m_Phi[X], &m_Psi[X]}) {
       DenseMatrix P = *R;
@@ -278,7 +227,6 @@ BoxSkeleton Frontier::skeleton(int X, double tol) const
 void Frontier::eliminate(int X, const BoxSkeleton &sk, Step *out, double *flops, std::vector<NewFill> *fresh)
 {
   const int k = static_cast<int>(sk.S.size()), r = static_cast<int>(sk.R.size());
-  const std::vector<int> nb = neighbours(X);
   Step &st = *out;
   for (int i : sk.S) st.S.push_back(m_D[X][i]);
   for (int i : sk.R) st.R.push_back(m_D[X][i]);
@@ -293,6 +241,38 @@ void Frontier::eliminate(int X, const BoxSkeleton &sk, Step *out, double *flops,
     side.C = columns_at(side.C, side.kept);
   }
   if (r == 0) return;
+  std::vector<int> targets{X}; // X and its close neighbours: where the Schur complement goes
+  const std::vector<int> nb = neighbours(X);
+  targets.insert(targets.end(), nb.begin(), nb.end());
+  sparsify(X, sk);
+  std::vector<int> off(targets.size() + 1, 0); // rows of X's skeleton and of each neighbour in I
+  for (std::size_t t = 0; t < targets.size(); ++t) off[t + 1] = off[t] + (t == 0 ? k : static_cast<int>(m_D[targets[t]].size()));
+  panels(X, k, targets, off, st);
+  schur_complement(X, targets, off, st, fresh);
+  *flops += 2.0 * off.back() * off.back() * r;
+  // X keeps its skeleton.
+  DenseMatrix &XX = open(X, m_M[X].at(X));
+  XX = dense::sub(XX, 0, k, 0, k);
+  for (int Y : nb) {
+    DenseMatrix &XY = open(X, m_M[X].at(Y));
+    XY = dense::row_block(XY, 0, k);
+    keep_columns(open(X, m_M[Y].at(X)), k);
+  }
+  m_D[X] = st.S;
+  for (StoredBlock *E : {&m_Eu[X], &m_Ew[X]}) {
+    DenseMatrix &e = open(X, *E);
+    e = dense::rows_at(e, sk.S);
+  }
+  if (m_pat.regularised()) {
+    m_Phi[X] = dense::rows_at(m_Phi[X], sk.S);
+    m_Psi[X] = dense::rows_at(m_Psi[X], sk.S);
+  }
+  for (int Y : targets) st.I.insert(st.I.end(), m_D[Y].begin(), m_D[Y].end());
+}
+
+void Frontier::sparsify(int X, const BoxSkeleton &sk)
+{
+  const int k = static_cast<int>(sk.S.size()), r = static_cast<int>(sk.R.size());
   // Local order [S, R]; rows R -= Tᵀ rows S, columns R -= columns S T.
   std::vector<int> order = sk.S;
   order.insert(order.end(), sk.R.begin(), sk.R.end());
@@ -307,48 +287,42 @@ void Frontier::eliminate(int X, const BoxSkeleton &sk, Step *out, double *flops,
   DenseMatrix &XX = open(X, m_M[X].at(X));
   row_op(XX);
   col_op(XX);
-  for (int Y : nb) {
+  for (int Y : neighbours(X)) {
     row_op(open(X, m_M[X].at(Y)));
     col_op(open(X, m_M[Y].at(X)));
   }
-  // Fill-in beyond the neighbours: the sparsified redundant part is below the tolerance.
-  for (auto &e : m_F[X]) {
-    DenseMatrix &B = open(X, e.second);
+  // Fill-in beyond the neighbours, and this side's copies of the cross blocks (as fill-in: rows
+  // kept as they are, columns as X's change of variables makes them; no Schur complement reaches
+  // them): the sparsified redundant part is below the tolerance.
+  const auto rows_kept = [&](StoredBlock &b) {
+    DenseMatrix &B = open(X, b);
     row_op(B);
     B = dense::row_block(B, 0, k);
-  }
-  for (StoredBlock *F : m_fill_col_blocks[X]) {
-    DenseMatrix &B = open(X, *F);
+  };
+  const auto columns_kept = [&](StoredBlock &b) {
+    DenseMatrix &B = open(X, b);
     col_op(B);
     keep_columns(B, k);
-  }
-  // This side's copies of the cross blocks: as fill-in (rows kept as they are, columns as X's
-  // change of variables makes them); no Schur complement reaches them.
-  for (int Y : m_cross[X]) {
-    DenseMatrix &B = open(X, m_X[X].at(Y));
-    row_op(B);
-    B = dense::row_block(B, 0, k);
-  }
-  for (int Z : m_cross[X]) {
-    DenseMatrix &B = open(X, m_G[Z].at(X));
-    col_op(B);
-    keep_columns(B, k);
-  }
-  // LU of the redundant block, the panels of the Schur complement.
+  };
+  for (auto &e : m_F[X]) rows_kept(e.second);
+  for (StoredBlock *F : m_fill_col_blocks[X]) columns_kept(*F);
+  for (int Y : m_cross[X]) rows_kept(m_X[X].at(Y));
+  for (int Z : m_cross[X]) columns_kept(m_G[Z].at(X));
+}
+
+void Frontier::panels(int X, int k, const std::vector<int> &targets, const std::vector<int> &off, Step &st) const
+{
+  const DenseMatrix &XX = *m_M[X].at(X).peek(); // opened by sparsify()
+  const int r = XX.m - k, nI = off.back();
   st.LU = dense::sub(XX, k, r, k, r);
   st.piv.resize(r);
-  if (!lu_regular(st.LU, st.piv))
+  if (!dense::lu_regular(st.LU, st.piv))
     throw H2Breakdown("H2 factorization broke down: the pivot block of box " + std::to_string(X) + " (" + std::to_string(r) + " unknowns) is singular to working precision");
-  std::vector<int> targets{X};
-  targets.insert(targets.end(), nb.begin(), nb.end());
-  std::vector<int> off(targets.size() + 1, 0);
-  for (std::size_t t = 0; t < targets.size(); ++t) off[t + 1] = off[t] + (t == 0 ? k : static_cast<int>(m_D[targets[t]].size()));
-  const int nI = off.back();
   st.Lp = DenseMatrix(nI, r);
   st.Up = DenseMatrix(r, nI);
   for (std::size_t t = 0; t < targets.size(); ++t) {
     const int Y = targets[t], rows = off[t + 1] - off[t];
-    const DenseMatrix &AYR = t == 0 ? XX : m_M[Y].at(X).open(), &ARY = t == 0 ? XX : m_M[X].at(Y).open(); // opened above
+    const DenseMatrix &AYR = t == 0 ? XX : *m_M[Y].at(X).peek(), &ARY = t == 0 ? XX : *m_M[X].at(Y).peek(); // opened by sparsify()
     for (int j = 0; j < r; ++j) {
       const double *src = AYR.data() + static_cast<std::size_t>(k + j) * AYR.m;
       std::copy(src, src + rows, &st.Lp(off[t], j));
@@ -360,12 +334,16 @@ void Frontier::eliminate(int X, const BoxSkeleton &sk, Step *out, double *flops,
   }
   if (nI > 0) {
     lapack::trsm('R', 'U', 'N', 'N', nI, r, 1.0, st.LU.data(), st.LU.ld(), st.Lp.data(), st.Lp.ld());
-    laswp(nI, st.Up.data(), st.Up.ld(), r, st.piv.data());
+    lapack::laswp(nI, st.Up.data(), st.Up.ld(), r, st.piv.data());
     lapack::trsm('L', 'L', 'N', 'U', r, nI, 1.0, st.LU.data(), st.LU.ld(), st.Up.data(), st.Up.ld());
   }
-  // Schur complement, block by block straight into the blocks it touches (a product of the whole
-  // |I| x |I| first would allocate and clear up to a few hundred MB per box at the upper levels).
-  *flops += 2.0 * nI * nI * r;
+}
+
+void Frontier::schur_complement(int X, const std::vector<int> &targets, const std::vector<int> &off, const Step &st, std::vector<NewFill> *fresh)
+{
+  // Block by block straight into the blocks it touches (a product of the whole |I| x |I| first
+  // would allocate and clear up to a few hundred MB per box at the upper levels).
+  const int r = st.LU.m;
   for (std::size_t ty = 0; ty < targets.size(); ++ty)
     for (std::size_t tz = 0; tz < targets.size(); ++tz) {
       const int Y = targets[ty], Z = targets[tz], my = off[ty + 1] - off[ty], mz = off[tz + 1] - off[tz];
@@ -385,23 +363,6 @@ void Frontier::eliminate(int X, const BoxSkeleton &sk, Step *out, double *flops,
       lapack::gemm('N', 'N', my, mz, r, -1.0, st.Lp.data() + off[ty], st.Lp.ld(), st.Up.data() + static_cast<std::size_t>(off[tz]) * st.Up.ld(), st.Up.ld(), 1.0,
                    B->data(), B->ld());
     }
-  // X keeps its skeleton.
-  XX = dense::sub(XX, 0, k, 0, k);
-  for (int Y : nb) {
-    DenseMatrix &XY = open(X, m_M[X].at(Y));
-    XY = dense::row_block(XY, 0, k);
-    keep_columns(open(X, m_M[Y].at(X)), k);
-  }
-  m_D[X] = st.S;
-  for (StoredBlock *E : {&m_Eu[X], &m_Ew[X]}) {
-    DenseMatrix &e = open(X, *E);
-    e = dense::rows_at(e, sk.S);
-  }
-  if (m_pat.regularised()) {
-    m_Phi[X] = dense::rows_at(m_Phi[X], sk.S);
-    m_Psi[X] = dense::rows_at(m_Psi[X], sk.S);
-  }
-  for (int Y : targets) st.I.insert(st.I.end(), m_D[Y].begin(), m_D[Y].end());
 }
 
 void Frontier::add_fill(std::vector<NewFill> &&fresh)
@@ -411,74 +372,6 @@ void Frontier::add_fill(std::vector<NewFill> &&fresh)
     settle(m_F[f.row].emplace(f.col, StoredBlock(std::move(f.B))).first->second);
   }
   fresh.clear();
-}
-
-// ---------------------------------------------------------------------------------------------
-// The solve of one step.
-
-std::size_t Step::bytes() const
-{
-  const std::size_t panels = Lps.empty() ? Lp.bytes() + Up.bytes() : (Lps.size() + Ups.size()) * sizeof(float);
-  return panels + T.bytes() + LU.bytes() + D.bytes() + (box.size() + dpiv.size() + S.size() + R.size() + I.size() + piv.size()) * sizeof(int);
-}
-
-void Step::demote()
-{
-  Lps.assign(Lp.a.begin(), Lp.a.end());
-  Ups.assign(Up.a.begin(), Up.a.end());
-  Lp.a.clear();
-  Lp.a.shrink_to_fit();
-  Up.a.clear();
-  Up.a.shrink_to_fit();
-}
-
-void Step::forward(double *b, std::vector<double> &work) const
-{
-  const int k = static_cast<int>(S.size()), r = static_cast<int>(R.size()), nI = static_cast<int>(I.size());
-  if (r == 0) return;
-  work.resize(static_cast<std::size_t>(k) + r + nI);
-  double *bs = work.data(), *br = bs + k, *bi = br + r;
-  for (int i = 0; i < k; ++i) bs[i] = b[S[i]];
-  for (int i = 0; i < r; ++i) br[i] = b[R[i]];
-  if (k > 0) lapack::gemv('T', k, r, -1.0, T.data(), T.ld(), bs, 1.0, br);
-  laswp(1, br, r, r, piv.data());
-  trsv('L', 'U', r, LU.data(), LU.ld(), br);
-  for (int i = 0; i < nI; ++i) bi[i] = b[I[i]];
-  if (nI > 0) {
-    if (Lps.empty()) lapack::gemv('N', nI, r, -1.0, Lp.data(), Lp.ld(), br, 1.0, bi);
-    else gemv_single(nI, r, -1.0, Lps.data(), br, bi);
-  }
-  for (int i = 0; i < nI; ++i) b[I[i]] = bi[i];
-  for (int i = 0; i < r; ++i) b[R[i]] = br[i];
-}
-
-void Step::backward(double *b, std::vector<double> &work) const
-{
-  const int k = static_cast<int>(S.size()), r = static_cast<int>(R.size()), nI = static_cast<int>(I.size());
-  if (r > 0) {
-    work.resize(static_cast<std::size_t>(k) + r + nI);
-    double *xs = work.data(), *xr = xs + k, *xi = xr + r;
-    for (int i = 0; i < r; ++i) xr[i] = b[R[i]];
-    for (int i = 0; i < nI; ++i) xi[i] = b[I[i]];
-    if (nI > 0) {
-      if (Ups.empty()) lapack::gemv('N', r, nI, -1.0, Up.data(), Up.ld(), xi, 1.0, xr);
-      else gemv_single(r, nI, -1.0, Ups.data(), xi, xr);
-    }
-    trsv('U', 'N', r, LU.data(), LU.ld(), xr);
-    for (int i = 0; i < r; ++i) b[R[i]] = xr[i];
-    if (k > 0) {
-      for (int i = 0; i < k; ++i) xs[i] = b[S[i]];
-      lapack::gemv('N', k, r, -1.0, T.data(), T.ld(), xr, 1.0, xs);
-      for (int i = 0; i < k; ++i) b[S[i]] = xs[i];
-    }
-  }
-  // The unknowns were A_XX x: x = A_XX⁻¹ (that).
-  const int m = static_cast<int>(box.size());
-  if (m == 0) return;
-  work.resize(m);
-  for (int i = 0; i < m; ++i) work[i] = b[box[i]];
-  lapack::getrs('N', m, 1, D.data(), D.ld(), dpiv.data(), work.data(), m);
-  for (int i = 0; i < m; ++i) b[box[i]] = work[i];
 }
 
 } // namespace hssbem::h2f

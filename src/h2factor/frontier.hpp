@@ -1,6 +1,12 @@
 // Private to the H² factorization: the active boxes of one level and their explicit blocks (the
-// block store of strong recursive skeletonization), and the elimination steps it produces.
+// block store of strong recursive skeletonization). Its member functions live by responsibility:
+// frontier.cpp (the boxes, their bases and far parts), frontier_merge.cpp (a level into its
+// parents), box_elimination.cpp (one box's step), frontier_ranks.cpp (what crosses ranks) and
+// top_assembly.cpp (the dense top); the steps it produces are elimination_step.hpp's.
 #pragma once
+
+#include "elimination_step.hpp"
+#include "stored_block.hpp"
 
 #include "hssbem/core/dense_matrix.hpp"
 #include "hssbem/core/rank_comm.hpp"
@@ -13,70 +19,10 @@
 
 namespace hssbem::h2f {
 
-struct BlockGrid;
 class TopSink;
 
-/// The columns of A-hat on K: column g (dof 3k + c of cluster order) is sign[g] × (K S)(:, w k +
-/// slot[g]); with a regularisation, A-hat also holds c Φ Ψᵀ (Φ: N × 6 column-major, Ψ = D Φ).
-struct Pattern {
-  std::vector<int> slot;
-  std::vector<double> sign;
-  std::vector<double> phi, psi; ///< empty without regularisation
-  double c = 0;
-  int dofs() const { return static_cast<int>(slot.size()); }
-  bool regularised() const { return !phi.empty(); }
-};
-
-/// One box's elimination, as the solve replays it (global dof indices of A-hat).
-struct Step {
-  std::vector<int> box;     ///< the box's unknowns before the step (the order of D)
-  DenseMatrix D;            ///< LU factors of the box's diagonal block A_XX: the unknowns became A_XX x (Frontier::precondition)
-  std::vector<int> dpiv;
-  std::vector<int> S, R, I; ///< skeleton, redundant, and the unknowns the Schur complement touched
-  DenseMatrix T;            ///< |S| × |R| interpolation: rows R -= Tᵀ rows S, columns R -= columns S T
-  DenseMatrix LU;           ///< |R| × |R| LU factors (getrf) of the sparsified R block
-  std::vector<int> piv;
-  DenseMatrix Lp, Up;       ///< A(I, R) U⁻¹ (|I| × |R|) and L⁻¹ P A(R, I) (|R| × |I|), in double ...
-  std::vector<float> Lps, Ups; ///< ... or in single precision (then Lp, Up keep their sizes but no entries)
-  int candidates = 0;          ///< active unknowns of the box before (statistics)
-  std::size_t bytes() const;
-  /// Forward and backward halves of the solve of this step, on the whole vector b.
-  void forward(double *b, std::vector<double> &work) const;
-  void backward(double *b, std::vector<double> &work) const;
-  /// Move the panels to single precision.
-  void demote();
-};
-
-/// LU with partial pivoting of A in place (getrf); false when A is singular to working precision
-/// (a zero pivot, or the smallest |U_ii| at most 1e-14 of the largest |A_ij|, as for HSS).
-bool lu_regular(DenseMatrix &A, std::vector<int> &piv);
-
-/// A block of the frontier's store. With single-precision storage (a loose tolerance) it rests
-/// in single precision between the steps that change it: open() widens it to double for a step,
-/// park() narrows it again. The rounding (6e-8) lies far below such a tolerance, and the store
-/// (the near field in double at the first level, the bulk of the factorization's workspace)
-/// halves.
-class StoredBlock {
-public:
-  StoredBlock() = default;
-  explicit StoredBlock(DenseMatrix B) : m_d(std::move(B)) {}
-  int rows() const { return m_d.m; }
-  int cols() const { return m_d.n; }
-  DenseMatrix &open();
-  void park();
-  /// A copy in double, parked or not.
-  DenseMatrix value() const;
-  /// The block itself while it is open (in double), else null.
-  const DenseMatrix *peek() const { return m_parked ? nullptr : &m_d; }
-  /// The block in double, moved out (the stored block is left empty).
-  DenseMatrix take();
-  std::size_t bytes() const { return m_d.bytes() + m_s.size() * sizeof(float); }
-
-private:
-  DenseMatrix m_d;        ///< sizes always; entries while open
-  std::vector<float> m_s; ///< entries while parked
-  bool m_parked = false;
-};
+/// One side of cluster c's nested basis in double (rows: U, else V), candidates × rank.
+inline DenseMatrix basis_side(const H2Matrix &K, int c, bool rows) { return rows ? K.row_interpolation(c).expand() : K.col_interpolation(c).expand(); }
 
 /// A fill-in block that an elimination created between two boxes that are not close; kept aside
 /// while other boxes of the same colour class are eliminated, then added with add_fill().
@@ -118,7 +64,7 @@ public:
   /// side's columns), the sides at a level's end, the data of merged cross blocks (the other
   /// side's unknowns, its column basis carried to the far block and Ψ; the far parts for the
   /// copies in the columns) and the top's rows. Every exchange is collective.
-  Frontier(const H2Matrix &K, const FarFieldSketch &sketch, const Pattern &pattern, bool single, std::vector<int> part = {}, const RankComm *comm = nullptr);
+  Frontier(const H2Matrix &K, const FarFieldSketch &sketch, const Pattern &pattern, bool single, std::vector<int> part, const RankComm &comm);
   /// Whether this rank holds box c (always on one rank).
   bool mine(int c) const { return m_owner.empty() || m_owner[c] == m_rank; }
 
@@ -133,8 +79,6 @@ public:
   bool same_part(int X, int Y) const { return m_box_part.empty() || m_box_part[X] == m_box_part[Y]; }
   /// Whether level l's box X takes a step (in the frontier, below or at its part's root).
   bool steps_at(int X) const { return m_in_front[X] && (m_box_part.empty() || m_box_part[X] >= 0); }
-  /// The boxes of other parts with which X shares cross blocks.
-  const std::vector<int> &cross_partners(int X) const { return m_cross[X]; }
   /// Cross blocks now (pairs, each counted once) and the bytes of both copies.
   long long cross_pairs() const;
   std::size_t cross_bytes() const;
@@ -163,6 +107,14 @@ public:
   /// into the rows of its own neighbourhood, which the other's steps reach through claim()'s
   /// pointers alone.
   void eliminate(int X, const BoxSkeleton &sk, Step *st, double *flops, std::vector<NewFill> *fresh);
+  /// eliminate()'s parts: rows R −= Tᵀ rows S and columns R −= columns S T in every block of X
+  /// (the redundant unknowns then couple to X and its neighbours only); the LU of the redundant
+  /// block and the panels L_p = A(I, R) U⁻¹, U_p = L⁻¹ P A(R, I) into st (I: X's skeleton and
+  /// its neighbours `targets`, rows off[t] .. off[t + 1] − 1 of I); and A(I, I) −= L_p U_p into
+  /// the blocks, fill-in that is new into *fresh.
+  void sparsify(int X, const BoxSkeleton &sk);
+  void panels(int X, int k, const std::vector<int> &targets, const std::vector<int> &off, Step &st) const;
+  void schur_complement(int X, const std::vector<int> &targets, const std::vector<int> &off, const Step &st, std::vector<NewFill> *fresh);
   /// Park the blocks that precondition() and eliminate() opened for X (single precision only).
   void rest(int X);
   /// Store fill-in blocks that eliminate() created.
@@ -176,20 +128,11 @@ public:
   /// The frontier of level l − 1 from that of level l (boxes never merge above their part's
   /// root: a part's root stays in the frontier as it is).
   void merge(int l);
-  /// All remaining unknowns as one block matrix into `sink`, their dof indices in *dofs; the
-  /// blocks between close boxes move out of the store (the frontier is spent).
-  void take_top(std::vector<int> *dofs, TopSink &sink);
-  /// The same on several ranks (collective): rank 0's own rows go straight into its sink, the
-  /// other ranks' rows are sent to rank 0 and go there as they are read; rank 0 gets in *dofs all
-  /// the top's unknowns, in *from[q] the positions in *dofs of rank q's (in the order of *own on
-  /// q); every rank gets its own top unknowns in *own. The sink is used on rank 0 alone.
-  void take_top_ranks(std::vector<int> *dofs, std::vector<std::vector<int>> *from, std::vector<int> *own, TopSink &sink);
-  /// The top spread over the ranks by blocks of nb columns (block j on rank j mod P; see
-  /// SpreadTop), in single precision (collective): each rank's rows go to the ranks of their
-  /// columns. *local gets this rank's columns (n × spread_columns(n, nb, rank, P)), *row_sums
-  /// A·1 on this rank's rows (zero elsewhere), *own this rank's top unknowns and *pos their
-  /// positions in the top (boxes in frontier order); returns n.
-  int take_top_spread(int nb, std::vector<float> *local, std::vector<double> *row_sums, std::vector<int> *own, std::vector<int> *pos);
+  /// The top (collective): every rank takes the remaining unknowns' rows of its boxes into its
+  /// sink, whose messages carry them on (top_assembly.hpp); the blocks move out of the store (the
+  /// frontier is spent). *own gets this rank's top unknowns, *pos their positions in the top
+  /// (boxes in frontier order); returns the top's size.
+  int take_top(TopSink &sink, std::vector<int> *own, std::vector<int> *pos);
 
 private:
   /// Box row s of the top (position s of the frontier) into the sink; its blocks move out.
@@ -203,12 +146,6 @@ private:
   std::vector<int> top_offsets() const;
   /// The positions of this rank's boxes in the frontier.
   std::vector<int> my_positions() const;
-  /// Several ranks, not rank 0: the top's rows of this rank's boxes (positions `here`) as one
-  /// message to rank 0 in r (halves: blocks rounded to single precision, two to a value); the
-  /// blocks move out of the store.
-  void pack_top_rows(const std::vector<int> &here, bool halves, std::vector<double> &r);
-  /// Rank 0: the other ranks' rows of the top (pack_top_rows' messages) into the sink.
-  void unpack_top_rows(std::vector<std::vector<double>> &recv, const std::vector<int> &here, bool halves, TopSink &sink) const;
   DenseMatrix leaf_col_basis(int c) const;
   DenseMatrix leaf_near(int a, int b) const;
   void add_regularisation(DenseMatrix &B, int P, int Q) const;
@@ -219,9 +156,6 @@ private:
   /// not close: the H² far block above them through their bases, the regularisation, the fill-in.
   void add_far_part(int P, int Q, double *out, int ld) const;
   DenseMatrix far_part(int P, int Q) const;
-  /// The block between close new boxes P and Q of level l − 1; the children's blocks it is made
-  /// of move out of the store (each serves exactly one such pair).
-  DenseMatrix assemble_close(int P, int Q, int l);
   /// The fill-in between the new boxes that are not close (the children's blocks move out).
   std::vector<std::map<int, StoredBlock>> merged_fill(int l);
   /// b opened for box X's step (logged for rest(X)).
@@ -257,9 +191,10 @@ private:
   DenseMatrix col_basis_to(int Q, int b) const;
   /// Whether (P, Q) of the current frontier hold a cross block.
   bool cross_close(int P, int Q) const { return m_in_front[P] && m_in_front[Q] && !same_part(P, Q) && m_part.is_close(P, Q); }
-  /// Copy `which` (m_X or m_G) of the cross block between new boxes P and Q of level l − 1,
-  /// from the children's copies and the far parts between the children that are not close.
-  DenseMatrix assemble_cross(int P, int Q, int l, std::vector<std::map<int, StoredBlock>> &which);
+  /// The block between new boxes P and Q of level l − 1 in `which` (m_M between close boxes; a
+  /// cross block's copy, m_X or m_G), from the children's blocks there, which move out of the
+  /// store (each serves exactly one such pair), and the far parts between the children.
+  DenseMatrix assemble(int P, int Q, int l, std::vector<std::map<int, StoredBlock>> &which);
 
   const H2Matrix &m_K;
   const ClusterTree &m_tree;

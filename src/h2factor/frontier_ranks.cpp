@@ -4,21 +4,12 @@
 // reaches the other copy as that side's CrossSide at the level's end.
 #include "frontier.hpp"
 
-#include "hssbem/core/allocator.hpp"
 #include "hssbem/core/blas_threads.hpp"
 #include "hssbem/core/cluster_exchange.hpp"
-#include "hssbem/core/dense_ops.hpp"
 
-#include "top_block.hpp"
-
-#include <algorithm>
-#include <cstring>
-#include <numeric>
-#include <optional>
-#include <string>
 #include <set>
-#include <tuple>
 #include <stdexcept>
+#include <tuple>
 
 namespace hssbem::h2f {
 
@@ -44,85 +35,6 @@ std::vector<int> read_ints(const std::vector<double> &r, std::size_t &at)
   at += static_cast<std::size_t>(n);
   return v;
 }
-
-/// The top's rows of this rank into the column blocks of a spread LU (SpreadTop): its own
-/// columns into `local` (n × its count), the others' into one message per rank, rounded to
-/// single precision (two floats to a value), box row by box row: for each of this rank's boxes
-/// s in frontier order, for each of the destination's columns in order, box s's rows.
-class SpreadSink : public TopSink {
-public:
-  SpreadSink(int nb, int rank, int ranks, const std::vector<int> &mine, std::vector<float> *local, std::vector<double> *row_sums)
-    : m_nb(nb), m_rank(rank), m_ranks(ranks), m_mine(mine), m_local(local), m_sums(row_sums)
-  {
-  }
-  void begin(const std::vector<int> &off) override
-  {
-    m_off = off;
-    const int n = off.back();
-    m_cols.resize(m_ranks);
-    for (int r = 0; r < m_ranks; ++r) m_cols[r] = spread_columns(n, m_nb, r, m_ranks);
-    m_base.assign(m_ranks, std::vector<std::size_t>(off.size() - 1, 0));
-    m_out.assign(m_ranks, {});
-    for (int r = 0; r < m_ranks; ++r) {
-      std::size_t at = 0;
-      for (int s : m_mine) m_base[r][s] = at, at += static_cast<std::size_t>(off[s + 1] - off[s]) * m_cols[r];
-      if (r == m_rank) continue;
-      message_count((at + at % 2) / 2, "the spread top's columns for rank " + std::to_string(r));
-      m_out[r].assign(at + at % 2, 0.0f); // an even count: two floats to a value
-    }
-    m_local->assign(static_cast<std::size_t>(n) * m_cols[m_rank], 0.0f);
-    m_sums->assign(n, 0.0);
-  }
-  void put(int s, int t, DenseMatrix B) override
-  {
-    const int n = m_off.back(), m = m_off[s + 1] - m_off[s];
-    if (B.m != m || B.n != m_off[t + 1] - m_off[t]) throw std::logic_error("H2 factorization: a top block of unexpected size");
-    for (int j = 0; j < B.n; ++j) {
-      const int c = m_off[t] + j, r = (c / m_nb) % m_ranks, place = (c / m_nb / m_ranks) * m_nb + c % m_nb;
-      const double *src = B.data() + static_cast<std::size_t>(j) * B.ld();
-      float *dst = r == m_rank ? m_local->data() + static_cast<std::size_t>(place) * n + m_off[s] : m_out[r].data() + m_base[r][s] + static_cast<std::size_t>(place) * m;
-      double *sums = m_sums->data() + m_off[s];
-      for (int i = 0; i < m; ++i) {
-        dst[i] = static_cast<float>(src[i]);
-        sums[i] += src[i];
-      }
-    }
-  }
-  bool single() const override { return true; }
-  /// The messages to the other ranks (this sink's buffers go).
-  std::vector<std::vector<double>> messages()
-  {
-    std::vector<std::vector<double>> send(m_ranks);
-    for (int r = 0; r < m_ranks; ++r) {
-      send[r].resize(m_out[r].size() / 2);
-      if (!m_out[r].empty()) std::memcpy(send[r].data(), m_out[r].data(), m_out[r].size() * sizeof(float));
-      std::vector<float>().swap(m_out[r]);
-    }
-    return send;
-  }
-  /// Another rank's message: the rows of its boxes `from` (positions, in frontier order).
-  void receive(const std::vector<int> &from, const std::vector<double> &message)
-  {
-    const int n = m_off.back(), mine_cols = m_cols[m_rank];
-    std::size_t need = 0, at = 0;
-    for (int s : from) need += static_cast<std::size_t>(m_off[s + 1] - m_off[s]) * mine_cols;
-    if ((need + need % 2) / 2 != message.size()) throw std::logic_error("H2 factorization: a spread top message of unexpected length");
-    const char *in = reinterpret_cast<const char *>(message.data()); // the floats' bytes (copied, never read as floats in place)
-    for (int s : from) {
-      const int m = m_off[s + 1] - m_off[s];
-      for (int lc = 0; lc < mine_cols; ++lc, at += m) std::memcpy(m_local->data() + static_cast<std::size_t>(lc) * n + m_off[s], in + at * sizeof(float), m * sizeof(float));
-    }
-  }
-
-private:
-  int m_nb, m_rank, m_ranks;
-  std::vector<int> m_mine;
-  std::vector<float> *m_local;
-  std::vector<double> *m_sums;
-  std::vector<int> m_off, m_cols;
-  std::vector<std::vector<std::size_t>> m_base; ///< per destination rank, per box of this rank: floats before its rows
-  std::vector<std::vector<float>> m_out;
-};
 
 /// What a record of the merges' and the top's exchanges carries.
 enum Record { BoxData = 0, ColumnBasis = 1, FarPart = 2 };
@@ -345,157 +257,6 @@ std::vector<int> Frontier::my_positions() const
   for (int s = 0; s < static_cast<int>(m_front.size()); ++s)
     if (mine(m_front[s])) here.push_back(s);
   return here;
-}
-
-void Frontier::pack_top_rows(const std::vector<int> &here, bool halves, std::vector<double> &r)
-{
-  const int nb = static_cast<int>(m_front.size());
-  const auto values = [&](std::size_t count) { return halves ? (count + 1) / 2 : count; };
-  // Box row s: its position, its unknowns (for a check), then its blocks. The rows are written
-  // in place into one message sized beforehand, so that it is never copied as it grows.
-  std::vector<std::size_t> start(here.size() + 1, 0);
-  for (std::size_t i = 0; i < here.size(); ++i) {
-    const std::size_t m = m_D[m_front[here[i]]].size();
-    std::size_t size = 2 + m;
-    for (int t = 0; t < nb; ++t) size += 2 + values(m * m_D[m_front[t]].size());
-    start[i + 1] = start[i] + size;
-  }
-  message_count(start.back(), "rank " + std::to_string(m_rank) + "'s rows of the dense top (to rank 0; a smaller top, -pc_h2_top_size, or one spread over the ranks fits)");
-  r.resize(start.back());
-  std::vector<int> rows(here.size());
-  std::iota(rows.begin(), rows.end(), 0);
-  for_each_cluster(rows, [&](int i) {
-    const int X = m_front[here[i]];
-    double *out = r.data() + start[i];
-    *out++ = here[i];
-    *out++ = static_cast<double>(m_D[X].size());
-    out = std::copy(m_D[X].begin(), m_D[X].end(), out);
-    std::vector<float> rounded;
-    for (int t = 0; t < nb; ++t) {
-      const int Q = m_front[t];
-      const auto it = m_M[X].find(Q);
-      const DenseMatrix B = it != m_M[X].end() ? it->second.take() : far_part(X, Q);
-      if (B.m != static_cast<int>(m_D[X].size()) || B.n != static_cast<int>(m_D[Q].size())) throw std::logic_error("H2 factorization: a top block of unexpected size");
-      *out++ = B.m;
-      *out++ = B.n;
-      if (!halves) {
-        out = std::copy(B.a.begin(), B.a.end(), out);
-        continue;
-      }
-      rounded.assign(values(B.a.size()) * 2, 0.0f);
-      std::copy(B.a.begin(), B.a.end(), rounded.begin());
-      std::memcpy(out, rounded.data(), rounded.size() * sizeof(float));
-      out += rounded.size() / 2;
-    }
-    m_M[X].clear();
-    if (out != r.data() + start[i + 1]) throw std::logic_error("H2 factorization: a top row of unexpected length");
-  });
-}
-
-void Frontier::unpack_top_rows(std::vector<std::vector<double>> &recv, const std::vector<int> &here, bool halves, TopSink &sink) const
-{
-  const int nb = static_cast<int>(m_front.size());
-  const auto values = [&](std::size_t count) { return halves ? (count + 1) / 2 : count; };
-  std::vector<char> seen(nb, 0);
-  std::vector<float> rounded; // a block as it came (rounded), copied out of the message
-  for (int s : here) seen[s] = 1;
-  for (std::vector<double> &r : recv) {
-    for (std::size_t at = 0; at < r.size();) {
-      const int s = read_int(r, at);
-      if (s < 0 || s >= nb || seen[s] || read_ints(r, at) != m_D[m_front[s]]) throw std::logic_error("H2 factorization: a box row of the top came twice or does not match");
-      seen[s] = 1;
-      for (int t = 0; t < nb; ++t) {
-        if (!halves) {
-          sink.put(s, t, read_matrix(r, at));
-          continue;
-        }
-        const int m = read_int(r, at), n = read_int(r, at);
-        const std::size_t count = static_cast<std::size_t>(m) * static_cast<std::size_t>(n);
-        if (m != static_cast<int>(m_D[m_front[s]].size()) || n != static_cast<int>(m_D[m_front[t]].size()) || at + values(count) > r.size())
-          throw std::logic_error("H2 factorization: a corrupt top block from another rank");
-        rounded.resize(count);
-        std::memcpy(rounded.data(), r.data() + at, count * sizeof(float));
-        DenseMatrix B(m, n);
-        std::copy(rounded.begin(), rounded.end(), B.a.begin());
-        at += values(count);
-        sink.put(s, t, std::move(B));
-      }
-    }
-    std::vector<double>().swap(r);
-  }
-  if (std::find(seen.begin(), seen.end(), 0) != seen.end()) throw std::logic_error("H2 factorization: a box of the top came from no rank");
-}
-
-void Frontier::take_top_ranks(std::vector<int> *dofs, std::vector<std::vector<int>> *from, std::vector<int> *own, TopSink &sink)
-{
-  const int nb = static_cast<int>(m_front.size()), P = m_comm->size();
-  share_top_columns();
-  // Blocks travel rounded to single precision, two to a value, when the sink rounds them anyway.
-  const bool halves = sink.single();
-  std::vector<int> here;
-  exchange_records(
-    *m_comm, "the dense top's rows",
-    [&](std::vector<std::vector<double>> &send) {
-      dofs->clear();
-      from->assign(P, {});
-      own->clear();
-      here = my_positions();
-      for (int s : here) own->insert(own->end(), m_D[m_front[s]].begin(), m_D[m_front[s]].end());
-      if (m_rank == 0) { // its own rows straight into the sink
-        const std::vector<int> off = top_offsets();
-        for (int s = 0; s < nb; ++s) {
-          const int q = m_owner.empty() ? 0 : m_owner[m_front[s]];
-          for (int i = off[s]; i < off[s + 1]; ++i) (*from)[q].push_back(i);
-          dofs->insert(dofs->end(), m_D[m_front[s]].begin(), m_D[m_front[s]].end());
-        }
-        sink.begin(off);
-        for_each_cluster(here, [&](int s) { take_row(s, sink); });
-      } else
-        pack_top_rows(here, halves, send[0]);
-      release_stores();
-      return_free_memory();
-    },
-    [&](std::vector<std::vector<double>> &recv) {
-      if (m_rank == 0) unpack_top_rows(recv, here, halves, sink);
-    });
-}
-
-int Frontier::take_top_spread(int nb, std::vector<float> *local, std::vector<double> *row_sums, std::vector<int> *own, std::vector<int> *pos)
-{
-  const int nb_boxes = static_cast<int>(m_front.size()), P = m_comm->size();
-  share_top_columns();
-  std::vector<int> off;
-  std::optional<SpreadSink> sink;
-  exchange_records(
-    *m_comm, "the spread top's columns",
-    [&](std::vector<std::vector<double>> &send) {
-      off = top_offsets();
-      check_spread_size(off.back(), nb, P);
-      const std::vector<int> here = my_positions();
-      own->clear();
-      pos->clear();
-      for (int s : here) {
-        own->insert(own->end(), m_D[m_front[s]].begin(), m_D[m_front[s]].end());
-        for (int i = off[s]; i < off[s + 1]; ++i) pos->push_back(i);
-      }
-      sink.emplace(nb, m_rank, P, here, local, row_sums);
-      sink->begin(off);
-      for_each_cluster(here, [&](int s) { take_row(s, *sink); });
-      release_stores();
-      return_free_memory();
-      send = sink->messages();
-    },
-    [&](std::vector<std::vector<double>> &recv) {
-      for (int q = 0; q < P; ++q) {
-        if (q == m_rank) continue;
-        std::vector<int> from; // rank q's boxes
-        for (int s = 0; s < nb_boxes; ++s)
-          if (m_owner[m_front[s]] == q) from.push_back(s);
-        sink->receive(from, recv[q]);
-        std::vector<double>().swap(recv[q]);
-      }
-    });
-  return off.back();
 }
 
 } // namespace hssbem::h2f

@@ -105,9 +105,9 @@ std::vector<double> HssDistributedSystem::diagonal(const SystemSelection &sel) c
 
 std::unique_ptr<UlvFactorization> HssDistributedSystem::factor(const SystemSelection &sel, const std::vector<double> *rigid_modes) const
 {
-  if (!rigid_modes) return std::make_unique<UlvFactorization>(*m_K, m_comm, sel.displacement_known);
-  const LowRankTerm t = rigid_mode_term(*rigid_modes);
-  return std::make_unique<UlvFactorization>(*m_K, m_comm, sel.displacement_known, &t);
+  if (!rigid_modes) return make_unique_collectively<UlvFactorization>(m_comm, *m_K, m_comm, sel.displacement_known);
+  const LowRankTerm t = collectively(m_comm, [&] { return rigid_mode_term(*rigid_modes); });
+  return make_unique_collectively<UlvFactorization>(m_comm, *m_K, m_comm, sel.displacement_known, &t);
 }
 
 } // namespace hssbem

@@ -6,8 +6,9 @@
 #include <petscviewer.h>
 
 /* The MatShell of the system ctx (of type HSS or H², with its hss_options or h2_options set) and
-   its right-hand side b; on several ranks the surface is partitioned by METIS and each rank
-   compresses its part (ctx->hssdist or ctx->h2dist), on one rank the whole (ctx->hss or ctx->h2). */
+   its right-hand side b: the surface partitioned by METIS (ctx->layout; one rank: one part) and
+   each rank compressing its part (ctx->hss or ctx->h2); rows in cluster order
+   (ctx->system_of_dof). The Mat's context is ctx (composed with it by the caller). */
 PetscErrorCode HssbemMatCreateCompressed_Private(MPI_Comm comm, HssbemSystemContext *ctx, Mat *A, Vec *b);
 
 /* Ranks per level, memory, entries and phase times of an HSS matrix, to an ASCII viewer. */

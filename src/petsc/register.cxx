@@ -3,13 +3,17 @@
 #include "hssbem/petsc/pc_hss.h"
 #include "hssbem/core/fault.hpp"
 #include "hssbem/core/phase.hpp"
+#include "hssbem/core/progress.hpp"
 
 #include <petscksp.h>
+
+#include <cstdio>
+#include <unistd.h>
 
 PetscClassId  HSSBEM_CLASSID;
 PetscLogEvent BEM_Mesh, BEM_Assembly, BEM_Partition, BEM_Solve, BEM_Post, BEM_Stress, BEM_Interior, BEM_Output;
 PetscLogEvent HSS_Tree, HSS_Compress, HSS_NearField, HSS_Truncate, HSS_Factor, HSS_Solve, HSS_MatMult, HSS_FactorTop, HSS_SolveTop;
-PetscLogEvent H2F_Factor, H2F_Sketch, H2F_Eliminate, H2F_Merge, H2F_Top, H2F_Solve;
+PetscLogEvent H2_Tree, H2_Compress, H2_NearField, H2_MatMult, H2F_Factor, H2F_Sketch, H2F_Eliminate, H2F_Merge, H2F_Top, H2F_Solve;
 PetscLogEvent SCN_Setup, SCN_Update, SCN_Apply, SCN_Refactor, SCN_Krylov, SCN_Frame;
 PetscLogEvent CNT_Setup, CNT_Detect, CNT_Solve, CNT_Fields;
 
@@ -17,6 +21,7 @@ PetscLogEvent CNT_Setup, CNT_Detect, CNT_Solve, CNT_Fields;
 static void PhaseHook_Private(hssbem::Phase phase, bool begin)
 {
   static const PetscLogEvent *event[] = {&HSS_Tree, &HSS_Compress, &HSS_NearField, &HSS_Truncate, &HSS_Factor, &HSS_Solve, &HSS_MatMult, &HSS_FactorTop, &HSS_SolveTop,
+                                        &H2_Tree,    &H2_Compress, &H2_NearField, &H2_MatMult,
                                         &H2F_Factor, &H2F_Sketch, &H2F_Eliminate, &H2F_Merge, &H2F_Top, &H2F_Solve,
                                         &SCN_Setup,  &SCN_Update, &SCN_Apply,     &SCN_Refactor, &SCN_Krylov, &CNT_Detect,   &CNT_Solve, &CNT_Fields};
   static_assert(sizeof(event) / sizeof(event[0]) == static_cast<int>(hssbem::Phase::Count), "one log event per phase");
@@ -26,6 +31,40 @@ static void PhaseHook_Private(hssbem::Phase phase, bool begin)
 }
 
 static PetscBool HssbemPackageInitialized = PETSC_FALSE;
+static bool      ProgressOnTerminal       = false;
+
+/* Progress of long work on rank 0's standard error (-hssbem_progress): one updating line on a
+   terminal, plain lines otherwise (at most one per phase every 5 s); a phase shorter than 2 s says
+   nothing. Never in the result file. */
+static void ProgressHook_Private(const char *phase, double done, double seconds)
+{
+  static const char *shown = nullptr;
+  static double      last  = 0;
+  const bool         end   = done >= 1;
+  if (seconds < 2 || (!end && shown == phase && seconds - last < (ProgressOnTerminal ? 0.25 : 5))) return;
+  shown = phase;
+  last  = seconds;
+  char left[48] = "";
+  if (!end && done > 0.02) std::snprintf(left, sizeof left, ", about %.0f s left", seconds * (1 - done) / done);
+  std::fprintf(stderr, "%s%s: %.0f%% done, %.1f s elapsed%s%s", ProgressOnTerminal ? "\r\033[K" : "", phase, 100 * done, seconds, left, end || !ProgressOnTerminal ? "\n" : "");
+  std::fflush(stderr);
+}
+
+/* -hssbem_progress: on by default when rank 0's standard error is a terminal. */
+static PetscErrorCode ProgressFromOptions_Private(void)
+{
+  PetscMPIInt rank;
+  PetscBool   on = isatty(STDERR_FILENO) ? PETSC_TRUE : PETSC_FALSE;
+
+  PetscFunctionBegin;
+  PetscCallMPI(MPI_Comm_rank(PETSC_COMM_WORLD, &rank));
+  PetscOptionsBegin(PETSC_COMM_WORLD, NULL, "Progress of long work (hssbem)", NULL);
+  PetscCall(PetscOptionsBool("-hssbem_progress", "Report the progress of long phases on rank 0's standard error (default: when it is a terminal)", NULL, on, &on, NULL));
+  PetscOptionsEnd();
+  ProgressOnTerminal = isatty(STDERR_FILENO) != 0;
+  hssbem::set_progress_hook(rank == 0 && on ? ProgressHook_Private : nullptr);
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
 
 /* Test-only fault injection (core/fault.hpp), from options that -help does not list:
    -hssbem_fault <site>           a fault point: MeshRead, Setup, Operator, RigidModes (the set-up,
@@ -83,6 +122,7 @@ PetscErrorCode HssbemFinalizePackage(void)
   PetscFunctionBegin;
   HssbemPackageInitialized = PETSC_FALSE;
   hssbem::set_phase_hook(nullptr);
+  hssbem::set_progress_hook(nullptr);
   hssbem::arm_fault(hssbem::FaultPlan{}, 0);
   PetscFunctionReturn(PETSC_SUCCESS);
 }
@@ -118,12 +158,16 @@ PetscErrorCode HssbemInitializePackage(void)
   PetscCall(PetscLogEventRegister("HSSMatMult", HSSBEM_CLASSID, &HSS_MatMult));
   PetscCall(PetscLogEventRegister(" HSSFactorTop", HSSBEM_CLASSID, &HSS_FactorTop));
   PetscCall(PetscLogEventRegister(" HSSSolveTop", HSSBEM_CLASSID, &HSS_SolveTop));
+  PetscCall(PetscLogEventRegister("H2Tree", HSSBEM_CLASSID, &H2_Tree));
+  PetscCall(PetscLogEventRegister("H2Compress", HSSBEM_CLASSID, &H2_Compress));
+  PetscCall(PetscLogEventRegister("H2NearField", HSSBEM_CLASSID, &H2_NearField));
+  PetscCall(PetscLogEventRegister("H2MatMult", HSSBEM_CLASSID, &H2_MatMult));
   PetscCall(PetscLogEventRegister("H2Factor", HSSBEM_CLASSID, &H2F_Factor));
-  PetscCall(PetscLogEventRegister(" H2FSketch", HSSBEM_CLASSID, &H2F_Sketch));
-  PetscCall(PetscLogEventRegister(" H2FEliminate", HSSBEM_CLASSID, &H2F_Eliminate));
-  PetscCall(PetscLogEventRegister(" H2FMerge", HSSBEM_CLASSID, &H2F_Merge));
-  PetscCall(PetscLogEventRegister(" H2FTop", HSSBEM_CLASSID, &H2F_Top));
-  PetscCall(PetscLogEventRegister("H2FSolve", HSSBEM_CLASSID, &H2F_Solve));
+  PetscCall(PetscLogEventRegister(" H2FactorSketch", HSSBEM_CLASSID, &H2F_Sketch));
+  PetscCall(PetscLogEventRegister(" H2FactorLevels", HSSBEM_CLASSID, &H2F_Eliminate));
+  PetscCall(PetscLogEventRegister(" H2FactorMerge", HSSBEM_CLASSID, &H2F_Merge));
+  PetscCall(PetscLogEventRegister(" H2FactorTop", HSSBEM_CLASSID, &H2F_Top));
+  PetscCall(PetscLogEventRegister("H2FactorSolve", HSSBEM_CLASSID, &H2F_Solve));
   PetscCall(PetscLogEventRegister("SceneSetup", HSSBEM_CLASSID, &SCN_Setup));
   PetscCall(PetscLogEventRegister("SceneFrame", HSSBEM_CLASSID, &SCN_Frame));
   PetscCall(PetscLogEventRegister(" SceneUpdate", HSSBEM_CLASSID, &SCN_Update));
@@ -138,6 +182,7 @@ PetscErrorCode HssbemInitializePackage(void)
   PetscCall(PCRegister(PCHSS, PCCreate_HSS));
   PetscCall(PCRegister(PCH2, PCCreate_H2));
   PetscCall(ArmFaultFromOptions_Private());
+  PetscCall(ProgressFromOptions_Private());
   PetscCall(PetscRegisterFinalize(HssbemFinalizePackage));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

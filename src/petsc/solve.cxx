@@ -7,6 +7,11 @@
 
 #include "system_context.hpp"
 
+#include "hssbem/core/progress.hpp"
+#include "hssbem/core/timer.hpp"
+
+#include <algorithm>
+
 #include <cmath>
 #include <string>
 
@@ -80,6 +85,43 @@ static PetscErrorCode KSPSolveInLayout_Private(KSP ksp, Mat op, Vec b, Vec x, Pe
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* The main solve's progress (core/progress.hpp): the share of the way from the first residual
+   to the tolerance, on a logarithmic scale. */
+struct KSPProgress_Private {
+  hssbem::Timer timer;
+  PetscReal     r0 = 0;
+};
+
+static PetscErrorCode KSPMonitorProgress_Private(KSP ksp, PetscInt it, PetscReal rnorm, void *ctx)
+{
+  KSPProgress_Private *p    = (KSPProgress_Private *)ctx;
+  hssbem::ProgressHook hook = hssbem::progress_hook();
+  PetscReal            rtol;
+  KSPConvergedReason   reason;
+  KSPType              type;
+
+  PetscFunctionBegin;
+  if (!hook) PetscFunctionReturn(PETSC_SUCCESS);
+  if (it == 0) {
+    p->timer.restart();
+    p->r0 = rnorm;
+  }
+  PetscCall(KSPGetTolerances(ksp, &rtol, NULL, NULL, NULL));
+  PetscCall(KSPGetConvergedReason(ksp, &reason));
+  PetscCall(KSPGetType(ksp, &type));
+  const double done = p->r0 > 0 && rnorm > 0 && rtol < 1 ? std::log(p->r0 / rnorm) / std::log(1 / rtol) : 0;
+  hook(type, reason != KSP_CONVERGED_ITERATING ? 1.0 : std::min(std::max(done, 0.0), 0.999), p->timer.seconds());
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode KSPProgressDestroy_Private(void **ctx)
+{
+  PetscFunctionBegin;
+  delete (KSPProgress_Private *)*ctx;
+  *ctx = NULL;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 /* -hssbem_residual_max: the largest true relative residual ||b - A x|| / ||b|| that counts as a
    solution, whatever the KSP (preonly included: a loose preconditioner applied once is no solve). */
 static PetscErrorCode ResidualMax_Private(MPI_Comm comm, PetscReal *bound)
@@ -90,27 +132,6 @@ static PetscErrorCode ResidualMax_Private(MPI_Comm comm, PetscReal *bound)
   PetscCall(PetscOptionsReal("-hssbem_residual_max", "Largest true relative residual ||b - A x||/||b|| accepted as a solution (any KSP, preonly included)", "HssbemSolveSystem", *bound, bound, NULL));
   PetscOptionsEnd();
   PetscCheck(*bound > 0 && std::isfinite((double)*bound), comm, PETSC_ERR_ARG_OUTOFRANGE, "-hssbem_residual_max must be positive and finite, got %g", (double)*bound);
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
-
-PetscErrorCode HssbemDefaultPCType(MPI_Comm comm, hssbem::OperatorType type, const char **pc_type)
-{
-  PetscFunctionBegin;
-  (void)comm;
-  *pc_type = type == hssbem::OperatorType::Hss ? PCHSS : type == hssbem::OperatorType::H2 ? PCH2 : PCLU;
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
-
-PetscErrorCode HssbemH2WillBeFactored(MPI_Comm comm, bool *factored)
-{
-  char        given[64];
-  PetscBool   set;
-  const char *def;
-
-  PetscFunctionBegin;
-  PetscCall(PetscOptionsGetString(NULL, NULL, "-pc_type", given, sizeof(given), &set));
-  PetscCall(HssbemDefaultPCType(comm, hssbem::OperatorType::H2, &def));
-  *factored = std::string(set ? given : def) == PCH2;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -131,6 +152,7 @@ PetscErrorCode HssbemKSPCreate(MPI_Comm comm, const char *mat_type, KSP *ksp)
   PC                   pc;
   hssbem::OperatorType type;
   const char          *pc_type;
+  KSPProgress_Private *progress;
 
   PetscFunctionBegin;
   PetscCall(HssbemOperatorTypeFromName(comm, mat_type, &type));
@@ -145,6 +167,8 @@ PetscErrorCode HssbemKSPCreate(MPI_Comm comm, const char *mat_type, KSP *ksp)
   PetscCall(KSPGetPC(*ksp, &pc));
   PetscCall(HssbemDefaultPCType(comm, type, &pc_type));
   PetscCall(PCSetType(pc, pc_type));
+  PetscCallCXX(progress = new KSPProgress_Private);
+  PetscCall(KSPMonitorSet(*ksp, KSPMonitorProgress_Private, progress, KSPProgressDestroy_Private));
   PetscCall(KSPSetFromOptions(*ksp));
   {
     PetscReal bound; /* read here too, so that -help lists it and a bad value stops the run early */

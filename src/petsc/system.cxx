@@ -1,4 +1,5 @@
-/* HssbemCreateSystem and the pieces the compressed MatShell and PC hss share (see system_context.hpp). */
+/* HssbemCreateSystem, the top of the PETSc layer: the options of the compressions, the size check,
+   the system's matrix and right-hand side; conversions between its rows and mesh order. */
 #include "hssbem/petsc/system.h"
 #include "hssbem/petsc/dense.h"
 #include "hssbem/petsc/log.h"
@@ -13,47 +14,6 @@
 #include <memory>
 #include <optional>
 #include <string>
-
-static PetscErrorCode SystemContextDestroy_Private(void *ctx)
-{
-  PetscFunctionBegin;
-  delete static_cast<HssbemSystemContext *>(ctx);
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
-
-/* Compose the system context with A; A owns it from here on. */
-static PetscErrorCode ComposeSystemContext_Private(Mat A, HssbemSystemContext *ctx)
-{
-  PetscContainer c;
-
-  PetscFunctionBegin;
-  PetscCall(PetscContainerCreate(PetscObjectComm((PetscObject)A), &c));
-  PetscCall(PetscContainerSetPointer(c, ctx));
-  PetscCall(PetscContainerSetUserDestroy(c, SystemContextDestroy_Private));
-  PetscCall(PetscObjectCompose((PetscObject)A, "HssbemSystemContext", (PetscObject)c));
-  PetscCall(PetscContainerDestroy(&c));
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
-
-PetscErrorCode HssbemMatGetSystemContext(Mat A, HssbemSystemContext **ctx)
-{
-  PetscContainer c = NULL;
-
-  PetscFunctionBegin;
-  *ctx = NULL;
-  PetscCall(PetscObjectQuery((PetscObject)A, "HssbemSystemContext", (PetscObject *)&c));
-  if (c) PetscCall(PetscContainerGetPointer(c, (void **)ctx));
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
-
-PetscErrorCode HssbemOperatorTypeFromName(MPI_Comm comm, const char *mat_type, hssbem::OperatorType *type)
-{
-  PetscFunctionBegin;
-  const std::optional<hssbem::OperatorType> t = hssbem::parse_operator_type(mat_type ? mat_type : "");
-  PetscCheck(t, comm, PETSC_ERR_ARG_UNKNOWN_TYPE, "unknown BEM matrix type '%s': use %s, %s or %s", mat_type, HSSBEM_MAT_HSS, HSSBEM_MAT_H2, HSSBEM_MAT_DENSE);
-  *type = *t;
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
 
 /*@C
   HssbemMatIsHss - Tells whether A is the HSS-backed MatShell of HssbemCreateSystem().
@@ -287,7 +247,7 @@ PetscErrorCode HssbemCreateSystem(MPI_Comm comm, const hssbem::BemOperator &op, 
     break;
   case hssbem::OperatorType::H2: {
     ctx->h2_options.pressure_columns = pressure;
-    /* The driver's defaults (README, "Choosing the operator"): 1e-5 keeps the H² solution within
+    /* The driver's defaults (docs/performance.md, "Choosing the operator"): 1e-5 keeps the H² solution within
        ~5e-6 of dense LU's, well below the discretisation error of any mesh it pays on, and
        single-precision (low-rank) blocks halve the memory at that tolerance. */
     ctx->h2_options.rel_tol          = 1e-5;
@@ -314,94 +274,8 @@ PetscErrorCode HssbemCreateSystem(MPI_Comm comm, const hssbem::BemOperator &op, 
     PetscCall(HssbemMatCreateCompressed_Private(comm, ctx.get(), A, b));
     break;
   }
-  PetscCall(ComposeSystemContext_Private(*A, ctx.get()));
+  PetscCall(HssbemMatComposeSystemContext(*A, ctx.get()));
   ctx.release();
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
-
-PetscErrorCode HssbemOwnedNodes(MPI_Comm comm, PetscInt nnodes, PetscInt *nstart, PetscInt *nlocal)
-{
-  PetscInt n = PETSC_DECIDE, N = nnodes;
-
-  PetscFunctionBegin;
-  PetscCall(PetscSplitOwnership(comm, &n, &N));
-  PetscCallMPI(MPI_Scan(&n, nstart, 1, MPIU_INT, MPI_SUM, comm));
-  *nstart -= n;
-  *nlocal = n;
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
-
-PetscErrorCode HssbemAgreeOnError(MPI_Comm comm, PetscErrorCode *code, std::string *message, PetscMPIInt *lowest, PetscMPIInt *nfailed)
-{
-  PetscMPIInt rank, size, key, failed = *code ? 1 : 0;
-  int         head[2] = {(int)*code, 0};
-
-  PetscFunctionBegin;
-  PetscCallMPI(MPI_Comm_rank(comm, &rank));
-  PetscCallMPI(MPI_Comm_size(comm, &size));
-  key = failed ? rank : size;
-  PetscCallMPI(MPI_Allreduce(&key, lowest, 1, MPI_INT, MPI_MIN, comm));
-  PetscCallMPI(MPI_Allreduce(&failed, nfailed, 1, MPI_INT, MPI_SUM, comm));
-  if (*lowest == size) {
-    *lowest = -1;
-    PetscFunctionReturn(PETSC_SUCCESS);
-  }
-  if (rank == *lowest) head[1] = (int)message->size();
-  PetscCallMPI(MPI_Bcast(head, 2, MPI_INT, *lowest, comm));
-  *code = (PetscErrorCode)head[0];
-  PetscCallCXX(message->resize((size_t)head[1]));
-  if (head[1] > 0) PetscCallMPI(MPI_Bcast(&(*message)[0], head[1], MPI_CHAR, *lowest, comm));
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
-
-void HssbemGuard::Fail(PetscErrorCode code, const char *message) noexcept
-{
-  m_code = code;
-  try {
-    m_message = message ? message : "out of memory";
-  } catch (...) {
-    m_code = PETSC_ERR_MEM; /* the message itself did not fit: say what is sure */
-    m_message.clear();
-  }
-}
-
-PetscErrorCode HssbemGuard::Check(MPI_Comm comm, const char *what)
-{
-  PetscMPIInt lowest, nfailed, size;
-
-  PetscFunctionBegin;
-  PetscCall(HssbemAgreeOnError(comm, &m_code, &m_message, &lowest, &nfailed));
-  if (lowest < 0) PetscFunctionReturn(PETSC_SUCCESS);
-  PetscCallMPI(MPI_Comm_size(comm, &size));
-  const std::string where = nfailed < size ? " (on rank " + std::to_string(lowest) + ")" : "";
-  SETERRQ(comm, m_code, "%s: %s%s", what, m_message.empty() ? "out of memory" : m_message.c_str(), where.c_str());
-}
-
-HssbemRootExchange::~HssbemRootExchange()
-{
-  PetscCallAbort(PETSC_COMM_SELF, VecScatterDestroy(&m_scatter));
-  PetscCallAbort(PETSC_COMM_SELF, VecDestroy(&m_in));
-  PetscCallAbort(PETSC_COMM_SELF, VecDestroy(&m_out));
-}
-
-PetscErrorCode HssbemRootExchange::SetUp(Vec x)
-{
-  PetscFunctionBegin;
-  if (m_scatter) PetscFunctionReturn(PETSC_SUCCESS);
-  if (m_order.empty()) {
-    PetscCall(VecScatterCreateToZero(x, &m_scatter, &m_in));
-  } else {
-    PetscMPIInt rank;
-    PetscInt    N;
-    IS          from;
-    PetscCallMPI(MPI_Comm_rank(PetscObjectComm((PetscObject)x), &rank));
-    PetscCall(VecGetSize(x, &N));
-    PetscCall(ISCreateGeneral(PETSC_COMM_SELF, rank == 0 ? N : 0, m_order.data(), PETSC_USE_POINTER, &from));
-    PetscCall(VecCreateSeq(PETSC_COMM_SELF, rank == 0 ? N : 0, &m_in));
-    PetscCall(VecScatterCreate(x, from, m_in, NULL, &m_scatter));
-    PetscCall(ISDestroy(&from));
-  }
-  PetscCall(VecDuplicate(m_in, &m_out));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -409,25 +283,26 @@ PetscErrorCode HssbemRootExchange::SetUp(Vec x)
 static PetscErrorCode MeshOrderScatter_Private(Mat A, Vec x, Vec y, ScatterMode mode)
 {
   HssbemSystemContext *p;
-  PetscInt             lo, hi;
-  IS                   from;
   VecScatter           sc;
 
   PetscFunctionBegin;
   PetscCall(HssbemMatGetSystemContext(A, &p));
-  PetscCall(VecGetOwnershipRange(y, &lo, &hi));
-  if (!p || p->system_of_dof.empty()) PetscCall(ISCreateStride(PetscObjectComm((PetscObject)y), hi - lo, lo, 1, &from));
-  else PetscCall(ISCreateGeneral(PetscObjectComm((PetscObject)y), hi - lo, p->system_of_dof.data() + lo, PETSC_COPY_VALUES, &from));
-  PetscCall(VecScatterCreate(x, from, y, NULL, &sc));
+  if (!p || p->system_of_dof.empty()) { /* mesh order already, perhaps in another layout (ScaLAPACK's) */
+    PetscInt lo, hi;
+    IS       from;
+    PetscCall(VecGetOwnershipRange(y, &lo, &hi));
+    PetscCall(ISCreateStride(PetscObjectComm((PetscObject)y), hi - lo, lo, 1, &from));
+    PetscCall(VecScatterCreate(y, from, x, from, &sc));
+    PetscCall(ISDestroy(&from));
+  } else PetscCall(HssbemRowScatterCreate(y, x, p->system_of_dof, &sc));
   if (mode == SCATTER_FORWARD) {
-    PetscCall(VecScatterBegin(sc, x, y, INSERT_VALUES, SCATTER_FORWARD));
-    PetscCall(VecScatterEnd(sc, x, y, INSERT_VALUES, SCATTER_FORWARD));
+    PetscCall(VecScatterBegin(sc, x, y, INSERT_VALUES, SCATTER_REVERSE));
+    PetscCall(VecScatterEnd(sc, x, y, INSERT_VALUES, SCATTER_REVERSE));
   } else {
-    PetscCall(VecScatterBegin(sc, y, x, INSERT_VALUES, SCATTER_REVERSE));
-    PetscCall(VecScatterEnd(sc, y, x, INSERT_VALUES, SCATTER_REVERSE));
+    PetscCall(VecScatterBegin(sc, y, x, INSERT_VALUES, SCATTER_FORWARD));
+    PetscCall(VecScatterEnd(sc, y, x, INSERT_VALUES, SCATTER_FORWARD));
   }
   PetscCall(VecScatterDestroy(&sc));
-  PetscCall(ISDestroy(&from));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -481,47 +356,4 @@ PetscErrorCode HssbemMatCreateMeshOrderVec(Mat A, Vec *y)
   PetscCall(VecCreateMPI(PetscObjectComm((PetscObject)A), 3 * nlocal, N, y));
   PetscCall(VecSetBlockSize(*y, 3));
   PetscFunctionReturn(PETSC_SUCCESS);
-}
-
-PetscErrorCode HssbemRootExchange::Gather(Vec x, const PetscScalar **a)
-{
-  PetscFunctionBegin;
-  PetscCall(VecScatterBegin(m_scatter, x, m_in, INSERT_VALUES, SCATTER_FORWARD));
-  PetscCall(VecScatterEnd(m_scatter, x, m_in, INSERT_VALUES, SCATTER_FORWARD));
-  PetscCall(VecGetArrayRead(m_in, a));
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
-
-PetscErrorCode HssbemRootExchange::RestoreGather(const PetscScalar **a)
-{
-  PetscFunctionBegin;
-  PetscCall(VecRestoreArrayRead(m_in, a));
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
-
-PetscErrorCode HssbemRootExchange::GetOut(PetscScalar **a)
-{
-  PetscFunctionBegin;
-  PetscCall(VecGetArrayWrite(m_out, a));
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
-
-PetscErrorCode HssbemRootExchange::ScatterOut(PetscScalar **a, Vec y)
-{
-  PetscFunctionBegin;
-  PetscCall(VecRestoreArrayWrite(m_out, a));
-  PetscCall(VecScatterBegin(m_scatter, m_out, y, INSERT_VALUES, SCATTER_REVERSE));
-  PetscCall(VecScatterEnd(m_scatter, m_out, y, INSERT_VALUES, SCATTER_REVERSE));
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
-
-void HssbemAddRegularization(const std::vector<double> &modes, const PetscScalar *x, PetscScalar *y)
-{
-  const std::size_t n = modes.size() / 6;
-  double            qx[6] = {0, 0, 0, 0, 0, 0};
-  for (std::size_t i = 0; i < n; ++i)
-    for (int m = 0; m < 6; ++m) qx[m] += modes[6 * i + m] * x[i];
-  for (int m = 0; m < 6; ++m) qx[m] *= hssbem::rigid_regularization_weight;
-  for (std::size_t i = 0; i < n; ++i)
-    for (int m = 0; m < 6; ++m) y[i] += modes[6 * i + m] * qx[m];
 }

@@ -1,17 +1,18 @@
 /* Private to the PETSc layer: the BEM system behind a matrix of HssbemCreateSystem(), composed
-   with the Mat so that its MatShell operations and PC hss find the operator, the pattern and the
-   compression. */
+   with the Mat so that its MatShell operations and the PCs find the operator, the pattern and the
+   compression; the layout of a distributed system; and the one guard of C++ work inside PETSc
+   functions. Implemented in system_context.cxx; nothing here calls into the files that use it. */
 #pragma once
 
 #include "hssbem/petsc/compat.h"
 #include "hssbem/petsc/errors.h"
 
 #include "hssbem/bem/bem_operator.hpp"
+#include "hssbem/bem/node_partition.hpp"
 #include "hssbem/core/fault.hpp"
 #include "hssbem/core/operator_type.hpp"
 #include "hssbem/h2/h2_system.hpp"
 #include "hssbem/hss/hss_system.hpp"
-#include "hssbem/bem/node_partition.hpp"
 #include "hssbem/petsc/mpi_comm.h"
 
 #include <petscmat.h>
@@ -22,44 +23,48 @@
 #include <string>
 #include <vector>
 
+/* How a distributed system lies on the ranks of a communicator (one rank is one part): the
+   engines' communicator (a duplicate), the METIS partition (part of each dof node, on every rank)
+   and its figures. */
+struct HssbemLayout {
+  std::unique_ptr<HssbemMpiComm> comm;
+  std::vector<int>               node_part;
+  hssbem::NodePartitionStats     partition;
+};
+
+/* The layout of a system of op on comm: METIS on rank 0 (one rank: one part), broadcast (log
+   event BEMPartition, fault site Partition). Collective. */
+PetscErrorCode HssbemLayoutCreate(MPI_Comm comm, const hssbem::BemOperator &op, std::unique_ptr<HssbemLayout> *layout);
+
+/* The global row of each mesh-order dof (3 per node) of a distributed system on `tree`: its rows
+   are in cluster order, rank p's block holding part p's nodes. */
+std::vector<PetscInt> HssbemSystemRows(const hssbem::ClusterTree &tree);
+
 struct HssbemSystemContext {
   const hssbem::BemOperator *op = nullptr;
   hssbem::SystemSelection    sel;
   std::vector<double>        modes; /* rigid modes (3N × 6, row-major) of the regularisation; empty: none */
   hssbem::OperatorType       type = hssbem::OperatorType::Dense;
-  hssbem::HssOptions         hss_options;                 /* of the compression below */
-  std::shared_ptr<const hssbem::HssBemSystem> hss;        /* rank 0 only, HSS matrices only */
-  hssbem::H2Options          h2_options;                  /* of the compression below */
-  std::shared_ptr<const hssbem::H2BemSystem> h2;          /* rank 0 only, H² matrices only: the
-                                                             whole matrix (gathered on demand when
-                                                             it is distributed) */
-  /* H² or HSS on several ranks: the matrix distributed over them (every rank its part), the
-     ranks' communicator (a duplicate, declared first so that it outlives the system), the METIS
-     partition (part of each dof node, on every rank) and its figures, and the global row of each
-     mesh-order dof (3 per node): the system's rows are in cluster order, rank p's block holding
-     part p's nodes. */
-  std::unique_ptr<HssbemMpiComm>                      comm;
-  std::shared_ptr<const hssbem::H2DistributedSystem>  h2dist;
-  std::shared_ptr<const hssbem::HssDistributedSystem> hssdist;
-  std::vector<int>                                    node_part;
-  hssbem::NodePartitionStats                          partition;
-  std::vector<PetscInt>                               system_of_dof; /* empty: mesh order */
-  bool                                                h2_gathered = false; /* h2 holds the gathered matrix (rank 0) */
+  hssbem::HssOptions         hss_options; /* of the compression below */
+  hssbem::H2Options          h2_options;  /* of the compression below */
+  /* H² or HSS (any number of ranks): the layout (declared first, so that its communicator
+     outlives the system), the matrix distributed over it (every rank its part), and the row of
+     each mesh-order dof (empty: mesh order, the dense system). */
+  std::unique_ptr<HssbemLayout>                       layout;
+  std::shared_ptr<const hssbem::H2DistributedSystem>  h2;
+  std::shared_ptr<const hssbem::HssDistributedSystem> hss;
+  std::vector<PetscInt>                               system_of_dof;
 
-  /* The compressed operator behind a MatShell (rank 0), or NULL. */
-  const hssbem::CompressedBemSystem *compressed() const
-  {
-    if (hss) return hss.get();
-    return h2.get();
-  }
-  /* The distributed operator behind a MatShell on several ranks, or NULL. */
+  /* The distributed operator behind a MatShell, or NULL (dense). */
   const hssbem::DistributedBemSystem *distributed() const
   {
-    if (h2dist) return h2dist.get();
-    return hssdist.get();
+    if (h2) return h2.get();
+    return hss.get();
   }
 };
 
+/* Compose the system context with A, which owns it from then on. */
+PetscErrorCode HssbemMatComposeSystemContext(Mat A, HssbemSystemContext *ctx);
 /* The system composed with A, or NULL when A did not come from HssbemCreateSystem(). */
 PetscErrorCode HssbemMatGetSystemContext(Mat A, HssbemSystemContext **ctx);
 
@@ -75,30 +80,15 @@ PetscErrorCode HssbemH2WillBeFactored(MPI_Comm comm, bool *factored);
 /* Dof nodes owned by this rank: a contiguous block [nstart, nstart + nlocal), 3 rows each. */
 PetscErrorCode HssbemOwnedNodes(MPI_Comm comm, PetscInt nnodes, PetscInt *nstart, PetscInt *nlocal);
 
-/* Vectors gathered whole on rank 0 and scattered back, for what runs on rank 0 only (PC h2, and PC hss
-   on a dense matrix or on one rank). */
-class HssbemRootExchange {
-public:
-  HssbemRootExchange() = default;
-  /* The root's arrays in mesh order: entry d is row order[d] of the distributed vectors. */
-  explicit HssbemRootExchange(std::vector<PetscInt> order) : m_order(std::move(order)) {}
-  HssbemRootExchange(const HssbemRootExchange &) = delete;
-  HssbemRootExchange &operator=(const HssbemRootExchange &) = delete;
-  ~HssbemRootExchange();
-  /* Set up for vectors laid out like x (once; later calls do nothing). */
-  PetscErrorCode SetUp(Vec x);
-  /* x gathered into the root's array (valid on rank 0 until Restore). */
-  PetscErrorCode Gather(Vec x, const PetscScalar **a);
-  PetscErrorCode RestoreGather(const PetscScalar **a);
-  /* The root's array out, scattered into y. */
-  PetscErrorCode GetOut(PetscScalar **a);
-  PetscErrorCode ScatterOut(PetscScalar **a, Vec y);
+/* The scatter from vectors like x to vectors like y that puts x's entry r at y's map[r] (x in mesh
+   order and y in a distributed system's rows: map = its rows, y[map[d]] being dof d). */
+PetscErrorCode HssbemRowScatterCreate(Vec x, Vec y, const std::vector<PetscInt> &map, VecScatter *sc);
 
-private:
-  std::vector<PetscInt> m_order; /* empty: the identity */
-  VecScatter            m_scatter = nullptr;
-  Vec                   m_in = nullptr, m_out = nullptr;
-};
+/* y += c Q (Qᵀ x) for the rigid-mode regularisation (modes: Q, 3N × 6 row-major, mesh order) on
+   this rank's rows of the distributed system s (Qᵀ x summed over its ranks, comm); and
+   diag[i] += c |Q(row i, :)|². */
+void HssbemAddRegularization(const hssbem::DistributedBemSystem &s, const hssbem::RankComm &comm, const std::vector<double> &modes, const PetscScalar *x, PetscScalar *y);
+void HssbemAddRegularizationDiagonal(const hssbem::DistributedBemSystem &s, const std::vector<double> &modes, PetscScalar *diag);
 
 /* The one guard of C++ work inside a PETSc function or callback (MatMult, MatGetDiagonal, PCSetUp,
    PCApply, the assembly, ...), on any number of ranks. Run() calls fn on this rank (every rank,
@@ -139,6 +129,3 @@ private:
   PetscErrorCode m_code = 0;
   std::string    m_message;
 };
-
-/* y += c Q (Qᵀ x) for the rigid-mode regularisation (full vectors on one rank). */
-void HssbemAddRegularization(const std::vector<double> &modes, const PetscScalar *x, PetscScalar *y);

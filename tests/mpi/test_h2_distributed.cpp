@@ -201,7 +201,7 @@ void compare_factorizations(const Fixture &f, const SystemSelection &sel, const 
   const int p = fo.sketch_columns > 0 ? fo.sketch_columns : default_sketch_columns(fo.rel_tol);
   FarFieldSketch sketch = gathered_sketch(f, p);
   H2FactorCache cd(dist.product());
-  const H2Factorization Fd(cd, f.comm, sel, fo);
+  const H2Factorization Fd(cd, sel, fo);
   std::vector<long long> eliminated;
   for (const H2FactorLevelStats &l : Fd.stats().levels) eliminated.push_back(l.eliminated);
   MPI_Allreduce(MPI_IN_PLACE, eliminated.data(), static_cast<int>(eliminated.size()), MPI_LONG_LONG, MPI_SUM, PETSC_COMM_WORLD);
@@ -219,7 +219,7 @@ void compare_factorizations(const Fixture &f, const SystemSelection &sel, const 
     EXPECT_EQ(Fw.stats().time_sketch, 0.0); // the adopted sketch
     same = Fw.stats().levels.size() == eliminated.size();
     for (std::size_t i = 0; same && i < eliminated.size(); ++i) same = Fw.stats().levels[i].eliminated == eliminated[i];
-    Fw.solve(b.data(), x.data());
+    solve_mesh_order(Fw, b.data(), x.data());
   }
   MPI_Bcast(&same, 1, MPI_INT, 0, PETSC_COMM_WORLD);
   MPI_Bcast(x.data(), static_cast<int>(x.size()), MPI_DOUBLE, 0, PETSC_COMM_WORLD);
@@ -230,7 +230,7 @@ void compare_factorizations(const Fixture &f, const SystemSelection &sel, const 
       bl[3 * k + c] = b[3L * tree.perm()[first + k] + c];
       xref[3 * k + c] = x[3L * tree.perm()[first + k] + c];
     }
-  Fd.solve_local(bl.data(), xl.data());
+  Fd.solve(bl.data(), xl.data());
   *diff = rel(xl, xref, PETSC_COMM_WORLD);
   dist.apply(sel, xl.data(), ax.data());
   *residual = rel(ax, bl, PETSC_COMM_WORLD);
@@ -244,8 +244,8 @@ TEST_F(H2Distributed, FactorizationEqualsTheOneRankOneWithParts)
   // simulates the parts on the same tree, matrix and sketch, so the same skeletons and, but for
   // the top's LU, the same arithmetic.
   const Fixture &f = *H2Distributed::f;
-  // At 1e-3 three times: the top's LU in double (below mixed_top_from, 4 000 by default), and in
-  // single precision alone (mixed_top_from 1) spread over the ranks (ScaLAPACK) or on rank 0
+  // At 1e-3 three times: the top's LU in double (below single_top_from, 4 000 by default), and in
+  // single precision alone (single_top_from 1) spread over the ranks (ScaLAPACK) or on rank 0
   // (each rank sends its rows rounded, two floats to a value).
   struct Case {
     double tol;
@@ -263,7 +263,7 @@ TEST_F(H2Distributed, FactorizationEqualsTheOneRankOneWithParts)
     fo.top_size = 0;
     fo.top_when_cheaper = false; // eliminate every level the parts allow (a 3k-unknown top is cheaper)
     fo.leaf_size = 16;
-    fo.mixed_top_from = c.mixed_from;
+    fo.single_top_from = c.mixed_from;
     fo.spread_top = c.spread;
     double diff = 1, residual = 1;
     H2FactorStats st;
@@ -305,7 +305,7 @@ TEST_F(H2Distributed, FactorizationBreakdownThrowsOnEveryRank)
   H2FactorOptions fo;
   fo.rel_tol = 1e-3;
   fo.top_size = 3 * f.op->num_nodes();
-  EXPECT_THROW(H2Factorization(cd, f.comm, sel, fo), H2Breakdown);
+  EXPECT_THROW(H2Factorization(cd, sel, fo), H2Breakdown);
 }
 
 TEST_F(H2Distributed, SystemRowsMatchTheMeshOrderSystem)

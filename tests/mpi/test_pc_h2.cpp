@@ -93,7 +93,7 @@ Outcome ksp_solve(Mat A, Vec b, Vec x_ref, const char *options)
   PetscCallAbort(PETSC_COMM_WORLD, VecDestroy(&x));
   PetscCallAbort(PETSC_COMM_WORLD, KSPDestroy(&ksp));
   // Remove only what this solve set: the program's own options (leaf sizes) stay.
-  for (const char *key : {"-t_ksp_type", "-t_ksp_rtol", "-t_pc_type", "-t_pc_h2_rel_tol", "-t_pc_h2_top_size", "-t_pc_h2_top_when_cheaper", "-t_pc_h2_leaf_size", "-t_ksp_pc_side", "-t_pc_h2_mixed_top"})
+  for (const char *key : {"-t_ksp_type", "-t_ksp_rtol", "-t_pc_type", "-t_pc_h2_rel_tol", "-t_pc_h2_top_size", "-t_pc_h2_top_when_cheaper", "-t_pc_h2_leaf_size", "-t_ksp_pc_side", "-t_pc_h2_single_top_from"})
     PetscCallAbort(PETSC_COMM_WORLD, PetscOptionsClearValue(NULL, key));
   return o;
 }
@@ -209,7 +209,7 @@ std::string pc_view_after(Mat A, const char *options)
   PetscCallAbort(PETSC_COMM_WORLD, PCView(pc, v));
   PetscCallAbort(PETSC_COMM_WORLD, PetscViewerDestroy(&v));
   PetscCallAbort(PETSC_COMM_WORLD, KSPDestroy(&ksp));
-  for (const char *key : {"-t_ksp_type", "-t_ksp_rtol", "-t_ksp_pc_side", "-t_pc_type", "-t_pc_h2_mixed_top", "-t_pc_h2_top_size", "-t_pc_h2_top_when_cheaper"})
+  for (const char *key : {"-t_ksp_type", "-t_ksp_rtol", "-t_ksp_pc_side", "-t_pc_type", "-t_pc_h2_single_top_from", "-t_pc_h2_top_size", "-t_pc_h2_top_when_cheaper"})
     PetscCallAbort(PETSC_COMM_WORLD, PetscOptionsClearValue(NULL, key));
   std::ifstream in(name);
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -221,10 +221,10 @@ std::string pc_view_after(Mat A, const char *options)
 TEST_F(PCH2Test, PreconditionerWithTheTopSpreadOverTheRanks)
 {
   // The mesh's top (a few hundred unknowns at the default tolerance) lies below the size from
-  // which a single-precision top is spread over the ranks (-pc_h2_mixed_top 4000): forced here,
+  // which a single-precision top is spread over the ranks (-pc_h2_single_top_from 4000): forced here,
   // with every level the parts allow eliminated, the spread top (ScaLAPACK on several ranks; the
   // single-precision LU on one) preconditions GMRES as well as the others.
-  const char *spread = "-t_ksp_type gmres -t_ksp_pc_side right -t_ksp_rtol 1e-10 -t_pc_type h2 -t_pc_h2_mixed_top 1 -t_pc_h2_top_size 0 -t_pc_h2_top_when_cheaper false";
+  const char *spread = "-t_ksp_type gmres -t_ksp_pc_side right -t_ksp_rtol 1e-10 -t_pc_type h2 -t_pc_h2_single_top_from 1 -t_pc_h2_top_size 0 -t_pc_h2_top_when_cheaper false";
   const Outcome o = ksp_solve(mixed->A[2], mixed->b[2], mixed->xd, spread);
   EXPECT_GT(o.reason, 0);
   EXPECT_GE(o.its, 2);

@@ -50,7 +50,7 @@ ENV.update(OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENB
 # The problem's solver: the H² matrix, GMRES + PC h2 with its levels (no dense-top shortcut).
 SOLVER = ["-bem_mat_type", "h2", "-mat_h2_leaf_size", "16", "-pc_type", "h2", "-pc_h2_top_size", "0",
           "-pc_h2_top_when_cheaper", "0", "-hssbem_error_timeout", "10", "-options_left"]
-SPREAD = ["-pc_h2_mixed_top", "1"]   # a single-precision top: spread over the ranks
+SPREAD = ["-pc_h2_single_top_from", "1"]   # a single-precision top: spread over the ranks
 ON_RANK0 = ["-pc_h2_spread_top", "0"]
 
 

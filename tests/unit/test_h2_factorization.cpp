@@ -116,7 +116,7 @@ TEST_P(H2FactorAccuracy, SolveMatchesDenseLU)
   const H2Factorization F(cache, sel, fo);
   const std::vector<double> b = random_vector(3L * n, 5);
   std::vector<double> x(b.size());
-  F.solve(b.data(), x.data());
+  solve_mesh_order(F, b.data(), x.data());
   const std::vector<double> xd = dense_solve(dense_a(dense_k(*L->op, 6), n, 6, known), b);
   const double err = rel(x, xd);
   const H2FactorStats &st = F.stats();
@@ -130,8 +130,11 @@ TEST_P(H2FactorAccuracy, SolveMatchesDenseLU)
   EXPECT_EQ(eliminated + st.top_size, 3LL * n);
   EXPECT_GE(eliminated, c.min_eliminated * 3 * n);
   // The estimate of ‖I − A F⁻¹‖ (with the H² product) follows the tolerance too.
-  const double inv_err = estimate_inverse_error(F, [&](const double *in, double *out) {
-    apply_compressed_k(K, pattern_product_input(sel, in, n, K.col_block()), out);
+  std::vector<double> in_mesh(3L * n), out_mesh(3L * n);
+  const double inv_err = estimate_inverse_error(F, [&](const double *in, double *out) { // cluster order, as F.solve()
+    K.tree().to_mesh_order(in, in_mesh.data(), 3);
+    apply_compressed_k(K, pattern_product_input(sel, in_mesh.data(), n, K.col_block()), out_mesh.data());
+    K.tree().to_cluster_order(out_mesh.data(), out, 3);
   });
   std::printf("  ||I - A F^-1|| ~ %.2e\n", inv_err);
   EXPECT_LE(inv_err, c.max_inverse);
@@ -168,7 +171,7 @@ TEST(H2FactorSchedule, TwoThreadsGiveTheSameFactorsEveryTimeAndTheOneThreadOnesT
     omp_set_num_threads(nt);
     const H2Factorization F(cache, sel, fo);
     std::vector<double> x(b.size());
-    F.solve(b.data(), x.data());
+    solve_mesh_order(F, b.data(), x.data());
     int most = 0; // boxes on the widest level: more than the threads, or nothing ran at once
     for (const H2FactorLevelStats &l : F.stats().levels) most = std::max(most, l.boxes);
     EXPECT_GE(most, 4);
@@ -199,7 +202,7 @@ TEST(H2FactorAccuracy, LooseToleranceIsApproximate)
   const H2Factorization F(cache, selection(n, known), fo);
   const std::vector<double> b = random_vector(3L * n, 5);
   std::vector<double> x(b.size());
-  F.solve(b.data(), x.data());
+  solve_mesh_order(F, b.data(), x.data());
   const double err = rel(x, dense_solve(dense_a(dense_k(*L->op, 6), n, 6, known), b));
   std::printf("tol 1e-2: error %.2e\n", err);
   EXPECT_GT(err, 4e-3); // measured 1.3e-2
@@ -226,8 +229,8 @@ TEST(H2FactorMemory, SinglePrecisionWorkingBlocksHalveTheStore)
   const H2Factorization Fs(cache, sel, fo);
   const std::vector<double> b = random_vector(3L * n, 5);
   std::vector<double> xd(b.size()), xs(b.size());
-  Fd.solve(b.data(), xd.data());
-  Fs.solve(b.data(), xs.data());
+  solve_mesh_order(Fd, b.data(), xd.data());
+  solve_mesh_order(Fs, b.data(), xs.data());
   const double moved = rel(xs, xd), err = rel(xs, dense_solve(dense_a(dense_k(*L->op, 6), n, 6, sel.displacement_known), b));
   const std::size_t wd = Fd.stats().workspace_bytes, ws = Fs.stats().workspace_bytes;
   std::printf("working store %.2f MB in double, %.2f MB at rest in single; solutions differ by %.2e, error vs dense LU %.2e\n", wd / 1e6, ws / 1e6, moved, err);
@@ -257,7 +260,7 @@ TEST(H2FactorPatterns, TwoPatternsOneCompression)
   for (int pass = 0; pass < 2; ++pass) {
     const H2Factorization F(cache, selection(n, known), fo);
     std::vector<double> x(b.size());
-    F.solve(b.data(), x.data());
+    solve_mesh_order(F, b.data(), x.data());
     const double err = rel(x, dense_solve(dense_a(Kd, n, 6, known), b));
     std::printf("pattern %d: error %.2e, sketch %.3f s\n", pass, err, F.stats().time_sketch);
     EXPECT_LE(err, 4e-7); // measured 4.5e-8, 1.3e-7
@@ -296,7 +299,7 @@ TEST(H2FactorPureTraction, RegularisedMatchesDense)
     fo.top_when_cheaper = false;
     const H2Factorization F(cache, selection(n, known), fo, &modes);
     std::vector<double> x(N);
-    F.solve(b.data(), x.data());
+    solve_mesh_order(F, b.data(), x.data());
     const double err = rel(x, xd);
     std::printf("pure traction, tol %.0e: error %.2e, top %d\n", tol, err, F.stats().top_size);
     EXPECT_LE(err, tol > 1e-5 ? 1.1e-3 : 7.4e-9); // measured 3.5e-4 (1e-3), 2.5e-9 (1e-7)
@@ -315,7 +318,7 @@ TEST(H2FactorPureTraction, UnregularisedBreaksDown)
   H2FactorOptions fo;
   fo.top_size = 3 * n; // all of it in the top
   for (int mixed : {0, 1}) { // the single-precision LU does not hide it: its refinement stalls, the double LU's test fires
-    fo.mixed_top_from = mixed;
+    fo.single_top_from = mixed;
     EXPECT_THROW(H2Factorization(cache, selection(n, std::vector<std::array<bool, 3>>(n, {false, false, false})), fo), H2Breakdown);
     EXPECT_NO_THROW(H2Factorization(cache, selection(n, random_pattern(n, 0.5, 2)), fo));
   }
@@ -332,9 +335,9 @@ TEST(H2FactorTop, MixedPrecisionTopSolvesLikeTheDoubleLU)
   const SystemSelection sel = selection(n, random_pattern(n, 0.5, 9));
   H2FactorOptions fo;
   fo.top_size = 3 * n;
-  fo.mixed_top_from = 0;
+  fo.single_top_from = 0;
   const H2Factorization plain(cache, sel, fo);
-  fo.mixed_top_from = 3 * n; // from exactly this size on
+  fo.single_top_from = 3 * n; // from exactly this size on
   const H2Factorization mixed(cache, sel, fo);
   EXPECT_FALSE(plain.stats().top_mixed);
   ASSERT_TRUE(mixed.stats().top_mixed);
@@ -348,18 +351,18 @@ TEST(H2FactorTop, MixedPrecisionTopSolvesLikeTheDoubleLU)
   EXPECT_EQ(h2_top_unknowns_from_options(fo, 3LL * n), 3LL * n);
   const std::vector<double> b = random_vector(3L * n, 3);
   std::vector<double> x1(b.size()), x2(b.size());
-  plain.solve(b.data(), x1.data());
-  mixed.solve(b.data(), x2.data());
+  solve_mesh_order(plain, b.data(), x1.data());
+  solve_mesh_order(mixed, b.data(), x2.data());
   const double diff = rel(x2, x1);
   std::printf("cardioid, %d unknowns in the top: mixed against double LU %.2e\n", 3 * n, diff);
   EXPECT_LE(diff, 1e-12);
-  fo.mixed_top_from = 3 * n + 1; // one above: double
+  fo.single_top_from = 3 * n + 1; // one above: double
   EXPECT_FALSE(H2Factorization(cache, sel, fo).stats().top_mixed);
 }
 
 TEST(H2FactorTop, SinglePanelsTopIsALinearOperatorInAThirdOfTheMemory)
 {
-  // Panels in single precision (the default tolerance): a top of mixed_top_from unknowns or more
+  // Panels in single precision (the default tolerance): a top of single_top_from unknowns or more
   // is factored in single precision alone, n² floats where the mixed LU keeps n² floats and the
   // n² doubles of the block. Its solves run in double arithmetic on the rounded factors, so the
   // preconditioner stays one fixed linear operator: rounding the right-hand side to single
@@ -372,9 +375,9 @@ TEST(H2FactorTop, SinglePanelsTopIsALinearOperatorInAThirdOfTheMemory)
   H2FactorOptions fo;
   fo.top_size = 0;
   fo.top_when_cheaper = false; // the same levels whatever the top's LU
-  fo.mixed_top_from = 1;
+  fo.single_top_from = 1;
   const H2Factorization single(cache, sel, fo);
-  fo.mixed_top_from = 0;
+  fo.single_top_from = 0;
   const H2Factorization plain(cache, sel, fo);
   ASSERT_TRUE(single.stats().single_panels);
   ASSERT_TRUE(single.stats().top_single);
@@ -385,21 +388,21 @@ TEST(H2FactorTop, SinglePanelsTopIsALinearOperatorInAThirdOfTheMemory)
   EXPECT_NEAR(static_cast<double>(single.stats().top_bytes) / plain.stats().top_bytes, 0.5, 0.01);
   // The size model's figures: the single top's peak, the LU and the rows arriving (8 n²), twice
   // what it keeps; the double top's, the block and its LU (16 n²).
-  fo.mixed_top_from = 1;
+  fo.single_top_from = 1;
   EXPECT_NEAR(h2_top_peak_bytes(fo, 3LL * n, single.stats().top_size, 1) / single.stats().top_bytes, 2.0, 0.05);
-  fo.mixed_top_from = 0;
+  fo.single_top_from = 0;
   EXPECT_NEAR(h2_top_peak_bytes(fo, 3LL * n, plain.stats().top_size, 1) / plain.stats().top_bytes, 2.0, 0.05);
   EXPECT_EQ(h2_top_unknowns_from_options(fo, 3LL * n), 0); // top_size 0: the levels decide
   EXPECT_LT(single.top_trial(), fo.rel_tol);
   const std::vector<double> b1 = random_vector(3L * n, 3), b2 = random_vector(3L * n, 4);
   std::vector<double> b3(b1.size()), x1(b1.size()), x2(b1.size()), x3(b1.size()), xp(b1.size()), sum(b1.size());
   for (std::size_t i = 0; i < b1.size(); ++i) b3[i] = b1[i] + 3 * b2[i];
-  single.solve(b1.data(), x1.data());
-  single.solve(b2.data(), x2.data());
-  single.solve(b3.data(), x3.data());
+  solve_mesh_order(single, b1.data(), x1.data());
+  solve_mesh_order(single, b2.data(), x2.data());
+  solve_mesh_order(single, b3.data(), x3.data());
   for (std::size_t i = 0; i < b1.size(); ++i) sum[i] = x1[i] + 3 * x2[i];
   const double nonlinear = rel(x3, sum);
-  plain.solve(b1.data(), xp.data());
+  solve_mesh_order(plain, b1.data(), xp.data());
   const double against_double = rel(x1, xp);
   std::printf("cardioid, top %d: trial %.1e, linearity %.1e, against the double top %.1e\n", single.stats().top_size, single.top_trial(), nonlinear, against_double);
   EXPECT_LT(nonlinear, 1.2e-14);     // measured 3.7e-15: rounding
@@ -436,8 +439,8 @@ TEST(H2FactorOptionsCheck, LeafSizeStartsHigherAndBadOptionsThrow)
   fo.rel_tol = 1e-6;
   const std::vector<double> b = random_vector(3L * n, 2);
   std::vector<double> x1(b.size()), x2(b.size());
-  fine.solve(b.data(), x1.data());
-  coarse.solve(b.data(), x2.data());
+  solve_mesh_order(fine, b.data(), x1.data());
+  solve_mesh_order(coarse, b.data(), x2.data());
   std::printf("leaves of 16 and 64 nodes at 1e-6: solutions differ by %.2e\n", rel(x2, x1));
   EXPECT_LE(rel(x2, x1), 1e-4);
   fo = H2FactorOptions{};

@@ -81,7 +81,6 @@ public:
   /// Install rigid-body terms computed elsewhere (e.g. by a fast matvec), one per node.
   void set_rigid_body_terms(std::vector<Mat3> terms);
   bool has_rigid_body_term(int row) const;
-  const Mat3 &rigid_body_term(int row) const { return m_rigid[row]; }
 
   /// H(I, J) and G(I, J), row-major with leading dimension ld (>= 3|J|); either may be null.
   /// I and J hold distinct node indices (J holding every node is recognised by its size).

@@ -23,6 +23,9 @@ DenseMatrix hcat(const DenseMatrix &A, const DenseMatrix &B);
 DenseMatrix vcat(const DenseMatrix &A, const DenseMatrix &B);
 /// op(A) op(B), with op = 'N' or 'T'.
 DenseMatrix product(const DenseMatrix &A, char ta, const DenseMatrix &B, char tb);
+/// LU with partial pivoting of A in place (getrf); false when A is singular to working precision
+/// (a zero pivot, or the smallest |U_ii| at most 1e-14 of the largest |A_ij|).
+bool lu_regular(DenseMatrix &A, std::vector<int> &piv);
 /// max |M(i, j)| (0 for an empty matrix).
 double max_abs(const DenseMatrix &M);
 /// The largest Euclidean norm of one of M's columns (0 for an empty matrix).

@@ -30,6 +30,8 @@ void sgemv_(const char *trans, const int *m, const int *n, const float *alpha, c
 void sgetrf_(const int *m, const int *n, float *a, const int *lda, int *ipiv, int *info);
 void sgetrs_(const char *trans, const int *n, const int *nrhs, const float *a, const int *lda, const int *ipiv, float *b, const int *ldb, int *info);
 void dgemm_(const char *transa, const char *transb, const int *m, const int *n, const int *k, const double *alpha, const double *a, const int *lda, const double *b, const int *ldb, const double *beta, double *c, const int *ldc);
+void dlaswp_(const int *n, double *a, const int *lda, const int *k1, const int *k2, const int *ipiv, const int *incx);
+void dtrsv_(const char *uplo, const char *trans, const char *diag, const int *n, const double *a, const int *lda, double *x, const int *incx);
 }
 
 namespace hssbem::lapack {
@@ -49,6 +51,10 @@ int gesv(int n, int nrhs, double *a, double *b);
 int geqp3(int m, int n, double *a, int lda, int *jpvt, double *tau);
 /// B ← alpha op(A)⁻¹ B (side 'L') or B ← alpha B op(A)⁻¹ (side 'R') with A triangular (dtrsm).
 void trsm(char side, char uplo, char transa, char diag, int m, int n, double alpha, const double *a, int lda, double *b, int ldb);
+/// The row interchanges of getrf's first k pivots (1-based) applied to the ncols columns of a (dlaswp).
+void laswp(int ncols, double *a, int lda, int k, const int *piv);
+/// x ← A⁻¹ x for a triangular n×n A (dtrsv, no transpose; diag 'U' for a unit diagonal).
+void trsv(char uplo, char diag, int n, const double *a, int lda, double *x);
 /// C ← alpha op(A) op(B) + beta C, C m×n, inner dimension k (dgemm).
 void gemm(char transa, char transb, int m, int n, int k, double alpha, const double *a, int lda, const double *b, int ldb, double beta, double *c, int ldc);
 

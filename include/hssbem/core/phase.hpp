@@ -8,15 +8,19 @@
 namespace hssbem {
 
 enum class Phase {
-  Tree,          ///< cluster tree (geometric bisection)
-  Compression,   ///< skeletons: proxy and near-field samples, interpolative decompositions, couplings (H²: block partition, far blocks)
-  NearField,     ///< dense near-field blocks: leaf diagonal blocks (H²: near blocks) and rigid-body terms
+  Tree,          ///< HSS: cluster tree (geometric bisection)
+  Compression,   ///< HSS: skeletons (proxy and near-field samples, interpolative decompositions) and couplings
+  NearField,     ///< HSS: leaf diagonal blocks and rigid-body terms
   Truncation,    ///< recompression of an HSS matrix to a looser tolerance
   Factorization, ///< ULV factorization
   Solve,         ///< ULV solve
-  Matvec,        ///< HSS or H² product
+  Matvec,        ///< HSS product
   FactorizationTop, ///< distributed ULV factorization: the parts' roots' blocks to rank 0 and the top's factorization there (inside Factorization)
   SolveTop,         ///< distributed ULV solve: the parts' roots' right-hand sides to rank 0, the top's solve there, the unknowns back (inside Solve)
+  H2Tree,          ///< H²: cluster tree and block partition
+  H2Compress,      ///< H²: nested bases (interpolative decompositions) and far blocks
+  H2NearField,     ///< H²: near blocks and rigid-body terms
+  H2Matvec,        ///< H² product
   H2Factorization, ///< H² factorization, the whole of it (the five below but the solve are inside)
   H2Sketch,        ///< H² factorization: random sketch of the far-field couplings
   H2Eliminate,     ///< H² factorization: skeletons and eliminations of the boxes, level by level

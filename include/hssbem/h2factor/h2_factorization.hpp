@@ -20,6 +20,12 @@
 /// Then S_X is all that remains of X; a parent's unknowns are its children's skeletons. When no
 /// box of a level sees a far field any more, the remaining unknowns are factored densely (the top).
 ///
+/// Ranks. The factorization runs on the ranks that hold its H² matrix (H2FactorCache::comm(); one
+/// rank is the case of one part): on a tree whose top levels are parts, one per rank, each rank
+/// eliminates its part's subtree (see "Parts" below), and what is left, the top, is factored
+/// densely on rank 0 or, in single precision, spread over all ranks. Every rank solves on its own
+/// rows; only the top's unknowns cross ranks.
+///
 /// A is factored with its columns scaled as the H² matrix holds K (G columns × μ/L-like scales,
 /// see kernel_column_scales), so one relative tolerance serves H and G columns. A pure-traction
 /// problem adds c Φ Φᵀ (rigid modes, rank 6): as explicit entries in close blocks and as a rank-6
@@ -45,11 +51,12 @@
 #include "hssbem/h2/h2_distributed.hpp"
 #include "hssbem/h2/h2_matrix.hpp"
 #include "hssbem/h2factor/far_sketch.hpp"
+#include "hssbem/h2factor/h2_breakdown.hpp"
 
 #include <cstddef>
 #include <functional>
 #include <memory>
-#include <stdexcept>
+#include <optional>
 #include <vector>
 
 namespace hssbem {
@@ -65,30 +72,23 @@ struct H2FactorOptions {
   int sketch_columns = 0;  ///< random vectors of the far-field sketch; 0: chosen from rel_tol
   int top_size = 2000;     ///< factor the rest densely once at most this many unknowns remain
   int single_panels = -1;  ///< elimination panels and the working blocks at rest in single precision: 1, 0, or -1 (when rel_tol ≥ 1e-5)
-  /// From this many unknowns on, the dense top is factored in single precision: with panels in
+  /// From this many unknowns on, the dense top's LU is in single precision: with panels in
   /// double, every solve refines in double against the top block (as accurate as a double LU,
   /// which is twice the time); with panels in single precision (a preconditioner), the single
   /// LU alone, a third of the memory, its accuracy checked by a trial solve. ≤ 0: always double.
-  int mixed_top_from = 4000;
+  int single_top_from = 4000;
   /// Stop at a level whose eliminations would cost more flops than factoring everything left
   /// densely (an upper bound of the level's Schur complements against the top's LU); false: go
   /// on while a level has a far field and more than top_size unknowns remain.
   bool top_when_cheaper = true;
-  /// On a tree with parts (ClusterTree's partition constructor): eliminate each part's subtree
-  /// separately, as the distributed factorization does on one rank per part (boxes of different
-  /// parts are never close; their couplings stay as cross blocks, see h2_factorization.hpp's
-  /// "Parts"), with the parts simulated on this rank. Ignored on a tree without parts.
+  /// On one rank, on a tree with parts (ClusterTree's partition constructor): eliminate each
+  /// part's subtree separately, as several ranks do with one part each (boxes of different parts
+  /// are never close; their couplings stay as cross blocks, see "Parts"), the parts simulated on
+  /// this rank. Ignored on a tree without parts; always so on several ranks.
   bool within_parts = false;
-  /// Distributed, with a single-precision top (single panels, mixed_top_from or more
-  /// unknowns): spread the top's LU over the ranks (ScaLAPACK, blocks of 128 columns) instead of
-  /// factoring it on rank 0.
+  /// On several ranks, a single-precision top (single panels, single_top_from or more unknowns)
+  /// is spread over the ranks (ScaLAPACK, blocks of 128 columns); false: factored on rank 0.
   bool spread_top = true;
-};
-
-/// A singular pivot block (e.g. a pure-traction problem without its rigid-mode regularisation).
-class H2Breakdown : public std::runtime_error {
-public:
-  using std::runtime_error::runtime_error;
 };
 
 struct H2FactorLevelStats {
@@ -108,8 +108,8 @@ struct H2FactorLevelStats {
 struct H2FactorStats {
   std::vector<H2FactorLevelStats> levels; ///< from the finest level factored up
   int top_size = 0;                       ///< unknowns of the dense top block
-  bool top_mixed = false;                 ///< the top's LU in single precision, refined in double (H2FactorOptions::mixed_top_from)
-  bool top_single = false;                ///< the top's LU in single precision alone, not refined (single panels and a top of mixed_top_from or more)
+  bool top_mixed = false;                 ///< the top's LU in single precision, refined in double (H2FactorOptions::single_top_from)
+  bool top_single = false;                ///< the top's LU in single precision alone, not refined (single panels and a top of single_top_from or more)
   int top_spread = 0;                     ///< ranks the top is spread over (H2FactorOptions::spread_top; 0: on rank 0 or one rank)
   std::size_t bytes = 0, top_bytes = 0;   ///< all factors; the top's LU (and, mixed, the top block in double)
   /// The largest working store of the factorization (blocks between active boxes, fill-in,
@@ -127,18 +127,23 @@ struct H2FactorStats {
   double seconds() const { return time_sketch + time_init + time_skeleton + time_eliminate + time_merge + time_top; }
 };
 
-/// Per H² matrix, what every factorization of it may reuse (the far-field sketches, by size).
-/// Not thread-safe.
+/// Per H² matrix, what every factorization of it may reuse (the far-field sketches, by size), and
+/// the ranks that hold it. Not thread-safe.
 class H2FactorCache {
 public:
+  /// Of a matrix held whole by this rank alone.
   explicit H2FactorCache(const H2Matrix &K) : m_K(&K) {}
   /// Of a distributed matrix: its sketches are made by the distributed passes (collective),
   /// each rank keeping its clusters' rows.
   explicit H2FactorCache(const H2DistributedProduct &K) : m_K(&K.matrix()), m_dist(&K) {}
   const H2Matrix &matrix() const { return *m_K; }
-  const H2DistributedProduct *distributed() const { return m_dist; }
+  /// The ranks that hold the matrix (a matrix held whole: one).
+  const RankComm &comm() const { return m_dist ? m_dist->comm() : m_one; }
+  /// This rank's points: positions [first_point(), first_point() + num_points()) of cluster order.
+  int first_point() const { return m_dist ? m_dist->first_point() : 0; }
+  int num_points() const { return m_dist ? m_dist->num_points() : m_K->tree().num_points(); }
   /// The sketch with p columns, made on first use (seconds spent in *made, 0 when cached).
-  /// Failure-atomic on a distributed matrix's ranks.
+  /// Failure-atomic on the ranks.
   const FarFieldSketch &sketch(int p, double *made = nullptr);
   /// Use `s` as the sketch with s.columns columns (a test compares two factorizations on one
   /// sketch: the distributed one's, gathered).
@@ -147,58 +152,59 @@ public:
 private:
   const H2Matrix *m_K;
   const H2DistributedProduct *m_dist = nullptr;
+  SerialComm m_one;
   std::vector<std::unique_ptr<FarFieldSketch>> m_sketches;
 };
 
 class H2Factorization {
 public:
   /// Factor A-hat = (K E_S + c Φ Φᵀ) D for the pattern `sel` on the H² matrix `cache.matrix()`
-  /// (which must outlive this object). `rigid_modes`: row-major 3N × 6 orthonormal modes (mesh
-  /// order) of a pure-traction problem's regularisation, or null. Throws H2Breakdown for a
-  /// singular pivot block, std::invalid_argument for bad options.
+  /// (which must outlive this object) on the cache's ranks (collective, failure-atomic). On
+  /// several ranks each eliminates its part's subtree (no communication during a level; the
+  /// cross blocks' other sides at its end, the data of merged cross blocks at the merges), and
+  /// the top is factored from the ranks' rows of it: spread over all ranks when it is a
+  /// single-precision top (spread_top), else on rank 0; the same steps as one rank with
+  /// within_parts on the same tree. `rigid_modes`: row-major 3N × 6 orthonormal modes (mesh
+  /// order) of a pure-traction problem's regularisation, or null. Throws H2Breakdown on every
+  /// rank for a singular pivot block on any rank, std::invalid_argument for bad options; another
+  /// error on its rank and PeerFault on the others (fault sites H2FSubtree, H2FTop).
   H2Factorization(H2FactorCache &cache, const SystemSelection &sel, const H2FactorOptions &options, const std::vector<double> *rigid_modes = nullptr);
-  /// Distributed (collective; `cache` of a distributed matrix, whose tree has one part per rank
-  /// of comm): each rank eliminates its part's subtree, its root included, as within_parts
-  /// does on one rank (no communication during a level; the cross blocks' other sides at its
-  /// end, the data of merged cross blocks at the merges), and the top is factored from the
-  /// ranks' rows of it: spread over all ranks when it is a single-precision top (spread_top),
-  /// else on rank 0. The same steps as one rank with within_parts on the same tree, up to
-  /// rounding. A breakdown on any rank throws H2Breakdown on every rank; another error throws on
-  /// its rank and PeerFault on the others (fault sites H2FSubtree, H2FTop). comm must outlive
-  /// this object.
-  H2Factorization(H2FactorCache &cache, const RankComm &comm, const SystemSelection &sel, const H2FactorOptions &options, const std::vector<double> *rigid_modes = nullptr);
   ~H2Factorization();
   H2Factorization(const H2Factorization &) = delete;
   H2Factorization &operator=(const H2Factorization &) = delete;
 
-  /// x = A⁻¹ b, both with 3 values per node in mesh order (x may alias b).
+  /// x = A⁻¹ b on this rank's rows (collective): 3 values per point of this rank, in cluster
+  /// order (one rank: every point; ClusterTree::to_cluster_order converts), x may alias b. Only
+  /// the top's unknowns cross ranks: summed over the ranks, solved (on rank 0, or spread), and
+  /// summed back.
   void solve(const double *b, double *x) const;
-  /// Of a distributed factorization (collective): x = A⁻¹ b on this rank's rows, both with 3
-  /// values per point of its part in cluster order (x may alias b). Only the top's unknowns
-  /// cross ranks (to rank 0 and back; spread: summed over the ranks, then one sum per block
-  /// column and triangle).
-  void solve_local(const double *b, double *x) const;
-  bool distributed() const { return m_comm != nullptr; }
+  const RankComm &comm() const { return *m_comm; }
+  const H2Matrix &matrix() const { return m_K; }
+  /// This rank's rows: 3 per point from first_point() (cluster order), num_points() points.
+  int first_point() const { return m_first; }
+  int num_points() const { return m_count; }
   const H2FactorStats &stats() const { return m_stats; }
   const H2FactorOptions &options() const { return m_options; }
-  /// A single-precision top's trial solve error (H2FactorStats::top_single), else 0.
+  /// A single-precision top's trial solve error (H2FactorStats::top_single; rank 0's when it is
+  /// on rank 0), else 0.
   double top_trial() const;
-  int num_unknowns() const;
   /// Steps whose unknowns (the box's, its skeleton's, and those its Schur complement touched)
   /// lie in more than one part of the tree (0 when the parts are eliminated separately).
   int steps_crossing_parts() const;
 
-  struct Factors; ///< the elimination steps (private)
+  struct Factors; ///< the elimination steps and the top (private)
 
 private:
-  /// The levels' eliminations and merges (collective on comm), from level l0 up to level last.
-  void eliminate_levels(h2f::Frontier &front, const RankComm &comm, int l0, int last);
+  /// The phases (h2_factorization.cpp, factor_levels.cpp, factor_top.cpp), collective.
+  const FarFieldSketch &prepare(H2FactorCache &cache, const SystemSelection &sel, const std::vector<double> *rigid_modes);
+  void eliminate_levels(h2f::Frontier &front, int l0, int last);
+  void eliminate_level(h2f::Frontier &front, const std::vector<int> &boxes, H2FactorLevelStats &ls);
+  void factor_top(std::optional<h2f::Frontier> &front, bool single_store);
 
   const H2Matrix &m_K;
-  const RankComm *m_comm = nullptr; ///< distributed: the ranks
-  int m_first = 0, m_count = 0;     ///< distributed: this rank's points (cluster order)
+  const RankComm *m_comm;
+  int m_first = 0, m_count = 0; ///< this rank's points (cluster order)
   H2FactorOptions m_options;
-  std::vector<int> m_slot;      ///< per A-hat column (cluster order): K's slot
   std::unique_ptr<Factors> m_f;
   H2FactorStats m_stats;
 };
@@ -211,12 +217,16 @@ int default_sketch_columns(double rel_tol);
 /// over the far field in both directions.
 constexpr int kMaxSketchColumns = 4096;
 
+/// x = A⁻¹ b with b and x in mesh order (3 values per node; x may alias b), for a factorization
+/// on one rank: F.solve() between ClusterTree::to_cluster_order and to_mesh_order.
+void solve_mesh_order(const H2Factorization &F, const double *b, double *x);
+
 /// For the size model (core/size_limits.hpp, which cannot see this layer: the PETSc face passes
 /// the figure on): the bytes PC h2's dense top of n = `top_unknowns` unknowns (of `unknowns` in
 /// all) takes at its peak on the rank that holds the most of it, with these options on `ranks`
 /// ranks. The options decide its precision and place (H2FactorStats::top_*): in double on rank 0,
 /// 16 n² while the LU is made from the block (8 n² after); mixed (double panels, or everything in
-/// the top, and n ≥ mixed_top_from), 12 n² (the block in double beside the single LU); single
+/// the top, and n ≥ single_top_from), 12 n² (the block in double beside the single LU); single
 /// precision alone on rank 0 (single panels), 4 n² and the other ranks' rows as they arrive, at
 /// most 4 n² more; spread over P ranks, 4 n² / P for the columns and up to twice that in
 /// messages, 12 n² / P.
@@ -229,8 +239,9 @@ double h2_top_peak_bytes(const H2FactorOptions &options, long long unknowns, lon
 long long h2_top_unknowns_from_options(const H2FactorOptions &options, long long unknowns);
 
 /// ‖I − A F⁻¹‖₂ estimated by power iterations from a random vector (the largest of the ratios
-/// ‖(I − A F⁻¹) v‖ / ‖v‖ met): how far the factorization is from an exact inverse of A, for
-/// apply_a(x, y): y = A x with the operator of the factored pattern (mesh order).
+/// ‖(I − A F⁻¹) v‖ / ‖v‖ met; collective on F's ranks): how far the factorization is from an
+/// exact inverse of A, for apply_a(x, y): y = A x with the operator of the factored pattern, on
+/// this rank's rows (as F.solve()).
 double estimate_inverse_error(const H2Factorization &F, const std::function<void(const double *, double *)> &apply_a, int iterations = 5, unsigned seed = 1);
 
 } // namespace hssbem

@@ -1,0 +1,121 @@
+// The H² factorization's dense top: which kind, taken from the frontier into its sinks, factored
+// (see h2_factorization.hpp and top_assembly.hpp).
+#include "factors.hpp"
+#include "frontier.hpp"
+#include "top_assembly.hpp"
+
+#include "hssbem/core/allocator.hpp"
+#include "hssbem/core/fault.hpp"
+#include "hssbem/core/phase.hpp"
+#include "hssbem/core/timer.hpp"
+
+#include <algorithm>
+#include <optional>
+#include <stdexcept>
+#include <string>
+
+namespace hssbem {
+
+namespace {
+
+/// Whether the top's LU runs in single precision (given single panels: SpreadTop alone; else
+/// TopBlock's mixed LU): when the top is large enough. The mixed LU would refine each of its
+/// solves to double against a copy of the top in double that the single-precision steps below
+/// it cannot use, and it takes three times the memory: on 2 ranks of an 80k sphere at 2e-3,
+/// rank 0's 5 174-unknown top took 306 MB, the single LU 102 MB.
+bool top_in_single(double n, const H2FactorOptions &o) { return o.single_top_from > 0 && n >= o.single_top_from; }
+
+/// The trial solve's bound for a single-precision top: the factorization's own tolerance (at
+/// most 1e-3, so that the top never adds more than the steps).
+double single_trial_tol(const H2FactorOptions &o) { return std::min(o.rel_tol, 1e-3); }
+
+/// Each step's and the top's unknowns on this rank's own rows (the steps touch no other rank's).
+void to_own_rows(std::vector<h2f::Step> &steps, std::vector<int> &top_own, int first, int count)
+{
+  const int offset = 3 * first, n = 3 * count;
+  const auto shift = [&](std::vector<int> &v) {
+    for (int &g : v) {
+      g -= offset;
+      if (g < 0 || g >= n) throw std::logic_error("H2 factorization: a step reaches another rank's unknowns");
+    }
+  };
+  for (h2f::Step &st : steps)
+    for (std::vector<int> *v : {&st.box, &st.S, &st.R, &st.I}) shift(*v);
+  shift(top_own);
+}
+
+} // namespace
+
+void H2Factorization::factor_top(std::optional<h2f::Frontier> &front, bool single_store)
+{
+  PhaseScope phase(Phase::H2Top);
+  const RankComm &comm = *m_comm;
+  const int P = comm.size(), me = comm.rank();
+  Factors &f = *m_f;
+  Timer timer;
+  m_stats.top_boxes = static_cast<int>(front->boxes().size());
+  double n = static_cast<double>(front->active_total());
+  comm.sum(&n, 1);
+  // Single precision (single panels and a large top): SpreadTop, over every rank (spread) or on
+  // rank 0 alone; else TopBlock on rank 0. The other ranks' rows go where the top is.
+  const bool single = single_store && top_in_single(n, m_options);
+  f.spread = single && P > 1 && m_options.spread_top;
+  return_free_memory(); // what the levels freed, before the top is allocated
+  std::optional<h2f::BlockGrid> grid;
+  std::vector<float> local;
+  std::vector<double> row_sums;
+  std::unique_ptr<h2f::TopSink> sink;
+  collectively(comm, [&] {
+    if (f.spread || (single && me == 0)) sink = std::make_unique<h2f::SpreadSink>(h2f::SpreadTop::kBlock, f.spread ? me : 0, f.spread ? P : 1, &local, &row_sums);
+    else if (me == 0) sink = std::make_unique<h2f::GridSink>(grid.emplace());
+    else sink = std::make_unique<h2f::RowSink>(single);
+  });
+  f.top_n = front->take_top(*sink, &f.top_own, &f.top_pos);
+  const std::size_t front_peak = front->peak_bytes(), front_left = front->store_bytes();
+  front.reset(); // spent: its memory goes before the top's LU
+  sink.reset();
+  return_free_memory();
+  if (f.spread) {
+    auto top = make_unique_collectively<h2f::SpreadTop>(comm);
+    top->factor(comm, f.top_n, std::move(local), std::move(row_sums), single_trial_tol(m_options)); // collective; H2Breakdown on every rank
+    f.top = std::move(top);
+  }
+  collectively<H2Breakdown>(comm, [&] {
+    fault_point("H2FTop");
+    if (!f.spread && me == 0 && single) {
+      auto top = std::make_unique<h2f::SpreadTop>();
+      top->factor(f.one, f.top_n, std::move(local), std::move(row_sums), single_trial_tol(m_options));
+      f.top = std::move(top);
+    } else if (!f.spread && me == 0) {
+      auto top = std::make_unique<h2f::TopBlock>();
+      if (!top->factor(std::move(*grid), m_options.single_top_from))
+        throw H2Breakdown("H2 factorization broke down: the top block (" + std::to_string(f.top_n) + " unknowns) is singular to working precision");
+      m_stats.top_mixed = top->mixed();
+      f.top = std::move(top);
+    }
+    to_own_rows(f.steps, f.top_own, m_first, m_count);
+  });
+  m_stats.time_top = timer.seconds();
+  m_stats.top_size = f.top_n;
+  m_stats.top_single = single;
+  m_stats.top_spread = f.spread ? P : 0;
+  m_stats.top_bytes = f.top ? f.top->bytes() : 0;
+  m_stats.workspace_bytes = std::max(front_peak, front_left + m_stats.top_bytes);
+}
+
+double h2_top_peak_bytes(const H2FactorOptions &o, long long unknowns, long long top_unknowns, int ranks)
+{
+  const double n2 = static_cast<double>(top_unknowns) * static_cast<double>(top_unknowns);
+  // As the factorization decides (single_store): panels in single precision, and levels below the top.
+  const bool single_panels = (o.single_panels < 0 ? o.rel_tol >= 1e-5 : o.single_panels == 1) && unknowns > o.top_size;
+  const bool reduced = top_in_single(static_cast<double>(top_unknowns), o);
+  const double vectors = 32.0 * static_cast<double>(top_unknowns); // pivots, offsets, the trial's and the solves' vectors
+  if (!reduced) return 16 * n2 + vectors;
+  if (!single_panels) return 12 * n2 + vectors;
+  if (ranks > 1 && o.spread_top) return 12 * n2 / ranks + vectors;
+  return 8 * n2 + vectors;
+}
+
+long long h2_top_unknowns_from_options(const H2FactorOptions &o, long long unknowns) { return unknowns <= o.top_size ? unknowns : 0; }
+
+} // namespace hssbem

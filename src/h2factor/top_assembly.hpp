@@ -1,0 +1,84 @@
+// Private to the H² factorization: how the frontier's last boxes become the dense top on the
+// ranks that factor it. Every rank takes its own boxes' rows of the top into a sink
+// (Frontier::take_top, one row-taking for every kind of top); the sinks' messages carry what
+// another rank holds to it.
+#pragma once
+
+#include "top_block.hpp"
+
+#include <vector>
+
+namespace hssbem::h2f {
+
+/// Where this rank's rows of the top go, block by block.
+class TopSink {
+public:
+  virtual ~TopSink() = default;
+  /// Once: box s of the frontier holds the top's rows off[s] .. off[s + 1] − 1; `mine` lists
+  /// this rank's boxes (positions, ascending).
+  virtual void begin(const std::vector<int> &off, const std::vector<int> &mine) = 0;
+  /// Block (s, t) of this rank's box row s; concurrent calls have different s.
+  virtual void put(int s, int t, DenseMatrix B) = 0;
+  /// Once the rows are in: what goes to each of `ranks` ranks (the sink's buffers go).
+  virtual std::vector<std::vector<double>> messages(int ranks) { return std::vector<std::vector<double>>(ranks); }
+  /// What rank q sent here, about its boxes `from` (positions, ascending).
+  virtual void receive(int q, const std::vector<int> &from, const std::vector<double> &message) = 0;
+};
+
+/// The top in double on rank 0 (TopBlock): a grid of blocks, the other ranks' rows as they come.
+class GridSink : public TopSink {
+public:
+  explicit GridSink(BlockGrid &G) : m_G(G) {}
+  void begin(const std::vector<int> &off, const std::vector<int> &mine) override;
+  void put(int s, int t, DenseMatrix B) override;
+  void receive(int q, const std::vector<int> &from, const std::vector<double> &message) override;
+
+private:
+  BlockGrid &m_G;
+};
+
+/// A single-precision top (SpreadTop) over `ranks` ranks, blocks of nb columns, block j on rank
+/// j mod ranks: this rank's columns into `local` (n × its count, column-major) and A·1 on its rows
+/// into `row_sums`, rounded as they come; the other ranks' columns of this rank's rows into one
+/// message per rank (two floats to a value). With ranks = 1 (the top on rank 0 of several), the
+/// other ranks' rows come whole (RowSink) instead.
+class SpreadSink : public TopSink {
+public:
+  SpreadSink(int nb, int rank, int ranks, std::vector<float> *local, std::vector<double> *row_sums)
+    : m_nb(nb), m_rank(rank), m_ranks(ranks), m_local(local), m_sums(row_sums)
+  {
+  }
+  void begin(const std::vector<int> &off, const std::vector<int> &mine) override;
+  void put(int s, int t, DenseMatrix B) override;
+  std::vector<std::vector<double>> messages(int ranks) override;
+  void receive(int q, const std::vector<int> &from, const std::vector<double> &message) override;
+
+private:
+  int m_nb, m_rank, m_ranks;
+  std::vector<float> *m_local;
+  std::vector<double> *m_sums;
+  std::vector<int> m_off, m_cols;
+  std::vector<std::vector<std::size_t>> m_base; ///< per destination rank, per box: floats before its rows
+  std::vector<std::vector<float>> m_out;
+};
+
+/// A rank other than 0 when the top is on rank 0: its rows, box row by box row (each row's blocks
+/// in order, column-major), into one message to rank 0, rounded to single precision (two floats
+/// to a value) when the top is a single-precision one.
+class RowSink : public TopSink {
+public:
+  explicit RowSink(bool single) : m_single(single) {}
+  void begin(const std::vector<int> &off, const std::vector<int> &mine) override;
+  void put(int s, int t, DenseMatrix B) override;
+  std::vector<std::vector<double>> messages(int ranks) override;
+  void receive(int, const std::vector<int> &, const std::vector<double> &) override {}
+
+private:
+  bool m_single;
+  std::vector<int> m_off;
+  std::vector<std::size_t> m_start; ///< per box: values before its row (floats when single)
+  std::vector<double> m_out;        ///< double
+  std::vector<float> m_out_single;  ///< or single
+};
+
+} // namespace hssbem::h2f
