@@ -196,7 +196,7 @@ void H2DistributedProduct::apply(const double *X, int ldx, double *Y, int ldy, i
   PhaseScope phase(Phase::H2Matvec);
   const H2Matrix &K = m_K;
   const ClusterTree &tree = K.tree();
-  const int nc = tree.num_clusters(), w = K.col_block(), rb = K.row_block();
+  const int w = K.col_block(), rb = K.row_block();
   std::vector<DenseMatrix> yh, xv;
   far_potentials(X, ldx, nrhs, yh, &xv);
   // 5. Downward through the parts, then the leaves.
