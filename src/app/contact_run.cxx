@@ -9,6 +9,7 @@
 #include "hssbem/bem/rigid_modes.hpp"
 #include "hssbem/contact/contact_engine.hpp"
 #include "hssbem/core/fault.hpp"
+#include "hssbem/core/progress.hpp"
 #include "hssbem/core/timer.hpp"
 #include "hssbem/io/hdf5_output.hpp"
 #include "hssbem/petsc/log.h"
@@ -137,6 +138,7 @@ void ContactRun::set_up(const NodeConditions &base)
 {
   const EventScope event(CNT_Setup);
   const Timer timer;
+  const Progress progress("contact set-up"); // reported when it ends (the reference LU and the engine's columns)
   std::vector<Obstacle> obstacles = obstacles_of(s);
   const ContactSettings settings = settings_of(s);
   ContactOptions opt;
@@ -210,28 +212,32 @@ void ContactRun::scene(const std::vector<NodeConditions> &frames)
   const std::vector<std::vector<Vec3>> placements = placements_of(s.spec);
   double total = 0, slowest = 0;
   long long iterations = 0;
-  for (frame = 0; frame < static_cast<long long>(frames.size()); ++frame) {
-    fault_point("Frame");
-    ContactSolution sol;
-    ContactFrameReport rep;
-    {
-      const EventScope event(SCN_Frame);
-      rep = engine->solve(selection_of(frames[frame]), placements[frame], sol);
+  { // the progress line ends before the summary
+    const Progress progress("contact frames");
+    for (frame = 0; frame < static_cast<long long>(frames.size()); ++frame) {
+      fault_point("Frame");
+      ContactSolution sol;
+      ContactFrameReport rep;
+      {
+        const EventScope event(SCN_Frame);
+        rep = engine->solve(selection_of(frames[frame]), placements[frame], sol);
+      }
+      total += rep.seconds, slowest = std::max(slowest, rep.seconds), iterations += rep.iterations;
+      check_finite(sol, frame);
+      progress.report(static_cast<double>(frame + 1) / static_cast<double>(frames.size()));
+      if (!writer) continue;
+      FrameData f;
+      f.displacement = vertex_average(*s.disc, sol.u);
+      f.traction = vertex_average(*s.disc, sol.t);
+      f.displacement_prescribed = vertex_displacement_prescribed(*s.disc, frames[frame]);
+      f.attributes_real = {{"seconds", rep.seconds}};
+      f.attributes_int = {{"iterations", rep.iterations}, {"active_vertices", rep.active_vertices}};
+      std::vector<NodeStress> nodes;
+      f.stress = surface_stress_fields(s, NodalSolution{sol.u, sol.t}, nodes, false);
+      f.contact = contact_data(*engine, sol, rep, s.spec.contact.bodies);
+      const EventScope event(BEM_Output);
+      writer->append(static_cast<std::size_t>(frame), f);
     }
-    total += rep.seconds, slowest = std::max(slowest, rep.seconds), iterations += rep.iterations;
-    check_finite(sol, frame);
-    if (!writer) continue;
-    FrameData f;
-    f.displacement = vertex_average(*s.disc, sol.u);
-    f.traction = vertex_average(*s.disc, sol.t);
-    f.displacement_prescribed = vertex_displacement_prescribed(*s.disc, frames[frame]);
-    f.attributes_real = {{"seconds", rep.seconds}};
-    f.attributes_int = {{"iterations", rep.iterations}, {"active_vertices", rep.active_vertices}};
-    std::vector<NodeStress> nodes;
-    f.stress = surface_stress_fields(s, NodalSolution{sol.u, sol.t}, nodes, false);
-    f.contact = contact_data(*engine, sol, rep, s.spec.contact.bodies);
-    const EventScope event(BEM_Output);
-    writer->append(static_cast<std::size_t>(frame), f);
   }
   const double n = static_cast<double>(frames.size());
   seconds["frames"] += total;

@@ -8,6 +8,7 @@
 #include "hssbem/bem/post.hpp"
 #include "hssbem/bem/rigid_modes.hpp"
 #include "hssbem/core/fault.hpp"
+#include "hssbem/core/progress.hpp"
 #include "hssbem/core/timer.hpp"
 #include "hssbem/io/hdf5_output.hpp"
 #include "hssbem/petsc/log.h"
@@ -148,9 +149,11 @@ void check_scene_size(MPI_Comm comm, const ProblemSetup &s, const SceneRunOption
 void solve_frames(const ProblemSetup &s, FrameLoop &loop, FrameWriter *writer, const SceneRunOptions &o, std::map<std::string, double> &seconds)
 {
   const std::size_t nframes = s.spec.frames.size();
+  const Progress    progress("scene frames");
   for (std::size_t i = 0; i < nframes; ++i) {
     try {
       loop.frame(i);
+      progress.report(static_cast<double>(i + 1) / static_cast<double>(nframes));
     } catch (const std::exception &e) {
       if (!o.keep_partial || !writer) throw;
       seconds["frames"] += loop.frame_seconds();

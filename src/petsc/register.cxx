@@ -7,6 +7,7 @@
 
 #include <petscksp.h>
 
+#include <cmath>
 #include <cstdio>
 #include <unistd.h>
 
@@ -32,16 +33,17 @@ static void PhaseHook_Private(hssbem::Phase phase, bool begin)
 
 static PetscBool HssbemPackageInitialized = PETSC_FALSE;
 static bool      ProgressOnTerminal       = false;
+static double    ProgressAfter            = 2;
 
 /* Progress of long work on rank 0's standard error (-hssbem_progress): one updating line on a
-   terminal, plain lines otherwise (at most one per phase every 5 s); a phase shorter than 2 s says
-   nothing. Never in the result file. */
+   terminal, plain lines otherwise (at most one per phase every 5 s); a phase shorter than
+   -hssbem_progress_after seconds (2) says nothing. Never in the result file. */
 static void ProgressHook_Private(const char *phase, double done, double seconds)
 {
   static const char *shown = nullptr;
   static double      last  = 0;
   const bool         end   = done >= 1;
-  if (seconds < 2 || (!end && shown == phase && seconds - last < (ProgressOnTerminal ? 0.25 : 5))) return;
+  if (seconds < ProgressAfter || (!end && shown == phase && seconds - last < (ProgressOnTerminal ? 0.25 : 5))) return;
   shown = phase;
   last  = seconds;
   char left[48] = "";
@@ -55,12 +57,16 @@ static PetscErrorCode ProgressFromOptions_Private(void)
 {
   PetscMPIInt rank;
   PetscBool   on = isatty(STDERR_FILENO) ? PETSC_TRUE : PETSC_FALSE;
+  PetscReal   after = 2;
 
   PetscFunctionBegin;
   PetscCallMPI(MPI_Comm_rank(PETSC_COMM_WORLD, &rank));
   PetscOptionsBegin(PETSC_COMM_WORLD, NULL, "Progress of long work (hssbem)", NULL);
   PetscCall(PetscOptionsBool("-hssbem_progress", "Report the progress of long phases on rank 0's standard error (default: when it is a terminal)", NULL, on, &on, NULL));
+  PetscCall(PetscOptionsReal("-hssbem_progress_after", "Seconds a phase runs before -hssbem_progress reports it", NULL, after, &after, NULL));
   PetscOptionsEnd();
+  PetscCheck(after >= 0 && std::isfinite((double)after), PETSC_COMM_WORLD, PETSC_ERR_ARG_OUTOFRANGE, "-hssbem_progress_after must be non-negative and finite, got %g", (double)after);
+  ProgressAfter      = (double)after;
   ProgressOnTerminal = isatty(STDERR_FILENO) != 0;
   hssbem::set_progress_hook(rank == 0 && on ? ProgressHook_Private : nullptr);
   PetscFunctionReturn(PETSC_SUCCESS);

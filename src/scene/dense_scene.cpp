@@ -5,6 +5,7 @@
 #include "hssbem/core/blas_threads.hpp"
 #include "hssbem/core/lapack.hpp"
 #include "hssbem/core/phase.hpp"
+#include "hssbem/core/progress.hpp"
 #include "hssbem/core/timer.hpp"
 
 #include <algorithm>
@@ -83,11 +84,13 @@ DenseScene::DenseScene(const BemOperator &op, const SystemSelection &reference, 
   const Timer timer;
   if (static_cast<int>(reference.displacement_known.size()) != m_nodes) throw std::invalid_argument("DenseScene: the reference pattern does not match the operator's nodes");
   if (m_opt.refresh_every < 1) throw std::invalid_argument("DenseScene: refresh_every must be at least 1");
+  const Progress progress("scene set-up"); // the reference LU (~1/4 of the flops), W = A0^-1 K0' (~3/4)
   {
     const PhaseScope phase(Phase::SceneSetup);
-    factor_reference(op, reference);
+    factor_reference(op, reference, progress);
     measure_rates();
   }
+  progress.report(0.95);
   m_cap = CapacitanceInverse(m_W.data(), m_n, m_opt.single_from);
   m_cap.rebuild({});
   m_cap_pattern = m_ref;
@@ -106,17 +109,19 @@ std::vector<char> DenseScene::pattern_of(const SystemSelection &sel) const
 }
 
 /// The reference factorization (reference.hpp), W = A₀⁻¹ K₀' (every column) and W_p = A₀⁻¹ Gn.
-void DenseScene::factor_reference(const BemOperator &op, const SystemSelection &reference)
+void DenseScene::factor_reference(const BemOperator &op, const SystemSelection &reference, const Progress &progress)
 {
   const int N = m_n;
   m_ref = pattern_of(SystemSelection{reference.displacement_known, std::vector<Vec3>(m_nodes), {}});
   DenseReferenceOptions ro;
   ro.with_pressure = m_opt.with_pressure;
   m_reference = std::make_unique<DenseReference>(op, m_ref, ro);
+  progress.report(0.25);
   std::vector<int> all(N);
   std::iota(all.begin(), all.end(), 0);
   m_W.resize(sq(N));
   m_reference->columns(all, m_W.data());
+  progress.report(0.9);
   if (m_opt.with_pressure) {
     m_Wp.resize(static_cast<std::size_t>(N) * m_nodes);
     std::vector<int> nodes(m_nodes);

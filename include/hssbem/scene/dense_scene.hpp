@@ -44,6 +44,8 @@
 
 namespace hssbem {
 
+class Progress; // core/progress.hpp
+
 enum class SceneStrategy { Auto, Solve, Update, Refactor, Krylov };
 
 /// "auto", "solve", "update", "refactor", "krylov".
@@ -126,7 +128,7 @@ public:
   std::array<double, 5> predict(const SystemSelection &sel) const;
 
 private:
-  void factor_reference(const BemOperator &op, const SystemSelection &reference);
+  void factor_reference(const BemOperator &op, const SystemSelection &reference, const Progress &progress);
   void measure_rates();
   std::vector<char> pattern_of(const SystemSelection &sel) const;
   /// y = A₀⁻¹ b_S for the pattern of the switched set J (m_cap) and sel's values.
