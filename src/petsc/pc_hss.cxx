@@ -11,6 +11,7 @@
 
 #include <petsc/private/pcimpl.h>
 
+#include <exception>
 #include <memory>
 #include <string>
 
@@ -80,12 +81,31 @@ const hssbem::DistributedBemSystem &Factor_Private(PC_HSS *hss, const HssbemSyst
   else hss->dsys = hssbem::make_shared_collectively<hssbem::HssDistributedSystem>(comm, *p.op, o, L.node_part, comm);
   hss->base.seconds_compress = timer.seconds();
   timer.restart();
+  /* The distributed factorization throws HssBreakdown on the rank that broke down and PeerFault on
+     the others: agree on it, so that every rank leaves here together (a breakdown is the PC's
+     failure, any other error every rank's) before the set-up's next collective step. */
+  std::exception_ptr other;
+  bool               broke = false, failed = false;
   try {
     if (comm.any(hssbem::fault_armed("Breakdown"))) throw hssbem::HssBreakdown("HSS factorization broke down (injected fault at Breakdown)");
     hss->factors = hss->dsys->factor(p.sel, p.modes.empty() ? nullptr : &p.modes);
   } catch (const hssbem::HssBreakdown &e) {
     hss->base.failure = e.what();
+    broke             = true;
+  } catch (const hssbem::PeerFault &) {
+    other = std::current_exception();
+  } catch (...) {
+    other  = std::current_exception();
+    failed = true;
   }
+  if (comm.any(failed)) { /* an error other than a breakdown somewhere: every rank throws */
+    if (other) std::rethrow_exception(other);
+    throw hssbem::PeerFault();
+  }
+  if (comm.any(broke)) {
+    hss->factors.reset();
+    if (hss->base.failure.empty()) hss->base.failure = "HSS factorization broke down on another rank";
+  } else if (other) std::rethrow_exception(other);
   hss->base.seconds_factor = timer.seconds();
   return *hss->dsys;
 }
