@@ -28,7 +28,6 @@ static PetscErrorCode ResetSkeleton_Private(PC_Compressed *c)
   c->own_layout.reset();
   c->layout = nullptr;
   c->system = nullptr;
-  c->broke  = false;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -41,7 +40,7 @@ PetscErrorCode PCSetUp_Compressed(PC pc)
   HssbemGuard           guard;
   std::vector<PetscInt> map;
   PetscInt              local = 0;
-  PetscMPIInt           flags[2];
+  PetscMPIInt           remap;
   Vec                   x;
 
   PetscFunctionBegin;
@@ -69,15 +68,13 @@ PetscErrorCode PCSetUp_Compressed(PC pc)
   });
   hssbem::fault_end("PCSetUp");
   PetscCall(guard.Check(comm, (std::string(what) + " set-up").c_str()));
-  flags[0] = !c->failure.empty(); /* a breakdown here */
-  flags[1] = !map.empty();        /* the PC's rows are not the matrix's */
-  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, flags, 2, MPI_INT, MPI_MAX, comm));
-  c->broke = flags[0] != 0;
-  if (c->broke) {
-    PetscCall(PetscInfo(pc, "%s: the factorization broke down: %s\n", what, !c->failure.empty() ? c->failure.c_str() : "on another rank"));
+  if (!c->failure.empty()) { /* the factorizations agree on a breakdown: every rank has it */
+    PetscCall(PetscInfo(pc, "%s: the factorization broke down: %s\n", what, c->failure.c_str()));
     PetscCall(PCSetFailedReason(pc, PC_FACTOR_NUMERIC_ZEROPIVOT));
   }
-  if (!flags[1]) PetscFunctionReturn(PETSC_SUCCESS);
+  remap = !map.empty(); /* the PC's rows are not the matrix's (on some rank) */
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &remap, 1, MPI_INT, MPI_MAX, comm));
+  if (!remap) PetscFunctionReturn(PETSC_SUCCESS);
   PetscCall(MatCreateVecs(pc->pmat, &x, NULL));
   PetscCall(VecCreateMPI(comm, local, PETSC_DETERMINE, &c->xs));
   PetscCall(VecDuplicate(c->xs, &c->ys));
@@ -158,6 +155,6 @@ PetscErrorCode PCCompressedCreate(PC pc, PC_Compressed *c, PetscErrorCode (*setf
 PetscErrorCode PCCompressedViewFailure(PetscViewer viewer, const PC_Compressed &c)
 {
   PetscFunctionBegin;
-  PetscCall(PetscViewerASCIIPrintf(viewer, "factorization failed: %s\n", c.failure.empty() ? "on another rank" : c.failure.c_str()));
+  PetscCall(PetscViewerASCIIPrintf(viewer, "factorization failed: %s\n", c.failure.c_str()));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

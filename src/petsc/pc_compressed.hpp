@@ -33,8 +33,7 @@ struct PC_Compressed {
   const HssbemLayout           *layout = nullptr;
   VecScatter                    scatter = nullptr; /* the matrix's rows to the PC's, when they differ */
   Vec                           xs = nullptr, ys = nullptr;
-  std::string                   failure; /* a breakdown (empty: none) */
-  bool                          broke   = false; /* a breakdown on some rank */
+  std::string                   failure; /* a breakdown, on every rank (empty: none) */
   double                        seconds_compress = 0, seconds_factor = 0;
 };
 
