@@ -23,6 +23,12 @@
 /// the number of sphere points (equivalent_points) and the ratio of the spheres; the tests check
 /// it against the direct sums.
 ///
+/// Precision: the sums over equivalent forces (at points and at the targets' check points) and
+/// over the near leaves' particles run in floats, positions relative to the cluster's centre
+/// formed in doubles first (twice the SIMD lanes); the pseudo-inverses, the upward pass and the
+/// choice of the triangles split near a point stay in doubles. Fast against direct is unchanged
+/// (2–4e-5 in the stress with 128 equivalent points).
+///
 /// Distribution: every rank runs the upward pass (O(triangles)) and evaluates the target leaves
 /// of its share (contiguous, balanced by points); the others' points are left at zero, so a sum
 /// over the ranks gives every point once. The values do not depend on the number of ranks.
