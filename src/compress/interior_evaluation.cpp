@@ -57,14 +57,16 @@ ClusterTreeOptions leaves_of(int n)
   return o;
 }
 
-/// Radii that nest: a parent's ball holds its children's.
-void nest_radii(const ClusterTree &tree, std::vector<double> &R)
+/// Radii as small as the upward pass allows: a cluster's ball holds its triangles, and its check
+/// sphere (check_ratio · R) lies outside its children's, where their forces are fitted:
+/// R ≥ R_child + |centre − centre_child| / check_ratio.
+void nest_radii(const ClusterTree &tree, double check_ratio, std::vector<double> &R)
 {
   for (int l = tree.levels() - 1; l >= 0; --l)
     for (int c : tree.clusters_at_level(l)) {
       const Cluster &cl = tree.cluster(c);
       if (cl.left < 0) continue;
-      for (int child : {cl.left, cl.right}) R[c] = std::max(R[c], norm(tree.cluster(child).centre - cl.centre) + R[child]);
+      for (int child : {cl.left, cl.right}) R[c] = std::max(R[c], norm(tree.cluster(child).centre - cl.centre) / check_ratio + R[child]);
     }
 }
 
@@ -258,7 +260,7 @@ void InteriorEvaluator::Impl::source_radii()
       reach[c] = std::max(reach[c], d + src.near_radius(e));
     }
   }
-  nest_radii(tree, R);
+  nest_radii(tree, opt.check_ratio, R);
 }
 
 void InteriorEvaluator::Impl::upward_leaf(int c)

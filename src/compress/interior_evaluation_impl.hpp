@@ -79,7 +79,7 @@ struct InteriorEvaluator::Impl {
   detail::Fit up;   ///< sources: equivalent sphere inside, check sphere outside
   detail::Fit down; ///< targets: check sphere inside, equivalent sphere outside
   ClusterTree tree; ///< over the triangles' centroids
-  std::vector<double> R, reach;       ///< per source cluster: ball of its triangles, of their near zones
+  std::vector<double> R, reach;       ///< per source cluster: ball of its triangles (enlarged for the upward pass, see nest_radii), of their near zones
   std::vector<std::vector<double>> q; ///< per source cluster: equivalent forces (SoA, 3 pe)
   std::vector<std::vector<float>> qf; ///< the same in single precision (the evaluation at points)
   detail::OrderedParticles particles; ///< in the tree's order

