@@ -178,6 +178,7 @@ struct ContactEngine::State {
   // the last frame
   std::unique_ptr<Compliance> D;
   std::vector<Vec3> wf, lambda, u_prev, warm_lambda;
+  std::vector<double> gap;             ///< per point: the gap after the solve
   std::vector<std::int8_t> point_status;
   std::vector<char> warm_nodes;
   std::vector<char> zone, zone_nodes;  ///< per point: watched by the iterations; per node: joined this frame
@@ -191,7 +192,8 @@ struct ContactEngine::State {
   void detect(const std::vector<Vec3> &offsets_);
   void solve_points(ContactFrameReport &rep);
   void fields(ContactSolution &out) const;
-  bool zone_violations(const ContactSolution &out);
+  void point_gaps();
+  bool zone_violations();
   bool penetrations(const std::vector<Vec3> &offsets_, const ContactSolution &out);
   void outputs(ContactSolution &out) const;
   /// The warm start of the next solve (round or frame): the active set and its tractions.
@@ -295,20 +297,32 @@ void ContactEngine::State::solve_points(ContactFrameReport &rep)
   auto monitor = [&](int it, long long active, long long changed, double res) {
     if (opt.monitor) opt.monitor(ContactIteration{it, active, changed, res});
   };
-  rep.iterations += friction_solver.solve(*D, wf, zone, opt.tol, opt.max_it, lambda, point_status, monitor).iterations;
+  const auto r = friction_solver.solve(*D, wf, zone, opt.tol, opt.max_it, lambda, point_status, monitor);
+  rep.iterations += r.iterations, rep.factorizations += r.factorizations, rep.products += r.products;
 }
 
-/// Points outside the zone whose gap in the fields went through: they join it.
-bool ContactEngine::State::zone_violations(const ContactSolution &out)
+/// Every point's gap after the solve, g = g_f + D_n λ from the compliance (in double, whatever
+/// the precision of the fields).
+void ContactEngine::State::point_gaps()
+{
+  const int n = D->size();
+  std::vector<int> rows(n), cols;
+  std::vector<Vec3> loaded;
+  for (int c = 0; c < n; ++c) {
+    rows[c] = c;
+    if (lambda[c][0] != 0 || lambda[c][1] != 0 || lambda[c][2] != 0) cols.push_back(c), loaded.push_back(lambda[c]);
+  }
+  gap.resize(n);
+  for (int c = 0; c < n; ++c) gap[c] = wf[c][0];
+  D->apply_normal(rows, cols, loaded.data(), gap.data());
+}
+
+/// Points outside the zone whose gap went through: they join it.
+bool ContactEngine::State::zone_violations()
 {
   bool found = false;
-  for (int c = 0; c < D->size(); ++c) {
-    if (zone[c]) continue;
-    const ContactPoint &p = D->point(c);
-    Vec3 d{};
-    for (int i = 0; i < p.terms; ++i) d = d + p.mw[i] * out.u[p.term_node[i]];
-    if (p.g0 + dot(p.frame[0], d) < -tol_gap) zone_nodes[p.node] = 1, found = true;
-  }
+  for (int c = 0; c < D->size(); ++c)
+    if (!zone[c] && gap[c] < -tol_gap) zone_nodes[D->point(c).node] = 1, found = true;
   return found;
 }
 
@@ -321,7 +335,7 @@ void ContactEngine::State::fields(ContactSolution &out) const
   const std::vector<int> &order = columns->row_order();
   std::vector<double> x(xf.size());
   for (std::size_t p = 0; p < x.size(); ++p) x[p] = xf[order.empty() ? p : order[p]];
-  if (opt.single_fields) {
+  if (opt.single_fields && !friction) {
     std::vector<const float *> col;
     for (int j : js) col.push_back(columns->column_single(j));
     subtract_columns(col, v, x);
@@ -375,9 +389,7 @@ void ContactEngine::State::outputs(ContactSolution &out) const
   out.body_force.assign(geo.bodies.count, Vec3{0, 0, 0});
   for (int c = 0; c < D->size(); ++c) {
     const ContactPoint &p = D->point(c);
-    Vec3 d{};
-    for (int i = 0; i < p.terms; ++i) d = d + p.mw[i] * out.u[p.term_node[i]];
-    if (p.facing) out.gap[p.vertex] = p.g0 + dot(p.frame[0], d);
+    if (p.facing) out.gap[p.vertex] = gap[c];
     if (!point_status[c]) continue;
     const Vec3 force = p.area * (lambda[c][0] * p.frame[0] + lambda[c][1] * p.frame[1] + lambda[c][2] * p.frame[2]);
     if (p.facing) out.pressure[p.vertex] = lambda[c][0], out.status[p.vertex] = point_status[c];
@@ -422,10 +434,11 @@ const ContactFrameReport &ContactEngine::solve(const SystemSelection &values, co
     rep.solve_seconds += phase.seconds();
     phase.restart();
     s.fields(out);
+    s.point_gaps();
     rep.fields_seconds += phase.seconds();
     phase.restart();
     const bool through = rep.rounds < 8 && s.penetrations(offsets, out); // vertices beyond reach
-    const bool joined = rep.rounds < 8 && s.zone_violations(out);           // points outside the zone
+    const bool joined = rep.rounds < 8 && s.zone_violations();              // points outside the zone
     if (through) s.detect(offsets);
     rep.detect_seconds += phase.seconds();
     if (!through && !joined) break;
