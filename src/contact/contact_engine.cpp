@@ -170,6 +170,7 @@ struct ContactEngine::State {
   bool body_points_done = false;
   std::vector<char> forced;            ///< per vertex: penetrated beyond reach once; always a candidate since
   double tol_gap = 0;
+  double size = 0;                     ///< the mesh's bounding-box diagonal
   // the free response of the last values
   bool has_free = false;
   SystemSelection free_values;
@@ -192,7 +193,7 @@ struct ContactEngine::State {
   void detect(const std::vector<Vec3> &offsets_);
   void solve_points(ContactFrameReport &rep);
   void fields(ContactSolution &out) const;
-  void point_gaps();
+  void point_gaps(const ContactSolution &out, bool single);
   bool zone_violations();
   bool penetrations(const std::vector<Vec3> &offsets_, const ContactSolution &out);
   void outputs(ContactSolution &out) const;
@@ -209,7 +210,8 @@ ContactEngine::ContactEngine(const Discretization &disc, const ReferenceFactoriz
   m->columns = columns ? std::move(columns) : std::make_shared<ReferenceColumns>(reference, spatial_order(disc));
   m->node_position.resize(disc.num_nodes());
   for (int i = 0; i < disc.num_nodes(); ++i) m->node_position[i] = m->columns->position(3 * i) / 3;
-  m->tol_gap = options.tol * mesh_size(disc.mesh());
+  m->size = mesh_size(disc.mesh());
+  m->tol_gap = options.tol * m->size;
   m->forced.assign(disc.mesh().num_vertices(), 0);
   m->u_prev.assign(disc.num_nodes(), Vec3{0, 0, 0});
   m->friction = settings.friction > 0;
@@ -301,20 +303,31 @@ void ContactEngine::State::solve_points(ContactFrameReport &rep)
   rep.iterations += r.iterations, rep.factorizations += r.factorizations, rep.products += r.products;
 }
 
-/// Every point's gap after the solve, g = g_f + D_n λ from the compliance (in double, whatever
-/// the precision of the fields).
-void ContactEngine::State::point_gaps()
+/// Every point's gap after the solve, from the fields; where the fields are in single precision
+/// (their u carries relative errors of about 1e-7), the gaps of the points near contact (within
+/// 1e-4 of the mesh's size) again from the compliance, g = g_f + D_n λ, in double: their sign
+/// decides the zone, and the contact's gaps are reported to round-off.
+void ContactEngine::State::point_gaps(const ContactSolution &out, bool single)
 {
   const int n = D->size();
-  std::vector<int> rows(n), cols;
-  std::vector<Vec3> loaded;
-  for (int c = 0; c < n; ++c) {
-    rows[c] = c;
-    if (lambda[c][0] != 0 || lambda[c][1] != 0 || lambda[c][2] != 0) cols.push_back(c), loaded.push_back(lambda[c]);
-  }
   gap.resize(n);
-  for (int c = 0; c < n; ++c) gap[c] = wf[c][0];
-  D->apply_normal(rows, cols, loaded.data(), gap.data());
+  std::vector<int> near;
+  for (int c = 0; c < n; ++c) {
+    const ContactPoint &p = D->point(c);
+    Vec3 d{};
+    for (int i = 0; i < p.terms; ++i) d = d + p.mw[i] * out.u[p.term_node[i]];
+    gap[c] = p.g0 + dot(p.frame[0], d);
+    if (single && std::abs(gap[c]) <= 1e-4 * size) near.push_back(c), gap[c] = wf[c][0];
+  }
+  if (near.empty()) return;
+  std::vector<int> cols;
+  std::vector<Vec3> loaded;
+  for (int c = 0; c < n; ++c)
+    if (lambda[c][0] != 0 || lambda[c][1] != 0 || lambda[c][2] != 0) cols.push_back(c), loaded.push_back(lambda[c]);
+  std::vector<double> g(near.size());
+  for (std::size_t r = 0; r < near.size(); ++r) g[r] = wf[near[r]][0];
+  D->apply_normal(near, cols, loaded.data(), g.data());
+  for (std::size_t r = 0; r < near.size(); ++r) gap[near[r]] = g[r];
 }
 
 /// Points outside the zone whose gap went through: they join it.
@@ -335,7 +348,7 @@ void ContactEngine::State::fields(ContactSolution &out) const
   const std::vector<int> &order = columns->row_order();
   std::vector<double> x(xf.size());
   for (std::size_t p = 0; p < x.size(); ++p) x[p] = xf[order.empty() ? p : order[p]];
-  if (opt.single_fields && !friction) {
+  if (opt.single_fields && !friction) { // (point_gaps makes the same choice)
     std::vector<const float *> col;
     for (int j : js) col.push_back(columns->column_single(j));
     subtract_columns(col, v, x);
@@ -434,7 +447,7 @@ const ContactFrameReport &ContactEngine::solve(const SystemSelection &values, co
     rep.solve_seconds += phase.seconds();
     phase.restart();
     s.fields(out);
-    s.point_gaps();
+    s.point_gaps(out, s.opt.single_fields && !s.friction);
     rep.fields_seconds += phase.seconds();
     phase.restart();
     const bool through = rep.rounds < 8 && s.penetrations(offsets, out); // vertices beyond reach
