@@ -309,6 +309,7 @@ void ContactEngine::State::solve_points(ContactFrameReport &rep)
 /// decides the zone, and the contact's gaps are reported to round-off.
 void ContactEngine::State::point_gaps(const ContactSolution &out, bool single)
 {
+  const PhaseScope phase(Phase::ContactFields);
   const int n = D->size();
   gap.resize(n);
   std::vector<int> near;
