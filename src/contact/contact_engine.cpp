@@ -199,6 +199,9 @@ struct ContactEngine::State {
   void outputs(ContactSolution &out) const;
   /// The warm start of the next solve (round or frame): the active set and its tractions.
   void remember();
+  Vec3 predicted_traction(int c);
+  std::vector<Vec3> warm_offsets;      ///< the obstacles' offsets of the warm start
+  TriangleBvh surface;                 ///< the mesh's triangles (the warm start's interpolation)
 };
 
 ContactEngine::ContactEngine(const Discretization &disc, const ReferenceFactorization &reference, std::vector<Obstacle> obstacles, const ContactSettings &settings,
@@ -295,7 +298,7 @@ void ContactEngine::State::solve_points(ContactFrameReport &rep)
   }
   lambda.assign(n, Vec3{0, 0, 0});
   if (opt.warm_start && !warm_lambda.empty())
-    for (int c = 0; c < n; ++c) lambda[c] = warm_lambda[D->point(c).node];
+    for (int c = 0; c < n; ++c) lambda[c] = predicted_traction(c);
   auto monitor = [&](int it, long long active, long long changed, double res) {
     if (opt.monitor) opt.monitor(ContactIteration{it, active, changed, res});
   };
@@ -421,8 +424,27 @@ void ContactEngine::State::outputs(ContactSolution &out) const
   }
 }
 
+/// The warm start of point c: the last solve's traction where the point's obstacle has not
+/// moved; where it has, the last solve's tractions carried along with it (interpolated on the
+/// surface at the vertex moved back by the obstacle's step), since the contact patch moves
+/// with the obstacle.
+Vec3 ContactEngine::State::predicted_traction(int c)
+{
+  const ContactPoint &p = D->point(c);
+  if (p.obstacle < 0 || warm_offsets.size() != offsets.size()) return warm_lambda[p.node];
+  const Vec3 step = offsets[p.obstacle] - warm_offsets[p.obstacle];
+  if (norm(step) == 0) return warm_lambda[p.node];
+  if (surface.empty()) surface = TriangleBvh(disc->mesh().vertices, disc->mesh().triangles);
+  const TriangleHit hit = surface.closest(disc->mesh().vertices[p.vertex] - step, 4 * norm(step));
+  if (hit.triangle < 0) return Vec3{0, 0, 0};
+  Vec3 l{0, 0, 0};
+  for (int k = 0; k < 3; ++k) l = l + hit.bary[k] * warm_lambda[disc->element_node(hit.triangle, k)];
+  return l;
+}
+
 void ContactEngine::State::remember()
 {
+  warm_offsets = offsets;
   warm_nodes.assign(disc->num_nodes(), 0);
   warm_lambda.assign(disc->num_nodes(), Vec3{0, 0, 0});
   for (int c = 0; c < D->size(); ++c)

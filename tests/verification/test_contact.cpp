@@ -240,6 +240,35 @@ TEST(Contact, FrictionFramesKeepCoulombsLawAndAgreeWithoutWarmStarts)
   EXPECT_GT(slip_last, 0);
 }
 
+TEST(Contact, ASlidingToolWithFrictionAgreesWithoutWarmStarts)
+{
+  // The bottom clamped, a rough tool (sphere) pressed into the top slides along x: the warm
+  // start carries the tractions along with the tool (interpolated on the surface) and the
+  // Newton matrix's factorization is kept; an engine without warm starts must agree.
+  ContactSettings rough;
+  rough.friction = 0.3;
+  ContactOptions cold_opt;
+  cold_opt.warm_start = false;
+  ProblemSpec spec = spec_for("cube_l0.msh", E, nu);
+  spec.rules = {rule(Kind::Displacement, region("z0"), {{0, 0, 0}})};
+  const Obstacle tool = Obstacle::sphere("tool", {0.25, 0.5, 1.5 - 0.08}, 0.5);
+  Case warm(spec, {tool}, rough), cold(spec, {tool}, rough, cold_opt);
+  double worst = 0, scale = 0;
+  long long least = 1 << 30, warm_steps = 0, cold_steps = 0;
+  for (int f = 0; f < 6; ++f) {
+    warm.solve({{0.1 * f, 0, 0}});
+    cold.solve({{0.1 * f, 0, 0}});
+    warm_steps += warm.rep.iterations, cold_steps += cold.rep.iterations;
+    least = std::min(least, warm.rep.active_vertices);
+    worst = std::max(worst, max_norm_diff(warm.sol.u, cold.sol.u));
+    for (const Vec3 &u : cold.sol.u) scale = std::max(scale, norm(u));
+  }
+  std::printf("sliding rough tool: warm against no warm starts %.2e (relative); at least %lld vertices touching; Newton steps warm %lld, cold %lld\n", worst / scale, least,
+              warm_steps, cold_steps);
+  EXPECT_LE(worst, 3e-11 * scale); // measured 1.1e-11 (the Newton tolerance)
+  EXPECT_GT(least, 0);             // measured: 1 to a few vertices of the coarse cube's top
+}
+
 TEST(Contact, MovingObstacleFramesEqualColdStaticSolves)
 {
   // The table rises through the frames: warm frames (active set and capacitance kept) against a
