@@ -165,8 +165,8 @@ private:
     if (m_single) b.park();
   }
   std::vector<int> parts_of(int P, int l) const;
-  /// Several ranks: the boxes of other ranks whose column data (unknowns, Ψ, column basis
-  /// carried to the far block; `far`: pairs that need a far part) this rank's rows need.
+  /// Several ranks: for pairs (b another rank's, c mine), c's column data that b's rows need
+  /// (unknowns, Ψ, and, where b and c are not close, c's column basis carried to the far block).
   void send_column_data(const std::vector<std::pair<int, int>> &pairs);
   /// Several ranks: the far parts of pairs (b mine, c another rank's) for the copies in c's
   /// columns, with b's unknowns.

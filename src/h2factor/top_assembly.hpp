@@ -77,8 +77,7 @@ private:
   bool m_single;
   std::vector<int> m_off;
   std::vector<std::size_t> m_start; ///< per box: values before its row (floats when single)
-  std::vector<double> m_out;        ///< double
-  std::vector<float> m_out_single;  ///< or single
+  std::vector<double> m_out;        ///< the message (single: two floats to a value)
 };
 
 } // namespace hssbem::h2f

@@ -34,7 +34,9 @@ UlvFactorization::UlvFactorization(const HssMatrix &K, const RankComm &comm, con
   const ClusterTree &tree = K.tree();
   const int P = comm.size();
   std::vector<std::vector<int>> need_up, need_down;
-  collectively(comm, [&] {
+  // A breakdown on any rank is agreed on: every rank throws it (the lowest such rank's message).
+  collectively<HssBreakdown>(comm, [&] {
+    if (fault_armed("Breakdown")) throw HssBreakdown("HSS factorization broke down (injected fault at Breakdown)");
     m_nodes.resize(tree.num_clusters());
     need_up.resize(P);
     need_down.resize(P);
@@ -60,7 +62,7 @@ UlvFactorization::UlvFactorization(const HssMatrix &K, const RankComm &comm, con
   std::optional<PhaseScope> top;
   if (tree.num_parts() > 1) top.emplace(Phase::FactorizationTop);
   send_part_roots();
-  collectively(comm, [&] {
+  collectively<HssBreakdown>(comm, [&] {
     if (!m_passes.top_up.empty()) fault_point("UlvTop");
     factor_levels(m_passes.top_up, displacement_known);
   });

@@ -13,13 +13,6 @@
 
 namespace {
 
-PetscErrorCode MatShellSystem_Private(Mat A, HssbemSystemContext **p)
-{
-  PetscFunctionBegin;
-  PetscCall(MatShellGetContext(A, p));
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
-
 PetscErrorCode MatMult_Compressed(Mat A, Vec x, Vec y)
 {
   HssbemSystemContext *p;
@@ -28,7 +21,7 @@ PetscErrorCode MatMult_Compressed(Mat A, Vec x, Vec y)
   PetscScalar         *ya;
 
   PetscFunctionBegin;
-  PetscCall(MatShellSystem_Private(A, &p));
+  PetscCall(MatShellGetContext(A, &p));
   PetscCall(VecGetArrayRead(x, &xa));
   PetscCall(VecGetArrayWrite(y, &ya));
   guard.Run([&] {
@@ -50,7 +43,7 @@ PetscErrorCode MatGetDiagonal_Compressed(Mat A, Vec d)
   PetscScalar         *da;
 
   PetscFunctionBegin;
-  PetscCall(MatShellSystem_Private(A, &p));
+  PetscCall(MatShellGetContext(A, &p));
   PetscCall(VecGetArrayWrite(d, &da));
   guard.Run("MatGetDiagonal", [&] {
     const std::vector<double> diag = p->distributed()->diagonal(p->sel);
@@ -72,7 +65,7 @@ PetscErrorCode MatView_Compressed(Mat A, PetscViewer viewer)
   PetscFunctionBegin;
   PetscCall(PetscObjectTypeCompare((PetscObject)viewer, PETSCVIEWERASCII, &ascii));
   if (!ascii) PetscFunctionReturn(PETSC_SUCCESS);
-  PetscCall(MatShellSystem_Private(A, &p));
+  PetscCall(MatShellGetContext(A, &p));
   const bool h2 = p->type == hssbem::OperatorType::H2;
   if (h2) {
     const hssbem::H2Options &o = p->h2_options;
@@ -107,6 +100,22 @@ PetscErrorCode MatView_Compressed(Mat A, PetscViewer viewer)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* One line: the rank per level (1 down) of the levels with clusters, HSS or H². */
+template <class Level>
+PetscErrorCode ViewLevelRanks_Private(PetscViewer viewer, const char *which, const std::vector<Level> &levels)
+{
+  PetscFunctionBegin;
+  PetscCall(PetscViewerASCIIPrintf(viewer, "rank per level (%s: rows max/mean, columns max/mean):", which));
+  PetscCall(PetscViewerASCIIUseTabs(viewer, PETSC_FALSE));
+  for (std::size_t l = 1; l < levels.size(); ++l) {
+    const Level &L = levels[l];
+    if (L.clusters > 0) PetscCall(PetscViewerASCIIPrintf(viewer, " L%d (%d: %d/%.0f, %d/%.0f)", (int)l, L.clusters, L.max_row_rank, L.mean_row_rank, L.max_col_rank, L.mean_col_rank));
+  }
+  PetscCall(PetscViewerASCIIPrintf(viewer, "\n"));
+  PetscCall(PetscViewerASCIIUseTabs(viewer, PETSC_TRUE));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 } // namespace
 
 PetscErrorCode HssbemViewHssMatrix_Private(PetscViewer viewer, const hssbem::HssMatrix &K)
@@ -117,14 +126,7 @@ PetscErrorCode HssbemViewHssMatrix_Private(PetscViewer viewer, const hssbem::Hss
   PetscFunctionBegin;
   PetscCall(PetscViewerASCIIPrintf(viewer, "%d rows, %d levels, %d proxy points; max rank %d (rows) / %d (columns); memory %.1f MB (dense K: %.1f MB)\n", K.num_rows(), (int)s.levels.size(),
                                    s.proxy_points, s.max_row_rank(), s.max_col_rank(), s.memory_bytes / 1048576.0, 8 * dense_entries / 1048576.0));
-  PetscCall(PetscViewerASCIIPrintf(viewer, "rank per level (clusters: rows max/mean, columns max/mean):"));
-  PetscCall(PetscViewerASCIIUseTabs(viewer, PETSC_FALSE));
-  for (std::size_t l = 1; l < s.levels.size(); ++l) {
-    const hssbem::HssLevelStats &L = s.levels[l];
-    PetscCall(PetscViewerASCIIPrintf(viewer, " L%d (%d: %d/%.0f, %d/%.0f)", (int)l, L.clusters, L.max_row_rank, L.mean_row_rank, L.max_col_rank, L.mean_col_rank));
-  }
-  PetscCall(PetscViewerASCIIPrintf(viewer, "\n"));
-  PetscCall(PetscViewerASCIIUseTabs(viewer, PETSC_TRUE));
+  PetscCall(ViewLevelRanks_Private(viewer, "clusters", s.levels));
   PetscCall(PetscViewerASCIIPrintf(viewer, "entries evaluated %lld (%.2f x dense K); seconds: tree %.2f, near field %.2f, IDs %.2f, couplings %.2f, leaves %.2f, rigid-body terms %.2f\n",
                                    s.entries_evaluated, s.entries_evaluated / dense_entries, s.time_tree, s.time_near_field, s.time_ids, s.time_couplings, s.time_leaves, s.time_rigid));
   PetscFunctionReturn(PETSC_SUCCESS);
@@ -139,14 +141,7 @@ PetscErrorCode HssbemViewH2Matrix_Private(PetscViewer viewer, const hssbem::H2Ma
   PetscCall(PetscViewerASCIIPrintf(viewer, "%d rows, %d levels, %d proxy points; max rank %d (rows) / %d (columns); memory %.1f MB (bases %.1f, %ld far blocks %.1f, %ld near blocks %.1f; dense K: %.1f MB)\n",
                                    K.num_rows(), (int)s.levels.size(), s.proxy_points, s.max_row_rank(), s.max_col_rank(), s.memory_bytes / 1048576.0, s.basis_bytes / 1048576.0, s.far_blocks,
                                    s.far_bytes / 1048576.0, s.near_blocks, s.near_bytes / 1048576.0, 8 * dense_entries / 1048576.0));
-  PetscCall(PetscViewerASCIIPrintf(viewer, "rank per level (clusters with a basis: rows max/mean, columns max/mean):"));
-  PetscCall(PetscViewerASCIIUseTabs(viewer, PETSC_FALSE));
-  for (std::size_t l = 1; l < s.levels.size(); ++l) {
-    const hssbem::H2LevelStats &L = s.levels[l];
-    if (L.clusters > 0) PetscCall(PetscViewerASCIIPrintf(viewer, " L%d (%d: %d/%.0f, %d/%.0f)", (int)l, L.clusters, L.max_row_rank, L.mean_row_rank, L.max_col_rank, L.mean_col_rank));
-  }
-  PetscCall(PetscViewerASCIIPrintf(viewer, "\n"));
-  PetscCall(PetscViewerASCIIUseTabs(viewer, PETSC_TRUE));
+  PetscCall(ViewLevelRanks_Private(viewer, "clusters with a basis", s.levels));
   PetscCall(PetscViewerASCIIPrintf(viewer, "entries evaluated %lld (%.2f x dense K); seconds: tree and partition %.2f, ID samples %.2f and IDs %.2f (thread-seconds), far blocks %.2f, near blocks %.2f, rigid-body terms %.2f\n",
                                    s.entries_evaluated, s.entries_evaluated / dense_entries, s.time_tree, s.time_near_field, s.time_ids, s.time_far, s.time_near, s.time_rigid));
   PetscFunctionReturn(PETSC_SUCCESS);

@@ -18,21 +18,36 @@ static std::vector<PetscInt> RowMap_Private(const HssbemSystemContext &p, std::v
   return {};
 }
 
-PetscErrorCode PCCompressedSetUp(PC pc, PC_Compressed *c, const char *what, const PCCompressedFactor &factor)
+/* The skeleton's own state goes: the scatter, its vectors and the layout. */
+static PetscErrorCode ResetSkeleton_Private(PC_Compressed *c)
 {
+  PetscFunctionBegin;
+  PetscCall(VecScatterDestroy(&c->scatter));
+  PetscCall(VecDestroy(&c->xs));
+  PetscCall(VecDestroy(&c->ys));
+  c->own_layout.reset();
+  c->layout = nullptr;
+  c->system = nullptr;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PCSetUp_Compressed(PC pc)
+{
+  PC_Compressed        *c = (PC_Compressed *)pc->data;
+  const char           *what = c->what;
   HssbemSystemContext  *p;
   MPI_Comm              comm = PetscObjectComm((PetscObject)pc);
   HssbemGuard           guard;
   std::vector<PetscInt> map;
   PetscInt              local = 0;
-  PetscMPIInt           flags[2];
+  PetscMPIInt           remap;
   Vec                   x;
 
   PetscFunctionBegin;
   PetscCall(HssbemMatGetSystemContext(pc->pmat, &p));
   PetscCheck(p, comm, PETSC_ERR_ARG_WRONG, "%s factors BEM system matrices only: build the matrix with HssbemCreateSystem() (the hssbem driver does)", what);
   c->fresh = c->system != p;
-  if (c->fresh) PetscCall(PCCompressedReset(c));
+  if (c->fresh) PetscCall(ResetSkeleton_Private(c));
   PetscCall(VecScatterDestroy(&c->scatter));
   PetscCall(VecDestroy(&c->xs));
   PetscCall(VecDestroy(&c->ys));
@@ -45,7 +60,7 @@ PetscErrorCode PCCompressedSetUp(PC pc, PC_Compressed *c, const char *what, cons
   c->failure.clear();
   guard.Run([&] {
     hssbem::collectively(*c->layout->comm, [] { hssbem::fault_point("PCSetUp"); }); /* every step is collective */
-    const hssbem::DistributedBemSystem &s = factor(*p, *c->layout);
+    const hssbem::DistributedBemSystem &s = c->Factor(*p, *c->layout);
     hssbem::collectively(*c->layout->comm, [&] {
       map   = RowMap_Private(*p, HssbemSystemRows(s.tree()));
       local = 3 * (PetscInt)s.num_points();
@@ -53,15 +68,13 @@ PetscErrorCode PCCompressedSetUp(PC pc, PC_Compressed *c, const char *what, cons
   });
   hssbem::fault_end("PCSetUp");
   PetscCall(guard.Check(comm, (std::string(what) + " set-up").c_str()));
-  flags[0] = !c->failure.empty(); /* a breakdown here */
-  flags[1] = !map.empty();        /* the PC's rows are not the matrix's */
-  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, flags, 2, MPI_INT, MPI_MAX, comm));
-  c->broke = flags[0] != 0;
-  if (c->broke) {
-    PetscCall(PetscInfo(pc, "%s: the factorization broke down: %s\n", what, !c->failure.empty() ? c->failure.c_str() : "on another rank"));
+  if (!c->failure.empty()) { /* the factorizations agree on a breakdown: every rank has it */
+    PetscCall(PetscInfo(pc, "%s: the factorization broke down: %s\n", what, c->failure.c_str()));
     PetscCall(PCSetFailedReason(pc, PC_FACTOR_NUMERIC_ZEROPIVOT));
   }
-  if (!flags[1]) PetscFunctionReturn(PETSC_SUCCESS);
+  remap = !map.empty(); /* the PC's rows are not the matrix's (on some rank) */
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &remap, 1, MPI_INT, MPI_MAX, comm));
+  if (!remap) PetscFunctionReturn(PETSC_SUCCESS);
   PetscCall(MatCreateVecs(pc->pmat, &x, NULL));
   PetscCall(VecCreateMPI(comm, local, PETSC_DETERMINE, &c->xs));
   PetscCall(VecDuplicate(c->xs, &c->ys));
@@ -70,8 +83,9 @@ PetscErrorCode PCCompressedSetUp(PC pc, PC_Compressed *c, const char *what, cons
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-PetscErrorCode PCCompressedApply(PC pc, PC_Compressed *c, Vec x, Vec y, const char *what, const std::function<void(const double *, double *)> &solve)
+PetscErrorCode PCApply_Compressed(PC pc, Vec x, Vec y)
 {
+  PC_Compressed     *c = (PC_Compressed *)pc->data;
   HssbemGuard        guard;
   PCFailedReason     reason;
   const PetscScalar *xa;
@@ -94,11 +108,11 @@ PetscErrorCode PCCompressedApply(PC pc, PC_Compressed *c, Vec x, Vec y, const ch
   PetscCall(VecGetArrayWrite(out, &ya));
   guard.Run([&] {
     hssbem::collectively(*c->layout->comm, [] { hssbem::fault_point("PCApply"); }); /* the ranks meet in the solve's exchanges */
-    solve(xa, ya);
+    c->Solve(xa, ya);
   });
   PetscCall(VecRestoreArrayRead(in, &xa));
   PetscCall(VecRestoreArrayWrite(out, &ya));
-  PetscCall(guard.Check(PetscObjectComm((PetscObject)pc), what));
+  PetscCall(guard.Check(PetscObjectComm((PetscObject)pc), c->what));
   if (c->scatter) {
     PetscCall(VecScatterBegin(c->scatter, c->ys, y, INSERT_VALUES, SCATTER_REVERSE));
     PetscCall(VecScatterEnd(c->scatter, c->ys, y, INSERT_VALUES, SCATTER_REVERSE));
@@ -106,22 +120,41 @@ PetscErrorCode PCCompressedApply(PC pc, PC_Compressed *c, Vec x, Vec y, const ch
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-PetscErrorCode PCCompressedReset(PC_Compressed *c)
+PetscErrorCode PCReset_Compressed(PC pc)
+{
+  PC_Compressed *c = (PC_Compressed *)pc->data;
+
+  PetscFunctionBegin;
+  c->Drop();
+  PetscCall(ResetSkeleton_Private(c));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PCDestroy_Compressed(PC pc)
 {
   PetscFunctionBegin;
-  PetscCall(VecScatterDestroy(&c->scatter));
-  PetscCall(VecDestroy(&c->xs));
-  PetscCall(VecDestroy(&c->ys));
-  c->own_layout.reset();
-  c->layout = nullptr;
-  c->system = nullptr;
-  c->broke  = false;
+  PetscCall(PCReset_Compressed(pc));
+  delete (PC_Compressed *)pc->data;
+  pc->data = NULL;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PCCompressedCreate(PC pc, PC_Compressed *c, PetscErrorCode (*setfromoptions)(PC, PetscOptionItems *), PetscErrorCode (*view)(PC, PetscViewer))
+{
+  PetscFunctionBegin;
+  pc->data                = c;
+  pc->ops->setup          = PCSetUp_Compressed;
+  pc->ops->apply          = PCApply_Compressed;
+  pc->ops->reset          = PCReset_Compressed;
+  pc->ops->destroy        = PCDestroy_Compressed;
+  pc->ops->setfromoptions = setfromoptions;
+  pc->ops->view           = view;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
 PetscErrorCode PCCompressedViewFailure(PetscViewer viewer, const PC_Compressed &c)
 {
   PetscFunctionBegin;
-  PetscCall(PetscViewerASCIIPrintf(viewer, "factorization failed: %s\n", c.failure.empty() ? "on another rank" : c.failure.c_str()));
+  PetscCall(PetscViewerASCIIPrintf(viewer, "factorization failed: %s\n", c.failure.c_str()));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

@@ -18,138 +18,89 @@ namespace {
 /* Where the factored H² matrix came from. */
 enum class Source { None, Matrix, Compressed };
 
-struct PC_H2 {
-  PetscReal rel_tol        = HSSBEM_PC_H2_DEFAULT_REL_TOL;
-  PetscInt  leaf_size      = 0;    /* 0: the H² matrix's leaves */
-  PetscInt  top_size       = 2000; /* unknowns factored densely at the top */
-  PetscBool top_cheaper    = PETSC_TRUE; /* stop at a level that costs more than the dense top */
-  PetscInt  single_top     = 4000; /* from this top size on, its LU in single precision (<= 0: never) */
-  PetscBool spread_top     = PETSC_TRUE; /* several ranks, a single-precision top: spread over them (ScaLAPACK) */
-  PetscInt  sketch_size    = 0;    /* 0: from the tolerance */
-  PetscInt  estimate_error = 0;    /* power iterations of the ‖I − A F⁻¹‖ estimate (0: none) */
+struct PC_H2 : PC_Compressed {
+  hssbem::H2FactorOptions options;            /* their defaults are the factorization's */
+  PetscInt                estimate_error = 0; /* power iterations of the ‖I − A F⁻¹‖ estimate (0: none) */
   /* set up */
-  PC_Compressed                                       base;
   Source                                              source         = Source::None;
   double                                              compressed_tol = 0, inverse_error = -1;
   std::shared_ptr<const hssbem::H2DistributedSystem> dsys; /* the matrix factored (every rank its part) */
   std::unique_ptr<hssbem::H2FactorCache>              cache;
   std::unique_ptr<hssbem::H2Factorization>            factors;
-};
 
-hssbem::H2FactorOptions FactorOptions(const PC_H2 &h2)
-{
-  hssbem::H2FactorOptions o;
-  o.rel_tol          = h2.rel_tol;
-  o.leaf_size        = (int)h2.leaf_size;
-  o.top_size         = (int)h2.top_size;
-  o.top_when_cheaper = h2.top_cheaper == PETSC_TRUE;
-  o.single_top_from  = (int)h2.single_top;
-  o.spread_top       = h2.spread_top == PETSC_TRUE;
-  o.sketch_columns   = (int)h2.sketch_size;
-  return o;
-}
+  PC_H2() : PC_Compressed("PC h2") { options.rel_tol = HSSBEM_PC_H2_DEFAULT_REL_TOL; }
+  const hssbem::DistributedBemSystem &Factor(const HssbemSystemContext &p, const HssbemLayout &L) override;
+  void Solve(const double *b, double *out) const override { factors->solve(b, out); }
+  void Drop() override
+  {
+    factors.reset();
+    cache.reset();
+    dsys.reset();
+    source = Source::None;
+  }
+};
 
 /* The H² matrix to factor (collective): the matrix's own when it is H² at a tolerance no tighter
    than the PC's (no kernel entry evaluated), else one compressed at the PC's tolerance on the
    layout, kept while the matrix and the tolerance stay. */
 void ChooseMatrix_Private(PC_H2 *h2, const HssbemSystemContext &p, const HssbemLayout &L)
 {
-  if (p.h2 && h2->rel_tol >= p.h2_options.rel_tol) {
+  if (p.h2 && h2->options.rel_tol >= p.h2_options.rel_tol) {
     if (h2->dsys != p.h2) h2->cache.reset();
     h2->dsys           = p.h2;
     h2->source         = Source::Matrix;
     h2->compressed_tol = p.h2_options.rel_tol;
     return;
   }
-  if (!h2->base.fresh && h2->dsys && h2->source == Source::Compressed && h2->compressed_tol == h2->rel_tol) return;
+  if (!h2->fresh && h2->dsys && h2->source == Source::Compressed && h2->compressed_tol == h2->options.rel_tol) return;
   h2->cache.reset();
   hssbem::H2Options o = p.type == hssbem::OperatorType::H2 ? p.h2_options : hssbem::H2Options{};
-  o.rel_tol           = h2->rel_tol;
+  o.rel_tol           = h2->options.rel_tol;
   o.pressure_columns  = false; /* the factorization needs H and G only */
   hssbem::Timer timer;
-  h2->dsys                  = hssbem::make_shared_collectively<hssbem::H2DistributedSystem>(*L.comm, *p.op, o, L.node_part, *L.comm);
-  h2->base.seconds_compress = timer.seconds();
-  h2->source                = Source::Compressed;
-  h2->compressed_tol        = o.rel_tol;
+  h2->dsys             = hssbem::make_shared_collectively<hssbem::H2DistributedSystem>(*L.comm, *p.op, o, L.node_part, *L.comm);
+  h2->seconds_compress = timer.seconds();
+  h2->source           = Source::Compressed;
+  h2->compressed_tol   = o.rel_tol;
 }
 
-/* The set-up's work (collective): the matrix, its factors (a breakdown in h2->base.failure on every
+/* The set-up's work (collective): the matrix, its factors (a breakdown in `failure` on every
    rank), the optional error estimate against the matrix factored. */
-const hssbem::DistributedBemSystem &Factor_Private(PC_H2 *h2, const HssbemSystemContext &p, const HssbemLayout &L)
+const hssbem::DistributedBemSystem &PC_H2::Factor(const HssbemSystemContext &p, const HssbemLayout &L)
 {
-  h2->factors.reset();
-  h2->inverse_error = -1;
-  ChooseMatrix_Private(h2, p, L);
+  factors.reset();
+  inverse_error = -1;
+  ChooseMatrix_Private(this, p, L);
   hssbem::collectively(*L.comm, [&] {
-    if (!h2->cache) h2->cache = std::make_unique<hssbem::H2FactorCache>(h2->dsys->product());
+    if (!cache) cache = std::make_unique<hssbem::H2FactorCache>(dsys->product());
   });
   hssbem::Timer timer;
   try {
-    h2->factors = hssbem::make_unique_collectively<hssbem::H2Factorization>(*L.comm, *h2->cache, p.sel, FactorOptions(*h2), p.modes.empty() ? nullptr : &p.modes);
+    factors = hssbem::make_unique_collectively<hssbem::H2Factorization>(*L.comm, *cache, p.sel, options, p.modes.empty() ? nullptr : &p.modes);
   } catch (const hssbem::H2Breakdown &e) { /* thrown on every rank */
-    h2->base.failure = e.what();
-    return *h2->dsys;
+    failure = e.what();
+    return *dsys;
   }
-  h2->base.seconds_factor = timer.seconds();
-  if (h2->estimate_error > 0) {
-    const hssbem::DistributedBemSystem &A = *h2->dsys;
-    h2->inverse_error                      = hssbem::estimate_inverse_error(
-      *h2->factors,
+  seconds_factor = timer.seconds();
+  if (estimate_error > 0) {
+    const hssbem::DistributedBemSystem &A = *dsys;
+    inverse_error = hssbem::estimate_inverse_error(
+      *factors,
       [&](const double *x, double *y) {
         A.apply(p.sel, x, y);
         if (!p.modes.empty()) HssbemAddRegularization(A, *L.comm, p.modes, x, y);
       },
-      (int)h2->estimate_error);
+      (int)estimate_error);
   }
-  return *h2->dsys;
-}
-
-PetscErrorCode PCSetUp_H2(PC pc)
-{
-  PC_H2 *h2 = (PC_H2 *)pc->data;
-
-  PetscFunctionBegin;
-  PetscCall(PCCompressedSetUp(pc, &h2->base, "PC h2", [h2](const HssbemSystemContext &p, const HssbemLayout &L) -> const hssbem::DistributedBemSystem & { return Factor_Private(h2, p, L); }));
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
-
-PetscErrorCode PCApply_H2(PC pc, Vec x, Vec y)
-{
-  PC_H2 *h2 = (PC_H2 *)pc->data;
-
-  PetscFunctionBegin;
-  PetscCall(PCCompressedApply(pc, &h2->base, x, y, "PC h2", [h2](const double *b, double *out) { h2->factors->solve(b, out); }));
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
-
-PetscErrorCode PCReset_H2(PC pc)
-{
-  PC_H2 *h2 = (PC_H2 *)pc->data;
-
-  PetscFunctionBegin;
-  h2->factors.reset();
-  h2->cache.reset();
-  h2->dsys.reset();
-  h2->source = Source::None;
-  PetscCall(PCCompressedReset(&h2->base));
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
-
-PetscErrorCode PCDestroy_H2(PC pc)
-{
-  PetscFunctionBegin;
-  PetscCall(PCReset_H2(pc));
-  delete (PC_H2 *)pc->data;
-  pc->data = NULL;
-  PetscFunctionReturn(PETSC_SUCCESS);
+  return *dsys;
 }
 
 PetscErrorCode PCSetFromOptions_H2(PC pc, PetscOptionItems *PetscOptionsObject)
 {
-  PC_H2    *h2 = (PC_H2 *)pc->data;
-  PetscReal tol = h2->rel_tol;
-  PetscInt  leaf = h2->leaf_size, top = h2->top_size, single = h2->single_top, sketch = h2->sketch_size, iterations = h2->estimate_error;
-  PetscBool cheaper = h2->top_cheaper, spread = h2->spread_top;
+  PC_H2    *h2 = PCCompressedData<PC_H2>(pc);
+  PetscReal tol = h2->options.rel_tol;
+  PetscInt  leaf = h2->options.leaf_size, top = h2->options.top_size, single = h2->options.single_top_from, sketch = h2->options.sketch_columns, iterations = h2->estimate_error;
+  PetscBool cheaper = h2->options.top_when_cheaper ? PETSC_TRUE : PETSC_FALSE, spread = h2->options.spread_top ? PETSC_TRUE : PETSC_FALSE;
 
   PetscFunctionBegin;
   PetscOptionsHeadBegin(PetscOptionsObject, "H2 factorization options");
@@ -220,25 +171,25 @@ PetscErrorCode ViewFactorization_Private(PetscViewer viewer, const hssbem::H2Fac
 
 PetscErrorCode PCView_H2(PC pc, PetscViewer viewer)
 {
-  PC_H2    *h2 = (PC_H2 *)pc->data;
+  PC_H2    *h2 = PCCompressedData<PC_H2>(pc);
   PetscBool ascii;
 
   PetscFunctionBegin;
   PetscCall(PetscObjectTypeCompare((PetscObject)viewer, PETSCVIEWERASCII, &ascii));
   if (!ascii) PetscFunctionReturn(PETSC_SUCCESS);
-  PetscCall(PetscViewerASCIIPrintf(viewer, "  H2 factorization (strong recursive skeletonization): relative tolerance %g, leaf size %s, top %d\n", (double)h2->rel_tol,
-                                   h2->leaf_size > 0 ? std::to_string((int)h2->leaf_size).c_str() : "the matrix's", (int)h2->top_size));
+  PetscCall(PetscViewerASCIIPrintf(viewer, "  H2 factorization (strong recursive skeletonization): relative tolerance %g, leaf size %s, top %d\n", (double)h2->options.rel_tol,
+                                   h2->options.leaf_size > 0 ? std::to_string(h2->options.leaf_size).c_str() : "the matrix's", h2->options.top_size));
   if (!h2->dsys) PetscFunctionReturn(PETSC_SUCCESS);
   PetscCall(PetscViewerASCIIPushTab(viewer));
   PetscCall(PetscViewerASCIIPushTab(viewer));
   if (h2->source == Source::Matrix) PetscCall(PetscViewerASCIIPrintf(viewer, "of the matrix's H2 compression (at %g; no kernel entry evaluated)\n", h2->compressed_tol));
   else {
-    PetscCall(PetscViewerASCIIPrintf(viewer, "of an H2 compression made at %g on the %s partition, %.2f s; its part on rank 0:\n", h2->compressed_tol, h2->base.own_layout ? "PC's own" : "matrix's",
-                                     h2->base.seconds_compress));
+    PetscCall(PetscViewerASCIIPrintf(viewer, "of an H2 compression made at %g on the %s partition, %.2f s; its part on rank 0:\n", h2->compressed_tol, h2->own_layout ? "PC's own" : "matrix's",
+                                     h2->seconds_compress));
     PetscCall(HssbemViewH2Matrix_Private(viewer, h2->dsys->matrix()));
   }
   if (h2->factors) PetscCall(ViewFactorization_Private(viewer, *h2->factors));
-  else PetscCall(PCCompressedViewFailure(viewer, h2->base));
+  else PetscCall(PCCompressedViewFailure(viewer, *h2));
   if (h2->factors && h2->inverse_error >= 0) PetscCall(PetscViewerASCIIPrintf(viewer, "||I - A F^-1|| estimated at %.3e (%d power iterations)\n", h2->inverse_error, (int)h2->estimate_error));
   PetscCall(PetscViewerASCIIPopTab(viewer));
   PetscCall(PetscViewerASCIIPopTab(viewer));
@@ -275,14 +226,11 @@ PetscErrorCode PCView_H2(PC pc, PetscViewer viewer)
 M*/
 PETSC_EXTERN PetscErrorCode PCCreate_H2(PC pc)
 {
+  PC_H2 *h2;
+
   PetscFunctionBegin;
-  PetscCallCXX(pc->data = new PC_H2);
-  pc->ops->setup          = PCSetUp_H2;
-  pc->ops->apply          = PCApply_H2;
-  pc->ops->reset          = PCReset_H2;
-  pc->ops->destroy        = PCDestroy_H2;
-  pc->ops->setfromoptions = PCSetFromOptions_H2;
-  pc->ops->view           = PCView_H2;
+  PetscCallCXX(h2 = new PC_H2);
+  PetscCall(PCCompressedCreate(pc, h2, PCSetFromOptions_H2, PCView_H2));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -300,7 +248,7 @@ PetscErrorCode PCH2SetRelTol(PC pc, PetscReal tol)
 {
   PetscFunctionBegin;
   PetscCheck(tol > 0 && tol < 1, PetscObjectComm((PetscObject)pc), PETSC_ERR_ARG_OUTOFRANGE, "-pc_h2_rel_tol: the relative tolerance must lie in (0, 1), got %g", (double)tol);
-  PCH2_SET(rel_tol, tol);
+  PCH2_SET(options.rel_tol, tol);
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -316,7 +264,7 @@ PetscErrorCode PCH2SetLeafSize(PC pc, PetscInt n)
 {
   PetscFunctionBegin;
   PetscCheck(n >= 0, PetscObjectComm((PetscObject)pc), PETSC_ERR_ARG_OUTOFRANGE, "-pc_h2_leaf_size: the leaf size must be 0 (the matrix's leaves) or positive");
-  PCH2_SET(leaf_size, n);
+  PCH2_SET(options.leaf_size, (int)n);
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -331,7 +279,7 @@ PetscErrorCode PCH2SetTopSize(PC pc, PetscInt n)
 {
   PetscFunctionBegin;
   PetscCheck(n >= 0, PetscObjectComm((PetscObject)pc), PETSC_ERR_ARG_OUTOFRANGE, "-pc_h2_top_size: the top size must be >= 0");
-  PCH2_SET(top_size, n);
+  PCH2_SET(options.top_size, (int)n);
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -348,7 +296,7 @@ PetscErrorCode PCH2SetTopSize(PC pc, PetscInt n)
 PetscErrorCode PCH2SetTopWhenCheaper(PC pc, PetscBool flg)
 {
   PetscFunctionBegin;
-  PCH2_SET(top_cheaper, flg);
+  PCH2_SET(options.top_when_cheaper, flg == PETSC_TRUE);
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -366,7 +314,7 @@ PetscErrorCode PCH2SetTopWhenCheaper(PC pc, PetscBool flg)
 PetscErrorCode PCH2SetSingleTopFrom(PC pc, PetscInt n)
 {
   PetscFunctionBegin;
-  PCH2_SET(single_top, n);
+  PCH2_SET(options.single_top_from, (int)n);
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -381,7 +329,7 @@ PetscErrorCode PCH2SetSingleTopFrom(PC pc, PetscInt n)
 PetscErrorCode PCH2SetSpreadTop(PC pc, PetscBool flg)
 {
   PetscFunctionBegin;
-  PCH2_SET(spread_top, flg);
+  PCH2_SET(options.spread_top, flg == PETSC_TRUE);
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -398,7 +346,7 @@ PetscErrorCode PCH2SetSketchSize(PC pc, PetscInt n)
   PetscFunctionBegin;
   PetscCheck(n >= 0 && n <= hssbem::kMaxSketchColumns, PetscObjectComm((PetscObject)pc), PETSC_ERR_ARG_OUTOFRANGE,
              "-pc_h2_sketch_size: the sketch size must be 0 (from the tolerance: 48 to 320) or at most %d, got %d", hssbem::kMaxSketchColumns, (int)n);
-  PCH2_SET(sketch_size, n);
+  PCH2_SET(options.sketch_columns, (int)n);
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

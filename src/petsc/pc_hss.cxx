@@ -1,7 +1,6 @@
 /* PC "hss": ULV factorization of the BEM system matrix from an HSS compression, as a direct
    solver (-ksp_type preonly) or a preconditioner at a loose tolerance (see pc_hss.h). */
 #include "hssbem/petsc/pc_hss.h"
-#include "hssbem/core/fault.hpp"
 #include "hssbem/core/timer.hpp"
 #include "hssbem/hss/truncate.hpp"
 #include "hssbem/hss/ulv.hpp"
@@ -11,7 +10,6 @@
 
 #include <petsc/private/pcimpl.h>
 
-#include <exception>
 #include <memory>
 #include <string>
 
@@ -29,16 +27,29 @@ const char *SourceName(Source s)
   }
 }
 
-struct PC_HSS {
+struct PC_HSS : PC_Compressed {
   PetscReal rel_tol   = 0;  /* <= 0: the matrix's tolerance (1e-8 on a dense matrix, 1e-3 on an H² one) */
   PetscInt  leaf_size = 0;  /* <= 0: the matrix's leaf size (256 on a dense matrix) */
   PetscInt  max_rank  = -1; /* -1: the matrix's cap (none on a dense matrix) */
   /* set up: the compression (every rank its part) and its factors */
-  PC_Compressed                                       base;
   Source                                              source = Source::None;
   hssbem::HssOptions                                  used;
   std::shared_ptr<const hssbem::HssDistributedSystem> dsys;
   std::unique_ptr<hssbem::UlvFactorization>           factors;
+
+  PC_HSS() : PC_Compressed("PC hss") {}
+  const hssbem::DistributedBemSystem &Factor(const HssbemSystemContext &p, const HssbemLayout &L) override;
+  void Solve(const double *b, double *out) const override
+  {
+    std::copy(b, b + 3 * (std::size_t)dsys->num_points(), out);
+    factors->solve(out);
+  }
+  void Drop() override
+  {
+    factors.reset();
+    dsys.reset();
+    source = Source::None;
+  }
 };
 
 /* The compression the PC factors: the matrix's options, then the PC's. */
@@ -65,96 +76,33 @@ Source ChooseSource_Private(const hssbem::HssOptions &o, const HssbemSystemConte
 }
 
 /* The set-up's work (collective): the compression on the layout (the matrix's own, truncated
-   from it, or anew on the layout's partition), then its factors; a breakdown in
-   hss->base.failure. An injected breakdown (-hssbem_fault Breakdown) is agreed on by every rank,
-   so that none waits for the others. */
-const hssbem::DistributedBemSystem &Factor_Private(PC_HSS *hss, const HssbemSystemContext &p, const HssbemLayout &L)
+   from it, or anew on the layout's partition), then its factors; a breakdown in `failure` on
+   every rank. */
+const hssbem::DistributedBemSystem &PC_HSS::Factor(const HssbemSystemContext &p, const HssbemLayout &L)
 {
   const hssbem::RankComm &comm = *L.comm;
-  const hssbem::HssOptions o   = CompressionOptions_Private(hss, p);
-  hss->factors.reset();
-  hss->used = o;
+  const hssbem::HssOptions o   = CompressionOptions_Private(this, p);
+  factors.reset();
+  used = o;
   hssbem::Timer timer;
-  hss->source = ChooseSource_Private(o, p);
-  if (hss->source == Source::Matrix) hss->dsys = p.hss;
-  else if (hss->source == Source::Truncated) hss->dsys = hssbem::make_shared_collectively<hssbem::HssDistributedSystem>(comm, *p.op, hssbem::truncate_hss(p.hss->matrix(), o.rel_tol, o.max_rank, comm), comm);
-  else hss->dsys = hssbem::make_shared_collectively<hssbem::HssDistributedSystem>(comm, *p.op, o, L.node_part, comm);
-  hss->base.seconds_compress = timer.seconds();
+  source = ChooseSource_Private(o, p);
+  if (source == Source::Matrix) dsys = p.hss;
+  else if (source == Source::Truncated) dsys = hssbem::make_shared_collectively<hssbem::HssDistributedSystem>(comm, *p.op, hssbem::truncate_hss(p.hss->matrix(), o.rel_tol, o.max_rank, comm), comm);
+  else dsys = hssbem::make_shared_collectively<hssbem::HssDistributedSystem>(comm, *p.op, o, L.node_part, comm);
+  seconds_compress = timer.seconds();
   timer.restart();
-  /* The distributed factorization throws HssBreakdown on the rank that broke down and PeerFault on
-     the others: agree on it, so that every rank leaves here together (a breakdown is the PC's
-     failure, any other error every rank's) before the set-up's next collective step. */
-  std::exception_ptr other;
-  bool               broke = false, failed = false;
   try {
-    if (comm.any(hssbem::fault_armed("Breakdown"))) throw hssbem::HssBreakdown("HSS factorization broke down (injected fault at Breakdown)");
-    hss->factors = hss->dsys->factor(p.sel, p.modes.empty() ? nullptr : &p.modes);
-  } catch (const hssbem::HssBreakdown &e) {
-    hss->base.failure = e.what();
-    broke             = true;
-  } catch (const hssbem::PeerFault &) {
-    other = std::current_exception();
-  } catch (...) {
-    other  = std::current_exception();
-    failed = true;
+    factors = dsys->factor(p.sel, p.modes.empty() ? nullptr : &p.modes);
+  } catch (const hssbem::HssBreakdown &e) { /* thrown on every rank */
+    failure = e.what();
   }
-  if (comm.any(failed)) { /* an error other than a breakdown somewhere: every rank throws */
-    if (other) std::rethrow_exception(other);
-    throw hssbem::PeerFault();
-  }
-  if (comm.any(broke)) {
-    hss->factors.reset();
-    if (hss->base.failure.empty()) hss->base.failure = "HSS factorization broke down on another rank";
-  } else if (other) std::rethrow_exception(other);
-  hss->base.seconds_factor = timer.seconds();
-  return *hss->dsys;
-}
-
-PetscErrorCode PCSetUp_HSS(PC pc)
-{
-  PC_HSS *hss = (PC_HSS *)pc->data;
-
-  PetscFunctionBegin;
-  PetscCall(PCCompressedSetUp(pc, &hss->base, "PC hss", [hss](const HssbemSystemContext &p, const HssbemLayout &L) -> const hssbem::DistributedBemSystem & { return Factor_Private(hss, p, L); }));
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
-
-PetscErrorCode PCApply_HSS(PC pc, Vec x, Vec y)
-{
-  PC_HSS *hss = (PC_HSS *)pc->data;
-
-  PetscFunctionBegin;
-  PetscCall(PCCompressedApply(pc, &hss->base, x, y, "PC hss", [hss](const double *b, double *out) {
-    std::copy(b, b + 3 * (std::size_t)hss->dsys->num_points(), out);
-    hss->factors->solve(out);
-  }));
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
-
-PetscErrorCode PCReset_HSS(PC pc)
-{
-  PC_HSS *hss = (PC_HSS *)pc->data;
-
-  PetscFunctionBegin;
-  hss->factors.reset();
-  hss->dsys.reset();
-  hss->source = Source::None;
-  PetscCall(PCCompressedReset(&hss->base));
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
-
-PetscErrorCode PCDestroy_HSS(PC pc)
-{
-  PetscFunctionBegin;
-  PetscCall(PCReset_HSS(pc));
-  delete (PC_HSS *)pc->data;
-  pc->data = NULL;
-  PetscFunctionReturn(PETSC_SUCCESS);
+  seconds_factor = timer.seconds();
+  return *dsys;
 }
 
 PetscErrorCode PCSetFromOptions_HSS(PC pc, PetscOptionItems *PetscOptionsObject)
 {
-  PC_HSS   *hss = (PC_HSS *)pc->data;
+  PC_HSS   *hss = PCCompressedData<PC_HSS>(pc);
   PetscReal tol = hss->rel_tol;
   PetscInt  leaf = hss->leaf_size, rank = hss->max_rank;
 
@@ -173,7 +121,7 @@ PetscErrorCode PCSetFromOptions_HSS(PC pc, PetscOptionItems *PetscOptionsObject)
 /* The distributed factorization's figures (collective): memory per rank and the top, rank 0's. */
 PetscErrorCode ViewDistributed_Private(PC pc, PetscViewer viewer)
 {
-  PC_HSS                 *hss     = (PC_HSS *)pc->data;
+  PC_HSS                 *hss     = PCCompressedData<PC_HSS>(pc);
   const hssbem::RankComm &comm    = hss->dsys->comm();
   const hssbem::HssStats &st      = hss->dsys->matrix().stats();
   const double            mine[2] = {(double)hss->dsys->memory_bytes(), hss->factors ? (double)hss->factors->memory_bytes() : 0.0};
@@ -193,7 +141,7 @@ PetscErrorCode ViewDistributed_Private(PC pc, PetscViewer viewer)
 
 PetscErrorCode PCView_HSS(PC pc, PetscViewer viewer)
 {
-  PC_HSS   *hss = (PC_HSS *)pc->data;
+  PC_HSS   *hss = PCCompressedData<PC_HSS>(pc);
   PetscBool ascii;
   char      tol[32], leaf[32], cap[32];
 
@@ -205,14 +153,14 @@ PetscErrorCode PCView_HSS(PC pc, PetscViewer viewer)
   PetscCall(PetscSNPrintf(cap, sizeof(cap), hss->max_rank > 0 ? "%d" : "the matrix's", (int)hss->max_rank));
   PetscCall(PetscViewerASCIIPrintf(viewer, "  HSS ULV factorization: relative tolerance %s, leaf size %s, rank cap %s\n", tol, leaf, cap));
   if (!hss->dsys) PetscFunctionReturn(PETSC_SUCCESS);
-  PetscCall(PetscViewerASCIIPrintf(viewer, "  compression at %g (leaf size %d): %s, %.2f s; factorization %.2f s\n", hss->used.rel_tol, hss->used.leaf_size, SourceName(hss->source), hss->base.seconds_compress,
-                                   hss->base.seconds_factor));
+  PetscCall(PetscViewerASCIIPrintf(viewer, "  compression at %g (leaf size %d): %s, %.2f s; factorization %.2f s\n", hss->used.rel_tol, hss->used.leaf_size, SourceName(hss->source), hss->seconds_compress,
+                                   hss->seconds_factor));
   PetscCall(ViewDistributed_Private(pc, viewer));
   PetscCall(PetscViewerASCIIPushTab(viewer));
   PetscCall(PetscViewerASCIIPushTab(viewer));
   PetscCall(HssbemViewHssMatrix_Private(viewer, hss->dsys->matrix()));
   if (hss->factors) PetscCall(PetscViewerASCIIPrintf(viewer, "factors on rank 0: %.1f MB, largest dense front %d\n", hss->factors->memory_bytes() / 1048576.0, hss->factors->max_front()));
-  else PetscCall(PCCompressedViewFailure(viewer, hss->base));
+  else PetscCall(PCCompressedViewFailure(viewer, *hss));
   PetscCall(PetscViewerASCIIPopTab(viewer));
   PetscCall(PetscViewerASCIIPopTab(viewer));
   PetscFunctionReturn(PETSC_SUCCESS);
@@ -244,14 +192,11 @@ PetscErrorCode PCView_HSS(PC pc, PetscViewer viewer)
 M*/
 PETSC_EXTERN PetscErrorCode PCCreate_HSS(PC pc)
 {
+  PC_HSS *hss;
+
   PetscFunctionBegin;
-  PetscCallCXX(pc->data = new PC_HSS);
-  pc->ops->setup          = PCSetUp_HSS;
-  pc->ops->apply          = PCApply_HSS;
-  pc->ops->reset          = PCReset_HSS;
-  pc->ops->destroy        = PCDestroy_HSS;
-  pc->ops->setfromoptions = PCSetFromOptions_HSS;
-  pc->ops->view           = PCView_HSS;
+  PetscCallCXX(hss = new PC_HSS);
+  PetscCall(PCCompressedCreate(pc, hss, PCSetFromOptions_HSS, PCView_HSS));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

@@ -46,18 +46,13 @@ static PetscErrorCode FactorMatType_Private(KSP ksp, Mat A, MatType *type)
 /* to := from, for vectors with the same global size and different layouts (ScaLAPACK picks its own). */
 static PetscErrorCode CopyAcrossLayouts_Private(Vec from, Vec to)
 {
-  PetscInt   lo, hi;
-  IS         is;
   VecScatter sc;
 
   PetscFunctionBegin;
-  PetscCall(VecGetOwnershipRange(to, &lo, &hi));
-  PetscCall(ISCreateStride(PetscObjectComm((PetscObject)to), hi - lo, lo, 1, &is));
-  PetscCall(VecScatterCreate(from, is, to, NULL, &sc));
+  PetscCall(HssbemRowScatterCreate(from, to, {}, &sc));
   PetscCall(VecScatterBegin(sc, from, to, INSERT_VALUES, SCATTER_FORWARD));
   PetscCall(VecScatterEnd(sc, from, to, INSERT_VALUES, SCATTER_FORWARD));
   PetscCall(VecScatterDestroy(&sc));
-  PetscCall(ISDestroy(&is));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

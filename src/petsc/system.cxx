@@ -287,14 +287,8 @@ static PetscErrorCode MeshOrderScatter_Private(Mat A, Vec x, Vec y, ScatterMode 
 
   PetscFunctionBegin;
   PetscCall(HssbemMatGetSystemContext(A, &p));
-  if (!p || p->system_of_dof.empty()) { /* mesh order already, perhaps in another layout (ScaLAPACK's) */
-    PetscInt lo, hi;
-    IS       from;
-    PetscCall(VecGetOwnershipRange(y, &lo, &hi));
-    PetscCall(ISCreateStride(PetscObjectComm((PetscObject)y), hi - lo, lo, 1, &from));
-    PetscCall(VecScatterCreate(y, from, x, from, &sc));
-    PetscCall(ISDestroy(&from));
-  } else PetscCall(HssbemRowScatterCreate(y, x, p->system_of_dof, &sc));
+  /* no map: mesh order already, perhaps in another layout (ScaLAPACK's) */
+  PetscCall(HssbemRowScatterCreate(y, x, p ? p->system_of_dof : std::vector<PetscInt>(), &sc));
   if (mode == SCATTER_FORWARD) {
     PetscCall(VecScatterBegin(sc, x, y, INSERT_VALUES, SCATTER_REVERSE));
     PetscCall(VecScatterEnd(sc, x, y, INSERT_VALUES, SCATTER_REVERSE));

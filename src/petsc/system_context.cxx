@@ -140,7 +140,8 @@ PetscErrorCode HssbemRowScatterCreate(Vec x, Vec y, const std::vector<PetscInt> 
   PetscFunctionBegin;
   PetscCall(VecGetOwnershipRange(x, &lo, &hi));
   PetscCall(ISCreateStride(PetscObjectComm((PetscObject)x), hi - lo, lo, 1, &from));
-  PetscCall(ISCreateGeneral(PetscObjectComm((PetscObject)x), hi - lo, map.data() + lo, PETSC_COPY_VALUES, &to));
+  if (map.empty()) PetscCall(ISDuplicate(from, &to)); /* the same global rows */
+  else PetscCall(ISCreateGeneral(PetscObjectComm((PetscObject)x), hi - lo, map.data() + lo, PETSC_COPY_VALUES, &to));
   PetscCall(VecScatterCreate(x, from, y, to, sc));
   PetscCall(ISDestroy(&from));
   PetscCall(ISDestroy(&to));

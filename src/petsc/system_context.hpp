@@ -81,7 +81,8 @@ PetscErrorCode HssbemH2WillBeFactored(MPI_Comm comm, bool *factored);
 PetscErrorCode HssbemOwnedNodes(MPI_Comm comm, PetscInt nnodes, PetscInt *nstart, PetscInt *nlocal);
 
 /* The scatter from vectors like x to vectors like y that puts x's entry r at y's map[r] (x in mesh
-   order and y in a distributed system's rows: map = its rows, y[map[d]] being dof d). */
+   order and y in a distributed system's rows: map = its rows, y[map[d]] being dof d); an empty
+   map: at y's entry r (the same global row in another layout). */
 PetscErrorCode HssbemRowScatterCreate(Vec x, Vec y, const std::vector<PetscInt> &map, VecScatter *sc);
 
 /* y += c Q (Qᵀ x) for the rigid-mode regularisation (modes: Q, 3N × 6 row-major, mesh order) on

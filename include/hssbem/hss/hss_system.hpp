@@ -66,7 +66,7 @@ public:
   void apply(const SystemSelection &sel, const double *x, double *y) const override;
   std::vector<double> diagonal(const SystemSelection &sel) const override;
   /// Collective: factor A (+ c Φ Φᵀ when `rigid_modes` is given, whole on every rank: row-major
-  /// 3N × 6, mesh order). Throws HssBreakdown on the rank where it broke down, PeerFault on the others.
+  /// 3N × 6, mesh order). Throws HssBreakdown on every rank when it broke down on any.
   std::unique_ptr<UlvFactorization> factor(const SystemSelection &sel, const std::vector<double> *rigid_modes = nullptr) const;
 
 private:

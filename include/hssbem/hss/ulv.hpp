@@ -56,8 +56,8 @@ public:
   /// object (its transfer matrices and couplings are used, not copied). Throws HssBreakdown.
   UlvFactorization(const HssMatrix &K, const std::vector<std::array<bool, 3>> &displacement_known, const LowRankTerm *extra = nullptr);
   /// The same for K distributed over the ranks of comm (collective; the pattern and the low-rank
-  /// term are whole, mesh order, on every rank). Throws HssBreakdown on the rank where a pivot
-  /// broke down (the root's: rank 0) and PeerFault on the others. comm must outlive this object.
+  /// term are whole, mesh order, on every rank). Throws HssBreakdown on every rank when a pivot
+  /// broke down on any (fault site Breakdown injects one). comm must outlive this object.
   UlvFactorization(const HssMatrix &K, const RankComm &comm, const std::vector<std::array<bool, 3>> &displacement_known, const LowRankTerm *extra = nullptr);
 
   /// Solve A x = b in place: b (3 values per point of this rank, cluster order; on one rank all
