@@ -151,8 +151,11 @@ private:
 class FrictionSolver {
 public:
   struct Result {
-    int iterations = 0;
+    int iterations = 0;     ///< Newton steps
+    int factorizations = 0; ///< of them: the Newton matrix factored
+    long long products = 0; ///< products with the Newton matrix (GMRES)
   };
+  struct Preconditioner; ///< the Newton matrix of an earlier step, factored
   /// λ (local frames) for the free relative displacements wf; λ holds the initial guess.
   /// status per point: 0 open, 1 stick, 2 slip. Newton runs on the points of `zone` (per
   /// point): the others keep λ = 0; the caller checks their gaps in the fields, as for the
@@ -169,6 +172,7 @@ private:
   std::vector<std::int8_t> m_state;
   std::vector<Vec3> m_direction;     ///< slip directions (local tangential) of the last solve
   bool m_factored = false;
+  std::shared_ptr<Preconditioner> m_pre; ///< kept from step to step and frame to frame
 };
 
 } // namespace hssbem::contact_detail

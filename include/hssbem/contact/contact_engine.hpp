@@ -57,9 +57,11 @@ struct ContactOptions {
   int max_it = 50;             ///< iterations per frame before it is an error
   double reach = 0;            ///< candidates: vertices within this gap (0: 5 % of the mesh's bounding-box diagonal)
   bool warm_start = true;      ///< start from the previous frame's active set (and tractions)
-  /// The fields' product with W's loaded columns in single precision (half the memory traffic):
-  /// the contact's share of the fields then carries relative errors of about 1e-7.
-  bool single_fields = false;
+  /// Frictionless frames: the fields' product with W's loaded columns in single precision (half
+  /// the memory traffic); the contact's share of the fields then carries relative errors of
+  /// about 1e-7 (the contact tractions themselves are solved in double). Frames with friction
+  /// always use double: the next frame's slip is measured from these fields.
+  bool single_fields = true;
   std::function<void(const ContactIteration &)> monitor; ///< called after every iteration (may be empty)
 };
 
@@ -71,6 +73,8 @@ struct ContactFrameReport {
   long long candidates = 0;    ///< contact points considered (one per dof node of a candidate vertex)
   int rounds = 1;              ///< solves: more than one when a vertex beyond reach penetrated
   bool rebuilt = false;        ///< the active block's inverse was rebuilt, not updated (frictionless)
+  long long factorizations = 0; ///< friction: Newton matrices factored (the others' systems by GMRES on a kept one)
+  long long products = 0;      ///< friction: products with the Newton matrix (GMRES)
   double seconds = 0, detect_seconds = 0, solve_seconds = 0, fields_seconds = 0;
 };
 
