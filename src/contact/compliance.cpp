@@ -6,15 +6,20 @@
 
 namespace hssbem::contact_detail {
 
-Compliance::Compliance(const std::vector<ContactPoint> &points, const std::vector<char> &pattern, ReferenceColumns &columns)
-    : m_points(&points), m_terms(points.size()), m_held(points.size()), m_pattern(&pattern)
+std::vector<int> loaded_unknowns(const std::vector<ContactPoint> &points, const std::vector<char> &pattern, bool normal_only)
 {
   std::vector<int> loaded;
   for (const ContactPoint &p : points)
     for (int i = 0; i < p.terms; ++i)
       for (int b = 0; b < 3; ++b)
-        if (!pattern[3 * p.term_node[i] + b]) loaded.push_back(3 * p.term_node[i] + b);
-  columns.require(loaded);
+        if (!pattern[3 * p.term_node[i] + b] && (!normal_only || p.lw[i] * p.frame[0][b] != 0.0)) loaded.push_back(3 * p.term_node[i] + b);
+  return loaded;
+}
+
+Compliance::Compliance(const std::vector<ContactPoint> &points, const std::vector<char> &pattern, ReferenceColumns &columns, bool normal_only)
+    : m_points(&points), m_terms(points.size()), m_held(points.size()), m_pattern(&pattern)
+{
+  columns.require(loaded_unknowns(points, pattern, normal_only));
   for (std::size_t c = 0; c < points.size(); ++c) {
     const ContactPoint &p = points[c];
     Terms &t = m_terms[c];
@@ -26,7 +31,7 @@ Compliance::Compliance(const std::vector<ContactPoint> &points, const std::vecto
           t.M[i][3 * k + a] = u_unknown ? p.mw[i] * p.frame[k][a] : 0.0;
           t.L[i][3 * a + k] = u_unknown ? p.lw[i] * p.frame[k][a] : 0.0;
         }
-      for (int b = 0; b < 3; ++b) t.col[i][b] = pattern[3 * m + b] ? nullptr : columns.column(3 * m + b);
+      for (int b = 0; b < 3; ++b) t.col[i][b] = pattern[3 * m + b] || !columns.has(3 * m + b) ? nullptr : columns.column(3 * m + b);
       t.row[i] = columns.position(3 * m);
     }
     for (int k = 0; k < 3; ++k) { // the slave node's measure along frame k: zero when prescribed

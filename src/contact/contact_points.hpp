@@ -81,8 +81,10 @@ std::vector<int> spatial_row_order(const Discretization &disc);
 /// where u is unknown and the loaded columns j where t is known.
 class Compliance {
 public:
-  /// Requires the columns the points load from `columns`.
-  Compliance(const std::vector<ContactPoint> &points, const std::vector<char> &pattern, ReferenceColumns &columns);
+  /// Requires the columns the points load from `columns`; with `normal_only` (frictionless
+  /// contact: tractions along the normals alone) only those a normal traction loads, so block()
+  /// is then incomplete and must not be used (normal(), apply_normal() and loads() are exact).
+  Compliance(const std::vector<ContactPoint> &points, const std::vector<char> &pattern, ReferenceColumns &columns, bool normal_only = false);
 
   int size() const { return static_cast<int>(m_points->size()); }
   const ContactPoint &point(int c) const { return (*m_points)[c]; }
@@ -117,6 +119,11 @@ private:
   std::vector<std::array<char, 3>> m_held;
   const std::vector<char> *m_pattern;
 };
+
+/// The unknowns whose columns of W the points load (traction-known components of their terms'
+/// nodes); with `normal_only`, only those a normal traction loads (a plane's points along z: one
+/// column per node instead of three).
+std::vector<int> loaded_unknowns(const std::vector<ContactPoint> &points, const std::vector<char> &pattern, bool normal_only);
 
 /// Frictionless contact: primal–dual active set on the normal compliance, the inverse of the
 /// active block kept by a CapacitanceInverse over dof nodes that lives from frame to frame.

@@ -61,6 +61,10 @@ struct ContactOptions {
   /// the contact's share of the fields then carries relative errors of about 1e-7.
   bool single_fields = false;
   std::function<void(const ContactIteration &)> monitor; ///< called after every iteration (may be empty)
+  /// On a reference whose columns are approximate (ReferenceFactorization::exact_columns()
+  /// false: H2Reference), the frame's answer is corrected with accurate solves until one changes
+  /// the unknowns by at most correction_tol relative to them (max_it corrections at most).
+  double correction_tol = 1e-8;
 };
 
 /// What a frame did.
@@ -71,7 +75,9 @@ struct ContactFrameReport {
   long long candidates = 0;    ///< contact points considered (one per dof node of a candidate vertex)
   int rounds = 1;              ///< solves: more than one when a vertex beyond reach penetrated
   bool rebuilt = false;        ///< the active block's inverse was rebuilt, not updated (frictionless)
-  double seconds = 0, detect_seconds = 0, solve_seconds = 0, fields_seconds = 0;
+  int corrections = 0;         ///< accurate solves that corrected the answer (approximate columns only)
+  double correction = 0;       ///< the last correction's relative change of the unknowns
+  double seconds = 0, detect_seconds = 0, solve_seconds = 0, fields_seconds = 0, correct_seconds = 0;
 };
 
 /// A frame's solution. Per dof node (u, t) and per vertex (the rest), mesh order.
