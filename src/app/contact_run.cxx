@@ -198,9 +198,13 @@ void ContactRun::single(const NodeConditions &nc)
   check_finite(sol, -1);
   HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF, "hssbem: contact: %lld vertices touching (%lld stick, %lld slip) after %lld iterations, %.3f ms\n", rep.active_vertices, rep.stick,
                               rep.slip, rep.iterations, 1e3 * rep.seconds));
-  if (rep.corrections > 0)
-    HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF, "hssbem: contact: %d corrections by accurate H2 solves (%.2f s; last change %.1e)\n", rep.corrections, rep.correct_seconds,
-                                rep.correction));
+  if (const auto *h = dynamic_cast<const H2Reference *>(reference.get())) {
+    const H2ReferenceStats &st = h->stats();
+    HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF,
+                                "hssbem: contact: %d corrections by accurate H2 solves (%.2f s; last change %.1e); H2 reference: %lld columns in %.2f s, %lld accurate solves "
+                                "(%lld GMRES iterations) in %.2f s\n",
+                                rep.corrections, rep.correct_seconds, rep.correction, st.columns, st.column_seconds, st.solves, st.iterations, st.solve_seconds));
+  }
   if (s.output.empty()) return;
   ResultData r = result_base(s, size);
   r.attributes_str["solver"] = "contact";
