@@ -108,6 +108,15 @@ class Result:
             " ".join(self.cmd), self.returncode, self.stdout.strip(), self.stderr.strip())
 
 
+def datasets(h5):
+    """Every dataset of a result file, by its path without the leading slash."""
+    import h5py
+    data = {}
+    with h5py.File(h5, "r") as f:
+        f.visititems(lambda n, o: data.__setitem__(n, o[()]) if isinstance(o, h5py.Dataset) else None)
+    return data
+
+
 class CliTestCase(unittest.TestCase):
     """A fresh temporary directory per test, helpers to write inputs and run the driver."""
 
@@ -794,10 +803,8 @@ class ParallelTests(CliTestCase):
     def read_result(self, name):
         """Every dataset, the root attributes and the /timings attributes of a result file."""
         import h5py
-        data = {}
+        data = datasets(self.path(name))
         with h5py.File(self.path(name), "r") as f:
-            f.visititems(lambda n, o: data.__setitem__(n, o[()])
-                         if isinstance(o, h5py.Dataset) else None)
             attrs = {k: f.attrs[k] for k in f.attrs}
             timings = {k: float(f["/timings"].attrs[k]) for k in f["/timings"].attrs}
         return data, attrs, timings

@@ -120,9 +120,8 @@ class ContactErrorTests(ContactCase):
 class ContactRunTests(ContactCase):
     def read(self, name):
         import h5py
-        data = {}
+        data = test_cli.datasets(self.path(name))
         with h5py.File(self.path(name), "r") as f:
-            f.visititems(lambda n, o: data.__setitem__(n, o[()]) if isinstance(o, h5py.Dataset) else None)
             attrs = {k: f.attrs[k] for k in f.attrs}
             contact = {k: f["/contact"].attrs[k] for k in f["/contact"].attrs} if "contact" in f else {}
         return data, attrs, contact

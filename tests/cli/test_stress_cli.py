@@ -37,9 +37,8 @@ class StressTests(base.CliTestCase):
 
     def read(self, name):
         import h5py
-        data = {}
+        data = base.datasets(self.path(name))
         with h5py.File(self.path(name), "r") as f:
-            f.visititems(lambda n, o: data.__setitem__(n, o[()]) if isinstance(o, h5py.Dataset) else None)
             data["grid_attrs"] = dict(f["/interior/grid"].attrs) if "/interior/grid" in f else {}
         return data
 
