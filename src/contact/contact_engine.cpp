@@ -230,6 +230,7 @@ std::vector<int> ContactEngine::spatial_order(const Discretization &disc) { retu
 
 void ContactEngine::prefetch(const std::vector<std::vector<Vec3>> &placements)
 {
+  if (!m->friction && !m->ref->exact_columns()) return; // columns that cost solves: only the active points', as the iterations ask
   std::vector<char> need(m->ref->pattern().size(), 0);
   auto mark = [&](const std::vector<ContactPoint> &pts) {
     for (int j : contact_detail::loaded_unknowns(pts, m->ref->pattern(), !m->friction)) need[j] = 1;

@@ -113,7 +113,9 @@ public:
   ContactEngine &operator=(const ContactEngine &) = delete;
 
   /// Computes now, in one blocked call, the columns of W every placement of `placements` (each
-  /// one offset per obstacle) will need: a scene's frames are known ahead.
+  /// one offset per obstacle) will need: a scene's frames are known ahead. Frictionless contact
+  /// needs only the columns of the points that become active; on a reference whose columns
+  /// cost solves (exact_columns() false) nothing is computed ahead, the iterations ask for them.
   void prefetch(const std::vector<std::vector<Vec3>> &placements);
   /// Solves a frame: `values` holds the known values (the reference pattern, its values), the
   /// obstacles are at their base positions translated by `offsets` (one per obstacle). Throws
