@@ -190,10 +190,18 @@ struct ContactEngine::State {
   ContactFrameReport report;
 
   void free_response(const SystemSelection &values);
+  void set_u_free();
+  /// The solve of a frame's points until no vertex went through (rounds of detection).
+  void rounds(const std::vector<Vec3> &offsets_, ContactSolution &out, ContactFrameReport &rep);
+  void correct(const SystemSelection &values, const std::vector<Vec3> &offsets_, ContactSolution &out, ContactFrameReport &rep);
   void detect(const std::vector<Vec3> &offsets_);
   void solve_points(ContactFrameReport &rep);
   void fields(ContactSolution &out) const;
   void point_gaps(const ContactSolution &out, bool single);
+  /// The fields in single precision: frictionless frames on exact columns only (friction
+  /// measures the next frame's slip from the fields, and approximate columns are corrected
+  /// against the fields to 1e-8, below single precision's 1e-7).
+  bool single_fields() const { return opt.single_fields && !friction && ref->exact_columns(); }
   bool zone_violations();
   bool penetrations(const std::vector<Vec3> &offsets_, const ContactSolution &out);
   void outputs(ContactSolution &out) const;
@@ -233,10 +241,10 @@ std::vector<int> ContactEngine::spatial_order(const Discretization &disc) { retu
 
 void ContactEngine::prefetch(const std::vector<std::vector<Vec3>> &placements)
 {
-  std::vector<char> need(m->disc->num_nodes(), 0);
+  if (!m->friction && !m->ref->exact_columns()) return; // columns that cost solves: only the active points', as the iterations ask
+  std::vector<char> need(m->ref->pattern().size(), 0);
   auto mark = [&](const std::vector<ContactPoint> &pts) {
-    for (const ContactPoint &p : pts)
-      for (int i = 0; i < p.terms; ++i) need[p.term_node[i]] = 1;
+    for (int j : contact_detail::loaded_unknowns(pts, m->ref->pattern(), !m->friction)) need[j] = 1;
   };
   for (const std::vector<Vec3> &offsets : placements) {
     if (offsets.size() != m->geo.obstacles.size()) throw std::invalid_argument("contact: one offset per obstacle expected");
@@ -244,9 +252,8 @@ void ContactEngine::prefetch(const std::vector<std::vector<Vec3>> &placements)
   }
   mark(contact_detail::body_points(m->geo));
   std::vector<int> js;
-  for (int i = 0; i < m->disc->num_nodes(); ++i)
-    for (int c = 0; c < 3; ++c)
-      if (need[i] && !m->ref->pattern()[3 * i + c]) js.push_back(3 * i + c);
+  for (std::size_t j = 0; j < need.size(); ++j)
+    if (need[j]) js.push_back(static_cast<int>(j));
   m->columns->require(js);
 }
 
@@ -257,12 +264,49 @@ void ContactEngine::State::free_response(const SystemSelection &values)
                     std::equal(values.pressure.begin(), values.pressure.end(), free_values.pressure.begin(), [](double a, double b) { return a == b || (std::isnan(a) && std::isnan(b)); });
   if (same) return;
   ref->free_response(values, xf);
+  free_values = values;
+  has_free = true;
+  set_u_free();
+}
+
+void ContactEngine::State::set_u_free()
+{
   const std::vector<char> &pattern = ref->pattern();
   u_free.resize(disc->num_nodes());
   for (int i = 0; i < disc->num_nodes(); ++i)
-    for (int c = 0; c < 3; ++c) u_free[i][c] = pattern[3 * i + c] ? values.known[i][c] : xf[3 * i + c];
-  free_values = values;
-  has_free = true;
+    for (int c = 0; c < 3; ++c) u_free[i][c] = pattern[3 * i + c] ? free_values.known[i][c] : xf[3 * i + c];
+}
+
+/// Approximate columns W̃ (ReferenceFactorization::exact_columns() false): the frame was solved
+/// with x = x_f' − W̃ L λ. The true unknowns of its tractions, x_true = A₀⁻¹ b(values + L λ) (one
+/// accurate solve), differ by δ; x_f' += δ makes the fields exact at this λ, and the frame is
+/// solved again. A fixed point has x = x_true and the contact conditions on it: the exact answer.
+/// Each pass shrinks the error by about W̃'s relative error (the factorization's tolerance). The
+/// corrected x_f' stays for the next frame of the same values (a warm start of its corrections).
+void ContactEngine::State::correct(const SystemSelection &values, const std::vector<Vec3> &offsets_, ContactSolution &out, ContactFrameReport &rep)
+{
+  const PhaseScope phase(Phase::ContactCorrect);
+  for (;;) {
+    SystemSelection loaded = values;
+    std::vector<int> js;
+    std::vector<double> v, x;
+    D->loads(lambda, js, v);
+    for (std::size_t q = 0; q < js.size(); ++q) loaded.known[js[q] / 3][js[q] % 3] += v[q];
+    ref->free_response(loaded, x);
+    double dn = 0, xn = 0;
+    for (std::size_t p = 0; p < x.size(); ++p) {
+      const double d = x[p] - out.x[p];
+      dn += d * d, xn += x[p] * x[p], xf[p] += d;
+    }
+    ++rep.corrections;
+    rep.correction = std::sqrt(dn / std::max(xn, 1e-300));
+    if (rep.correction <= opt.correction_tol) return;
+    if (rep.corrections >= opt.max_it)
+      throw std::runtime_error("contact: the corrections of the compressed reference did not settle in " + std::to_string(opt.max_it) + " solves (-contact_max_it; last change " +
+                               std::to_string(rep.correction) + ")");
+    set_u_free();
+    rounds(offsets_, out, rep);
+  }
 }
 
 void ContactEngine::State::detect(const std::vector<Vec3> &offsets_)
@@ -275,7 +319,7 @@ void ContactEngine::State::detect(const std::vector<Vec3> &offsets_)
 void ContactEngine::State::solve_points(ContactFrameReport &rep)
 {
   const PhaseScope phase(Phase::ContactSolve);
-  D = std::make_unique<Compliance>(points, ref->pattern(), *columns);
+  D = std::make_unique<Compliance>(points, ref->pattern(), *columns, !friction);
   wf = D->free_w(u_free, friction ? u_prev : std::vector<Vec3>{});
   const int n = D->size();
   // The zone the iterations watch: what touched before, what starts penetrated, and what went
@@ -304,6 +348,29 @@ void ContactEngine::State::solve_points(ContactFrameReport &rep)
   };
   const auto r = friction_solver.solve(*D, wf, zone, opt.tol, opt.max_it, lambda, point_status, monitor);
   rep.iterations += r.iterations, rep.factorizations += r.factorizations, rep.products += r.products;
+}
+
+/// The frame's solve in rounds: the points solved, the fields and every point's gap, then again
+/// while a vertex beyond reach penetrated or a point outside the zone went through (8 at most).
+void ContactEngine::State::rounds(const std::vector<Vec3> &offsets_, ContactSolution &out, ContactFrameReport &rep)
+{
+  for (int round = 1;; ++round) {
+    ++rep.rounds;
+    Timer phase;
+    solve_points(rep);
+    remember();
+    rep.solve_seconds += phase.seconds();
+    phase.restart();
+    fields(out);
+    point_gaps(out, single_fields());
+    rep.fields_seconds += phase.seconds();
+    phase.restart();
+    const bool through = round < 8 && penetrations(offsets_, out); // vertices beyond reach
+    const bool joined = round < 8 && zone_violations();            // points outside the zone
+    if (through) detect(offsets_);
+    rep.detect_seconds += phase.seconds();
+    if (!through && !joined) break;
+  }
 }
 
 /// Every point's gap after the solve, from the fields; where the fields are in single precision
@@ -352,7 +419,7 @@ void ContactEngine::State::fields(ContactSolution &out) const
   const std::vector<int> &order = columns->row_order();
   std::vector<double> x(xf.size());
   for (std::size_t p = 0; p < x.size(); ++p) x[p] = xf[order.empty() ? p : order[p]];
-  if (opt.single_fields && !friction) { // (point_gaps makes the same choice)
+  if (single_fields()) { // (point_gaps makes the same choice)
     std::vector<const float *> col;
     for (int j : js) col.push_back(columns->column_single(j));
     subtract_columns(col, v, x);
@@ -460,24 +527,15 @@ const ContactFrameReport &ContactEngine::solve(const SystemSelection &values, co
   s.free_response(values);
   s.offsets = offsets;
   s.zone_nodes.assign(s.disc->num_nodes(), 0);
-  Timer phase;
+  const Timer detect;
   s.detect(offsets);
-  rep.detect_seconds += phase.seconds();
-  for (rep.rounds = 1;; ++rep.rounds) {
-    phase.restart();
-    s.solve_points(rep);
-    s.remember();
-    rep.solve_seconds += phase.seconds();
-    phase.restart();
-    s.fields(out);
-    s.point_gaps(out, s.opt.single_fields && !s.friction);
-    rep.fields_seconds += phase.seconds();
-    phase.restart();
-    const bool through = rep.rounds < 8 && s.penetrations(offsets, out); // vertices beyond reach
-    const bool joined = rep.rounds < 8 && s.zone_violations();              // points outside the zone
-    if (through) s.detect(offsets);
-    rep.detect_seconds += phase.seconds();
-    if (!through && !joined) break;
+  rep.detect_seconds += detect.seconds();
+  rep.rounds = 0;
+  s.rounds(offsets, out, rep);
+  if (!s.ref->exact_columns()) {
+    const Timer correct;
+    s.correct(values, offsets, out, rep);
+    rep.correct_seconds += correct.seconds();
   }
   s.outputs(out);
   if (s.friction) s.u_prev = out.u; // slip is measured from the previous frame
