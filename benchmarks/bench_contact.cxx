@@ -5,6 +5,7 @@
 //
 //   bench_contact --mesh FILE --scenario wall|instrument|table [--frames 60] [--friction 0]
 //                 [--target 0.2] [--check 3] [--haptic 20] [--E 3000 --nu 0.45] [--reach 0]
+//                 [--double-fields]   (frictionless fields in double; single is the default)
 //
 //   wall:       the mesh's region "base" clamped; a rigid wall (plane) comes in along -x and
 //               pushes until `target` of the vertices touch (the paper's cardioid: 20 %).
@@ -42,7 +43,7 @@ struct Args {
   std::string mesh, scenario = "wall";
   int frames = 60, check = 3, haptic = 20;
   double friction = 0, target = -1, E = 3000, nu = 0.45, reach = 0;
-  bool single_fields = false;
+  bool single_fields = true;
 };
 
 Args parse(int argc, char **argv)
@@ -65,6 +66,7 @@ Args parse(int argc, char **argv)
     else if (k == "--nu") a.nu = std::stod(next());
     else if (k == "--reach") a.reach = std::stod(next());
     else if (k == "--single-fields") a.single_fields = true;
+    else if (k == "--double-fields") a.single_fields = false;
     else if (k.rfind("-", 0) == 0 && k.rfind("--", 0) != 0) { // a PETSc option and its value
       if (i + 1 < argc && argv[i + 1][0] != '-') ++i;
     } else throw std::invalid_argument("unknown argument " + k);
@@ -187,6 +189,8 @@ int run(const Args &a)
   ContactOptions opt;
   opt.reach = a.reach;
   opt.single_fields = a.single_fields;
+  if (std::getenv("BENCH_CONTACT_MONITOR"))
+    opt.monitor = [](const ContactIteration &it) { std::printf("    it %d: %lld touching, %lld changed, residual %.2e\n", it.iteration, it.active, it.changed, it.residual); };
   // One cache of W's columns for every engine below: the calibration's columns serve the frames.
   const auto columns = std::make_shared<ReferenceColumns>(*st.ref, ContactEngine::spatial_order(*st.s.disc));
   auto touching = [&](const ContactSolution &sol) {
@@ -217,7 +221,7 @@ int run(const Args &a)
   std::vector<double> seconds, cpu, haptic;
   std::vector<std::vector<Vec3>> sampled;
   std::vector<int> sampled_frame;
-  long long iterations = 0, max_it = 0;
+  long long iterations = 0, max_it = 0, factorizations = 0, products = 0;
   double most = 0;
   for (int f = 0; f < a.frames; ++f) {
     ContactSolution sol;
@@ -226,10 +230,11 @@ int run(const Args &a)
     cpu.push_back(cpu_seconds() - c0);
     seconds.push_back(rep.seconds);
     if (std::getenv("BENCH_CONTACT_VERBOSE"))
-      std::printf("  frame %d: %.3f ms (detect %.3f, solve %.3f, fields %.3f), %lld iterations, %lld rounds, %lld candidates, %lld touching%s\n", f, 1e3 * rep.seconds,
-                  1e3 * rep.detect_seconds, 1e3 * rep.solve_seconds, 1e3 * rep.fields_seconds, rep.iterations, static_cast<long long>(rep.rounds), rep.candidates,
-                  rep.active_vertices, rep.rebuilt ? ", rebuilt" : "");
+      std::printf("  frame %d: %.3f ms (detect %.3f, solve %.3f, fields %.3f), %lld iterations (%lld factored, %lld products), %lld rounds, %lld candidates, %lld touching%s\n", f,
+                  1e3 * rep.seconds, 1e3 * rep.detect_seconds, 1e3 * rep.solve_seconds, 1e3 * rep.fields_seconds, rep.iterations, rep.factorizations, rep.products,
+                  static_cast<long long>(rep.rounds), rep.candidates, rep.active_vertices, rep.rebuilt ? ", rebuilt" : "");
     iterations += rep.iterations, max_it = std::max(max_it, rep.iterations);
+    factorizations += rep.factorizations, products += rep.products;
     most = std::max(most, touching(sol));
     if (a.check > 0 && f % std::max(1, a.frames / a.check) == 0) sampled.push_back(sol.u), sampled_frame.push_back(f);
     for (int h = 0; h < a.haptic; ++h) { // the instrument moves on a little between frames
@@ -254,10 +259,10 @@ int run(const Args &a)
     for (std::size_t i = 0; i < sol.u.size(); ++i) worst = std::max(worst, norm(sol.u[i] - sampled[k][i])), scale = std::max(scale, norm(sol.u[i]));
   }
   const double ms = 1e3 * median(seconds);
-  std::printf("  set-up: reference %.1f s, columns %.1f s (%.0f MB); frames: median %.2f ms (%.0f Hz; CPU %.2f ms), slowest %.2f ms; iterations %.2f per frame (max %lld); "
-              "touching up to %.1f %%; cold static solves of %zu frames differ by %.1e (relative); haptic median %.1f us (%.0f Hz); peak RSS %.0f MB; load %.2f\n",
+  std::printf("  set-up: reference %.1f s, columns %.1f s (%.0f MB); frames: median %.2f ms (%.0f Hz; CPU %.2f ms), slowest %.2f ms; iterations %.2f per frame (max %lld; "
+              "friction: %.2f factorizations, %.1f GMRES products per frame); touching up to %.1f %%; cold static solves of %zu frames differ by %.1e (relative); haptic median %.1f us (%.0f Hz); peak RSS %.0f MB; load %.2f\n",
               t_ref, t_prefetch, engine.memory_bytes() / 1e6, ms, 1e3 / ms, 1e3 * median(cpu), 1e3 * *std::max_element(seconds.begin(), seconds.end()), static_cast<double>(iterations) / a.frames, max_it,
-              100 * most, sampled.size(), scale > 0 ? worst / scale : worst, 1e6 * median(haptic), 1.0 / median(haptic), bench::peak_rss_mb(), load_average());
+              static_cast<double>(factorizations) / a.frames, static_cast<double>(products) / a.frames, 100 * most, sampled.size(), scale > 0 ? worst / scale : worst, 1e6 * median(haptic), 1.0 / median(haptic), bench::peak_rss_mb(), load_average());
   std::printf("csv,%s,%s,%d,%.2g,%d,%.2f,%.2f,%.3f,%.0f,%.3f,%.2f,%lld,%.3f,%.2e,%.2f,%.0f,%.2f\n", a.scenario.c_str(), a.mesh.c_str(), N, a.friction, a.frames, t_ref, t_prefetch, ms, 1e3 / ms, 1e3 * median(cpu),
               static_cast<double>(iterations) / a.frames, max_it, most, scale > 0 ? worst / scale : worst, 1e6 * median(haptic), bench::peak_rss_mb(), load_average());
   return 0;

@@ -414,19 +414,19 @@ int grid_speed(const Args &a)
   Timer timer;
   const SurfaceLocator loc(mesh);
   const std::vector<signed char> side = grid_inside(loc, g.lo, g.spacing(), g.points_per_axis());
-  const double t_inside = timer.seconds();
+  const double t_inside = timer.seconds(), c_inside = cpu_seconds() - c_start;
   timer.restart();
   InteriorPlanOptions po;
   po.band = a.band;
   const InteriorPlan plan(loc, mesh, pts, po, &side);
-  const double t_plan = timer.seconds();
+  const double t_plan = timer.seconds(), c_plan = cpu_seconds() - c_start - c_inside;
   timer.restart();
   const SomiglianaSources src(disc, mat, u, t);
   const InteriorEvaluator fast(src, eo);
-  const double t_up = timer.seconds();
+  const double t_up = timer.seconds(), c_up = cpu_seconds() - c_start - c_inside - c_plan;
   timer.restart();
   const std::vector<double> v = fast.evaluate(plan.evaluation_points());
-  const double t_eval = timer.seconds();
+  const double t_eval = timer.seconds(), c_eval = cpu_seconds() - c_start - c_inside - c_plan - c_up;
   timer.restart();
   const std::vector<FieldValue> f = plan.finish(v, corner_displacements(disc, u), corner_stress(disc, nodes));
   const double t_finish = timer.seconds(), wall = total.seconds(), cpu = cpu_seconds() - c_start;
@@ -443,6 +443,8 @@ int grid_speed(const Args &a)
   );
   std::printf("wall seconds: inside %.2f, plan %.2f, sources + upward %.2f, evaluation %.2f, finish %.2f; total %.2f (%.0f grid points/s, %.0f inside points/s); cpu %.1f s\n",
               t_inside, t_plan, t_up, t_eval, t_finish, wall, pts.size() / wall, inside / wall, cpu);
+  std::printf("cpu seconds: inside %.2f, plan %.2f, sources + upward %.2f, evaluation %.2f, finish %.2f; %.0f inside points per cpu second\n", c_inside, c_plan, c_up,
+              c_eval, cpu - c_inside - c_plan - c_up - c_eval, inside / cpu);
   std::printf("evaluation: far pairs %lld, fits %lld, per integrated point: far kernels %.0f, fit kernels %.0f, near particles %.0f, split triangles %.2f\n",
               st.far_pairs, st.local_fits, double(st.kernel_far) / v.size() * field_outputs, double(st.kernel_fit) / v.size() * field_outputs,
               double(st.kernel_near) / v.size() * field_outputs, double(st.adaptive_triangles) / v.size() * field_outputs);

@@ -1,5 +1,6 @@
 // Contact problems in the driver: a problem file with "contact", solved once or frame by frame by
-// the contact engine (contact/contact_engine.hpp) on the dense reference factorization, on rank 0.
+// the contact engine (contact/contact_engine.hpp) on the dense reference factorization or, with
+// -bem_mat_type h2 (or auto where dense does not fit), the H² one (scene/h2_reference.hpp), on rank 0.
 #include "hssbem/app/run.hpp"
 #include "result_base.hpp"
 #include "stress_post.hpp"
@@ -13,6 +14,8 @@
 #include "hssbem/core/timer.hpp"
 #include "hssbem/io/hdf5_output.hpp"
 #include "hssbem/petsc/log.h"
+#include "hssbem/petsc/system.h"
+#include "hssbem/scene/h2_reference.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -125,14 +128,40 @@ struct ContactRun {
   const InteriorRunOptions &interior;
   PetscMPIInt size;
   std::map<std::string, double> &seconds;
-  std::unique_ptr<DenseReference> reference;
+  const H2Options *h2 = nullptr; ///< the H² path's compression options, or null: the dense reference
+  std::unique_ptr<ReferenceFactorization> reference;
   std::unique_ptr<ContactEngine> engine;
   long long frame = 0;
 
+  void make_reference(const NodeConditions &base);
   void set_up(const NodeConditions &base);
   void single(const NodeConditions &nc);
   void scene(const std::vector<NodeConditions> &frames);
 };
+
+void ContactRun::make_reference(const NodeConditions &base)
+{
+  const bool pressure = std::any_of(base.pressure.begin(), base.pressure.end(), [](double p) { return !std::isnan(p); });
+  std::vector<char> pattern(3 * base.displacement_prescribed.size());
+  for (std::size_t i = 0; i < base.displacement_prescribed.size(); ++i)
+    for (int c = 0; c < 3; ++c) pattern[3 * i + c] = base.displacement_prescribed[i][c];
+  if (!h2) {
+    DenseReferenceOptions ro;
+    ro.node_body = node_bodies(*s.disc);
+    ro.with_pressure = pressure;
+    reference = std::make_unique<DenseReference>(op, pattern, ro);
+    return;
+  }
+  H2ReferenceOptions ho;
+  ho.compression = *h2;
+  ho.with_pressure = pressure;
+  ho.rtol = o.h2_rtol;
+  ho.factor.rel_tol = o.h2_factor_tol;
+  auto ref = std::make_unique<H2Reference>(op, pattern, ho);
+  HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF, "hssbem: contact: H2 reference: compressed in %.2f s, factored in %.2f s (%.0f MB)\n", ref->stats().compress_seconds,
+                              ref->stats().factor_seconds, ref->memory_bytes() / 1e6));
+  reference = std::move(ref);
+}
 
 void ContactRun::set_up(const NodeConditions &base)
 {
@@ -153,13 +182,7 @@ void ContactRun::set_up(const NodeConditions &base)
     throw ConstraintError(s.spec.file + ": " + e.what());
   }
   fault_point("ContactSetup");
-  DenseReferenceOptions ro;
-  ro.node_body = node_bodies(*s.disc);
-  ro.with_pressure = std::any_of(base.pressure.begin(), base.pressure.end(), [](double p) { return !std::isnan(p); });
-  std::vector<char> pattern(3 * base.displacement_prescribed.size());
-  for (std::size_t i = 0; i < base.displacement_prescribed.size(); ++i)
-    for (int c = 0; c < 3; ++c) pattern[3 * i + c] = base.displacement_prescribed[i][c];
-  reference = std::make_unique<DenseReference>(op, pattern, ro);
+  make_reference(base);
   engine = std::make_unique<ContactEngine>(*s.disc, *reference, std::move(obstacles), settings, opt);
   engine->prefetch(placements_of(s.spec));
   seconds["contact_setup"] += timer.seconds();
@@ -175,10 +198,17 @@ void ContactRun::single(const NodeConditions &nc)
   check_finite(sol, -1);
   HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF, "hssbem: contact: %lld vertices touching (%lld stick, %lld slip) after %lld iterations, %.3f ms\n", rep.active_vertices, rep.stick,
                               rep.slip, rep.iterations, 1e3 * rep.seconds));
+  if (const auto *h = dynamic_cast<const H2Reference *>(reference.get())) {
+    const H2ReferenceStats &st = h->stats();
+    HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF,
+                                "hssbem: contact: %d corrections by accurate H2 solves (%.2f s; last change %.1e); H2 reference: %lld columns in %.2f s, %lld accurate solves "
+                                "(%lld GMRES iterations) in %.2f s\n",
+                                rep.corrections, rep.correct_seconds, rep.correction, st.columns, st.column_seconds, st.solves, st.iterations, st.solve_seconds));
+  }
   if (s.output.empty()) return;
   ResultData r = result_base(s, size);
   r.attributes_str["solver"] = "contact";
-  r.attributes_str["mat_type"] = "dense";
+  r.attributes_str["mat_type"] = h2 ? "h2" : "dense";
   r.displacement = vertex_average(*s.disc, sol.u);
   r.traction = vertex_average(*s.disc, sol.t);
   r.traction_corner = corner_values(*s.disc, sol.t);
@@ -206,7 +236,7 @@ void ContactRun::scene(const std::vector<NodeConditions> &frames)
   if (!s.output.empty()) {
     ResultData base = result_base(s, size);
     base.attributes_str["solver"] = "contact";
-    base.attributes_str["mat_type"] = "dense";
+    base.attributes_str["mat_type"] = h2 ? "h2" : "dense";
     writer = std::make_unique<FrameWriter>(s.output, base);
   }
   const std::vector<std::vector<Vec3>> placements = placements_of(s.spec);
@@ -248,6 +278,30 @@ void ContactRun::scene(const std::vector<NodeConditions> &frames)
   HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF, "hssbem: wrote %s\n", s.output.c_str()));
 }
 
+/// The reference a contact runs on: the dense one when asked, or (auto) when it fits the node's
+/// memory; the H² one when asked, or (auto) when dense does not fit. HSS is refused, and so are
+/// several bodies on the H² path (its operator couples them: h2_reference.hpp).
+bool contact_on_h2(MPI_Comm comm, const ProblemSetup &s, std::optional<OperatorType> asked)
+{
+  if (asked && *asked == OperatorType::Hss)
+    throw std::runtime_error("-bem_mat_type hss: contact runs on the dense or the H2 reference factorization; use -bem_mat_type dense, h2 or auto");
+  const long long N = 3LL * s.disc->num_nodes();
+  MachineLimits limits;
+  HssbemCallThrow(HssbemMachineLimits(comm, &limits));
+  const double need = 8.0 * N * N * 4.0; // H, G, the LU, and W's columns (at most N)
+  const bool fits = need <= 0.9 * static_cast<double>(limits.node_memory_bytes);
+  if (asked && *asked == OperatorType::Dense && !fits)
+    throw std::runtime_error("contact needs about " + std::to_string(static_cast<long long>(need / 1e9 + 0.5)) + " GB for " + std::to_string(N) +
+                             " unknowns (dense reference factorization, H and G, W's columns), more than this node's " +
+                             std::to_string(static_cast<long long>(limits.node_memory_bytes / 1e9)) + " GB; use -bem_mat_type h2");
+  const bool h2 = asked ? *asked == OperatorType::H2 : !fits;
+  const int bodies = h2 ? find_bodies(s.disc->mesh()).count : 1;
+  if (bodies > 1)
+    throw std::runtime_error("contact on the H2 reference factorization needs one body (the mesh has " + std::to_string(bodies) +
+                             "): the H2 operator does not keep separate bodies apart; use -bem_mat_type dense");
+  return h2;
+}
+
 } // namespace
 
 void run_contact(MPI_Comm comm, const ProblemSetup &s, const BemOperator &op, std::optional<OperatorType> asked, const ContactRunOptions &o, const InteriorRunOptions &interior,
@@ -256,23 +310,19 @@ void run_contact(MPI_Comm comm, const ProblemSetup &s, const BemOperator &op, st
   PetscMPIInt rank, size;
   HssbemCallMPIThrow(MPI_Comm_rank(comm, &rank));
   HssbemCallMPIThrow(MPI_Comm_size(comm, &size));
-  if (asked && *asked != OperatorType::Dense)
-    throw std::runtime_error(std::string("-bem_mat_type ") + operator_type_name(*asked) + ": contact runs on the dense reference factorization; use -bem_mat_type dense or auto");
-  const long long N = 3LL * s.disc->num_nodes();
-  MachineLimits limits;
-  HssbemCallThrow(HssbemMachineLimits(comm, &limits));
-  const double need = 8.0 * N * N * 4.0; // H, G, the LU, and W's columns (at most N)
-  if (need > 0.9 * static_cast<double>(limits.node_memory_bytes))
-    throw std::runtime_error("contact needs about " + std::to_string(static_cast<long long>(need / 1e9 + 0.5)) + " GB for " + std::to_string(N) +
-                             " unknowns (dense reference factorization, H and G, W's columns), more than this node's " +
-                             std::to_string(static_cast<long long>(limits.node_memory_bytes / 1e9)) + " GB");
-  HssbemCallThrow(PetscPrintf(comm, "hssbem: contact: %zu obstacles%s, %zu frames, on the dense reference factorization (rank 0)\n", s.spec.contact.obstacles.size(),
-                              s.spec.contact.bodies ? " and the bodies" : "", std::max<std::size_t>(1, s.spec.frames.size())));
+  const bool on_h2 = contact_on_h2(comm, s, asked);
+  H2Options h2;
+  if (on_h2) { // the driver's H² defaults (petsc/system.cxx), then -mat_h2_*
+    h2.rel_tol = 1e-5, h2.single_precision = true;
+    HssbemCallThrow(HssbemH2OptionsFromDatabase(comm, NULL, &h2));
+  }
+  HssbemCallThrow(PetscPrintf(comm, "hssbem: contact: %zu obstacles%s, %zu frames, on the %s reference factorization (rank 0)\n", s.spec.contact.obstacles.size(),
+                              s.spec.contact.bodies ? " and the bodies" : "", std::max<std::size_t>(1, s.spec.frames.size()), on_h2 ? "H2" : "dense"));
   run_collectively(comm, [&] {
     if (rank != 0) return;
     const NodeConditions base = apply_rules(s.spec.rules, *s.disc, s.spec.file);
     const std::vector<NodeConditions> frames = frames_of(s, base);
-    ContactRun run{s, op, o, interior, size, seconds, nullptr, nullptr};
+    ContactRun run{s, op, o, interior, size, seconds, on_h2 ? &h2 : nullptr, nullptr, nullptr};
     run.set_up(base);
     if (s.spec.frames.empty()) run.single(frames[0]);
     else run.scene(frames);

@@ -22,6 +22,7 @@ detail::SpherePoints sphere_points(int n)
 {
   detail::SpherePoints s;
   for (const Vec3 &p : unit_sphere_points(n)) s.x.push_back(p[0]), s.y.push_back(p[1]), s.z.push_back(p[2]);
+  s.fx.assign(s.x.begin(), s.x.end()), s.fy.assign(s.y.begin(), s.y.end()), s.fz.assign(s.z.begin(), s.z.end());
   return s;
 }
 
@@ -56,14 +57,16 @@ ClusterTreeOptions leaves_of(int n)
   return o;
 }
 
-/// Radii that nest: a parent's ball holds its children's.
-void nest_radii(const ClusterTree &tree, std::vector<double> &R)
+/// Radii as small as the upward pass allows: a cluster's ball holds its triangles, and its check
+/// sphere (check_ratio · R) lies outside its children's, where their forces are fitted:
+/// R ≥ R_child + |centre − centre_child| / check_ratio.
+void nest_radii(const ClusterTree &tree, double check_ratio, std::vector<double> &R)
 {
   for (int l = tree.levels() - 1; l >= 0; --l)
     for (int c : tree.clusters_at_level(l)) {
       const Cluster &cl = tree.cluster(c);
       if (cl.left < 0) continue;
-      for (int child : {cl.left, cl.right}) R[c] = std::max(R[c], norm(tree.cluster(child).centre - cl.centre) + R[child]);
+      for (int child : {cl.left, cl.right}) R[c] = std::max(R[c], norm(tree.cluster(child).centre - cl.centre) / check_ratio + R[child]);
     }
 }
 
@@ -86,6 +89,57 @@ void add_forces_at(const SomiglianaConstants &k, const Vec3 &x, const Vec3 &cent
   u[0] += u0, u[1] += u1, u[2] += u2;
 }
 
+void add_forces_at(const SomiglianaConstants &k, const Vec3 &x, const Vec3 &centre, double r, const SpherePoints &s, const float *q, double *u)
+{
+  const int n = s.size();
+  const float ox = static_cast<float>(centre[0] - x[0]), oy = static_cast<float>(centre[1] - x[1]), oz = static_cast<float>(centre[2] - x[2]);
+  const float rf = static_cast<float>(r);
+  const float *SX = s.fx.data(), *SY = s.fy.data(), *SZ = s.fz.data(), *Q0 = q, *Q1 = q + n, *Q2 = q + 2 * n;
+  float u0 = 0, u1 = 0, u2 = 0;
+#pragma omp simd reduction(+ : u0, u1, u2)
+  for (int j = 0; j < n; ++j) {
+    float v0, v1, v2;
+    kelvin_displacement_point(k, ox + rf * SX[j], oy + rf * SY[j], oz + rf * SZ[j], Q0[j], Q1[j], Q2[j], v0, v1, v2);
+    u0 += v0, u1 += v1, u2 += v2;
+  }
+  u[0] += u0, u[1] += u1, u[2] += u2;
+}
+
+void add_forces_to(const SomiglianaConstants &k, const float *const p[3], int m, const Vec3 &c, double r, const SpherePoints &s, const float *q, double *field)
+{
+  const int n = s.size();
+  std::vector<float> acc(3 * static_cast<std::size_t>(m), 0.0f);
+  float *A0 = acc.data(), *A1 = A0 + m, *A2 = A1 + m;
+  const float *P0 = p[0], *P1 = p[1], *P2 = p[2], rf = static_cast<float>(r);
+  const float c0 = static_cast<float>(c[0]), c1 = static_cast<float>(c[1]), c2 = static_cast<float>(c[2]);
+  for (int j = 0; j < n; ++j) {
+    const float y0 = c0 + rf * s.fx[j], y1 = c1 + rf * s.fy[j], y2 = c2 + rf * s.fz[j], q0 = q[j], q1 = q[n + j], q2 = q[2 * n + j];
+#pragma omp simd
+    for (int i = 0; i < m; ++i) {
+      float v0, v1, v2;
+      kelvin_displacement_point(k, y0 - P0[i], y1 - P1[i], y2 - P2[i], q0, q1, q2, v0, v1, v2);
+      A0[i] += v0, A1[i] += v1, A2[i] += v2;
+    }
+  }
+  for (std::size_t i = 0; i < acc.size(); ++i) field[i] += acc[i];
+}
+
+void add_forces_field(const SomiglianaConstants &k, const Vec3 &x, const Vec3 &centre, double r, const SpherePoints &s, const float *q, double *out)
+{
+  const int n = s.size();
+  const float ox = static_cast<float>(centre[0] - x[0]), oy = static_cast<float>(centre[1] - x[1]), oz = static_cast<float>(centre[2] - x[2]);
+  const float rf = static_cast<float>(r);
+  const float *SX = s.fx.data(), *SY = s.fy.data(), *SZ = s.fz.data(), *Q0 = q, *Q1 = q + n, *Q2 = q + 2 * n;
+  float a0 = 0, a1 = 0, a2 = 0, a3 = 0, a4 = 0, a5 = 0, a6 = 0, a7 = 0, a8 = 0;
+#pragma omp simd reduction(+ : a0, a1, a2, a3, a4, a5, a6, a7, a8)
+  for (int j = 0; j < n; ++j) {
+    float w0, w1, w2, w3, w4, w5, w6, w7, w8;
+    kelvin_force_point(k, ox + rf * SX[j], oy + rf * SY[j], oz + rf * SZ[j], Q0[j], Q1[j], Q2[j], w0, w1, w2, w3, w4, w5, w6, w7, w8);
+    a0 += w0, a1 += w1, a2 += w2, a3 += w3, a4 += w4, a5 += w5, a6 += w6, a7 += w7, a8 += w8;
+  }
+  out[0] += a0, out[1] += a1, out[2] += a2, out[3] += a3, out[4] += a4, out[5] += a5, out[6] += a6, out[7] += a7, out[8] += a8;
+}
+
 Fit::Fit(const SomiglianaConstants &k, int pe, int pc_, double r_equiv_, double r_check_) : equiv(sphere_points(pe)), check(sphere_points(pc_)), r_equiv(r_equiv_), r_check(r_check_)
 {
   const int pc = check.size(), m = 3 * pc, n = 3 * pe;
@@ -95,7 +149,7 @@ Fit::Fit(const SomiglianaConstants &k, int pe, int pc_, double r_equiv_, double 
       double *col = &A[static_cast<std::size_t>(b * pe + j) * m];
       for (int i = 0; i < pc; ++i) {
         const double d0 = r_equiv * equiv.x[j] - r_check * check.x[i], d1 = r_equiv * equiv.y[j] - r_check * check.y[i], d2 = r_equiv * equiv.z[j] - r_check * check.z[i];
-        kelvin_displacement_point(k, d0, d1, d2, b == 0, b == 1, b == 2, col[i], col[pc + i], col[2 * pc + i]);
+        kelvin_displacement_point<double>(k, d0, d1, d2, b == 0, b == 1, b == 2, col[i], col[pc + i], col[2 * pc + i]);
       }
     }
   pinv = pseudo_inverse(std::move(A), m, n);
@@ -107,19 +161,21 @@ void Fit::solve(double R, const std::vector<double> &field, std::vector<double> 
   lapack::gemv('N', 3 * pe(), 3 * pc(), R, pinv.data(), 3 * pe(), field.data(), 0.0, forces.data());
 }
 
-void OrderedParticles::add_regular(const SomiglianaConstants &k, const Vec3 &x, std::size_t begin, std::size_t end, double *out) const
+void OrderedParticles::add_regular(const SomiglianaConstants &k, const Vec3 &x, const Vec3 &centre, std::size_t begin, std::size_t end, const float *weight,
+                                   double *out) const
 {
-  double a0 = 0, a1 = 0, a2 = 0, a3 = 0, a4 = 0, a5 = 0, a6 = 0, a7 = 0, a8 = 0;
-  const double x0 = x[0], x1 = x[1], x2 = x[2];
+  std::vector<float> ones;
+  if (!weight) ones.assign(end - begin, 1.0f), weight = ones.data();
+  float a0 = 0, a1 = 0, a2 = 0, a3 = 0, a4 = 0, a5 = 0, a6 = 0, a7 = 0, a8 = 0;
+  const float x0 = static_cast<float>(x[0] - centre[0]), x1 = static_cast<float>(x[1] - centre[1]), x2 = static_cast<float>(x[2] - centre[2]);
   // Raw pointers: the loop below must see plain arrays to vectorise with contiguous loads.
-  const double *Y0 = y[0].data(), *Y1 = y[1].data(), *Y2 = y[2].data(), *F0 = f[0].data(), *F1 = f[1].data(), *F2 = f[2].data();
-  const double *M0 = m[0].data(), *M1 = m[1].data(), *M2 = m[2].data(), *N0 = n[0].data(), *N1 = n[1].data(), *N2 = n[2].data();
-  const double *C0 = c[0].data(), *C1 = c[1].data(), *C2 = c[2].data(), *R2 = r2.data();
+  const float *Y0 = ys[0].data(), *Y1 = ys[1].data(), *Y2 = ys[2].data(), *F0 = fs[0].data(), *F1 = fs[1].data(), *F2 = fs[2].data();
+  const float *M0 = ms[0].data(), *M1 = ms[1].data(), *M2 = ms[2].data(), *N0 = ns[0].data(), *N1 = ns[1].data(), *N2 = ns[2].data();
+  const float *W = weight - begin;
 #pragma omp simd reduction(+ : a0, a1, a2, a3, a4, a5, a6, a7, a8)
   for (std::size_t j = begin; j < end; ++j) {
-    const double c0 = C0[j] - x0, c1 = C1[j] - x1, c2 = C2[j] - x2;
-    const double w = c0 * c0 + c1 * c1 + c2 * c2 >= R2[j] ? 1.0 : 0.0; // a triangle near x is split elsewhere
-    double v0, v1, v2, v3, v4, v5, v6, v7, v8;
+    const float w = W[j];
+    float v0, v1, v2, v3, v4, v5, v6, v7, v8;
     somigliana_point(k, Y0[j] - x0, Y1[j] - x1, Y2[j] - x2, w * F0[j], w * F1[j], w * F2[j], w * M0[j], w * M1[j], w * M2[j], N0[j], N1[j], N2[j], v0, v1, v2, v3,
                      v4, v5, v6, v7, v8);
     a0 += v0, a1 += v1, a2 += v2, a3 += v3, a4 += v4, a5 += v5, a6 += v6, a7 += v7, a8 += v8;
@@ -143,37 +199,30 @@ void InteriorEvaluator::Impl::order_particles()
   const Particles &P = src.particles();
   const std::size_t n = P.size();
   detail::OrderedParticles &o = particles;
-  for (int a = 0; a < 3; ++a)
-    for (auto *v : {&o.y[a], &o.f[a], &o.m[a], &o.n[a], &o.c[a]}) v->resize(n);
-  o.r2.resize(n);
-  std::size_t at = 0;
-  for (int e : tree.perm())
-    for (std::size_t i = Particles::per_triangle * static_cast<std::size_t>(e), end = i + Particles::per_triangle; i < end; ++i, ++at) {
-      for (int a = 0; a < 3; ++a) {
-        o.y[a][at] = P.y[a][i], o.f[a][at] = P.f[a][i], o.m[a][at] = P.m[a][i], o.n[a][at] = P.n[a][i];
-        o.c[a][at] = src.centroid(e)[a];
+  for (int a = 0; a < 3; ++a) {
+    for (auto *v : {&o.y[a], &o.f[a], &o.m[a], &o.n[a]}) v->resize(n);
+    for (auto *v : {&o.ys[a], &o.fs[a], &o.ms[a], &o.ns[a]}) v->resize(n);
+  }
+  for (int c = 0; c < tree.num_clusters(); ++c) {
+    const Cluster &cl = tree.cluster(c);
+    if (!tree.is_leaf(c)) continue;
+    for (int p = cl.begin; p < cl.end; ++p) {
+      const int e = tree.perm()[p];
+      for (std::size_t k = 0; k < Particles::per_triangle; ++k) {
+        const std::size_t i = Particles::per_triangle * static_cast<std::size_t>(e) + k, at = Particles::per_triangle * static_cast<std::size_t>(p) + k;
+        for (int a = 0; a < 3; ++a) {
+          o.y[a][at] = P.y[a][i], o.f[a][at] = P.f[a][i], o.m[a][at] = P.m[a][i], o.n[a][at] = P.n[a][i];
+          o.ys[a][at] = static_cast<float>(P.y[a][i] - cl.centre[a]), o.fs[a][at] = static_cast<float>(P.f[a][i]);
+          o.ms[a][at] = static_cast<float>(P.m[a][i]), o.ns[a][at] = static_cast<float>(P.n[a][i]);
+        }
       }
-      o.r2[at] = src.near_radius(e) * src.near_radius(e);
     }
+  }
 }
 
 void InteriorEvaluator::Impl::add_equivalent(const Vec3 &x, int b, double *out) const
 {
-  const std::vector<double> &f = q[b];
-  const detail::SpherePoints &s = up.equiv;
-  const int n = s.size();
-  const Vec3 &c = tree.cluster(b).centre;
-  const double r = R[b] * up.r_equiv, ox = c[0] - x[0], oy = c[1] - x[1], oz = c[2] - x[2];
-  const SomiglianaConstants &k = src.constants();
-  const double *SX = s.x.data(), *SY = s.y.data(), *SZ = s.z.data(), *Q0 = f.data(), *Q1 = f.data() + n, *Q2 = f.data() + 2 * n;
-  double a0 = 0, a1 = 0, a2 = 0, a3 = 0, a4 = 0, a5 = 0, a6 = 0, a7 = 0, a8 = 0;
-#pragma omp simd reduction(+ : a0, a1, a2, a3, a4, a5, a6, a7, a8)
-  for (int j = 0; j < n; ++j) {
-    double w0, w1, w2, w3, w4, w5, w6, w7, w8;
-    kelvin_force_point(k, ox + r * SX[j], oy + r * SY[j], oz + r * SZ[j], Q0[j], Q1[j], Q2[j], w0, w1, w2, w3, w4, w5, w6, w7, w8);
-    a0 += w0, a1 += w1, a2 += w2, a3 += w3, a4 += w4, a5 += w5, a6 += w6, a7 += w7, a8 += w8;
-  }
-  out[0] += a0, out[1] += a1, out[2] += a2, out[3] += a3, out[4] += a4, out[5] += a5, out[6] += a6, out[7] += a7, out[8] += a8;
+  detail::add_forces_field(src.constants(), x, tree.cluster(b).centre, R[b] * up.r_equiv, up.equiv, qf[b].data(), out);
 }
 
 void InteriorEvaluator::Impl::add_leaf(const Vec3 &x, int b, double *out, InteriorEvaluationStats &s) const
@@ -184,12 +233,18 @@ void InteriorEvaluator::Impl::add_leaf(const Vec3 &x, int b, double *out, Interi
     s.kernel_far += up.pe();
     return add_equivalent(x, b, out);
   }
-  particles.add_regular(src.constants(), x, Particles::per_triangle * static_cast<std::size_t>(cl.begin), Particles::per_triangle * static_cast<std::size_t>(cl.end), out);
+  const std::size_t begin = Particles::per_triangle * static_cast<std::size_t>(cl.begin), end = Particles::per_triangle * static_cast<std::size_t>(cl.end);
   s.kernel_near += Particles::per_triangle * cl.size();
+  if (D >= reach[b]) return particles.add_regular(src.constants(), x, cl.centre, begin, end, nullptr, out); // every triangle regular at x
+  // The triangles near x (decided in doubles, as SomiglianaSources does) are split instead.
+  std::vector<float> weight(end - begin);
   for (int p = cl.begin; p < cl.end; ++p) {
     const int e = tree.perm()[p];
-    if (!src.is_regular(x, e)) src.add_triangle(x, e, out), ++s.adaptive_triangles;
+    const bool regular = src.is_regular(x, e);
+    std::fill_n(&weight[Particles::per_triangle * static_cast<std::size_t>(p - cl.begin)], Particles::per_triangle, regular ? 1.0f : 0.0f);
+    if (!regular) src.add_triangle(x, e, out), ++s.adaptive_triangles;
   }
+  particles.add_regular(src.constants(), x, cl.centre, begin, end, weight.data(), out);
 }
 
 void InteriorEvaluator::Impl::source_radii()
@@ -205,7 +260,7 @@ void InteriorEvaluator::Impl::source_radii()
       reach[c] = std::max(reach[c], d + src.near_radius(e));
     }
   }
-  nest_radii(tree, R);
+  nest_radii(tree, opt.check_ratio, R);
 }
 
 void InteriorEvaluator::Impl::upward_leaf(int c)
@@ -261,6 +316,8 @@ void InteriorEvaluator::Impl::upward()
       else upward_inner(c);
     }
   }
+  qf.resize(q.size());
+  for (std::size_t c = 0; c < q.size(); ++c) qf[c] = detail::to_float(q[c]);
 }
 
 bool InteriorEvaluator::Impl::far(const Vec3 &ca, double Ra, int b) const

@@ -8,11 +8,28 @@
 
 namespace hssbem::detail {
 
-/// Points on a sphere, structure of arrays.
+/// Points on a sphere, structure of arrays (and in single precision for the far-field loops).
 struct SpherePoints {
   std::vector<double> x, y, z;
+  std::vector<float> fx, fy, fz;
   int size() const { return static_cast<int>(x.size()); }
 };
+
+/// out[0..9) += displacement and stress at x of the forces q (SoA, 3n) at centre + r · s, summed
+/// in single precision relative to the centre (the far field: twice the SIMD lanes of doubles;
+/// the tests check the evaluation against the direct sums).
+void add_forces_field(const SomiglianaConstants &k, const Vec3 &x, const Vec3 &centre, double r, const SpherePoints &s, const float *q, double *out);
+
+/// u[0..3) += the displacement at x of the forces q (SoA floats) at centre + r · s, summed in floats.
+void add_forces_at(const SomiglianaConstants &k, const Vec3 &x, const Vec3 &centre, double r, const SpherePoints &s, const float *q, double *u);
+
+/// field (SoA, 3 m) += the displacement at the m points p (floats, relative to an origin) of the
+/// forces q (SoA floats, 3n) at c + r · s (c relative to the same origin). The SIMD loop runs over
+/// the points, force by force, and each call sums in floats: the fits' many pairs.
+void add_forces_to(const SomiglianaConstants &k, const float *const p[3], int m, const Vec3 &c, double r, const SpherePoints &s, const float *q, double *field);
+
+/// Single-precision copy of a force vector.
+inline std::vector<float> to_float(const std::vector<double> &v) { return std::vector<float>(v.begin(), v.end()); }
 
 /// u[0..3) += the displacement at x of the forces q (SoA: q[j], q[n + j], q[2n + j]) at the
 /// points centre + r · s.
@@ -40,12 +57,16 @@ struct Fit {
   }
 };
 
-/// The sources' particles in the order of the source tree (a leaf's are contiguous), each with
-/// its triangle's centroid and squared near radius, for SIMD loops over a leaf.
+/// The sources' particles in the order of the source tree (a leaf's are contiguous): in double
+/// (the upward pass) and in single precision relative to the centre of their source leaf (the
+/// evaluation at points, x − centre formed in doubles, then rounded), for SIMD loops over a leaf.
 struct OrderedParticles {
-  std::vector<double> y[3], f[3], m[3], n[3], c[3], r2;
-  /// out[0..9) += the field at x of particles [begin, end) whose triangle is regular at x.
-  void add_regular(const SomiglianaConstants &k, const Vec3 &x, std::size_t begin, std::size_t end, double *out) const;
+  std::vector<double> y[3], f[3], m[3], n[3];
+  std::vector<float> ys[3], fs[3], ms[3], ns[3];
+  /// out[0..9) += the field at x of particles [begin, end) of the leaf centred at `centre`, each
+  /// weighted by weight[j − begin] (1: its triangle is regular at x, 0: split elsewhere), or all
+  /// taken where weight is null.
+  void add_regular(const SomiglianaConstants &k, const Vec3 &x, const Vec3 &centre, std::size_t begin, std::size_t end, const float *weight, double *out) const;
 };
 
 } // namespace hssbem::detail
@@ -58,8 +79,9 @@ struct InteriorEvaluator::Impl {
   detail::Fit up;   ///< sources: equivalent sphere inside, check sphere outside
   detail::Fit down; ///< targets: check sphere inside, equivalent sphere outside
   ClusterTree tree; ///< over the triangles' centroids
-  std::vector<double> R, reach;       ///< per source cluster: ball of its triangles, of their near zones
+  std::vector<double> R, reach;       ///< per source cluster: ball of its triangles (enlarged for the upward pass, see nest_radii), of their near zones
   std::vector<std::vector<double>> q; ///< per source cluster: equivalent forces (SoA, 3 pe)
+  std::vector<std::vector<float>> qf; ///< the same in single precision (the evaluation at points)
   detail::OrderedParticles particles; ///< in the tree's order
 
   Impl(const SomiglianaSources &s, const InteriorEvaluationOptions &o);

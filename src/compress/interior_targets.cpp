@@ -59,6 +59,7 @@ private:
   std::vector<std::vector<int>> m_far, m_near;     ///< far source clusters; near source leaves (final clusters)
   std::vector<char> m_final;
   std::vector<std::vector<double>> m_local;        ///< per target cluster: the forces on its outer sphere (empty: none)
+  std::vector<std::vector<float>> m_localf;        ///< the same in single precision (the evaluation at points)
   std::vector<int> m_owner;                        ///< per target cluster: the cluster whose outer forces serve it (−1: none)
   InteriorEvaluationStats &m_stats;
 };
@@ -83,6 +84,7 @@ TargetPass::TargetPass(const InteriorEvaluator::Impl &s, const std::vector<Vec3>
   m_near.assign(nc, {});
   m_final.assign(nc, 0);
   m_local.assign(nc, {});
+  m_localf.assign(nc, {});
   m_owner.assign(nc, -1);
 }
 
@@ -120,16 +122,18 @@ void TargetPass::downward(int a)
   const bool inherit = parent >= 0 && !m_local[parent].empty();
   if (2 * ta.size() < pc || (!inherit && m_far[a].empty())) return; // small, or no far field yet
   m_owner[a] = a;
+  // The check points relative to a's centre, in floats; the far field summed pair by pair.
+  std::vector<float> check(3 * static_cast<std::size_t>(pc));
+  const double rc = m_R[a] * down.r_check;
+  for (int i = 0; i < pc; ++i)
+    check[i] = static_cast<float>(rc * down.check.x[i]), check[pc + i] = static_cast<float>(rc * down.check.y[i]), check[2 * pc + i] = static_cast<float>(rc * down.check.z[i]);
+  const float *const p[3] = {check.data(), check.data() + pc, check.data() + 2 * pc};
+  const SomiglianaConstants &k = m_s.src.constants();
   std::vector<double> field(3 * pc, 0.0);
-  for (int i = 0; i < pc; ++i) {
-    const Vec3 x = down.check_point(ta.centre, m_R[a], i);
-    double u[3] = {0, 0, 0};
-    if (inherit) detail::add_forces_at(m_s.src.constants(), x, m_tree.cluster(parent).centre, m_R[parent] * down.r_equiv, down.equiv, m_local[parent].data(), u);
-    for (int b : m_far[a])
-      detail::add_forces_at(m_s.src.constants(), x, m_s.tree.cluster(b).centre, m_s.R[b] * up.r_equiv, up.equiv, m_s.q[b].data(), u);
-    field[i] = u[0], field[pc + i] = u[1], field[2 * pc + i] = u[2];
-  }
+  if (inherit) detail::add_forces_to(k, p, pc, m_tree.cluster(parent).centre - ta.centre, m_R[parent] * down.r_equiv, down.equiv, m_localf[parent].data(), field.data());
+  for (int b : m_far[a]) detail::add_forces_to(k, p, pc, m_s.tree.cluster(b).centre - ta.centre, m_s.R[b] * up.r_equiv, up.equiv, m_s.qf[b].data(), field.data());
   down.solve(m_R[a], field, m_local[a]);
+  m_localf[a] = detail::to_float(m_local[a]);
 #pragma omp atomic
   m_stats.kernel_fit += static_cast<long long>(pc) * down.pe() * (static_cast<long long>(m_far[a].size()) + inherit);
 }
@@ -137,22 +141,8 @@ void TargetPass::downward(int a)
 /// v += the far field at x (in cluster a) of the forces on a's outer sphere.
 void TargetPass::add_local(int a, const Vec3 &x, double *v) const
 {
-  const std::vector<double> &q = m_local[a];
-  if (q.empty()) return;
-  const detail::SpherePoints &s = m_s.down.equiv;
-  const int n = s.size();
-  const Vec3 &c = m_tree.cluster(a).centre;
-  const double r = m_R[a] * m_s.down.r_equiv, ox = c[0] - x[0], oy = c[1] - x[1], oz = c[2] - x[2];
-  const SomiglianaConstants &k = m_s.src.constants();
-  const double *SX = s.x.data(), *SY = s.y.data(), *SZ = s.z.data(), *Q0 = q.data(), *Q1 = q.data() + n, *Q2 = q.data() + 2 * n;
-  double a0 = 0, a1 = 0, a2 = 0, a3 = 0, a4 = 0, a5 = 0, a6 = 0, a7 = 0, a8 = 0;
-#pragma omp simd reduction(+ : a0, a1, a2, a3, a4, a5, a6, a7, a8)
-  for (int j = 0; j < n; ++j) {
-    double w0, w1, w2, w3, w4, w5, w6, w7, w8;
-    kelvin_force_point(k, ox + r * SX[j], oy + r * SY[j], oz + r * SZ[j], Q0[j], Q1[j], Q2[j], w0, w1, w2, w3, w4, w5, w6, w7, w8);
-    a0 += w0, a1 += w1, a2 += w2, a3 += w3, a4 += w4, a5 += w5, a6 += w6, a7 += w7, a8 += w8;
-  }
-  v[0] += a0, v[1] += a1, v[2] += a2, v[3] += a3, v[4] += a4, v[5] += a5, v[6] += a6, v[7] += a7, v[8] += a8;
+  if (m_localf[a].empty()) return;
+  detail::add_forces_field(m_s.src.constants(), x, m_tree.cluster(a).centre, m_R[a] * m_s.down.r_equiv, m_s.down.equiv, m_localf[a].data(), v);
 }
 
 std::vector<int> TargetPass::deferred_sources(int a) const

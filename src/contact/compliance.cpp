@@ -6,15 +6,21 @@
 
 namespace hssbem::contact_detail {
 
-Compliance::Compliance(const std::vector<ContactPoint> &points, const std::vector<char> &pattern, ReferenceColumns &columns)
-    : m_points(&points), m_terms(points.size()), m_held(points.size()), m_pattern(&pattern)
+std::vector<int> loaded_unknowns(const std::vector<ContactPoint> &points, const std::vector<char> &pattern, bool normal_only)
 {
   std::vector<int> loaded;
   for (const ContactPoint &p : points)
     for (int i = 0; i < p.terms; ++i)
       for (int b = 0; b < 3; ++b)
-        if (!pattern[3 * p.term_node[i] + b]) loaded.push_back(3 * p.term_node[i] + b);
-  columns.require(loaded);
+        if (!pattern[3 * p.term_node[i] + b] && (!normal_only || p.lw[i] * p.frame[0][b] != 0.0)) loaded.push_back(3 * p.term_node[i] + b);
+  return loaded;
+}
+
+Compliance::Compliance(const std::vector<ContactPoint> &points, const std::vector<char> &pattern, ReferenceColumns &columns, bool normal_only)
+    : m_points(&points), m_columns(&columns), m_normal_only(normal_only), m_terms(points.size()), m_attached(points.size(), 0), m_held(points.size()),
+      m_pattern(&pattern)
+{
+  if (!normal_only) columns.require(loaded_unknowns(points, pattern, false));
   for (std::size_t c = 0; c < points.size(); ++c) {
     const ContactPoint &p = points[c];
     Terms &t = m_terms[c];
@@ -26,14 +32,37 @@ Compliance::Compliance(const std::vector<ContactPoint> &points, const std::vecto
           t.M[i][3 * k + a] = u_unknown ? p.mw[i] * p.frame[k][a] : 0.0;
           t.L[i][3 * a + k] = u_unknown ? p.lw[i] * p.frame[k][a] : 0.0;
         }
-      for (int b = 0; b < 3; ++b) t.col[i][b] = pattern[3 * m + b] ? nullptr : columns.column(3 * m + b);
       t.row[i] = columns.position(3 * m);
     }
     for (int k = 0; k < 3; ++k) { // the slave node's measure along frame k: zero when prescribed
       const Mat3 &M = t.M[0];
       m_held[c][k] = std::abs(M[3 * k]) + std::abs(M[3 * k + 1]) + std::abs(M[3 * k + 2]) <= 1e-12;
     }
+    if (!normal_only) attach(static_cast<int>(c));
   }
+}
+
+void Compliance::attach(int c) const
+{
+  const ContactPoint &p = (*m_points)[c];
+  Terms &t = m_terms[c];
+  for (int i = 0; i < p.terms; ++i)
+    for (int b = 0; b < 3; ++b) {
+      const int j = 3 * p.term_node[i] + b;
+      t.col[i][b] = (*m_pattern)[j] || !m_columns->has(j) ? nullptr : m_columns->column(j);
+    }
+  m_attached[c] = 1;
+}
+
+void Compliance::require(const std::vector<int> &cs) const
+{
+  std::vector<ContactPoint> missing;
+  std::vector<int> which;
+  for (int c : cs)
+    if (!m_attached[c]) missing.push_back((*m_points)[c]), which.push_back(c);
+  if (which.empty()) return;
+  m_columns->require(loaded_unknowns(missing, *m_pattern, m_normal_only));
+  for (int c : which) attach(c);
 }
 
 Mat3 Compliance::block(int c, int cp) const

@@ -170,6 +170,7 @@ struct ContactEngine::State {
   bool body_points_done = false;
   std::vector<char> forced;            ///< per vertex: penetrated beyond reach once; always a candidate since
   double tol_gap = 0;
+  double size = 0;                     ///< the mesh's bounding-box diagonal
   // the free response of the last values
   bool has_free = false;
   SystemSelection free_values;
@@ -178,6 +179,7 @@ struct ContactEngine::State {
   // the last frame
   std::unique_ptr<Compliance> D;
   std::vector<Vec3> wf, lambda, u_prev, warm_lambda;
+  std::vector<double> gap;             ///< per point: the gap after the solve
   std::vector<std::int8_t> point_status;
   std::vector<char> warm_nodes;
   std::vector<char> zone, zone_nodes;  ///< per point: watched by the iterations; per node: joined this frame
@@ -188,14 +190,26 @@ struct ContactEngine::State {
   ContactFrameReport report;
 
   void free_response(const SystemSelection &values);
+  void set_u_free();
+  /// The solve of a frame's points until no vertex went through (rounds of detection).
+  void rounds(const std::vector<Vec3> &offsets_, ContactSolution &out, ContactFrameReport &rep);
+  void correct(const SystemSelection &values, const std::vector<Vec3> &offsets_, ContactSolution &out, ContactFrameReport &rep);
   void detect(const std::vector<Vec3> &offsets_);
   void solve_points(ContactFrameReport &rep);
   void fields(ContactSolution &out) const;
-  bool zone_violations(const ContactSolution &out);
+  void point_gaps(const ContactSolution &out, bool single);
+  /// The fields in single precision: frictionless frames on exact columns only (friction
+  /// measures the next frame's slip from the fields, and approximate columns are corrected
+  /// against the fields to 1e-8, below single precision's 1e-7).
+  bool single_fields() const { return opt.single_fields && !friction && ref->exact_columns(); }
+  bool zone_violations();
   bool penetrations(const std::vector<Vec3> &offsets_, const ContactSolution &out);
   void outputs(ContactSolution &out) const;
   /// The warm start of the next solve (round or frame): the active set and its tractions.
   void remember();
+  Vec3 predicted_traction(int c);
+  std::vector<Vec3> warm_offsets;      ///< the obstacles' offsets of the warm start
+  TriangleBvh surface;                 ///< the mesh's triangles (the warm start's interpolation)
 };
 
 ContactEngine::ContactEngine(const Discretization &disc, const ReferenceFactorization &reference, std::vector<Obstacle> obstacles, const ContactSettings &settings,
@@ -207,7 +221,8 @@ ContactEngine::ContactEngine(const Discretization &disc, const ReferenceFactoriz
   m->columns = columns ? std::move(columns) : std::make_shared<ReferenceColumns>(reference, spatial_order(disc));
   m->node_position.resize(disc.num_nodes());
   for (int i = 0; i < disc.num_nodes(); ++i) m->node_position[i] = m->columns->position(3 * i) / 3;
-  m->tol_gap = options.tol * mesh_size(disc.mesh());
+  m->size = mesh_size(disc.mesh());
+  m->tol_gap = options.tol * m->size;
   m->forced.assign(disc.mesh().num_vertices(), 0);
   m->u_prev.assign(disc.num_nodes(), Vec3{0, 0, 0});
   m->friction = settings.friction > 0;
@@ -226,10 +241,10 @@ std::vector<int> ContactEngine::spatial_order(const Discretization &disc) { retu
 
 void ContactEngine::prefetch(const std::vector<std::vector<Vec3>> &placements)
 {
-  std::vector<char> need(m->disc->num_nodes(), 0);
+  if (!m->friction && !m->ref->exact_columns()) return; // columns that cost solves: only the active points', as the iterations ask
+  std::vector<char> need(m->ref->pattern().size(), 0);
   auto mark = [&](const std::vector<ContactPoint> &pts) {
-    for (const ContactPoint &p : pts)
-      for (int i = 0; i < p.terms; ++i) need[p.term_node[i]] = 1;
+    for (int j : contact_detail::loaded_unknowns(pts, m->ref->pattern(), !m->friction)) need[j] = 1;
   };
   for (const std::vector<Vec3> &offsets : placements) {
     if (offsets.size() != m->geo.obstacles.size()) throw std::invalid_argument("contact: one offset per obstacle expected");
@@ -237,9 +252,8 @@ void ContactEngine::prefetch(const std::vector<std::vector<Vec3>> &placements)
   }
   mark(contact_detail::body_points(m->geo));
   std::vector<int> js;
-  for (int i = 0; i < m->disc->num_nodes(); ++i)
-    for (int c = 0; c < 3; ++c)
-      if (need[i] && !m->ref->pattern()[3 * i + c]) js.push_back(3 * i + c);
+  for (std::size_t j = 0; j < need.size(); ++j)
+    if (need[j]) js.push_back(static_cast<int>(j));
   m->columns->require(js);
 }
 
@@ -250,12 +264,49 @@ void ContactEngine::State::free_response(const SystemSelection &values)
                     std::equal(values.pressure.begin(), values.pressure.end(), free_values.pressure.begin(), [](double a, double b) { return a == b || (std::isnan(a) && std::isnan(b)); });
   if (same) return;
   ref->free_response(values, xf);
+  free_values = values;
+  has_free = true;
+  set_u_free();
+}
+
+void ContactEngine::State::set_u_free()
+{
   const std::vector<char> &pattern = ref->pattern();
   u_free.resize(disc->num_nodes());
   for (int i = 0; i < disc->num_nodes(); ++i)
-    for (int c = 0; c < 3; ++c) u_free[i][c] = pattern[3 * i + c] ? values.known[i][c] : xf[3 * i + c];
-  free_values = values;
-  has_free = true;
+    for (int c = 0; c < 3; ++c) u_free[i][c] = pattern[3 * i + c] ? free_values.known[i][c] : xf[3 * i + c];
+}
+
+/// Approximate columns W̃ (ReferenceFactorization::exact_columns() false): the frame was solved
+/// with x = x_f' − W̃ L λ. The true unknowns of its tractions, x_true = A₀⁻¹ b(values + L λ) (one
+/// accurate solve), differ by δ; x_f' += δ makes the fields exact at this λ, and the frame is
+/// solved again. A fixed point has x = x_true and the contact conditions on it: the exact answer.
+/// Each pass shrinks the error by about W̃'s relative error (the factorization's tolerance). The
+/// corrected x_f' stays for the next frame of the same values (a warm start of its corrections).
+void ContactEngine::State::correct(const SystemSelection &values, const std::vector<Vec3> &offsets_, ContactSolution &out, ContactFrameReport &rep)
+{
+  const PhaseScope phase(Phase::ContactCorrect);
+  for (;;) {
+    SystemSelection loaded = values;
+    std::vector<int> js;
+    std::vector<double> v, x;
+    D->loads(lambda, js, v);
+    for (std::size_t q = 0; q < js.size(); ++q) loaded.known[js[q] / 3][js[q] % 3] += v[q];
+    ref->free_response(loaded, x);
+    double dn = 0, xn = 0;
+    for (std::size_t p = 0; p < x.size(); ++p) {
+      const double d = x[p] - out.x[p];
+      dn += d * d, xn += x[p] * x[p], xf[p] += d;
+    }
+    ++rep.corrections;
+    rep.correction = std::sqrt(dn / std::max(xn, 1e-300));
+    if (rep.correction <= opt.correction_tol) return;
+    if (rep.corrections >= opt.max_it)
+      throw std::runtime_error("contact: the corrections of the compressed reference did not settle in " + std::to_string(opt.max_it) + " solves (-contact_max_it; last change " +
+                               std::to_string(rep.correction) + ")");
+    set_u_free();
+    rounds(offsets_, out, rep);
+  }
 }
 
 void ContactEngine::State::detect(const std::vector<Vec3> &offsets_)
@@ -268,7 +319,7 @@ void ContactEngine::State::detect(const std::vector<Vec3> &offsets_)
 void ContactEngine::State::solve_points(ContactFrameReport &rep)
 {
   const PhaseScope phase(Phase::ContactSolve);
-  D = std::make_unique<Compliance>(points, ref->pattern(), *columns);
+  D = std::make_unique<Compliance>(points, ref->pattern(), *columns, !friction);
   wf = D->free_w(u_free, friction ? u_prev : std::vector<Vec3>{});
   const int n = D->size();
   // The zone the iterations watch: what touched before, what starts penetrated, and what went
@@ -291,24 +342,71 @@ void ContactEngine::State::solve_points(ContactFrameReport &rep)
   }
   lambda.assign(n, Vec3{0, 0, 0});
   if (opt.warm_start && !warm_lambda.empty())
-    for (int c = 0; c < n; ++c) lambda[c] = warm_lambda[D->point(c).node];
+    for (int c = 0; c < n; ++c) lambda[c] = predicted_traction(c);
   auto monitor = [&](int it, long long active, long long changed, double res) {
     if (opt.monitor) opt.monitor(ContactIteration{it, active, changed, res});
   };
-  rep.iterations += friction_solver.solve(*D, wf, zone, opt.tol, opt.max_it, lambda, point_status, monitor).iterations;
+  const auto r = friction_solver.solve(*D, wf, zone, opt.tol, opt.max_it, lambda, point_status, monitor);
+  rep.iterations += r.iterations, rep.factorizations += r.factorizations, rep.products += r.products;
 }
 
-/// Points outside the zone whose gap in the fields went through: they join it.
-bool ContactEngine::State::zone_violations(const ContactSolution &out)
+/// The frame's solve in rounds: the points solved, the fields and every point's gap, then again
+/// while a vertex beyond reach penetrated or a point outside the zone went through (8 at most).
+void ContactEngine::State::rounds(const std::vector<Vec3> &offsets_, ContactSolution &out, ContactFrameReport &rep)
 {
-  bool found = false;
-  for (int c = 0; c < D->size(); ++c) {
-    if (zone[c]) continue;
+  for (int round = 1;; ++round) {
+    ++rep.rounds;
+    Timer phase;
+    solve_points(rep);
+    remember();
+    rep.solve_seconds += phase.seconds();
+    phase.restart();
+    fields(out);
+    point_gaps(out, single_fields());
+    rep.fields_seconds += phase.seconds();
+    phase.restart();
+    const bool through = round < 8 && penetrations(offsets_, out); // vertices beyond reach
+    const bool joined = round < 8 && zone_violations();            // points outside the zone
+    if (through) detect(offsets_);
+    rep.detect_seconds += phase.seconds();
+    if (!through && !joined) break;
+  }
+}
+
+/// Every point's gap after the solve, from the fields; where the fields are in single precision
+/// (their u carries relative errors of about 1e-7), the gaps of the points near contact (within
+/// 1e-4 of the mesh's size) again from the compliance, g = g_f + D_n λ, in double: their sign
+/// decides the zone, and the contact's gaps are reported to round-off.
+void ContactEngine::State::point_gaps(const ContactSolution &out, bool single)
+{
+  const PhaseScope phase(Phase::ContactFields);
+  const int n = D->size();
+  gap.resize(n);
+  std::vector<int> near;
+  for (int c = 0; c < n; ++c) {
     const ContactPoint &p = D->point(c);
     Vec3 d{};
     for (int i = 0; i < p.terms; ++i) d = d + p.mw[i] * out.u[p.term_node[i]];
-    if (p.g0 + dot(p.frame[0], d) < -tol_gap) zone_nodes[p.node] = 1, found = true;
+    gap[c] = p.g0 + dot(p.frame[0], d);
+    if (single && std::abs(gap[c]) <= 1e-4 * size) near.push_back(c), gap[c] = wf[c][0];
   }
+  if (near.empty()) return;
+  std::vector<int> cols;
+  std::vector<Vec3> loaded;
+  for (int c = 0; c < n; ++c)
+    if (lambda[c][0] != 0 || lambda[c][1] != 0 || lambda[c][2] != 0) cols.push_back(c), loaded.push_back(lambda[c]);
+  std::vector<double> g(near.size());
+  for (std::size_t r = 0; r < near.size(); ++r) g[r] = wf[near[r]][0];
+  D->apply_normal(near, cols, loaded.data(), g.data());
+  for (std::size_t r = 0; r < near.size(); ++r) gap[near[r]] = g[r];
+}
+
+/// Points outside the zone whose gap went through: they join it.
+bool ContactEngine::State::zone_violations()
+{
+  bool found = false;
+  for (int c = 0; c < D->size(); ++c)
+    if (!zone[c] && gap[c] < -tol_gap) zone_nodes[D->point(c).node] = 1, found = true;
   return found;
 }
 
@@ -321,7 +419,7 @@ void ContactEngine::State::fields(ContactSolution &out) const
   const std::vector<int> &order = columns->row_order();
   std::vector<double> x(xf.size());
   for (std::size_t p = 0; p < x.size(); ++p) x[p] = xf[order.empty() ? p : order[p]];
-  if (opt.single_fields) {
+  if (single_fields()) { // (point_gaps makes the same choice)
     std::vector<const float *> col;
     for (int j : js) col.push_back(columns->column_single(j));
     subtract_columns(col, v, x);
@@ -375,9 +473,7 @@ void ContactEngine::State::outputs(ContactSolution &out) const
   out.body_force.assign(geo.bodies.count, Vec3{0, 0, 0});
   for (int c = 0; c < D->size(); ++c) {
     const ContactPoint &p = D->point(c);
-    Vec3 d{};
-    for (int i = 0; i < p.terms; ++i) d = d + p.mw[i] * out.u[p.term_node[i]];
-    if (p.facing) out.gap[p.vertex] = p.g0 + dot(p.frame[0], d);
+    if (p.facing) out.gap[p.vertex] = gap[c];
     if (!point_status[c]) continue;
     const Vec3 force = p.area * (lambda[c][0] * p.frame[0] + lambda[c][1] * p.frame[1] + lambda[c][2] * p.frame[2]);
     if (p.facing) out.pressure[p.vertex] = lambda[c][0], out.status[p.vertex] = point_status[c];
@@ -395,8 +491,27 @@ void ContactEngine::State::outputs(ContactSolution &out) const
   }
 }
 
+/// The warm start of point c: the last solve's traction where the point's obstacle has not
+/// moved; where it has, the last solve's tractions carried along with it (interpolated on the
+/// surface at the vertex moved back by the obstacle's step), since the contact patch moves
+/// with the obstacle.
+Vec3 ContactEngine::State::predicted_traction(int c)
+{
+  const ContactPoint &p = D->point(c);
+  if (p.obstacle < 0 || warm_offsets.size() != offsets.size()) return warm_lambda[p.node];
+  const Vec3 step = offsets[p.obstacle] - warm_offsets[p.obstacle];
+  if (norm(step) == 0) return warm_lambda[p.node];
+  if (surface.empty()) surface = TriangleBvh(disc->mesh().vertices, disc->mesh().triangles);
+  const TriangleHit hit = surface.closest(disc->mesh().vertices[p.vertex] - step, 4 * norm(step));
+  if (hit.triangle < 0) return Vec3{0, 0, 0};
+  Vec3 l{0, 0, 0};
+  for (int k = 0; k < 3; ++k) l = l + hit.bary[k] * warm_lambda[disc->element_node(hit.triangle, k)];
+  return l;
+}
+
 void ContactEngine::State::remember()
 {
+  warm_offsets = offsets;
   warm_nodes.assign(disc->num_nodes(), 0);
   warm_lambda.assign(disc->num_nodes(), Vec3{0, 0, 0});
   for (int c = 0; c < D->size(); ++c)
@@ -412,23 +527,15 @@ const ContactFrameReport &ContactEngine::solve(const SystemSelection &values, co
   s.free_response(values);
   s.offsets = offsets;
   s.zone_nodes.assign(s.disc->num_nodes(), 0);
-  Timer phase;
+  const Timer detect;
   s.detect(offsets);
-  rep.detect_seconds += phase.seconds();
-  for (rep.rounds = 1;; ++rep.rounds) {
-    phase.restart();
-    s.solve_points(rep);
-    s.remember();
-    rep.solve_seconds += phase.seconds();
-    phase.restart();
-    s.fields(out);
-    rep.fields_seconds += phase.seconds();
-    phase.restart();
-    const bool through = rep.rounds < 8 && s.penetrations(offsets, out); // vertices beyond reach
-    const bool joined = rep.rounds < 8 && s.zone_violations(out);           // points outside the zone
-    if (through) s.detect(offsets);
-    rep.detect_seconds += phase.seconds();
-    if (!through && !joined) break;
+  rep.detect_seconds += detect.seconds();
+  rep.rounds = 0;
+  s.rounds(offsets, out, rep);
+  if (!s.ref->exact_columns()) {
+    const Timer correct;
+    s.correct(values, offsets, out, rep);
+    rep.correct_seconds += correct.seconds();
   }
   s.outputs(out);
   if (s.friction) s.u_prev = out.u; // slip is measured from the previous frame

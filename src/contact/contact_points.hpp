@@ -81,8 +81,14 @@ std::vector<int> spatial_row_order(const Discretization &disc);
 /// where u is unknown and the loaded columns j where t is known.
 class Compliance {
 public:
-  /// Requires the columns the points load from `columns`.
-  Compliance(const std::vector<ContactPoint> &points, const std::vector<char> &pattern, ReferenceColumns &columns);
+  /// Requires the columns the points load from `columns` (which must outlive the compliance).
+  /// With `normal_only` (frictionless contact: tractions along the normals alone) only those a
+  /// normal traction loads, and only as require() asks for them: a point's column is needed only
+  /// once it is loaded (active), the others' gaps read the loaded columns' rows. block() must
+  /// not be used then; normal() and apply_normal() are exact for required (loaded) points.
+  Compliance(const std::vector<ContactPoint> &points, const std::vector<char> &pattern, ReferenceColumns &columns, bool normal_only = false);
+  /// Makes sure the columns the points `cs` load are here (normal_only: in one blocked call).
+  void require(const std::vector<int> &cs) const;
 
   int size() const { return static_cast<int>(m_points->size()); }
   const ContactPoint &point(int c) const { return (*m_points)[c]; }
@@ -112,11 +118,21 @@ private:
     std::array<std::array<const double *, 3>, 4> col; ///< W's columns of the term's node (null: not loaded)
     std::array<int, 4> row;                           ///< where the term's node's rows sit in a column
   };
+  /// Point c's column pointers from the cache (they stay valid for the cache's life).
+  void attach(int c) const;
   const std::vector<ContactPoint> *m_points;
-  std::vector<Terms> m_terms;
+  ReferenceColumns *m_columns;
+  bool m_normal_only;
+  mutable std::vector<Terms> m_terms;  ///< column pointers attached as require() asks (a cache)
+  mutable std::vector<char> m_attached;
   std::vector<std::array<char, 3>> m_held;
   const std::vector<char> *m_pattern;
 };
+
+/// The unknowns whose columns of W the points load (traction-known components of their terms'
+/// nodes); with `normal_only`, only those a normal traction loads (a plane's points along z: one
+/// column per node instead of three).
+std::vector<int> loaded_unknowns(const std::vector<ContactPoint> &points, const std::vector<char> &pattern, bool normal_only);
 
 /// Frictionless contact: primal–dual active set on the normal compliance, the inverse of the
 /// active block kept by a CapacitanceInverse over dof nodes that lives from frame to frame.
@@ -151,8 +167,11 @@ private:
 class FrictionSolver {
 public:
   struct Result {
-    int iterations = 0;
+    int iterations = 0;     ///< Newton steps
+    int factorizations = 0; ///< of them: the Newton matrix factored
+    long long products = 0; ///< products with the Newton matrix (GMRES)
   };
+  struct Preconditioner; ///< the Newton matrix of an earlier step, factored
   /// λ (local frames) for the free relative displacements wf; λ holds the initial guess.
   /// status per point: 0 open, 1 stick, 2 slip. Newton runs on the points of `zone` (per
   /// point): the others keep λ = 0; the caller checks their gaps in the fields, as for the
@@ -169,6 +188,7 @@ private:
   std::vector<std::int8_t> m_state;
   std::vector<Vec3> m_direction;     ///< slip directions (local tangential) of the last solve
   bool m_factored = false;
+  std::shared_ptr<Preconditioner> m_pre; ///< kept from step to step and frame to frame
 };
 
 } // namespace hssbem::contact_detail

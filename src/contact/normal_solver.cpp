@@ -90,9 +90,10 @@ NormalSolver::Result NormalSolver::solve(const Compliance &D, const std::vector<
   for (int c = 0; c < n; ++c) active[c] = !warm.empty() && warm[D.point(c).node];
   Result r;
   for (r.iterations = 1; r.iterations <= max_it; ++r.iterations) {
-    std::vector<int> nodes; // in the points' order: their rows increase
+    std::vector<int> nodes, points; // in the points' order: their rows increase
     for (int c = 0; c < n; ++c)
-      if (active[c]) nodes.push_back(D.point(c).node);
+      if (active[c]) nodes.push_back(D.point(c).node), points.push_back(c);
+    D.require(points); // the active points' columns: the others' gaps read these columns' rows
     sync(D, nodes, &r.rebuilt);
     resolve(D, wf, lambda);
     std::vector<int> inactive, loaded;

@@ -16,7 +16,7 @@ PetscLogEvent BEM_Mesh, BEM_Assembly, BEM_Partition, BEM_Solve, BEM_Post, BEM_St
 PetscLogEvent HSS_Tree, HSS_Compress, HSS_NearField, HSS_Truncate, HSS_Factor, HSS_Solve, HSS_MatMult, HSS_FactorTop, HSS_SolveTop;
 PetscLogEvent H2_Tree, H2_Compress, H2_NearField, H2_MatMult, H2F_Factor, H2F_Sketch, H2F_Eliminate, H2F_Merge, H2F_Top, H2F_Solve;
 PetscLogEvent SCN_Setup, SCN_Update, SCN_Apply, SCN_Refactor, SCN_Krylov, SCN_Frame;
-PetscLogEvent CNT_Setup, CNT_Detect, CNT_Solve, CNT_Fields;
+PetscLogEvent CNT_Setup, CNT_Detect, CNT_Solve, CNT_Fields, CNT_Correct;
 
 /* The engine's phases as log events (engine phases open and close on the calling thread). */
 static void PhaseHook_Private(hssbem::Phase phase, bool begin)
@@ -24,7 +24,7 @@ static void PhaseHook_Private(hssbem::Phase phase, bool begin)
   static const PetscLogEvent *event[] = {&HSS_Tree, &HSS_Compress, &HSS_NearField, &HSS_Truncate, &HSS_Factor, &HSS_Solve, &HSS_MatMult, &HSS_FactorTop, &HSS_SolveTop,
                                         &H2_Tree,    &H2_Compress, &H2_NearField, &H2_MatMult,
                                         &H2F_Factor, &H2F_Sketch, &H2F_Eliminate, &H2F_Merge, &H2F_Top, &H2F_Solve,
-                                        &SCN_Setup,  &SCN_Update, &SCN_Apply,     &SCN_Refactor, &SCN_Krylov, &CNT_Detect,   &CNT_Solve, &CNT_Fields};
+                                        &SCN_Setup,  &SCN_Update, &SCN_Apply,     &SCN_Refactor, &SCN_Krylov, &CNT_Detect,   &CNT_Solve, &CNT_Fields, &CNT_Correct};
   static_assert(sizeof(event) / sizeof(event[0]) == static_cast<int>(hssbem::Phase::Count), "one log event per phase");
   const PetscLogEvent e = *event[static_cast<int>(phase)];
   if (begin) (void)PetscLogEventBegin(e, 0, 0, 0, 0);
@@ -184,6 +184,7 @@ PetscErrorCode HssbemInitializePackage(void)
   PetscCall(PetscLogEventRegister(" ContactDetect", HSSBEM_CLASSID, &CNT_Detect));
   PetscCall(PetscLogEventRegister(" ContactSolve", HSSBEM_CLASSID, &CNT_Solve));
   PetscCall(PetscLogEventRegister(" ContactFields", HSSBEM_CLASSID, &CNT_Fields));
+  PetscCall(PetscLogEventRegister(" ContactCorrect", HSSBEM_CLASSID, &CNT_Correct));
   hssbem::set_phase_hook(PhaseHook_Private);
   PetscCall(PCRegister(PCHSS, PCCreate_HSS));
   PetscCall(PCRegister(PCH2, PCCreate_H2));

@@ -87,8 +87,18 @@ class ContactErrorTests(ContactCase):
 
     def test_compressed_operator_refused(self):
         self.cube_contact({"obstacles": [TABLE]})
+        self.assertFailsCleanly(self.run_problem("problem.json", "-bem_mat_type", "hss"),
+                                r"contact runs on the dense or the H2 reference factorization")
+
+    def test_several_bodies_on_h2_refused(self):
+        from test_cli import CUBE_TRIANGLES, CUBE_VERTICES, off_text
+        upper = [(x, y, z + 1.001) for x, y, z in CUBE_VERTICES]
+        self.write("two.off", off_text(CUBE_VERTICES + upper, CUBE_TRIANGLES + [tuple(i + 8 for i in t) for t in CUBE_TRIANGLES]))
+        self.problem(mesh="two.off", boundary=[{"where": {"box": [[-1, -1, -1e-9], [2, 2, 1e-9]]}, "displacement": [0, 0, 0]},
+                                               {"where": {"box": [[-1, -1, 2.001 - 1e-9], [2, 2, 3]]}, "displacement": [0, 0, -0.01]}],
+                     contact={"bodies": True})
         self.assertFailsCleanly(self.run_problem("problem.json", "-bem_mat_type", "h2"),
-                                r"contact runs on the dense reference factorization")
+                                r"contact on the H2 reference factorization needs one body \(the mesh has 2\)")
 
     def test_frame_that_changes_the_pattern(self):
         self.cube_contact({"obstacles": [TABLE]},
@@ -137,6 +147,21 @@ class ContactRunTests(ContactCase):
             xdmf = f.read()
         self.assertIn("/contact/pressure", xdmf)
         self.assertIn("/contact/status", xdmf)
+
+    def test_h2_reference(self):
+        # The cube on the table on the H² path: the same uniform pressure E delta as the dense
+        # reference, after corrections by accurate H² solves.
+        import numpy as np
+        self.cube_contact({"obstacles": [TABLE]})
+        r = self.run_problem("problem.json", "-bem_mat_type", "h2", timeout=TIMEOUT_RUN)
+        self.assertSucceeds(r, self.out)
+        self.assertRegex(r.stdout, r"on the H2 reference factorization")
+        self.assertRegex(r.stdout, r"contact: [1-9]\d* corrections by accurate H2 solves")
+        data, attrs, contact = self.read("out.h5")
+        bottom = np.abs(data["mesh/vertices"][:, 2]) < 1e-12
+        self.assertLess(np.max(np.abs(data["contact/pressure"][bottom] - 10.0)), 2e-3)  # measured 7.1e-4
+        self.assertLess(np.max(np.abs(data["contact/forces/table"] - [0, 0, 10.0])), 2e-4)  # measured 3.9e-5
+        self.assertEqual(attrs["mat_type"], "h2")
 
     def test_stress_on_the_surface_and_inside(self):
         # The cube pressed onto the table is in uniaxial stress: sigma_zz = -E delta = -10 and

@@ -1,7 +1,6 @@
 // Cluster tree: permutation, structure invariants, geometry, degenerate sets, top-level parts.
 #include "hssbem/core/cluster_tree.hpp"
 #include "hssbem/core/lapack.hpp"
-#include "hssbem/core/timer.hpp"
 #include "test_shapes.hpp"
 
 #include <gtest/gtest.h>
@@ -639,15 +638,13 @@ TEST(ClusterTree, MovedTreeKeepsItsContents)
   EXPECT_EQ(b.num_clusters(), nc);
 }
 
-TEST(ClusterTree, LargeTreeIsFastAndValid)
+// A million points: a quadratic step would not finish within the test's timeout (no wall-clock
+// bound here: the load of the machine sets that, not the code).
+TEST(ClusterTree, LargeTreeIsValid)
 {
   const int n = 1000000;
   const auto x = random_on_sphere(n, 11);
-  const Timer timer;
   const ClusterTree t(x, ClusterTreeOptions{64});
-  const double seconds = timer.seconds();
-  RecordProperty("build_seconds", std::to_string(seconds));
-  EXPECT_LT(seconds, 20.0); // generous: guards against a quadratic step, not a benchmark
   expect_depth(t, n, 64);
   expect_median_splits(t);
   std::vector<char> seen(n, 0);

@@ -196,6 +196,79 @@ TEST(Contact, PushedSidewaysItSlidesAtTheCoulombLimit)
   EXPECT_GE(slipping, static_cast<long long>(0.9 * bottom.size()));
 }
 
+TEST(Contact, FrictionFramesKeepCoulombsLawAndAgreeWithoutWarmStarts)
+{
+  // The top held whole, pressed down by delta and pushed sideways a little more every frame:
+  // the bottom sticks, then slides. Frames with warm starts and the Newton matrix's factorization
+  // kept from frame to frame, against an engine without warm starts (its factorization kept
+  // too); per bottom node, a sliding point at the Coulomb limit, a sticking one inside it.
+  ContactSettings rough;
+  rough.friction = 0.3;
+  ContactOptions cold_opt;
+  cold_opt.warm_start = false;
+  Case warm(cube_spec(false, {0, 0, -delta}), {Obstacle::plane("table", {0, 0, 0}, {0, 0, 1})}, rough);
+  Case cold(cube_spec(false, {0, 0, -delta}), {Obstacle::plane("table", {0, 0, 0}, {0, 0, 1})}, rough, cold_opt);
+  double worst = 0, law = 0;
+  long long stick_first = 0, slip_last = 0, warm_steps = 0, cold_steps = 0;
+  const int frames = 6;
+  for (int f = 0; f < frames; ++f) {
+    const ProblemSpec spec = cube_spec(false, {0.3 * delta * f, 0, -delta});
+    const SystemSelection values = selection_of(apply_rules(spec.rules, *warm.s.disc, spec.file));
+    warm.rep = warm.engine->solve(values, {{0, 0, 0}}, warm.sol);
+    cold.rep = cold.engine->solve(values, {{0, 0, 0}}, cold.sol);
+    warm_steps += warm.rep.iterations, cold_steps += cold.rep.iterations;
+    worst = std::max(worst, max_norm_diff(warm.sol.u, cold.sol.u) / delta);
+    for (int v : bottom_vertices(warm.s.disc->mesh())) {
+      const int i = warm.s.disc->first_node(v);
+      for (int k = i; k < i + warm.s.disc->node_count(v); ++k) {
+        if (warm.s.disc->node(k).normal[2] > -0.9) continue; // the bottom face's node
+        const Vec3 &t = warm.sol.t[k];
+        const double tt = std::hypot(t[0], t[1]), limit = 0.3 * t[2];
+        if (warm.sol.status[v] == 2) law = std::max(law, std::abs(tt - limit) / (E * delta));
+        if (warm.sol.status[v] == 1) law = std::max(law, std::max(0.0, tt - limit) / (E * delta));
+      }
+    }
+    if (f == 1) stick_first = warm.rep.stick;
+    if (f == frames - 1) slip_last = warm.rep.slip;
+  }
+  std::printf("friction frames: warm against no warm starts %.2e; Coulomb's law %.2e of E delta; frame 1: %lld stick, last frame: %lld slip; Newton steps warm %lld, "
+              "cold %lld\n",
+              worst, law, stick_first, slip_last, warm_steps, cold_steps);
+  EXPECT_LE(worst, 5e-11); // measured 1.5e-11 (the Newton tolerance, 1e-10 of the traction scale)
+  EXPECT_LE(law, 6e-11);   // measured 1.9e-11
+  EXPECT_GT(stick_first, 0);
+  EXPECT_GT(slip_last, 0);
+}
+
+TEST(Contact, ASlidingToolWithFrictionAgreesWithoutWarmStarts)
+{
+  // The bottom clamped, a rough tool (sphere) pressed into the top slides along x: the warm
+  // start carries the tractions along with the tool (interpolated on the surface) and the
+  // Newton matrix's factorization is kept; an engine without warm starts must agree.
+  ContactSettings rough;
+  rough.friction = 0.3;
+  ContactOptions cold_opt;
+  cold_opt.warm_start = false;
+  ProblemSpec spec = spec_for("cube_l0.msh", E, nu);
+  spec.rules = {rule(Kind::Displacement, region("z0"), {{0, 0, 0}})};
+  const Obstacle tool = Obstacle::sphere("tool", {0.25, 0.5, 1.5 - 0.08}, 0.5);
+  Case warm(spec, {tool}, rough), cold(spec, {tool}, rough, cold_opt);
+  double worst = 0, scale = 0;
+  long long least = 1 << 30, warm_steps = 0, cold_steps = 0;
+  for (int f = 0; f < 6; ++f) {
+    warm.solve({{0.1 * f, 0, 0}});
+    cold.solve({{0.1 * f, 0, 0}});
+    warm_steps += warm.rep.iterations, cold_steps += cold.rep.iterations;
+    least = std::min(least, warm.rep.active_vertices);
+    worst = std::max(worst, max_norm_diff(warm.sol.u, cold.sol.u));
+    for (const Vec3 &u : cold.sol.u) scale = std::max(scale, norm(u));
+  }
+  std::printf("sliding rough tool: warm against no warm starts %.2e (relative); at least %lld vertices touching; Newton steps warm %lld, cold %lld\n", worst / scale, least,
+              warm_steps, cold_steps);
+  EXPECT_LE(worst, 3e-11 * scale); // measured 1.1e-11 (the Newton tolerance)
+  EXPECT_GT(least, 0);             // measured: 1 to a few vertices of the coarse cube's top
+}
+
 TEST(Contact, MovingObstacleFramesEqualColdStaticSolves)
 {
   // The table rises through the frames: warm frames (active set and capacitance kept) against a

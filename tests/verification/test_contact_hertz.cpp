@@ -182,7 +182,7 @@ TEST(ContactHertz, SphereOnAPlane)
   double ds = 0, us = 0;
   for (std::size_t i = 0; i < u_plane.size(); ++i) ds = std::max(ds, norm(st.u[i] - u_plane[i])), us = std::max(us, norm(u_plane[i]));
   std::printf("Hertz sphere on a plane: the static solve with the contact area prescribed differs by %.1e (relative)\n", ds / us);
-  EXPECT_LE(ds, 1e-8 * us);
+  EXPECT_LE(ds, 2e-8 * us); // measured 6.8e-9: the default single-precision fields (7e-15 in double); the target is 1e-6
 }
 
 TEST(ContactHertz, TwoSpheres)

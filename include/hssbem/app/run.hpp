@@ -45,12 +45,13 @@ void run_problem(MPI_Comm comm, const std::string &problem_file, const ProblemOv
 void run_scene(MPI_Comm comm, const ProblemSetup &s, const BemOperator &op, std::optional<OperatorType> asked, const SceneRunOptions &o, std::map<std::string, double> seconds);
 
 /// Solve a contact problem (s.spec.contact.present), once or frame by frame, on rank 0 with the
-/// contact engine (contact/contact_engine.hpp) over the dense reference factorization of the
-/// base rules: every body checked to be held, every frame's conditions checked to keep the base
+/// contact engine (contact/contact_engine.hpp) over the reference factorization of the base
+/// rules — dense, or H² (scene/h2_reference.hpp) with -bem_mat_type h2 or where dense does not
+/// fit (auto; one body only): every body checked to be held, every frame's conditions checked to keep the base
 /// pattern, the columns every frame needs computed in one block, then the frames, written as a
 /// result file with /contact (single solve) or /frames/<i>/contact, the surface stress (and, for
 /// a single solve, the interior points and grid: `interior`) as in any other run. Throws for -bem_mat_type
-/// hss or h2 and for a problem that does not fit the node's memory.
+/// hss, for several bodies on the H² path and for a dense run that does not fit the node's memory.
 void run_contact(MPI_Comm comm, const ProblemSetup &s, const BemOperator &op, std::optional<OperatorType> asked, const ContactRunOptions &o,
                  const InteriorRunOptions &interior, std::map<std::string, double> seconds);
 

@@ -48,32 +48,33 @@ struct SomiglianaConstants {
 /// The contribution of one source point at offset d = y − x to the displacement (u0, u1, u2)
 /// and the stress (s0..s5, Voigt) at x: the force f (weight × t(y)) through U and D, minus the
 /// double-layer density m (weight × u(y)) on the unit normal n through P and S. Outputs are set,
-/// not added, one scalar each, so that loops over source points vectorise.
-inline void somigliana_point(const SomiglianaConstants &k, double d0, double d1, double d2, double f0, double f1, double f2, double m0, double m1,
-                             double m2, double n0, double n1, double n2, double &u0, double &u1, double &u2, double &s0, double &s1, double &s2, double &s3,
-                             double &s4, double &s5)
+/// not added, one scalar each, so that loops over source points vectorise. T = double, or float
+/// for the fast evaluation's sums (twice the SIMD lanes; see interior_evaluation.hpp).
+template <class T>
+inline void somigliana_point(const SomiglianaConstants &k, T d0, T d1, T d2, T f0, T f1, T f2, T m0, T m1, T m2, T n0, T n1, T n2, T &u0, T &u1, T &u2, T &s0,
+                             T &s1, T &s2, T &s3, T &s4, T &s5)
 {
-  const double inv_r = 1.0 / std::sqrt(d0 * d0 + d1 * d1 + d2 * d2);
-  const double g0 = d0 * inv_r, g1 = d1 * inv_r, g2 = d2 * inv_r;
-  const double gf = g0 * f0 + g1 * f1 + g2 * f2, gm = g0 * m0 + g1 * m1 + g2 * m2;
-  const double gn = g0 * n0 + g1 * n1 + g2 * n2, nm = n0 * m0 + n1 * m1 + n2 * m2;
-  const double inv_r2 = inv_r * inv_r, om = k.om, nu = k.nu;
+  const T inv_r = T(1) / std::sqrt(d0 * d0 + d1 * d1 + d2 * d2);
+  const T g0 = d0 * inv_r, g1 = d1 * inv_r, g2 = d2 * inv_r;
+  const T gf = g0 * f0 + g1 * f1 + g2 * f2, gm = g0 * m0 + g1 * m1 + g2 * m2;
+  const T gn = g0 * n0 + g1 * n1 + g2 * n2, nm = n0 * m0 + n1 * m1 + n2 * m2;
+  const T inv_r2 = inv_r * inv_r, om = T(k.om), nu = T(k.nu), cu_diag = T(k.cu_diag);
   // Displacement: U f − P m.
-  const double au = k.cu * inv_r, ap = k.cp * inv_r2;
-  const double pu = ap * gn * om, pg = ap * (3.0 * gn * gm - om * nm), pn = ap * om * gm;
-  u0 = au * (k.cu_diag * f0 + g0 * gf) - (pu * m0 + pg * g0 + pn * n0);
-  u1 = au * (k.cu_diag * f1 + g1 * gf) - (pu * m1 + pg * g1 + pn * n1);
-  u2 = au * (k.cu_diag * f2 + g2 * gf) - (pu * m2 + pg * g2 + pn * n2);
+  const T au = T(k.cu) * inv_r, ap = T(k.cp) * inv_r2;
+  const T pu = ap * gn * om, pg = ap * (T(3) * gn * gm - om * nm), pn = ap * om * gm;
+  u0 = au * (cu_diag * f0 + g0 * gf) - (pu * m0 + pg * g0 + pn * n0);
+  u1 = au * (cu_diag * f1 + g1 * gf) - (pu * m1 + pg * g1 + pn * n1);
+  u2 = au * (cu_diag * f2 + g2 * gf) - (pu * m2 + pg * g2 + pn * n2);
   // Stress: D f − S m, the kernels above contracted with f and m and grouped by tensor product:
   // dgg g⊗g + dd I + (w⊗g + g⊗w) + dnm (n⊗m + m⊗n), w = dfg f + dmg m + dng n.
-  const double ad = k.cd * inv_r2, as = k.cs * inv_r2 * inv_r;
-  const double dgg = 3.0 * ad * gf - as * (om * 3.0 * nm - 15.0 * gn * gm);
-  const double dd = -ad * om * gf - as * (3.0 * gn * om * gm - (1.0 - 4.0 * nu) * nm);
-  const double dfg = ad * om, dmg = -as * 3.0 * gn * nu, dng = -as * 3.0 * nu * gm, dnm = -as * om;
-  const double w0 = dfg * f0 + dmg * m0 + dng * n0, w1 = dfg * f1 + dmg * m1 + dng * n1, w2 = dfg * f2 + dmg * m2 + dng * n2;
-  s0 = dgg * g0 * g0 + dd + 2.0 * (w0 * g0 + dnm * n0 * m0);
-  s1 = dgg * g1 * g1 + dd + 2.0 * (w1 * g1 + dnm * n1 * m1);
-  s2 = dgg * g2 * g2 + dd + 2.0 * (w2 * g2 + dnm * n2 * m2);
+  const T ad = T(k.cd) * inv_r2, as = T(k.cs) * inv_r2 * inv_r;
+  const T dgg = T(3) * ad * gf - as * (om * T(3) * nm - T(15) * gn * gm);
+  const T dd = -ad * om * gf - as * (T(3) * gn * om * gm - (T(1) - T(4) * nu) * nm);
+  const T dfg = ad * om, dmg = -as * T(3) * gn * nu, dng = -as * T(3) * nu * gm, dnm = -as * om;
+  const T w0 = dfg * f0 + dmg * m0 + dng * n0, w1 = dfg * f1 + dmg * m1 + dng * n1, w2 = dfg * f2 + dmg * m2 + dng * n2;
+  s0 = dgg * g0 * g0 + dd + T(2) * (w0 * g0 + dnm * n0 * m0);
+  s1 = dgg * g1 * g1 + dd + T(2) * (w1 * g1 + dnm * n1 * m1);
+  s2 = dgg * g2 * g2 + dd + T(2) * (w2 * g2 + dnm * n2 * m2);
   s3 = dgg * g1 * g2 + w1 * g2 + w2 * g1 + dnm * (n2 * m1 + n1 * m2);
   s4 = dgg * g0 * g2 + w0 * g2 + w2 * g0 + dnm * (n2 * m0 + n0 * m2);
   s5 = dgg * g0 * g1 + w0 * g1 + w1 * g0 + dnm * (n1 * m0 + n0 * m1);
@@ -104,21 +105,21 @@ inline void somigliana_displacement_point(const SomiglianaConstants &k, double d
 }
 
 /// The displacement and stress at x of a point force q at offset d = y − x (U and D only): the
-/// far field of the equivalent sources of a fast evaluation. Outputs are set, as above.
-inline void kelvin_force_point(const SomiglianaConstants &k, double d0, double d1, double d2, double q0, double q1, double q2, double &u0, double &u1,
-                               double &u2, double &s0, double &s1, double &s2, double &s3, double &s4, double &s5)
+/// far field of the equivalent sources of a fast evaluation. Outputs are set, as above; T as above.
+template <class T>
+inline void kelvin_force_point(const SomiglianaConstants &k, T d0, T d1, T d2, T q0, T q1, T q2, T &u0, T &u1, T &u2, T &s0, T &s1, T &s2, T &s3, T &s4, T &s5)
 {
-  const double inv_r = 1.0 / std::sqrt(d0 * d0 + d1 * d1 + d2 * d2);
-  const double g0 = d0 * inv_r, g1 = d1 * inv_r, g2 = d2 * inv_r;
-  const double gq = g0 * q0 + g1 * q1 + g2 * q2;
-  const double au = k.cu * inv_r, ad = k.cd * inv_r * inv_r;
-  u0 = au * (k.cu_diag * q0 + g0 * gq);
-  u1 = au * (k.cu_diag * q1 + g1 * gq);
-  u2 = au * (k.cu_diag * q2 + g2 * gq);
-  const double dgg = 3.0 * ad * gq, dd = -ad * k.om * gq, dfg = ad * k.om;
-  s0 = dgg * g0 * g0 + dd + 2.0 * dfg * q0 * g0;
-  s1 = dgg * g1 * g1 + dd + 2.0 * dfg * q1 * g1;
-  s2 = dgg * g2 * g2 + dd + 2.0 * dfg * q2 * g2;
+  const T inv_r = T(1) / std::sqrt(d0 * d0 + d1 * d1 + d2 * d2);
+  const T g0 = d0 * inv_r, g1 = d1 * inv_r, g2 = d2 * inv_r;
+  const T gq = g0 * q0 + g1 * q1 + g2 * q2, cu_diag = T(k.cu_diag), om = T(k.om);
+  const T au = T(k.cu) * inv_r, ad = T(k.cd) * inv_r * inv_r;
+  u0 = au * (cu_diag * q0 + g0 * gq);
+  u1 = au * (cu_diag * q1 + g1 * gq);
+  u2 = au * (cu_diag * q2 + g2 * gq);
+  const T dgg = T(3) * ad * gq, dd = -ad * om * gq, dfg = ad * om;
+  s0 = dgg * g0 * g0 + dd + T(2) * dfg * q0 * g0;
+  s1 = dgg * g1 * g1 + dd + T(2) * dfg * q1 * g1;
+  s2 = dgg * g2 * g2 + dd + T(2) * dfg * q2 * g2;
   s3 = dgg * g1 * g2 + dfg * (q1 * g2 + q2 * g1);
   s4 = dgg * g0 * g2 + dfg * (q0 * g2 + q2 * g0);
   s5 = dgg * g0 * g1 + dfg * (q0 * g1 + q1 * g0);
@@ -132,13 +133,13 @@ inline void kelvin_force_point(const SomiglianaConstants &k, double d0, double d
   for (int c = 0; c < field_outputs; ++c) out[c * stride] += v[c];
 }
 
-/// The displacement at x of a point force q at offset d = y − x (U only), set into u0, u1, u2.
-inline void kelvin_displacement_point(const SomiglianaConstants &k, double d0, double d1, double d2, double q0, double q1, double q2, double &u0, double &u1,
-                                      double &u2)
+/// The displacement at x of a point force q at offset d = y − x (U only), set into u0, u1, u2; T as above.
+template <class T>
+inline void kelvin_displacement_point(const SomiglianaConstants &k, T d0, T d1, T d2, T q0, T q1, T q2, T &u0, T &u1, T &u2)
 {
-  const double inv_r = 1.0 / std::sqrt(d0 * d0 + d1 * d1 + d2 * d2);
-  const double gq = (d0 * q0 + d1 * q1 + d2 * q2) * inv_r * inv_r;
-  const double au = k.cu * inv_r, ad = au * k.cu_diag;
+  const T inv_r = T(1) / std::sqrt(d0 * d0 + d1 * d1 + d2 * d2);
+  const T gq = (d0 * q0 + d1 * q1 + d2 * q2) * inv_r * inv_r;
+  const T au = T(k.cu) * inv_r, ad = au * T(k.cu_diag);
   u0 = ad * q0 + au * d0 * gq;
   u1 = ad * q1 + au * d1 * gq;
   u2 = ad * q2 + au * d2 * gq;

@@ -57,10 +57,17 @@ struct ContactOptions {
   int max_it = 50;             ///< iterations per frame before it is an error
   double reach = 0;            ///< candidates: vertices within this gap (0: 5 % of the mesh's bounding-box diagonal)
   bool warm_start = true;      ///< start from the previous frame's active set (and tractions)
-  /// The fields' product with W's loaded columns in single precision (half the memory traffic):
-  /// the contact's share of the fields then carries relative errors of about 1e-7.
-  bool single_fields = false;
+  /// Frictionless frames: the fields' product with W's loaded columns in single precision (half
+  /// the memory traffic); the contact's share of the fields then carries relative errors of
+  /// about 1e-7 (the contact tractions themselves are solved in double). Frames with friction
+  /// always use double: the next frame's slip is measured from these fields; so do frames on
+  /// approximate columns (H2Reference), whose corrections compare the fields to 1e-8.
+  bool single_fields = true;
   std::function<void(const ContactIteration &)> monitor; ///< called after every iteration (may be empty)
+  /// On a reference whose columns are approximate (ReferenceFactorization::exact_columns()
+  /// false: H2Reference), the frame's answer is corrected with accurate solves until one changes
+  /// the unknowns by at most correction_tol relative to them (max_it corrections at most).
+  double correction_tol = 1e-8;
 };
 
 /// What a frame did.
@@ -71,7 +78,11 @@ struct ContactFrameReport {
   long long candidates = 0;    ///< contact points considered (one per dof node of a candidate vertex)
   int rounds = 1;              ///< solves: more than one when a vertex beyond reach penetrated
   bool rebuilt = false;        ///< the active block's inverse was rebuilt, not updated (frictionless)
-  double seconds = 0, detect_seconds = 0, solve_seconds = 0, fields_seconds = 0;
+  long long factorizations = 0; ///< friction: Newton matrices factored (the others' systems by GMRES on a kept one)
+  long long products = 0;      ///< friction: products with the Newton matrix (GMRES)
+  int corrections = 0;         ///< accurate solves that corrected the answer (approximate columns only)
+  double correction = 0;       ///< the last correction's relative change of the unknowns
+  double seconds = 0, detect_seconds = 0, solve_seconds = 0, fields_seconds = 0, correct_seconds = 0;
 };
 
 /// A frame's solution. Per dof node (u, t) and per vertex (the rest), mesh order.
@@ -107,7 +118,9 @@ public:
   ContactEngine &operator=(const ContactEngine &) = delete;
 
   /// Computes now, in one blocked call, the columns of W every placement of `placements` (each
-  /// one offset per obstacle) will need: a scene's frames are known ahead.
+  /// one offset per obstacle) will need: a scene's frames are known ahead. Frictionless contact
+  /// needs only the columns of the points that become active; on a reference whose columns
+  /// cost solves (exact_columns() false) nothing is computed ahead, the iterations ask for them.
   void prefetch(const std::vector<std::vector<Vec3>> &placements);
   /// Solves a frame: `values` holds the known values (the reference pattern, its values), the
   /// obstacles are at their base positions translated by `offsets` (one per obstacle). Throws

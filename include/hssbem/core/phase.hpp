@@ -35,6 +35,7 @@ enum class Phase {
   ContactDetect,   ///< contact: contact points of a frame (obstacles' gaps, pairs of bodies)
   ContactSolve,    ///< contact: compliance and the active-set (or Newton) iterations
   ContactFields,   ///< contact: the fields from the free response and W's loaded columns
+  ContactCorrect,  ///< contact: accurate solves correcting a frame on approximate columns (H2Reference)
   Count
 };
 

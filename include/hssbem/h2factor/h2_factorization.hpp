@@ -178,6 +178,10 @@ public:
   /// the top's unknowns cross ranks: summed over the ranks, solved (on rank 0, or spread), and
   /// summed back.
   void solve(const double *b, double *x) const;
+  /// X ← A⁻¹ X for nrhs right-hand sides at once (column-major, leading dimension ld ≥ 3
+  /// num_points(), cluster order), on a factorization held by one rank: solve()'s steps as matrix
+  /// products over the block (factor_solve_block.cpp), the factors read once per block.
+  void solve_block(double *X, int nrhs, int ld) const;
   const RankComm &comm() const { return *m_comm; }
   const H2Matrix &matrix() const { return m_K; }
   /// This rank's rows: 3 per point from first_point() (cluster order), num_points() points.

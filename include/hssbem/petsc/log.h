@@ -18,7 +18,7 @@ PETSC_EXTERN PetscLogEvent H2_Tree, H2_Compress, H2_NearField, H2_MatMult, H2F_F
 /* Phases of a scene (frames): set-up, capacitance update, Woodbury/LU solve, refactorization, Krylov; and one whole frame. */
 PETSC_EXTERN PetscLogEvent SCN_Setup, SCN_Update, SCN_Apply, SCN_Refactor, SCN_Krylov, SCN_Frame;
 /* Phases of contact (contact/): the set-up (reference factorization, columns of W), and per frame the detection, the solve, the fields. */
-PETSC_EXTERN PetscLogEvent CNT_Setup, CNT_Detect, CNT_Solve, CNT_Fields;
+PETSC_EXTERN PetscLogEvent CNT_Setup, CNT_Detect, CNT_Solve, CNT_Fields, CNT_Correct;
 
 PETSC_EXTERN PetscErrorCode HssbemInitializePackage(void);
 PETSC_EXTERN PetscErrorCode HssbemFinalizePackage(void);

@@ -45,6 +45,10 @@ public:
   virtual void free_response(const SystemSelection &sel, std::vector<double> &y) const = 0;
   /// Bytes held.
   virtual std::size_t memory_bytes() const = 0;
+  /// False when columns() gives W only to a tolerance (a compressed factorization's solves
+  /// alone: H2Reference) while solve() and free_response() are accurate: an engine then corrects
+  /// its answer with accurate solves (the contact engine's correction, docs/contact.md).
+  virtual bool exact_columns() const { return true; }
 };
 
 struct DenseReferenceOptions {
