@@ -66,11 +66,12 @@ void H2Factorization::factor_top(std::optional<h2f::Frontier> &front, bool singl
   std::vector<double> row_sums;
   std::unique_ptr<h2f::TopSink> sink;
   collectively(comm, [&] {
-    if (f.spread || (single && me == 0)) sink = std::make_unique<h2f::SpreadSink>(h2f::SpreadTop::kBlock, f.spread ? me : 0, f.spread ? P : 1, &local, &row_sums);
+    if (single) sink = std::make_unique<h2f::SpreadSink>(h2f::SpreadTop::kBlock, me, f.spread ? P : 1, &local, &row_sums);
     else if (me == 0) sink = std::make_unique<h2f::GridSink>(grid.emplace());
-    else sink = std::make_unique<h2f::RowSink>(single);
+    else sink = std::make_unique<h2f::RowSink>();
   });
   f.top_n = front->take_top(*sink, &f.top_own, &f.top_pos);
+  if (single && !f.spread) comm.sum(row_sums.data(), f.top_n); // A·1 on every rank's rows, for rank 0's top
   const std::size_t front_peak = front->peak_bytes(), front_left = front->store_bytes();
   front.reset(); // spent: its memory goes before the top's LU
   sink.reset();

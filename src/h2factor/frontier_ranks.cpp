@@ -7,6 +7,7 @@
 #include "hssbem/core/blas_threads.hpp"
 #include "hssbem/core/cluster_exchange.hpp"
 
+#include <initializer_list>
 #include <set>
 #include <stdexcept>
 #include <tuple>
@@ -38,6 +39,23 @@ std::vector<int> read_ints(const std::vector<double> &r, std::size_t &at)
 
 /// What a record of the merges' and the top's exchanges carries.
 enum Record { BoxData = 0, ColumnBasis = 1, FarPart = 2 };
+
+/// A record of `kind` about clusters `ids`, then a matrix.
+void append_record(std::vector<double> &r, Record kind, std::initializer_list<int> ids, const DenseMatrix &M)
+{
+  r.push_back(kind);
+  r.insert(r.end(), ids.begin(), ids.end());
+  append_matrix(r, M);
+}
+
+/// Box c's unknowns D and its Ψ (BoxData).
+void append_box(std::vector<double> &r, int c, const std::vector<int> &D, const DenseMatrix &Psi)
+{
+  r.push_back(BoxData);
+  r.push_back(c);
+  append_ints(r, D);
+  append_matrix(r, Psi);
+}
 
 } // namespace
 
@@ -104,8 +122,7 @@ void Frontier::exchange_sides()
     [&](const std::vector<std::vector<double>> &recv) {
       for (const std::vector<double> &r : recv)
         for (std::size_t at = 0; at < r.size();) {
-          const int X = read_int(r, at);
-          CrossSide &side = m_side[X];
+          CrossSide &side = m_side[read_int(r, at)];
           side.recorded = true;
           side.kept = read_ints(r, at);
           side.C = read_matrix(r, at);
@@ -123,19 +140,10 @@ void Frontier::send_column_data(const std::vector<std::pair<int, int>> &pairs)
       for (const auto &[b, c] : pairs) {
         const int q = m_owner[b];
         std::vector<double> &r = send[q];
-        if (boxes.insert({q, c}).second) {
-          r.push_back(BoxData);
-          r.push_back(c);
-          append_ints(r, m_D[c]);
-          append_matrix(r, m_Psi[c]);
-        }
+        if (boxes.insert({q, c}).second) append_box(r, c, m_D[c], m_Psi[c]);
         if (cross_close(b, c)) continue; // the cross block holds the pair's value
         const int bb = far_pair(b, c).second;
-        if (!bases.insert({q, c, bb}).second) continue;
-        r.push_back(ColumnBasis);
-        r.push_back(c);
-        r.push_back(bb);
-        append_matrix(r, col_basis_to(c, bb));
+        if (bases.insert({q, c, bb}).second) append_record(r, ColumnBasis, {c, bb}, col_basis_to(c, bb));
       }
     },
     [&](const std::vector<std::vector<double>> &recv) {
@@ -169,17 +177,9 @@ void Frontier::send_far_parts(const std::vector<std::pair<int, int>> &pairs)
         const auto [b, c] = pairs[i];
         const int q = m_owner[c];
         std::vector<double> &r = send[q];
-        if (boxes.insert({q, b}).second) {
-          r.push_back(BoxData);
-          r.push_back(b);
-          append_ints(r, m_D[b]);
-          append_matrix(r, DenseMatrix());
-        }
+        if (boxes.insert({q, b}).second) append_box(r, b, m_D[b], DenseMatrix()); // no Ψ: the rows' rank adds the regularisation
         if (cross_close(b, c)) continue;
-        r.push_back(FarPart);
-        r.push_back(b);
-        r.push_back(c);
-        append_matrix(r, far[i]);
+        append_record(r, FarPart, {b, c}, far[i]);
         m_pair_far[{b, c}] = std::move(far[i]); // this rank's copy (the rows) uses it too
       }
     },
@@ -189,7 +189,7 @@ void Frontier::send_far_parts(const std::vector<std::pair<int, int>> &pairs)
           const int kind = read_int(r, at), b = read_int(r, at);
           if (kind == BoxData) {
             m_D[b] = read_ints(r, at);
-            read_matrix(r, at); // no Ψ: the rows' rank adds the regularisation
+            read_matrix(r, at); // empty
           } else if (kind == FarPart) {
             const int c = read_int(r, at);
             m_pair_far[{b, c}] = read_matrix(r, at);

@@ -16,37 +16,18 @@ namespace hssbem::h2f {
 
 namespace {
 
-/// Block B (double) at out + at values, or rounded to single precision at float position `at` of
-/// the bytes of out.
-void write_block(const DenseMatrix &B, bool single, double *out, std::size_t at)
-{
-  if (!single) {
-    std::copy(B.a.begin(), B.a.end(), out + at);
-    return;
-  }
-  const std::vector<float> rounded(B.a.begin(), B.a.end());
-  std::memcpy(reinterpret_cast<char *>(out) + at * sizeof(float), rounded.data(), rounded.size() * sizeof(float));
-}
-
 /// The rows of boxes `from` out of a RowSink's message, into sink.put(): box row by box row,
-/// each row's blocks in order. A single-precision message's floats are copied out, never read in
-/// the doubles' storage.
-void read_rows(TopSink &sink, const std::vector<int> &off, const std::vector<int> &from, const std::vector<double> &message, bool single)
+/// each row's blocks in order.
+void read_rows(TopSink &sink, const std::vector<int> &off, const std::vector<int> &from, const std::vector<double> &message)
 {
   const std::size_t n = static_cast<std::size_t>(off.back());
   std::size_t count = 0, at = 0;
   for (int s : from) count += static_cast<std::size_t>(off[s + 1] - off[s]) * n;
-  if ((single ? (count + 1) / 2 : count) != message.size()) throw std::logic_error("H2 factorization: a message of the top's rows of unexpected length");
-  std::vector<float> rounded;
+  if (count != message.size()) throw std::logic_error("H2 factorization: a message of the top's rows of unexpected length");
   for (int s : from)
     for (int t = 0; t + 1 < static_cast<int>(off.size()); ++t) {
       DenseMatrix B(off[s + 1] - off[s], off[t + 1] - off[t]);
-      if (single) {
-        rounded.resize(B.a.size());
-        std::memcpy(rounded.data(), reinterpret_cast<const char *>(message.data()) + at * sizeof(float), rounded.size() * sizeof(float));
-        std::copy(rounded.begin(), rounded.end(), B.a.begin());
-      } else
-        std::copy_n(message.begin() + static_cast<long>(at), B.a.size(), B.a.begin());
+      std::copy_n(message.begin() + static_cast<long>(at), B.a.size(), B.a.begin());
       at += B.a.size();
       sink.put(s, t, std::move(B));
     }
@@ -63,7 +44,7 @@ void GridSink::begin(const std::vector<int> &off, const std::vector<int> &)
 
 void GridSink::put(int s, int t, DenseMatrix B) { m_G.blocks[static_cast<std::size_t>(s) * m_G.boxes() + t] = std::move(B); }
 
-void GridSink::receive(int, const std::vector<int> &from, const std::vector<double> &message) { read_rows(*this, m_G.off, from, message, false); }
+void GridSink::receive(int, const std::vector<int> &from, const std::vector<double> &message) { read_rows(*this, m_G.off, from, message); }
 
 void SpreadSink::begin(const std::vector<int> &off, const std::vector<int> &mine)
 {
@@ -77,10 +58,10 @@ void SpreadSink::begin(const std::vector<int> &off, const std::vector<int> &mine
     std::size_t at = 0;
     for (int s : mine) m_base[r][s] = at, at += static_cast<std::size_t>(off[s + 1] - off[s]) * m_cols[r];
     if (r == m_rank) continue;
-    message_count((at + at % 2) / 2, "the spread top's columns for rank " + std::to_string(r));
+    message_count((at + at % 2) / 2, m_ranks == 1 ? "these rows of the dense top (to rank 0; a smaller top, -pc_h2_top_size, or one spread over the ranks fits)" : "the spread top's columns for rank " + std::to_string(r));
     m_out[r].assign(at + at % 2, 0.0f); // an even count: two floats to a value
   }
-  m_local->assign(static_cast<std::size_t>(n) * m_cols[m_rank], 0.0f);
+  m_local->assign(static_cast<std::size_t>(n) * my_columns(), 0.0f);
   m_sums->assign(n, 0.0);
 }
 
@@ -113,9 +94,8 @@ std::vector<std::vector<double>> SpreadSink::messages(int ranks)
 
 void SpreadSink::receive(int, const std::vector<int> &from, const std::vector<double> &message)
 {
-  if (m_ranks == 1) return read_rows(*this, m_off, from, message, true); // the top on rank 0: whole rows
   // Another rank's rows of this rank's columns: for each of its boxes, column by column.
-  const int n = m_off.back(), mine_cols = m_cols[m_rank];
+  const int n = m_off.back(), mine_cols = my_columns();
   std::size_t need = 0, at = 0;
   for (int s : from) need += static_cast<std::size_t>(m_off[s + 1] - m_off[s]) * mine_cols;
   if ((need + need % 2) / 2 != message.size()) throw std::logic_error("H2 factorization: a spread top message of unexpected length");
@@ -132,16 +112,15 @@ void RowSink::begin(const std::vector<int> &off, const std::vector<int> &mine)
   m_start.assign(off.size() - 1, 0);
   std::size_t at = 0;
   for (int s : mine) m_start[s] = at, at += static_cast<std::size_t>(off[s + 1] - off[s]) * off.back();
-  const std::size_t values = m_single ? (at + 1) / 2 : at;
-  message_count(values, "these rows of the dense top (to rank 0; a smaller top, -pc_h2_top_size, or one spread over the ranks fits)");
-  m_out.assign(values, 0.0);
+  message_count(at, "these rows of the dense top (to rank 0; a smaller top, -pc_h2_top_size, or one spread over the ranks fits)");
+  m_out.assign(at, 0.0);
 }
 
 void RowSink::put(int s, int t, DenseMatrix B)
 {
   const int m = m_off[s + 1] - m_off[s];
   if (B.m != m || B.n != m_off[t + 1] - m_off[t]) throw std::logic_error("H2 factorization: a top block of unexpected size");
-  write_block(B, m_single, m_out.data(), m_start[s] + static_cast<std::size_t>(m) * m_off[t]);
+  std::copy(B.a.begin(), B.a.end(), m_out.begin() + static_cast<long>(m_start[s] + static_cast<std::size_t>(m) * m_off[t]));
 }
 
 std::vector<std::vector<double>> RowSink::messages(int ranks)

@@ -37,11 +37,11 @@ private:
   BlockGrid &m_G;
 };
 
-/// A single-precision top (SpreadTop) over `ranks` ranks, blocks of nb columns, block j on rank
-/// j mod ranks: this rank's columns into `local` (n × its count, column-major) and A·1 on its rows
-/// into `row_sums`, rounded as they come; the other ranks' columns of this rank's rows into one
-/// message per rank (two floats to a value). With ranks = 1 (the top on rank 0 of several), the
-/// other ranks' rows come whole (RowSink) instead.
+/// A single-precision top (SpreadTop) over ranks 0 .. `ranks` − 1, blocks of nb columns, block j
+/// on rank j mod ranks: this rank's columns into `local` (n × its count, column-major) and A·1 on
+/// its rows into `row_sums`, rounded as they come; the other ranks' columns of this rank's rows
+/// into one message per rank (two floats to a value). With ranks = 1 (the top on rank 0 of
+/// several) every other rank sends its rows to rank 0 and keeps no columns.
 class SpreadSink : public TopSink {
 public:
   SpreadSink(int nb, int rank, int ranks, std::vector<float> *local, std::vector<double> *row_sums)
@@ -54,6 +54,8 @@ public:
   void receive(int q, const std::vector<int> &from, const std::vector<double> &message) override;
 
 private:
+  int my_columns() const { return m_rank < m_ranks ? m_cols[m_rank] : 0; }
+
   int m_nb, m_rank, m_ranks;
   std::vector<float> *m_local;
   std::vector<double> *m_sums;
@@ -62,22 +64,19 @@ private:
   std::vector<std::vector<float>> m_out;
 };
 
-/// A rank other than 0 when the top is on rank 0: its rows, box row by box row (each row's blocks
-/// in order, column-major), into one message to rank 0, rounded to single precision (two floats
-/// to a value) when the top is a single-precision one.
+/// A rank other than 0 when the top is on rank 0 in double (GridSink): its rows, box row by box
+/// row (each row's blocks in order, column-major), into one message to rank 0.
 class RowSink : public TopSink {
 public:
-  explicit RowSink(bool single) : m_single(single) {}
   void begin(const std::vector<int> &off, const std::vector<int> &mine) override;
   void put(int s, int t, DenseMatrix B) override;
   std::vector<std::vector<double>> messages(int ranks) override;
   void receive(int, const std::vector<int> &, const std::vector<double> &) override {}
 
 private:
-  bool m_single;
   std::vector<int> m_off;
-  std::vector<std::size_t> m_start; ///< per box: values before its row (floats when single)
-  std::vector<double> m_out;        ///< the message (single: two floats to a value)
+  std::vector<std::size_t> m_start; ///< per box: values before its row
+  std::vector<double> m_out;        ///< the message
 };
 
 } // namespace hssbem::h2f

@@ -16,23 +16,6 @@
 #include <string>
 
 /*@C
-  HssbemMatIsHss - Tells whether A is the HSS-backed MatShell of HssbemCreateSystem().
-
-  Not Collective
-
-  Level: intermediate
-@*/
-PetscErrorCode HssbemMatIsHss(Mat A, PetscBool *is_hss)
-{
-  HssbemSystemContext *p;
-
-  PetscFunctionBegin;
-  PetscCall(HssbemMatGetSystemContext(A, &p));
-  *is_hss = p && p->type == hssbem::OperatorType::Hss ? PETSC_TRUE : PETSC_FALSE;
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
-
-/*@C
   HssbemMatIsCompressed - Tells whether A is a compressed (HSS or H²) MatShell of
   HssbemCreateSystem(), which has no entries to factor.
 

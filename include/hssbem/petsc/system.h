@@ -64,9 +64,6 @@ PetscErrorCode HssbemHssOptionsFromDatabase(MPI_Comm comm, const char *prefix, h
    opts (which holds the defaults on entry) and check them. */
 PetscErrorCode HssbemH2OptionsFromDatabase(MPI_Comm comm, const char *prefix, hssbem::H2Options *opts);
 
-/* PETSC_TRUE when A is the HSS MatShell of HssbemCreateSystem(). */
-PetscErrorCode HssbemMatIsHss(Mat A, PetscBool *is_hss);
-
 /* PETSC_TRUE when A is a compressed MatShell (HSS or H²) of HssbemCreateSystem(): no entries. */
 PetscErrorCode HssbemMatIsCompressed(Mat A, PetscBool *compressed);
 
