@@ -49,6 +49,7 @@ PetscErrorCode OptionString_Private(const char *key, const char *text, std::stri
 . -scene_strategy <auto|solve|update|refactor|krylov> - per-frame strategy of a scene (auto: the cost model's cheapest)
 . -scene_refresh <n>          - incremental capacitance updates before a rebuild
 . -scene_single_from <n>      - single-precision capacitance inverse from this many switched unknowns (-1: never)
+. -scene_single_fields_from <n> - the fields' product with W(:, J) in single precision from this many switched unknowns (-1: never)
 . -scene_krylov_rtol <r>      - GMRES tolerance of the krylov strategy
 . -scene_monitor              - print one line per frame
 . -scene_keep_partial         - when a frame fails, keep the frames solved before it in the result file (the run still fails)
@@ -69,6 +70,7 @@ PetscErrorCode ProcessOptions_Private(MPI_Comm comm, AppOptions *opts)
   QuadratureOptions &quad = opts->quad;
   std::string strategy = scene_strategy_name(opts->scene.strategy);
   PetscInt    refresh  = opts->scene.refresh_every, single_from = opts->scene.single_from;
+  PetscInt    single_fields_from = opts->scene.single_fields_from;
   PetscBool   monitor  = opts->scene.monitor ? PETSC_TRUE : PETSC_FALSE, keep_partial = opts->scene.keep_partial ? PETSC_TRUE : PETSC_FALSE;
   PetscReal   error_timeout = k_default_error_timeout; /* -hssbem_error_timeout: acted on by app/main.cxx (read_error_timeout); listed here for -help */
   PetscBool   contact_monitor = opts->contact.monitor ? PETSC_TRUE : PETSC_FALSE;
@@ -94,6 +96,7 @@ PetscErrorCode ProcessOptions_Private(MPI_Comm comm, AppOptions *opts)
   PetscCall(OptionString_Private("-scene_strategy", "Scenes (frames): per-frame strategy: auto (cheapest by the cost model), solve, update, refactor or krylov", &strategy, PetscOptionsObject));
   PetscCall(PetscOptionsInt("-scene_refresh", "Scenes: incremental capacitance updates before a rebuild from scratch", "", opts->scene.refresh_every, &refresh, NULL));
   PetscCall(PetscOptionsInt("-scene_single_from", "Scenes: switched sets of at least this size keep the capacitance inverse in single precision, refined in double (-1: never)", "", single_from, &single_from, NULL));
+  PetscCall(PetscOptionsInt("-scene_single_fields_from", "Scenes: switched sets of at least this size take the fields' product with W(:, J) in single precision (switched unknowns stay double; -1: never)", "", single_fields_from, &single_fields_from, NULL));
   PetscCall(PetscOptionsReal("-scene_krylov_rtol", "Scenes: GMRES relative tolerance (true residual) of the krylov strategy", "", opts->scene.krylov_rtol, &opts->scene.krylov_rtol, NULL));
   PetscCall(PetscOptionsBool("-scene_monitor", "Scenes: print one line per frame (strategy, switched unknowns, time)", "", monitor, &monitor, NULL));
   PetscCall(PetscOptionsBool("-scene_keep_partial", "Scenes: when a frame fails, commit the frames solved before it (the run still fails)", "", keep_partial, &keep_partial, NULL));
@@ -123,6 +126,8 @@ PetscErrorCode ProcessOptions_Private(MPI_Comm comm, AppOptions *opts)
   opts->scene.refresh_every = (int)refresh;
   PetscCheck(single_from >= -1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-scene_single_from must be -1 (never) or a number of switched unknowns");
   opts->scene.single_from = single_from < 0 ? INT_MAX : (int)single_from;
+  PetscCheck(single_fields_from >= -1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-scene_single_fields_from must be -1 (never) or a number of switched unknowns");
+  opts->scene.single_fields_from = single_fields_from < 0 ? INT_MAX : (int)single_fields_from;
   PetscCheck(opts->scene.krylov_rtol > 0 && opts->scene.krylov_rtol < 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-scene_krylov_rtol must lie in (0, 1)");
   if (!mesh.empty()) opts->overrides.mesh = mesh;
   if (!output.empty()) opts->overrides.output = output;

@@ -122,6 +122,7 @@ std::unique_ptr<DenseScene> set_up_scene(const ProblemSetup &s, const BemOperato
   so.with_pressure = uses_pressure(s.spec);
   so.refresh_every = o.refresh_every;
   so.single_from   = o.single_from;
+  so.single_fields_from = o.single_fields_from;
   so.krylov_rtol   = o.krylov_rtol;
   const Timer timer;
   fault_point("SceneSetup");

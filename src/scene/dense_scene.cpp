@@ -29,9 +29,11 @@ constexpr double k_parallel_entries = 1e6;
 
 std::size_t sq(int n) { return static_cast<std::size_t>(n) * n; }
 
-/// y += Σ_i coef[i] M(:, cols[i]) for the column-major n-row matrix M: a gathered product,
-/// threaded over row blocks (each thread streams its rows of the chosen columns).
-void gather_axpy(const double *M, int n, const std::vector<int> &cols, const std::vector<double> &coef, double *y)
+/// y += Σ_i coef[i] M(:, cols[i]) for the column-major n-row matrix M (double, or single
+/// precision: the products and sums are in double either way): a gathered product, threaded
+/// over row blocks (each thread streams its rows of the chosen columns).
+template <class T>
+void gather_axpy(const T *M, int n, const std::vector<int> &cols, const std::vector<double> &coef, double *y)
 {
   if (cols.empty()) return;
   constexpr int block = 4096; // 32 kB of y per thread stays in cache while the columns stream by
@@ -42,15 +44,15 @@ void gather_axpy(const double *M, int n, const std::vector<int> &cols, const std
     const int r0 = b * block, r1 = std::min(n, r0 + block);
     std::size_t i = 0;
     for (; i + 4 <= nc; i += 4) { // four columns per pass over the block: a quarter of the y traffic
-      const double *m0 = M + static_cast<std::size_t>(cols[i]) * n, *m1 = M + static_cast<std::size_t>(cols[i + 1]) * n,
-                   *m2 = M + static_cast<std::size_t>(cols[i + 2]) * n, *m3 = M + static_cast<std::size_t>(cols[i + 3]) * n;
+      const T *m0 = M + static_cast<std::size_t>(cols[i]) * n, *m1 = M + static_cast<std::size_t>(cols[i + 1]) * n,
+              *m2 = M + static_cast<std::size_t>(cols[i + 2]) * n, *m3 = M + static_cast<std::size_t>(cols[i + 3]) * n;
       const double c0 = coef[i], c1 = coef[i + 1], c2 = coef[i + 2], c3 = coef[i + 3];
-      for (int r = r0; r < r1; ++r) y[r] += c0 * m0[r] + c1 * m1[r] + c2 * m2[r] + c3 * m3[r];
+      for (int r = r0; r < r1; ++r) y[r] += c0 * static_cast<double>(m0[r]) + c1 * static_cast<double>(m1[r]) + c2 * static_cast<double>(m2[r]) + c3 * static_cast<double>(m3[r]);
     }
     for (; i < nc; ++i) {
-      const double *m = M + static_cast<std::size_t>(cols[i]) * n;
+      const T *m = M + static_cast<std::size_t>(cols[i]) * n;
       const double c = coef[i];
-      for (int r = r0; r < r1; ++r) y[r] += c * m[r];
+      for (int r = r0; r < r1; ++r) y[r] += c * static_cast<double>(m[r]);
     }
   }
 }
@@ -188,18 +190,65 @@ void DenseScene::capacitance_correct(double *y) const
   const int k = m_cap.size();
   std::vector<double> yJ(k), s(k), minus_s(k);
   for (int p = 0; p < k; ++p) yJ[p] = y[J[p]];
+  const Timer t_cap;
   capacitance_solve(yJ.data(), s.data());
+  m_cap_seconds += t_cap.seconds();
+  const Timer t_fields;
+  if (k >= m_opt.single_fields_from) single_fields_correct(s, y);
+  else {
+    std::vector<float>().swap(m_panel); // a set too small for the panel: its memory back
+    m_panel_index.clear();
+    for (int p = 0; p < k; ++p) minus_s[p] = -s[p];
+    gather_axpy(m_W.data(), m_n, J, minus_s, y);
+    for (int p = 0; p < k; ++p) y[J[p]] += s[p];
+  }
+  m_fields_seconds += t_fields.seconds();
+}
+
+/// The same product from the single-precision panel, over its used slots. The switched rows
+/// get x(J) = s: in exact arithmetic x(J) = y(J) − C s + s, and y(J) − C s is the refined
+/// capacitance residual (≤ 1e-13 ‖y(J)‖), so they keep double accuracy.
+void DenseScene::single_fields_correct(const std::vector<double> &s, double *y) const
+{
+  refresh_panel();
+  const std::vector<int> &J = m_cap.indices(), &slot = m_cap.position_slots();
+  const int k = m_cap.size();
+  std::vector<double> minus_s(k);
   for (int p = 0; p < k; ++p) minus_s[p] = -s[p];
-  gather_axpy(m_W.data(), m_n, J, minus_s, y);
-  for (int p = 0; p < k; ++p) y[J[p]] += s[p];
+  gather_axpy(m_panel.data(), m_n, slot, minus_s, y);
+  for (int p = 0; p < k; ++p) y[J[p]] = s[p];
+}
+
+void DenseScene::refresh_panel() const
+{
+  const std::size_t cols = static_cast<std::size_t>(m_cap.capacity());
+  if (m_panel_index.size() != cols) { // the capacitance grew (slots kept) or is new: columns keep their place
+    m_panel.resize(cols * m_n);
+    m_panel_index.resize(cols, -1);
+  }
+  const std::vector<int> &idx = m_cap.slot_indices();
+  std::vector<int> stale;
+  for (std::size_t p = 0; p < idx.size(); ++p)
+    if (idx[p] >= 0 && idx[p] != m_panel_index[p]) stale.push_back(static_cast<int>(p));
+  const int n = m_n;
+#pragma omp parallel for schedule(static) if (stale.size() > 8)
+  for (std::size_t q = 0; q < stale.size(); ++q) {
+    const double *w = &m_W[static_cast<std::size_t>(idx[stale[q]]) * n];
+    float *f = &m_panel[static_cast<std::size_t>(stale[q]) * n];
+    for (int i = 0; i < n; ++i) f[i] = static_cast<float>(w[i]);
+  }
+  for (int p : stale) m_panel_index[p] = idx[p];
 }
 
 void DenseScene::capacitance_solve(const double *r, double *s) const
 {
-  if (m_cap.solve(r, s)) return;
+  const bool ok = m_cap.solve(r, s);
+  m_last_refinements += m_cap.last_iterations();
+  if (ok) return;
   const std::vector<int> J = m_cap.indices(); // single precision no longer enough: rebuild in double
   m_cap.rebuild(J, true);
   m_cap.solve(r, s);
+  m_last_refinements += m_cap.last_iterations();
 }
 
 double DenseScene::predict_update(const std::vector<char> &pattern, bool *rebuild) const
@@ -327,7 +376,10 @@ std::array<double, 5> DenseScene::predict(const SystemSelection &sel, const std:
     changed_cap += pattern[j] != m_cap_pattern[j];
     changed_prev += pattern[j] != prev[j];
   }
-  const double apply = 8.0 * N * static_cast<double>(nv + k) / bw + 8.0 * static_cast<double>(k) * k / bw;
+  // the values' columns of W, the fields' product over W(:, J) (single: the panel) and the
+  // capacitance solve (single: C⁻¹ in float and C in double per refinement step, ~3 steps)
+  const double field_bytes = k >= m_opt.single_fields_from ? 4.0 : 8.0, cap_bytes = k >= m_opt.single_from ? 3 * 12.0 : 8.0;
+  const double apply = (8.0 * N * static_cast<double>(nv) + field_bytes * N * static_cast<double>(k) + cap_bytes * static_cast<double>(k) * k) / bw;
   const double lu_solve = 16.0 * N * N / bw + 8.0 * N * nv / bw;
   std::array<double, 5> t{};
   t[static_cast<int>(SceneStrategy::Auto)] = k_inf;
@@ -361,6 +413,8 @@ const SceneFrameReport &DenseScene::solve(const SystemSelection &sel, std::vecto
     throw std::invalid_argument("scene frame: strategy 'solve' reuses a factorization, but the boundary-condition pattern changed (use update, refactor, krylov or auto)");
   m_report = SceneFrameReport{};
   m_report.strategy = s;
+  m_last_refinements = 0;
+  m_cap_seconds = m_fields_seconds = 0;
   const std::vector<char> &before = m_last_pattern.empty() ? m_ref : m_last_pattern;
   for (int j = 0; j < m_n; ++j) {
     m_report.switched += pattern[j] != m_ref[j];
@@ -376,7 +430,9 @@ const SceneFrameReport &DenseScene::solve(const SystemSelection &sel, std::vecto
     break;
   }
   case SceneStrategy::Update: {
+    const Timer t_update;
     if (pattern != m_cap_pattern) update_capacitance(pattern);
+    m_report.update_seconds = t_update.seconds();
     const PhaseScope phase(Phase::SceneApply);
     const SerialBlas serial;
     woodbury_solve(sel, pattern, x);
@@ -399,6 +455,9 @@ const SceneFrameReport &DenseScene::solve(const SystemSelection &sel, std::vecto
     m_last_t[j / 3][j % 3] = pattern[j] ? x[j] : known;
   }
   m_report.seconds = timer.seconds();
+  m_report.refinements = m_last_refinements;
+  m_report.capacitance_seconds = m_cap_seconds;
+  m_report.fields_seconds = m_fields_seconds;
   m_report.predicted = predicted[static_cast<int>(s)];
   const int si = static_cast<int>(s);
   if (std::isfinite(m_report.predicted) && m_report.predicted > 0 && m_report.seconds > 0) // the model learns from what it measured
@@ -450,7 +509,7 @@ double DenseScene::residual(const SystemSelection &sel, const std::vector<double
 std::size_t DenseScene::memory_bytes() const
 {
   const std::size_t d = m_W.size() + m_Wp.size() + m_lu.size() + sq(m_cap.size());
-  return 8 * d + m_reference->memory_bytes();
+  return 8 * d + 4 * m_panel.size() + m_reference->memory_bytes();
 }
 
 } // namespace hssbem

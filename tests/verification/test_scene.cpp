@@ -384,6 +384,32 @@ TEST(DenseScene, SinglePrecisionCapacitanceMatchesTheDenseSolves)
   for (std::size_t p = 0; p < sw.size(); ++p) EXPECT_NEAR(sw[p], x[scene.switched()[p]], 1e-9 * (1 + std::abs(x[scene.switched()[p]])));
 }
 
+TEST(DenseScene, SinglePrecisionFieldsKeepTheSwitchedUnknownsInDouble)
+{
+  const Cardioid &c = cardioid();
+  SceneOptions opt, exact;
+  opt.single_from = opt.single_fields_from = 0; // W(:, J) for the fields in single precision
+  exact.single_from = 0;                          // the same capacitance, fields in double
+  DenseScene scene(*c.op, c.reference(), opt), twin(*c.op, c.reference(), exact);
+  std::vector<double> x, y;
+  double worst = 0, least = 1;
+  for (int f = 0; f < 10; ++f) { // moves (updates), values only, and a move back (slots reused)
+    const SystemSelection sel = c.frame(f < 8 ? 0.08 * (f / 2) : 0.0, f % 2 ? 0.05 : 0.03, true);
+    const SceneFrameReport &rep = scene.solve(sel, x);
+    twin.solve(sel, y);
+    EXPECT_GE(rep.refinements, 1) << "frame " << f;
+    const std::vector<double> ref = c.dense(sel);
+    const double err = rel_diff(x, ref);
+    worst = std::max(worst, err), least = std::min(least, rel_diff(x, y));
+    EXPECT_LT(err, 1.5e-8) << "frame " << f; // measured up to 5.0e-9 (W's single-precision rounding)
+    double d = 0, n = 0; // the switched unknowns (the contact's tractions) stay double-accurate
+    for (int j : scene.switched()) d = std::max(d, std::abs(x[j] - ref[j])), n = std::max(n, std::abs(ref[j]));
+    EXPECT_LT(d, 1e-9 * n) << "frame " << f;
+  }
+  EXPECT_GT(least, 1e-12); // the fields really came from single precision: measured 4.3e-9 apart at least (double: ~1e-14)
+  EXPECT_GT(worst, 0.0);
+}
+
 TEST(Scene, PerVertexFramesMatchTheEngineAndTheHapticForcesMatchTheTractions)
 {
   const Cardioid &c = cardioid();

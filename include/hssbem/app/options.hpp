@@ -26,6 +26,7 @@ struct SceneRunOptions {
   int refresh_every = 32;                       ///< -scene_refresh: capacitance updates between rebuilds
   double krylov_rtol = 1e-10;                   ///< -scene_krylov_rtol
   int single_from = 1024;                       ///< -scene_single_from: single-precision capacitance from this many switched unknowns
+  int single_fields_from = 1024;                ///< -scene_single_fields_from: single-precision W(:, J) for the fields from this many
   bool monitor = false;                         ///< -scene_monitor: one line per frame
   bool keep_partial = false;                    ///< -scene_keep_partial: a failed frame commits the frames solved before it (still an error)
 };

@@ -69,6 +69,13 @@ public:
   int slots() const { return m_k; }
   int capacity() const { return m_ld; }
   bool single() const { return m_single; }
+  /// Per slot (below slots()): the index it holds, or -1 when empty. Slots keep their index
+  /// through updates and growth; a rebuild or a squeeze renumbers them.
+  const std::vector<int> &slot_indices() const { return m_slot_index; }
+  /// Per position of indices(): its slot.
+  const std::vector<int> &position_slots() const { return m_pos_slot; }
+  /// Refinement steps of the last solve() (1 in double: the product with the inverse).
+  int last_iterations() const { return m_last_iterations; }
 
   /// s = C⁻¹ r for r of length size(); in single precision refined to ‖r − C s‖ ≤ 1e-13 ‖r‖.
   /// Returns false when the refinement stopped contracting (s is then the best iterate): rebuild.
@@ -81,6 +88,8 @@ public:
   static double update_flops(double k, double r, double a);
 
 private:
+  /// The refinement of a single-precision solve (by slots); false when it stops contracting.
+  bool refine(const std::vector<double> &r, std::vector<double> &s) const;
   void drop_indices(const std::vector<int> &drop);
   void add_indices(const std::vector<int> &add);
   /// C's rows and columns of the new slots A (holding `add`), idx the index of every slot (-1: empty).
@@ -108,6 +117,7 @@ private:
   std::vector<double> m_C;   ///< W(J, J) by slots, column-major, leading dimension m_ld
   std::vector<double> m_inv; ///< C⁻¹ by slots in double (when !m_single)
   std::vector<float> m_invf; ///< C⁻¹ by slots in single (when m_single)
+  mutable int m_last_iterations = 0;
 };
 
 } // namespace hssbem

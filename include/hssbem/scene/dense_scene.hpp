@@ -61,6 +61,11 @@ struct SceneOptions {
   /// Switched sets of at least this size keep the capacitance inverse in single precision,
   /// refined in double per solve (capacitance.hpp); INT_MAX: always double.
   int single_from = 1024;
+  /// Switched sets of at least this size take the fields' product x −= W(:, J) s from a copy of
+  /// W(:, J) in single precision (half the bytes; the switched unknowns x(J) = s stay refined in
+  /// double, the other unknowns carry W's single-precision rounding, ~1e-7 relative); INT_MAX:
+  /// always double.
+  int single_fields_from = 1024;
   double krylov_rtol = 1e-10;  ///< GMRES relative tolerance (true residual) of the krylov strategy
   int krylov_max_it = 200;     ///< and its iteration limit (reaching it is an error)
 };
@@ -73,6 +78,10 @@ struct SceneFrameReport {
   long long values = 0;     ///< nonzero known values (right-hand side columns)
   long long iterations = 0; ///< GMRES iterations (krylov)
   bool rebuilt = false;     ///< update: the capacitance inverse was rebuilt, not updated
+  int refinements = 0;      ///< refinement steps of the frame's capacitance solve (capacitance.hpp)
+  /// Where an update's or solve's time went: the capacitance update (or rebuild), the
+  /// capacitance solve s = W(J, J)⁻¹ y(J), and the fields' product x −= W(:, J) s.
+  double update_seconds = 0, capacitance_seconds = 0, fields_seconds = 0;
   double seconds = 0;       ///< wall time of the frame (update and solve)
   double predicted = 0;     ///< the cost model's seconds for the strategy taken
 };
@@ -161,6 +170,17 @@ private:
   mutable CapacitanceInverse m_cap;
   /// s = W(J, J)⁻¹ r with the current capacitance, rebuilding it when its refinement fails.
   void capacitance_solve(const double *r, double *s) const;
+  /// y −= W(:, J) s, y(J) = s from the single-precision panel (SceneOptions::single_fields_from).
+  void single_fields_correct(const std::vector<double> &s, double *y) const;
+  /// Brings the panel up to the capacitance's slots: converts the columns of the slots whose
+  /// index changed since (an update touches the added ones only).
+  void refresh_panel() const;
+  /// W(:, index of slot p) in single precision as column p (N rows), per capacitance slot;
+  /// m_panel_index: the index each column holds (-1: none). Mutable: refreshed on use.
+  mutable std::vector<float> m_panel;
+  mutable std::vector<int> m_panel_index;
+  mutable int m_last_refinements = 0;
+  mutable double m_cap_seconds = 0, m_fields_seconds = 0; ///< of the frame (the report's)
   std::vector<char> m_cap_pattern;   ///< the pattern m_cap serves
   int m_updates_since_rebuild = 0;
   std::vector<double> m_lu;          ///< LU of A_S after a refactor, column-major
