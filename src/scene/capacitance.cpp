@@ -336,8 +336,8 @@ bool CapacitanceInverse::solve(const double *r_in, double *s_out) const
 /// s ← s + C⁻¹ (r − C s) with the single-precision inverse, the residual in double against C:
 /// each step costs a pass over C⁻¹ (float) and one over C (double). The last pass over C is
 /// skipped when the contraction measured so far puts the next residual 100x below the
-/// tolerance (on the 10k organ with 3 717 switched unknowns: 3 passes over C instead of 4,
-/// see docs/scenes.md).
+/// tolerance (on the 10k and 4k organs with 20 % switched: 3 steps, 2 passes over C instead of
+/// 3; benchmarks/results/2026-11-27-scenes.md).
 bool CapacitanceInverse::refine(const std::vector<double> &r, std::vector<double> &s) const
 {
   constexpr double tol = 1e-13;

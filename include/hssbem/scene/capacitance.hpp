@@ -12,7 +12,9 @@
 /// large sets, where the updates' GEMMs dominate a frame — in single precision (twice the GEMM
 /// rate, half the memory traffic), and then every solve is refined in double against C
 /// (s ← s + C⁻¹(r − C s)) until ‖r − C s‖ ≤ 1e-13 ‖r‖: the answer is double-accurate as long as
-/// the single-precision inverse contracts the residual. When it stops contracting (rounding
+/// the single-precision inverse contracts the residual. The last step's residual is not
+/// computed when the contraction measured so far puts it 100x below the tolerance (a pass over
+/// C in double is the dearest part of a solve). When it stops contracting (rounding
 /// accumulated over many updates, or an ill-conditioned C), solve() says so and the owner
 /// rebuilds (in double if that was single already).
 ///

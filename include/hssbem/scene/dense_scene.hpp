@@ -26,9 +26,17 @@
 /// rates (memory bandwidth, flop rate) are measured at set-up and corrected after every frame by
 /// the measured time (report(): predicted and measured seconds).
 ///
+/// Precision. From SceneOptions::single_from switched unknowns on, C⁻¹ is kept in single
+/// precision and refined in double (capacitance.hpp); from single_fields_from on, the product
+/// x −= W(:, J) s reads W(:, J) from a single-precision copy kept per capacitance slot (a moved
+/// contact converts only its new columns): half the bytes of the frame's largest product. The
+/// switched unknowns x(J) = s keep double accuracy; the others carry W's rounding (~5e-9
+/// relative on the cardioid, docs/scenes.md).
+///
 /// Memory: W and the LU of A₀ (8 N² bytes each), H and G (16 N² bytes, for refactor, krylov and residuals; see
-/// SceneOptions::keep_operator), W_p and Gn (8 N² / 3 bytes each) with pressure loads, and one
-/// N² factor after a refactor. Thread-safety: one frame at a time.
+/// SceneOptions::keep_operator), W_p and Gn (8 N² / 3 bytes each) with pressure loads, one
+/// N² factor after a refactor, and the single-precision W(:, J) (4 N |J| bytes). Thread-safety:
+/// one frame at a time.
 #pragma once
 
 #include "hssbem/bem/bem_operator.hpp"
