@@ -208,9 +208,7 @@ void ContactRun::make_reference(const NodeConditions &base, const std::vector<No
                                 const ContactOptions &opt)
 {
   const bool pressure = std::any_of(base.pressure.begin(), base.pressure.end(), [](double p) { return !std::isnan(p); });
-  std::vector<char> pattern(3 * base.displacement_prescribed.size());
-  for (std::size_t i = 0; i < base.displacement_prescribed.size(); ++i)
-    for (int c = 0; c < 3; ++c) pattern[3 * i + c] = base.displacement_prescribed[i][c];
+  std::vector<char> pattern = base.unknown_pattern();
   std::vector<NodeConditions> all = frames;
   all.push_back(base);
   std::vector<char> kept = kept_columns(contact_loaded_unknowns(*s.disc, pattern, obstacles, settings, opt), all);
