@@ -213,7 +213,7 @@ TEST(ContactHertz, TwoSpheres)
     o.reference_columns_only = true;
     return std::make_unique<DenseReference>(op, std::move(pattern), o);
   };
-  const CompositeReference composite(*r->op, node_bodies(*r->s.disc), pattern_of(r->base), {}, dense);
+  const CompositeReference composite(*r->op, node_bodies(*r->s.disc), r->base.unknown_pattern(), {}, dense);
   ContactOptions opt;
   opt.reach = 0.05 * R;
   ContactEngine engine(*r->s.disc, composite, {}, bodies, opt);
