@@ -142,9 +142,7 @@ struct ContactRun {
 void ContactRun::make_reference(const NodeConditions &base)
 {
   const bool pressure = std::any_of(base.pressure.begin(), base.pressure.end(), [](double p) { return !std::isnan(p); });
-  std::vector<char> pattern(3 * base.displacement_prescribed.size());
-  for (std::size_t i = 0; i < base.displacement_prescribed.size(); ++i)
-    for (int c = 0; c < 3; ++c) pattern[3 * i + c] = base.displacement_prescribed[i][c];
+  const std::vector<char> pattern = base.unknown_pattern();
   if (!h2) {
     DenseReferenceOptions ro;
     ro.node_body = node_bodies(*s.disc);

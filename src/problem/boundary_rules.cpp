@@ -389,4 +389,12 @@ int NodeConditions::num_displacement_prescribed() const
   return n;
 }
 
+std::vector<char> NodeConditions::unknown_pattern() const
+{
+  std::vector<char> p(3 * displacement_prescribed.size());
+  for (std::size_t i = 0; i < displacement_prescribed.size(); ++i)
+    for (int c = 0; c < 3; ++c) p[3 * i + c] = displacement_prescribed[i][c];
+  return p;
+}
+
 } // namespace hssbem

@@ -25,14 +25,6 @@ using Kind = BoundaryRule::Kind;
 constexpr double k_nan = std::numeric_limits<double>::quiet_NaN();
 constexpr double E = 1000, nu = 0.3, delta = 0.01;
 
-std::vector<char> pattern_of(const NodeConditions &nc)
-{
-  std::vector<char> p(3 * nc.displacement_prescribed.size());
-  for (std::size_t i = 0; i < nc.displacement_prescribed.size(); ++i)
-    for (int c = 0; c < 3; ++c) p[3 * i + c] = nc.displacement_prescribed[i][c];
-  return p;
-}
-
 /// A contact problem set up in code, on the dense reference of its base rules.
 struct Case {
   ProblemSetup s;
@@ -50,7 +42,7 @@ struct Case {
     op = std::make_unique<BemOperator>(*s.disc, s.material);
     base = apply_rules(s.spec.rules, *s.disc, s.spec.file);
     check_bodies_held(*s.disc, base.displacement_prescribed, obstacles, settings, opt);
-    ref = std::make_unique<DenseReference>(*op, pattern_of(base));
+    ref = std::make_unique<DenseReference>(*op, base.unknown_pattern());
     engine = std::make_unique<ContactEngine>(*s.disc, *ref, std::move(obstacles), settings, opt);
   }
   const ContactFrameReport &solve(const std::vector<Vec3> &offsets)
@@ -73,7 +65,7 @@ ProblemSpec cube_spec(bool rollers = true, Vec3 top = {k_nan, k_nan, -delta})
 NodalSolution static_solve(const ProblemSpec &spec, const Discretization &disc, const BemOperator &op)
 {
   const NodeConditions nc = apply_rules(spec.rules, disc, spec.file);
-  const DenseReference ref(op, pattern_of(nc));
+  const DenseReference ref(op, nc.unknown_pattern());
   std::vector<double> x;
   ref.free_response(selection_of(nc), x);
   return split_unknowns(selection_of(nc), x);

@@ -65,14 +65,6 @@ Vec3 held_reaction(const Discretization &disc, const NodeConditions &nc, const s
   return F;
 }
 
-std::vector<char> pattern_of(const NodeConditions &nc)
-{
-  std::vector<char> p(3 * nc.displacement_prescribed.size());
-  for (std::size_t i = 0; i < nc.displacement_prescribed.size(); ++i)
-    for (int c = 0; c < 3; ++c) p[3 * i + c] = nc.displacement_prescribed[i][c];
-  return p;
-}
-
 struct Solved {
   ProblemSetup s;
   std::unique_ptr<BemOperator> op;
@@ -100,7 +92,7 @@ std::unique_ptr<Solved> solve_contact(ProblemSpec spec, std::vector<Obstacle> ob
   r->base = apply_rules(r->s.spec.rules, *r->s.disc, r->s.spec.file);
   DenseReferenceOptions ro;
   ro.node_body = node_bodies(*r->s.disc);
-  r->ref = std::make_unique<DenseReference>(*r->op, pattern_of(r->base), ro);
+  r->ref = std::make_unique<DenseReference>(*r->op, r->base.unknown_pattern(), ro);
   r->solve(std::move(obstacles), settings);
   return r;
 }
@@ -108,7 +100,7 @@ std::unique_ptr<Solved> solve_contact(ProblemSpec spec, std::vector<Obstacle> ob
 /// The static problem of `nc` with the reference's H and G: dense LU of its system.
 NodalSolution static_solve(const DenseReference &ref, const NodeConditions &nc)
 {
-  const std::vector<char> pattern = pattern_of(nc);
+  const std::vector<char> pattern = nc.unknown_pattern();
   const int N = static_cast<int>(pattern.size());
   std::vector<double> A(static_cast<std::size_t>(N) * N), b;
   ref.system_matrix(pattern, A.data());
