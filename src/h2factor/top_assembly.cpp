@@ -10,6 +10,7 @@
 #include <cstring>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 
 namespace hssbem::h2f {
 
@@ -62,6 +63,17 @@ void ColumnSink<T>::put(int s, int t, DenseMatrix B)
 }
 
 template <class T>
+double *ColumnSink<T>::place(int s, int t, int *ld)
+{
+  if constexpr (std::is_same_v<T, double>) // the double top's columns, all on rank 0 (A·1 is not needed)
+    if (m_ranks == 1 && m_rank == 0) {
+      *ld = m_off.back();
+      return m_local->data() + static_cast<std::size_t>(m_off[t]) * m_off.back() + m_off[s];
+    }
+  return nullptr;
+}
+
+template <class T>
 std::vector<std::vector<double>> ColumnSink<T>::messages(int ranks)
 {
   std::vector<std::vector<double>> send(ranks);
@@ -107,7 +119,10 @@ void Frontier::take_row(int s, TopSink &sink)
   for (int t = 0; t < nb; ++t) {
     const int Q = m_front[t];
     const auto it = m_M[P].find(Q);
-    sink.put(s, t, it != m_M[P].end() ? it->second.take() : far_part(P, Q));
+    int ld = 0;
+    double *out = it == m_M[P].end() ? sink.place(s, t, &ld) : nullptr;
+    if (out) add_far_part(P, Q, out, ld);
+    else sink.put(s, t, it != m_M[P].end() ? it->second.take() : far_part(P, Q));
   }
   m_M[P].clear();
 }

@@ -19,6 +19,9 @@ public:
   virtual void begin(const std::vector<int> &off, const std::vector<int> &mine) = 0;
   /// Block (s, t) of this rank's box row s; concurrent calls have different s.
   virtual void put(int s, int t, DenseMatrix B) = 0;
+  /// Where block (s, t) lies in double in this rank's own storage (leading dimension *ld, zeros
+  /// there), for a far part added in place instead of put(); null when it does not.
+  virtual double *place(int, int, int *) { return nullptr; }
   /// Once the rows are in: what goes to each of `ranks` ranks (the sink's buffers go).
   virtual std::vector<std::vector<double>> messages(int ranks) { return std::vector<std::vector<double>>(ranks); }
   /// What rank q sent here, about its boxes `from` (positions, ascending).
@@ -40,6 +43,7 @@ public:
   }
   void begin(const std::vector<int> &off, const std::vector<int> &mine) override;
   void put(int s, int t, DenseMatrix B) override;
+  double *place(int s, int t, int *ld) override;
   std::vector<std::vector<double>> messages(int ranks) override;
   void receive(int q, const std::vector<int> &from, const std::vector<double> &message) override;
 

@@ -39,10 +39,13 @@ bool TopBlock::factor(DenseMatrix A, int mixed_from)
   m_n = n;
   m_mixed = false;
   if (mixed_from > 0 && n >= mixed_from) {
-    m_lu.assign(A.a.begin(), A.a.end());
+    m_lu.resize(A.a.size());
     std::vector<double> rows(n, 0.0), b(n), x(n), ones(n, 1.0);
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i) rows[i] += std::abs(A(i, j));
+    for (std::size_t j = 0; j < static_cast<std::size_t>(n); ++j) // rounded, and ‖A‖_∞'s row sums, in one pass
+      for (std::size_t i = 0; i < static_cast<std::size_t>(n); ++i) {
+        m_lu[i + j * n] = static_cast<float>(A.a[i + j * n]);
+        rows[i] += std::abs(A.a[i + j * n]);
+      }
     m_norm = inf_norm(rows.data(), n);
     m_piv.resize(n);
     if (lapack::getrf(n, m_lu.data(), n, m_piv.data()) == 0) {
