@@ -19,6 +19,7 @@ Usage
         [--radius R] [--refine K]   (K nested 1:4 refinements with projection onto the sphere)
   scripts/gen_meshes.py --disk-triangles 20000 --out d.msh     # disk organ with ~N triangles
   scripts/gen_meshes.py --disk-size 0.02 --out d.msh            # disk organ with gmsh size h
+  scripts/gen_meshes.py --disk-triangles 10000 --disk-pair 0.01 --out p.msh  # two organs face to face
         [--refine K]   (K nested 1:4 refinements with projection onto the ellipsoid)
   scripts/gen_meshes.py --cardioid-triangles 20000 --out c.msh  # cardioid with exactly N triangles
   scripts/gen_meshes.py --check-examples [--out DIR]   # check meshes/examples/*.json selectors
@@ -685,6 +686,19 @@ def disk_mesh_count(target):
     return V, T
 
 
+def disk_pair(V, T, gap):
+    """Two disk organs pressed together: the organ and its mirror image below, the lower flat
+    face's pole `gap` below the upper one's (the surfaces apart for gap > 0).  Regions: the faces
+    toward each other (the organ's bottom, nz < -0.7, and its image) and the rest."""
+    if not gap > 0:
+        raise MeshCheckError("--disk-pair: the gap must be positive (the undeformed surfaces may not touch)")
+    reg = disk_regions(V, T)  # 0: bottom (faces the other organ), 1: the rest
+    Vb = V * np.array([1, 1, -1]) - np.array([0, 0, 2 * DISK_AXES[2] + gap])
+    Tb = T[:, [0, 2, 1]] + len(V)  # mirrored: flip to stay outward
+    return (np.vstack([V, Vb]), np.vstack([T, Tb]), np.concatenate([reg, reg + 2]),
+            ["a_face", "a_rest", "b_face", "b_rest"])
+
+
 def gen_disk_organ(outdir, log):
     V, T, h = mesh_by_count(disk_mesh_h, 1000, 0.15)
     check_normals_star("disk_organ_1k", V, T, np.zeros(3))
@@ -852,6 +866,9 @@ def main():
                     help="Hertz: size HC within this distance of the pole (default 0.3 R)")
     ap.add_argument("--hertz-pair", type=float, metavar="GAP",
                     help="Hertz: add the mirror image below, its pole at z = -GAP (two bodies)")
+    ap.add_argument("--disk-pair", type=float, metavar="GAP",
+                    help="disk organ: add its mirror image below, the two flat faces' poles GAP apart "
+                    "(two bodies; regions a_face, a_rest, b_face, b_rest, the faces toward each other)")
     ap.add_argument("--refine", type=int, default=0, metavar="K",
                     help="apply K nested 1:4 refinements (single-sphere and single-disk modes)")
     ap.add_argument("--check-examples", action="store_true",
@@ -922,6 +939,10 @@ def main():
         check_normals_star(args.out, V, T, np.zeros(3))
         d = os.path.dirname(os.path.abspath(args.out))
         os.makedirs(d, exist_ok=True)
+        if args.disk_pair is not None:
+            V, T, reg, names = disk_pair(V, T, args.disk_pair)
+            save(d, os.path.basename(args.out), V, T, reg, names, [+1, +1], [])
+            return
         save(d, os.path.basename(args.out), V, T, disk_regions(V, T), ["bottom", "top"], [+1], [])
         return
 

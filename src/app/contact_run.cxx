@@ -15,6 +15,7 @@
 #include "hssbem/io/hdf5_output.hpp"
 #include "hssbem/petsc/log.h"
 #include "hssbem/petsc/system.h"
+#include "hssbem/scene/composite_reference.hpp"
 #include "hssbem/scene/h2_reference.hpp"
 
 #include <algorithm>
@@ -120,6 +121,42 @@ void check_finite(const ContactSolution &sol, long long frame)
                                    " is not finite (the contact system is singular or overflows)");
 }
 
+/// The columns of K₀′ a dense reference keeps (DenseReferenceOptions::kept_columns): those the
+/// contact may load (contact_loaded_unknowns) and those of every unknown that carries a non-zero
+/// known value, or a pressure, in the base rules or a frame (the free responses' right-hand sides).
+std::vector<char> kept_columns(std::vector<char> kept, const std::vector<NodeConditions> &frames)
+{
+  for (std::size_t i = 0; 3 * i < kept.size(); ++i)
+    for (const NodeConditions &nc : frames)
+      for (int k = 0; k < 3; ++k)
+        if (nc.value[i][k] != 0 || (!nc.pressure.empty() && !std::isnan(nc.pressure[i]))) kept[3 * i + k] = 1;
+  return kept;
+}
+
+/// "dense", "h2", or "dense,h2" (bodies on both).
+std::string mat_type_of(const std::vector<char> &h2)
+{
+  const bool any = std::any_of(h2.begin(), h2.end(), [](char c) { return c != 0; }), all = std::all_of(h2.begin(), h2.end(), [](char c) { return c != 0; });
+  return all ? "h2" : any ? "dense,h2" : "dense";
+}
+
+/// The H² references' statistics under `ref` (itself, or a composite's bodies'), summed.
+H2ReferenceStats h2_stats(const ReferenceFactorization &ref)
+{
+  std::vector<const ReferenceFactorization *> parts{&ref};
+  if (const auto *c = dynamic_cast<const CompositeReference *>(&ref)) {
+    parts.clear();
+    for (int b = 0; b < c->num_bodies(); ++b) parts.push_back(&c->body_reference(b));
+  }
+  H2ReferenceStats sum;
+  for (const ReferenceFactorization *p : parts)
+    if (const auto *h = dynamic_cast<const H2Reference *>(p)) {
+      const H2ReferenceStats &st = h->stats();
+      sum.columns += st.columns, sum.column_seconds += st.column_seconds, sum.solves += st.solves, sum.iterations += st.iterations, sum.solve_seconds += st.solve_seconds;
+    }
+  return sum;
+}
+
 /// What the driver keeps of a contact run on rank 0.
 struct ContactRun {
   const ProblemSetup &s;
@@ -128,40 +165,68 @@ struct ContactRun {
   const InteriorRunOptions &interior;
   PetscMPIInt size;
   std::map<std::string, double> &seconds;
-  const H2Options *h2 = nullptr; ///< the H² path's compression options, or null: the dense reference
+  const H2Options *h2 = nullptr;     ///< the H² path's compression options (used by the bodies on it)
+  std::vector<char> body_h2;         ///< per body: its reference is the H² one (else dense)
   std::unique_ptr<ReferenceFactorization> reference;
   std::unique_ptr<ContactEngine> engine;
   long long frame = 0;
 
-  void make_reference(const NodeConditions &base);
-  void set_up(const NodeConditions &base);
+  std::unique_ptr<ReferenceFactorization> body_reference(const BemOperator &body_op, std::vector<char> pattern, std::vector<char> kept, bool pressure, int body) const;
+  void make_reference(const NodeConditions &base, const std::vector<NodeConditions> &frames, const std::vector<Obstacle> &obstacles, const ContactSettings &settings,
+                      const ContactOptions &opt);
+  void set_up(const NodeConditions &base, const std::vector<NodeConditions> &frames);
   void single(const NodeConditions &nc);
   void scene(const std::vector<NodeConditions> &frames);
 };
 
-void ContactRun::make_reference(const NodeConditions &base)
+/// One body's reference (the whole mesh's when it is one body): the dense LU with K₀′'s kept
+/// columns, or the H² one.
+std::unique_ptr<ReferenceFactorization> ContactRun::body_reference(const BemOperator &body_op, std::vector<char> pattern, std::vector<char> kept, bool pressure, int body) const
 {
-  const bool pressure = std::any_of(base.pressure.begin(), base.pressure.end(), [](double p) { return !std::isnan(p); });
-  const std::vector<char> pattern = base.unknown_pattern();
-  if (!h2) {
+  if (!body_h2[body]) {
     DenseReferenceOptions ro;
-    ro.node_body = node_bodies(*s.disc);
     ro.with_pressure = pressure;
-    reference = std::make_unique<DenseReference>(op, pattern, ro);
-    return;
+    ro.reference_columns_only = true; // contact reads K₀′ alone: 16 N² bytes at most, not 24 N²
+    ro.kept_columns = std::move(kept);
+    return std::make_unique<DenseReference>(body_op, std::move(pattern), ro);
   }
   H2ReferenceOptions ho;
   ho.compression = *h2;
   ho.with_pressure = pressure;
   ho.rtol = o.h2_rtol;
   ho.factor.rel_tol = o.h2_factor_tol;
-  auto ref = std::make_unique<H2Reference>(op, pattern, ho);
-  HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF, "hssbem: contact: H2 reference: compressed in %.2f s, factored in %.2f s (%.0f MB)\n", ref->stats().compress_seconds,
-                              ref->stats().factor_seconds, ref->memory_bytes() / 1e6));
-  reference = std::move(ref);
+  auto ref = std::make_unique<H2Reference>(body_op, std::move(pattern), ho);
+  HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF, "hssbem: contact: H2 reference%s: compressed in %.2f s, factored in %.2f s (%.0f MB)\n",
+                              body_h2.size() > 1 ? (" of body " + std::to_string(body)).c_str() : "", ref->stats().compress_seconds, ref->stats().factor_seconds,
+                              ref->memory_bytes() / 1e6));
+  return ref;
 }
 
-void ContactRun::set_up(const NodeConditions &base)
+/// One body: its reference on the whole operator. Several: a CompositeReference, each body on
+/// its own surface and operator (no integral across bodies), dense or H² per body_h2.
+void ContactRun::make_reference(const NodeConditions &base, const std::vector<NodeConditions> &frames, const std::vector<Obstacle> &obstacles, const ContactSettings &settings,
+                                const ContactOptions &opt)
+{
+  const bool pressure = std::any_of(base.pressure.begin(), base.pressure.end(), [](double p) { return !std::isnan(p); });
+  std::vector<char> pattern = base.unknown_pattern();
+  std::vector<NodeConditions> all = frames;
+  all.push_back(base);
+  std::vector<char> kept = kept_columns(contact_loaded_unknowns(*s.disc, pattern, obstacles, settings, opt), all);
+  if (body_h2.size() == 1) {
+    reference = body_reference(op, std::move(pattern), std::move(kept), pressure, 0);
+    return;
+  }
+  const BodyReferenceFactory make = [&](const BemOperator &body_op, std::vector<char> p, std::vector<char> k, int body) {
+    return body_reference(body_op, std::move(p), std::move(k), pressure, body);
+  };
+  auto composite = std::make_unique<CompositeReference>(op, node_bodies(*s.disc), std::move(pattern), std::move(kept), make);
+  for (int b = 0; b < composite->num_bodies(); ++b)
+    HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF, "hssbem: contact: body %d: %d unknowns, %s reference, set up in %.2f s (%.0f MB)\n", b, composite->body_reference(b).num_unknowns(),
+                                body_h2[b] ? "H2" : "dense", composite->body_seconds(b), composite->body_reference(b).memory_bytes() / 1e6));
+  reference = std::move(composite);
+}
+
+void ContactRun::set_up(const NodeConditions &base, const std::vector<NodeConditions> &frames)
 {
   const EventScope event(CNT_Setup);
   const Timer timer;
@@ -180,7 +245,7 @@ void ContactRun::set_up(const NodeConditions &base)
     throw ConstraintError(s.spec.file + ": " + e.what());
   }
   fault_point("ContactSetup");
-  make_reference(base);
+  make_reference(base, frames, obstacles, settings, opt);
   engine = std::make_unique<ContactEngine>(*s.disc, *reference, std::move(obstacles), settings, opt);
   engine->prefetch(placements_of(s.spec));
   seconds["contact_setup"] += timer.seconds();
@@ -196,8 +261,8 @@ void ContactRun::single(const NodeConditions &nc)
   check_finite(sol, -1);
   HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF, "hssbem: contact: %lld vertices touching (%lld stick, %lld slip) after %lld iterations, %.3f ms\n", rep.active_vertices, rep.stick,
                               rep.slip, rep.iterations, 1e3 * rep.seconds));
-  if (const auto *h = dynamic_cast<const H2Reference *>(reference.get())) {
-    const H2ReferenceStats &st = h->stats();
+  if (std::any_of(body_h2.begin(), body_h2.end(), [](char c) { return c != 0; })) {
+    const H2ReferenceStats st = h2_stats(*reference);
     HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF,
                                 "hssbem: contact: %d corrections by accurate H2 solves (%.2f s; last change %.1e); H2 reference: %lld columns in %.2f s, %lld accurate solves "
                                 "(%lld GMRES iterations) in %.2f s\n",
@@ -206,7 +271,7 @@ void ContactRun::single(const NodeConditions &nc)
   if (s.output.empty()) return;
   ResultData r = result_base(s, size);
   r.attributes_str["solver"] = "contact";
-  r.attributes_str["mat_type"] = h2 ? "h2" : "dense";
+  r.attributes_str["mat_type"] = mat_type_of(body_h2);
   r.displacement = vertex_average(*s.disc, sol.u);
   r.traction = vertex_average(*s.disc, sol.t);
   r.traction_corner = corner_values(*s.disc, sol.t);
@@ -234,7 +299,7 @@ void ContactRun::scene(const std::vector<NodeConditions> &frames)
   if (!s.output.empty()) {
     ResultData base = result_base(s, size);
     base.attributes_str["solver"] = "contact";
-    base.attributes_str["mat_type"] = h2 ? "h2" : "dense";
+    base.attributes_str["mat_type"] = mat_type_of(body_h2);
     writer = std::make_unique<FrameWriter>(s.output, base);
   }
   const std::vector<std::vector<Vec3>> placements = placements_of(s.spec);
@@ -276,27 +341,33 @@ void ContactRun::scene(const std::vector<NodeConditions> &frames)
   HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF, "hssbem: wrote %s\n", s.output.c_str()));
 }
 
-/// The reference a contact runs on: the dense one when asked, or (auto) when it fits the node's
-/// memory; the H² one when asked, or (auto) when dense does not fit. HSS is refused, and so are
-/// several bodies on the H² path (its operator couples them: h2_reference.hpp).
-bool contact_on_h2(MPI_Comm comm, const ProblemSetup &s, std::optional<OperatorType> asked)
+/// Per body (one entry when the mesh is one body), whether its reference is the H² one: all
+/// when asked (-bem_mat_type h2), none when dense is asked (an error if they do not fit the node's
+/// memory together); with auto, the bodies in order take the dense reference while the dense
+/// ones fit the node's memory together, the others the H² one. HSS is refused.
+std::vector<char> references_on_h2(MPI_Comm comm, const ProblemSetup &s, std::optional<OperatorType> asked)
 {
   if (asked && *asked == OperatorType::Hss)
     throw std::runtime_error("-bem_mat_type hss: contact runs on the dense or the H2 reference factorization; use -bem_mat_type dense, h2 or auto");
-  const long long N = 3LL * s.disc->num_nodes();
+  const std::vector<int> node_body = node_bodies(*s.disc);
+  std::vector<double> unknowns(node_body.empty() ? 1 : *std::max_element(node_body.begin(), node_body.end()) + 1, 0.0);
+  for (int i = 0; i < s.disc->num_nodes(); ++i) unknowns[node_body.empty() ? 0 : node_body[i]] += 3;
   MachineLimits limits;
   HssbemCallThrow(HssbemMachineLimits(comm, &limits));
-  const double need = 8.0 * N * N * 4.0; // H, G, the LU, and W's columns (at most N)
-  const bool fits = need <= 0.9 * static_cast<double>(limits.node_memory_bytes);
-  if (asked && *asked == OperatorType::Dense && !fits)
-    throw std::runtime_error("contact needs about " + std::to_string(static_cast<long long>(need / 1e9 + 0.5)) + " GB for " + std::to_string(N) +
-                             " unknowns (dense reference factorization, H and G, W's columns), more than this node's " +
+  const double room = 0.9 * static_cast<double>(limits.node_memory_bytes);
+  std::vector<char> h2(unknowns.size(), asked && *asked == OperatorType::H2);
+  double need = 0, total = 0;
+  for (std::size_t b = 0; b < unknowns.size(); ++b) {
+    const double nb = 8.0 * unknowns[b] * unknowns[b] * 3.0; // the LU, K₀′ (at most), W's columns (at most N_b)
+    total += nb;
+    if (asked) continue;
+    h2[b] = need + nb > room;
+    if (!h2[b]) need += nb;
+  }
+  if (asked && *asked == OperatorType::Dense && total > room)
+    throw std::runtime_error("contact needs about " + std::to_string(static_cast<long long>(total / 1e9 + 0.5)) + " GB for " + std::to_string(3LL * s.disc->num_nodes()) +
+                             " unknowns (dense reference factorization, the operator's columns, W's columns), more than this node's " +
                              std::to_string(static_cast<long long>(limits.node_memory_bytes / 1e9)) + " GB; use -bem_mat_type h2");
-  const bool h2 = asked ? *asked == OperatorType::H2 : !fits;
-  const int bodies = h2 ? find_bodies(s.disc->mesh()).count : 1;
-  if (bodies > 1)
-    throw std::runtime_error("contact on the H2 reference factorization needs one body (the mesh has " + std::to_string(bodies) +
-                             "): the H2 operator does not keep separate bodies apart; use -bem_mat_type dense");
   return h2;
 }
 
@@ -308,20 +379,21 @@ void run_contact(MPI_Comm comm, const ProblemSetup &s, const BemOperator &op, st
   PetscMPIInt rank, size;
   HssbemCallMPIThrow(MPI_Comm_rank(comm, &rank));
   HssbemCallMPIThrow(MPI_Comm_size(comm, &size));
-  const bool on_h2 = contact_on_h2(comm, s, asked);
+  const std::vector<char> body_h2 = references_on_h2(comm, s, asked);
+  const bool on_h2 = std::any_of(body_h2.begin(), body_h2.end(), [](char c) { return c != 0; });
   H2Options h2;
   if (on_h2) { // the driver's H² defaults (petsc/system.cxx), then -mat_h2_*
     h2.rel_tol = 1e-5, h2.single_precision = true;
     HssbemCallThrow(HssbemH2OptionsFromDatabase(comm, NULL, &h2));
   }
   HssbemCallThrow(PetscPrintf(comm, "hssbem: contact: %zu obstacles%s, %zu frames, on the %s reference factorization (rank 0)\n", s.spec.contact.obstacles.size(),
-                              s.spec.contact.bodies ? " and the bodies" : "", std::max<std::size_t>(1, s.spec.frames.size()), on_h2 ? "H2" : "dense"));
+                              s.spec.contact.bodies ? " and the bodies" : "", std::max<std::size_t>(1, s.spec.frames.size()), mat_type_of(body_h2) == "dense,h2" ? "dense and H2" : on_h2 ? "H2" : "dense"));
   run_collectively(comm, [&] {
     if (rank != 0) return;
     const NodeConditions base = apply_rules(s.spec.rules, *s.disc, s.spec.file);
     const std::vector<NodeConditions> frames = frames_of(s, base);
-    ContactRun run{s, op, o, interior, size, seconds, on_h2 ? &h2 : nullptr, nullptr, nullptr};
-    run.set_up(base);
+    ContactRun run{s, op, o, interior, size, seconds, on_h2 ? &h2 : nullptr, body_h2, nullptr, nullptr};
+    run.set_up(base, frames);
     if (s.spec.frames.empty()) run.single(frames[0]);
     else run.scene(frames);
   });

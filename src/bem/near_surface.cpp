@@ -28,16 +28,24 @@ double max_edge(const SurfaceMesh &mesh)
   return h;
 }
 
-/// Whether y is inside and at least `clearance` from the surface.
-bool clear_of_surface(const SurfaceLocator &locator, const Vec3 &y, double clearance)
+/// Whether y is at least `clearance` from the surface and inside the body. `joined`: y is known to
+/// be reachable from an inside point without crossing the surface (see band_recipe), so no
+/// winding number is needed.
+bool clear_of_surface(const SurfaceLocator &locator, const Vec3 &y, double clearance, bool joined)
 {
-  return locator.nearest(y).distance >= clearance && locator.inside(y);
+  return locator.nearest(y, clearance).triangle < 0 && (joined || locator.inside(y));
 }
 
 } // namespace
 
+// The support points lie on the ray from x0 through x (inside, at distance d < δ from x0, the
+// ball of radius d around it free of the surface). x1 = x0 + δ dir, clear by 0.9 δ: the segment
+// from x to x1 lies in the two empty balls when 2 d > 0.1 δ, so x1 is inside without a winding
+// number; x2 = x0 + 2 δ dir, clear by 1.8 δ, is likewise joined to x1 (0.9 + 1.8 > 1).
+static_assert(3 * support_clearance > 1, "the second support point's ball must reach the first's");
+
 InteriorPlan::Recipe InteriorPlan::band_recipe(const SurfaceLocator &locator, const SurfaceMesh &mesh, const Vec3 &x, const SurfaceLocator::Nearest &n,
-                                               double delta)
+                                               double delta, std::array<Vec3, 2> &support)
 {
   Recipe r;
   r.kind = PointKind::Band;
@@ -47,14 +55,11 @@ InteriorPlan::Recipe InteriorPlan::band_recipe(const SurfaceLocator &locator, co
   const Vec3 dir = d > 0 ? (1.0 / d) * (x - n.point) : -1.0 * mesh.triangle_normal(n.triangle);
   for (int halve = 0; halve < 3 && d < delta; ++halve, delta *= 0.5) {
     const Vec3 x1 = n.point + delta * dir, x2 = n.point + (2 * delta) * dir;
-    if (!clear_of_surface(locator, x1, support_clearance * delta)) continue;
+    if (!clear_of_surface(locator, x1, support_clearance * delta, 2 * d > (1 - support_clearance) * delta)) continue;
     const double s = d / delta;
-    const int at = static_cast<int>(m_eval.size());
-    m_eval.push_back(x1);
-    r.eval[0] = at;
-    if (clear_of_surface(locator, x2, 2 * support_clearance * delta)) { // quadratic through 0, δ, 2δ
-      m_eval.push_back(x2);
-      r.eval[1] = at + 1;
+    support[0] = x1, r.eval[0] = 0;
+    if (clear_of_surface(locator, x2, 2 * support_clearance * delta, true)) { // quadratic through 0, δ, 2δ
+      support[1] = x2, r.eval[1] = 0;
       r.w_surface = 0.5 * (s - 1) * (s - 2);
       r.w[0] = s * (2 - s);
       r.w[1] = 0.5 * s * (s - 1);
@@ -64,36 +69,47 @@ InteriorPlan::Recipe InteriorPlan::band_recipe(const SurfaceLocator &locator, co
     }
     return r;
   }
-  r = Recipe{}; // no clear line: integrate where the point is
-  r.kind = PointKind::Deep;
-  r.eval[0] = static_cast<int>(m_eval.size());
-  r.w[0] = 1;
-  m_eval.push_back(x);
+  return deep_recipe(x, support); // no clear line: integrate where the point is
+}
+
+InteriorPlan::Recipe InteriorPlan::deep_recipe(const Vec3 &x, std::array<Vec3, 2> &support)
+{
+  Recipe r;
+  r.kind = PointKind::Deep, r.eval[0] = 0, r.w[0] = 1;
+  support[0] = x;
   return r;
+}
+
+InteriorPlan::Recipe InteriorPlan::classify(const SurfaceLocator &locator, const SurfaceMesh &mesh, const Vec3 &x, signed char side, const Reach &reach,
+                                            std::array<Vec3, 2> &support)
+{
+  Recipe r;
+  // A point outside by the caller only needs to know whether it lies on the surface.
+  const SurfaceLocator::Nearest n = locator.nearest(x, (side == 0 ? reach.on : reach.band) * (1 + 1e-12));
+  if (n.triangle >= 0 && n.distance <= reach.on) {
+    r.kind = PointKind::Surface, r.triangle = n.triangle, r.bary = n.bary, r.w_surface = 1;
+    return r;
+  }
+  if (side == 0 || (side < 0 && !locator.inside(x))) return r; // Outside
+  const double delta = n.triangle >= 0 ? reach.band_depth * longest_edge(mesh, n.triangle) : 0.0;
+  if (n.triangle >= 0 && n.distance < delta) return band_recipe(locator, mesh, x, n, delta, support);
+  return deep_recipe(x, support);
 }
 
 InteriorPlan::InteriorPlan(const SurfaceLocator &locator, const SurfaceMesh &mesh, const std::vector<Vec3> &points, const InteriorPlanOptions &o,
                            const std::vector<signed char> *inside)
   : m_recipe(points.size())
 {
-  const double on = o.on_surface * locator.size(), reach = std::max(on, o.band * max_edge(mesh));
-  for (std::size_t p = 0; p < points.size(); ++p) {
-    const Vec3 &x = points[p];
-    const SurfaceLocator::Nearest n = locator.nearest(x, reach * (1 + 1e-12));
-    Recipe &r = m_recipe[p];
-    if (n.triangle >= 0 && n.distance <= on) {
-      r.kind = PointKind::Surface, r.triangle = n.triangle, r.bary = n.bary, r.w_surface = 1;
-      continue;
-    }
-    if (inside && (*inside)[p] >= 0 ? (*inside)[p] == 0 : !locator.inside(x)) continue; // Outside
-    const double delta = n.triangle >= 0 ? o.band * longest_edge(mesh, n.triangle) : 0.0;
-    if (n.triangle >= 0 && n.distance < delta) {
-      r = band_recipe(locator, mesh, x, n, delta);
-      continue;
-    }
-    r.kind = PointKind::Deep, r.eval[0] = static_cast<int>(m_eval.size()), r.w[0] = 1;
-    m_eval.push_back(x);
-  }
+  Reach reach;
+  reach.on = o.on_surface * locator.size(), reach.band = std::max(reach.on, o.band * max_edge(mesh)), reach.band_depth = o.band;
+  std::vector<std::array<Vec3, 2>> support(points.size());
+  const long long np = static_cast<long long>(points.size());
+#pragma omp parallel for schedule(dynamic, 256)
+  for (long long p = 0; p < np; ++p) m_recipe[p] = classify(locator, mesh, points[p], inside ? (*inside)[p] : -1, reach, support[p]);
+  // The evaluation points in the order of the points, each point's support points in turn.
+  for (std::size_t p = 0; p < points.size(); ++p)
+    for (int s = 0; s < 2; ++s)
+      if (m_recipe[p].eval[s] >= 0) m_recipe[p].eval[s] = static_cast<int>(m_eval.size()), m_eval.push_back(support[p][s]);
 }
 
 namespace {

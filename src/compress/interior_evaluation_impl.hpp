@@ -20,9 +20,6 @@ struct SpherePoints {
 /// the tests check the evaluation against the direct sums).
 void add_forces_field(const SomiglianaConstants &k, const Vec3 &x, const Vec3 &centre, double r, const SpherePoints &s, const float *q, double *out);
 
-/// u[0..3) += the displacement at x of the forces q (SoA floats) at centre + r · s, summed in floats.
-void add_forces_at(const SomiglianaConstants &k, const Vec3 &x, const Vec3 &centre, double r, const SpherePoints &s, const float *q, double *u);
-
 /// field (SoA, 3 m) += the displacement at the m points p (floats, relative to an origin) of the
 /// forces q (SoA floats, 3n) at c + r · s (c relative to the same origin). The SIMD loop runs over
 /// the points, force by force, and each call sums in floats: the fits' many pairs.
@@ -32,7 +29,7 @@ void add_forces_to(const SomiglianaConstants &k, const float *const p[3], int m,
 inline std::vector<float> to_float(const std::vector<double> &v) { return std::vector<float>(v.begin(), v.end()); }
 
 /// u[0..3) += the displacement at x of the forces q (SoA: q[j], q[n + j], q[2n + j]) at the
-/// points centre + r · s.
+/// points centre + r · s, summed in doubles (the upward pass).
 void add_forces_at(const SomiglianaConstants &k, const Vec3 &x, const Vec3 &centre, double r, const SpherePoints &s, const double *q, double *u);
 
 /// One unit configuration of the fits: equivalent points (where the fitted forces sit, radius

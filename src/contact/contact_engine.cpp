@@ -83,6 +83,24 @@ std::vector<char> node_pattern(const std::vector<std::array<bool, 3>> &known)
   return p;
 }
 
+/// s when `values` are `base`'s known values times s (the same pattern, no pressure loads, each
+/// value within round-off of s times base's), else NaN: the free response of a load that ramps
+/// up is the last solved one scaled, no solve.
+double known_ratio(const SystemSelection &values, const SystemSelection &base)
+{
+  const auto no_pressure = [](const SystemSelection &v) { return std::all_of(v.pressure.begin(), v.pressure.end(), [](double p) { return std::isnan(p); }); };
+  if (values.displacement_known != base.displacement_known || values.known.size() != base.known.size() || !no_pressure(values) || !no_pressure(base)) return std::nan("");
+  double s = std::nan("");
+  for (std::size_t i = 0; i < base.known.size() && std::isnan(s); ++i)
+    for (int c = 0; c < 3 && std::isnan(s); ++c)
+      if (base.known[i][c] != 0) s = values.known[i][c] / base.known[i][c];
+  if (!std::isfinite(s)) return std::nan("");
+  for (std::size_t i = 0; i < base.known.size(); ++i)
+    for (int c = 0; c < 3; ++c)
+      if (std::abs(values.known[i][c] - s * base.known[i][c]) > 4e-16 * std::abs(values.known[i][c])) return std::nan("");
+  return s;
+}
+
 std::string join(const std::vector<std::string> &parts)
 {
   std::string s;
@@ -175,6 +193,9 @@ struct ContactEngine::State {
   bool has_free = false;
   SystemSelection free_values;
   std::vector<double> xf;
+  SystemSelection solved_values;       ///< the values of the last free response solved (not scaled)
+  std::vector<double> solved_xf;       ///< and that response
+  bool exact = true;                   ///< the reference's columns are exact (its x_f is never corrected)
   std::vector<Vec3> u_free;
   // the last frame
   std::unique_ptr<Compliance> D;
@@ -218,6 +239,7 @@ ContactEngine::ContactEngine(const Discretization &disc, const ReferenceFactoriz
   if (reference.num_unknowns() != 3 * disc.num_nodes()) throw std::invalid_argument("contact: the reference does not match the discretization");
   if (columns && &columns->reference() != &reference) throw std::invalid_argument("contact: the shared columns belong to another reference");
   m = std::make_unique<State>(disc, reference, make_geometry(disc, reference.pattern(), std::move(obstacles), settings, options), options);
+  m->exact = reference.exact_columns();
   m->columns = columns ? std::move(columns) : std::make_shared<ReferenceColumns>(reference, spatial_order(disc));
   m->node_position.resize(disc.num_nodes());
   for (int i = 0; i < disc.num_nodes(); ++i) m->node_position[i] = m->columns->position(3 * i) / 3;
@@ -233,6 +255,20 @@ ContactEngine::~ContactEngine() = default;
 
 int ContactEngine::num_obstacles() const { return static_cast<int>(m->geo.obstacles.size()); }
 const std::string &ContactEngine::obstacle_name(int o) const { return m->geo.obstacles.at(o).name(); }
+std::vector<char> contact_loaded_unknowns(const Discretization &disc, const std::vector<char> &pattern, const std::vector<Obstacle> &obstacles, const ContactSettings &settings,
+                                          const ContactOptions &options)
+{
+  const Geometry g = make_geometry(disc, pattern, obstacles, settings, options);
+  std::vector<char> need(pattern.size(), 0);
+  for (int i = 0; i < disc.num_nodes(); ++i)
+    if (g.candidate[disc.node(i).vertex])
+      for (int c = 0; c < 3; ++c) need[3 * i + c] = 1;
+  for (const ContactPoint &p : contact_detail::body_points(g)) // the master nodes a pair loads
+    for (int k = 0; k < p.terms; ++k)
+      for (int c = 0; c < 3; ++c) need[3 * p.term_node[k] + c] = 1;
+  return need;
+}
+
 const Bodies &ContactEngine::bodies() const { return m->geo.bodies; }
 double ContactEngine::reach() const { return m->geo.reach; }
 std::size_t ContactEngine::memory_bytes() const { return m->columns->memory_bytes(); }
@@ -263,9 +299,16 @@ void ContactEngine::State::free_response(const SystemSelection &values)
                     values.pressure.size() == free_values.pressure.size() &&
                     std::equal(values.pressure.begin(), values.pressure.end(), free_values.pressure.begin(), [](double a, double b) { return a == b || (std::isnan(a) && std::isnan(b)); });
   if (same) return;
-  ref->free_response(values, xf);
   free_values = values;
   has_free = true;
+  const double s = exact ? known_ratio(values, solved_values) : std::nan("");
+  if (std::isfinite(s)) { // the same loads scaled (a push that ramps up): the response scales
+    xf.resize(solved_xf.size());
+    for (std::size_t p = 0; p < xf.size(); ++p) xf[p] = s * solved_xf[p];
+  } else {
+    ref->free_response(values, xf);
+    solved_values = values, solved_xf = xf;
+  }
   set_u_free();
 }
 

@@ -38,6 +38,7 @@ DenseReference::DenseReference(const BemOperator &op, std::vector<char> pattern,
     : m_n(3 * op.num_nodes()), m_nodes(op.num_nodes()), m_opt(options), m_pattern(std::move(pattern))
 {
   if (static_cast<int>(m_pattern.size()) != m_n) throw std::invalid_argument("DenseReference: the pattern needs one entry per unknown");
+  check_options();
   assemble(op);
   if (!m_opt.node_body.empty()) separate_bodies(op);
   factor();
@@ -46,13 +47,54 @@ DenseReference::DenseReference(const BemOperator &op, std::vector<char> pattern,
 
 DenseReference::~DenseReference() = default;
 
+void DenseReference::check_options() const
+{
+  if (!m_opt.reference_columns_only) return;
+  if (!m_opt.node_body.empty()) throw std::invalid_argument("DenseReference: reference_columns_only takes one body (CompositeReference keeps bodies apart)");
+  if (!m_opt.kept_columns.empty() && static_cast<int>(m_opt.kept_columns.size()) != m_n)
+    throw std::invalid_argument("DenseReference: kept_columns needs one entry per unknown");
+}
+
+/// Row block r0 .. r0 + rows: H and G into m_H and m_G, or (reference_columns_only) the columns
+/// A₀ uses into m_lu and the others, where kept, into m_K. sums += ‖H‖², ‖G‖² of the block.
+void DenseReference::place_rows(int r0, int rows, const double *H, const double *G, double sums[2])
+{
+  const int N = m_n;
+  const bool compact = m_opt.reference_columns_only;
+  for (int r = 0; r < 3 * rows; ++r) {
+    const std::size_t row = 3 * static_cast<std::size_t>(r0) + r;
+    const double *h = H + static_cast<std::size_t>(r) * N, *g = G + static_cast<std::size_t>(r) * N;
+    for (int c = 0; c < N; ++c) {
+      const std::size_t at = row + static_cast<std::size_t>(c) * N;
+      sums[0] += h[c] * h[c], sums[1] += g[c] * g[c];
+      if (!compact) {
+        m_H[at] = h[c], m_G[at] = g[c];
+        continue;
+      }
+      const bool u_known = m_pattern[c] != 0; // A₀ takes −G, K₀′ H; else A₀ H, K₀′ −G
+      m_lu[at] = u_known ? -g[c] : h[c];
+      if (m_kpos[c] >= 0) m_K[row + static_cast<std::size_t>(m_kpos[c]) * N] = u_known ? h[c] : -g[c];
+    }
+  }
+}
+
 /// H and G (and Gn) column-major, rows in chunks per thread with their own workspaces.
 void DenseReference::assemble(const BemOperator &op)
 {
   const int nn = m_nodes, N = m_n, chunk = 8;
-  m_H.assign(sq(N), 0.0);
-  m_G.assign(sq(N), 0.0);
+  if (m_opt.reference_columns_only) {
+    m_kpos.assign(N, -1);
+    int kept = 0;
+    for (int j = 0; j < N; ++j)
+      if (m_opt.kept_columns.empty() || m_opt.kept_columns[j]) m_kpos[j] = kept++;
+    m_lu.assign(sq(N), 0.0);
+    m_K.assign(static_cast<std::size_t>(N) * kept, 0.0);
+  } else {
+    m_H.assign(sq(N), 0.0);
+    m_G.assign(sq(N), 0.0);
+  }
   if (m_opt.with_pressure) m_Gn.assign(static_cast<std::size_t>(N) * nn, 0.0);
+  double h2 = 0, g2 = 0;
   std::vector<int> J(nn);
   std::iota(J.begin(), J.end(), 0);
   std::exception_ptr failure;
@@ -76,15 +118,15 @@ void DenseReference::assemble(const BemOperator &op)
         std::vector<int> I(std::min(chunk, nn - r0));
         std::iota(I.begin(), I.end(), r0);
         op.fill_hg(I, J, H.data(), G.data(), N, m_opt.with_pressure ? Gn.data() : nullptr, nn, *ws);
-        for (std::size_t r = 0; r < 3 * I.size(); ++r) {
-          const std::size_t row = 3 * static_cast<std::size_t>(r0) + r;
-          for (int c = 0; c < N; ++c) {
-            m_H[row + static_cast<std::size_t>(c) * N] = H[r * N + c];
-            m_G[row + static_cast<std::size_t>(c) * N] = G[r * N + c];
-          }
-          if (m_opt.with_pressure)
-            for (int c = 0; c < nn; ++c) m_Gn[row + static_cast<std::size_t>(c) * N] = Gn[r * nn + c];
-        }
+        double sums[2] = {0, 0};
+        place_rows(r0, static_cast<int>(I.size()), H.data(), G.data(), sums);
+#pragma omp atomic
+        h2 += sums[0];
+#pragma omp atomic
+        g2 += sums[1];
+        if (m_opt.with_pressure)
+          for (std::size_t r = 0; r < 3 * I.size(); ++r)
+            for (int c = 0; c < nn; ++c) m_Gn[3 * static_cast<std::size_t>(r0) + r + static_cast<std::size_t>(c) * N] = Gn[r * nn + c];
       } catch (...) {
 #pragma omp critical(hssbem_reference_assembly)
         if (!failure) failure = std::current_exception();
@@ -92,6 +134,7 @@ void DenseReference::assemble(const BemOperator &op)
     }
   }
   if (failure) std::rethrow_exception(failure);
+  m_scale_t = g2 > 0 ? std::sqrt(h2 / g2) : 1.0;
 }
 
 /// With H's row sums zero (a rigid translation gives no traction), the other bodies' part S of
@@ -130,11 +173,15 @@ void DenseReference::separate_bodies(const BemOperator &op)
 void DenseReference::factor()
 {
   const int N = m_n;
-  m_lu.resize(sq(N));
-  system_matrix(m_pattern, m_lu.data());
-  double h2 = 0, g2 = 0;
-  for (std::size_t i = 0; i < m_H.size(); ++i) h2 += m_H[i] * m_H[i], g2 += m_G[i] * m_G[i];
-  m_scale_t = g2 > 0 ? std::sqrt(h2 / g2) : 1.0;
+  if (!m_opt.reference_columns_only) { // (compact: assembled into place)
+    m_lu.resize(sq(N));
+    system_matrix(m_pattern, m_lu.data());
+  }
+  if (!m_opt.node_body.empty()) { // the separated operator's scale
+    double h2 = 0, g2 = 0;
+    for (std::size_t i = 0; i < m_H.size(); ++i) h2 += m_H[i] * m_H[i], g2 += m_G[i] * m_G[i];
+    m_scale_t = g2 > 0 ? std::sqrt(h2 / g2) : 1.0;
+  }
   m_piv.resize(N);
   const int info = lapack::getrf(N, m_lu.data(), N, m_piv.data());
   if (info != 0) throw std::runtime_error("scene: the reference pattern's system is singular (LU pivot " + std::to_string(info) + " is zero); the base rules must hold the body");
@@ -159,6 +206,8 @@ void DenseReference::drop_operator()
   std::vector<double>().swap(m_H);
   std::vector<double>().swap(m_G);
   std::vector<double>().swap(m_Gn);
+  std::vector<double>().swap(m_K);
+  std::vector<int>().swap(m_kpos);
 }
 
 void DenseReference::solve(double *X, int nrhs) const
@@ -168,6 +217,10 @@ void DenseReference::solve(double *X, int nrhs) const
 
 void DenseReference::reference_column(int j, double *col) const
 {
+  if (!has_operator()) {
+    std::copy_n(&m_K[static_cast<std::size_t>(m_kpos[j]) * m_n], m_n, col);
+    return;
+  }
   const std::size_t off = static_cast<std::size_t>(j) * m_n;
   if (m_pattern[j]) std::copy_n(&m_H[off], m_n, col);
   else
@@ -177,15 +230,15 @@ void DenseReference::reference_column(int j, double *col) const
 void DenseReference::columns(const std::vector<int> &js, double *out) const
 {
   if (js.empty()) return;
-  if (!has_operator()) throw std::invalid_argument("reference: new columns of W need the operator (keep_operator)");
+  for (int j : js) {
+    if (j < 0 || j >= m_n) throw std::out_of_range("reference: column " + std::to_string(j) + " out of range");
+    if (!has_column(j))
+      throw std::invalid_argument(!m_kpos.empty() ? "reference: column " + std::to_string(j) + " of W was not kept (kept_columns)"
+                                                  : "reference: new columns of W need the operator (keep_operator)");
+  }
   const int k = static_cast<int>(js.size());
 #pragma omp parallel for schedule(static)
-  for (int q = 0; q < k; ++q) {
-    if (js[q] < 0 || js[q] >= m_n) continue; // refused below, outside the parallel region
-    reference_column(js[q], out + static_cast<std::size_t>(q) * m_n);
-  }
-  for (int j : js)
-    if (j < 0 || j >= m_n) throw std::out_of_range("reference: column " + std::to_string(j) + " out of range");
+  for (int q = 0; q < k; ++q) reference_column(js[q], out + static_cast<std::size_t>(q) * m_n);
   solve(out, k);
 }
 
@@ -198,7 +251,7 @@ void DenseReference::pressure_columns(const std::vector<int> &nodes, double *out
 
 void DenseReference::rhs(const SystemSelection &sel, const std::vector<char> &pattern, std::vector<double> &b) const
 {
-  if (!has_operator()) throw std::invalid_argument("scene: this strategy needs the operator (SceneOptions::keep_operator)");
+  if (!has_operator() && (m_kpos.empty() || pattern != m_pattern)) throw std::invalid_argument("scene: this strategy needs the operator (SceneOptions::keep_operator)");
   b.assign(m_n, 0.0);
   std::vector<int> hc, gc, pc;
   std::vector<double> hv, gv, pv;
@@ -212,6 +265,18 @@ void DenseReference::rhs(const SystemSelection &sel, const std::vector<char> &pa
   for (int node = 0; node < m_nodes; ++node)
     if (has_pressure(sel, node)) pc.push_back(node), pv.push_back(-sel.pressure[node]);
   if (!pc.empty() && m_Gn.empty()) throw std::invalid_argument("scene frame: pressure loads need a scene set up with pressure (SceneOptions::with_pressure)");
+  if (!has_operator()) { // K₀′ alone: b = −Σ_j K₀′(:, j) v_j
+    for (std::vector<int> *cols : {&hc, &gc})
+      for (int &j : *cols) {
+        if (m_kpos[j] < 0) throw std::invalid_argument("reference: a known value at unknown " + std::to_string(j) + ", whose column was not kept (kept_columns)");
+        j = m_kpos[j];
+      }
+    for (double &v : gv) v = -v;
+    add_columns(m_K, m_n, hc, hv, b.data());
+    add_columns(m_K, m_n, gc, gv, b.data());
+    add_columns(m_Gn, m_n, pc, pv, b.data());
+    return;
+  }
   add_columns(m_H, m_n, hc, hv, b.data());
   add_columns(m_G, m_n, gc, gv, b.data());
   add_columns(m_Gn, m_n, pc, pv, b.data());
@@ -236,7 +301,7 @@ void DenseReference::free_response(const SystemSelection &sel, std::vector<doubl
   solve(y.data(), 1);
 }
 
-std::size_t DenseReference::memory_bytes() const { return 8 * (m_H.size() + m_G.size() + m_Gn.size() + m_lu.size()) + 4 * m_piv.size(); }
+std::size_t DenseReference::memory_bytes() const { return 8 * (m_H.size() + m_G.size() + m_Gn.size() + m_K.size() + m_lu.size()) + 4 * (m_piv.size() + m_kpos.size()); }
 
 // --- the column cache ---------------------------------------------------------------------------
 

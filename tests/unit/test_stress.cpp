@@ -279,6 +279,30 @@ TEST(SurfaceLocator, GridInsideMatchesTheWindingNumber)
   }
 }
 
+// The plan of a grid is the same whether the sides come from the flood fill or from the winding
+// number at every point: the same kinds, the same evaluation points in the same order (the plan
+// is built in parallel and numbered afterwards).
+TEST(InteriorPlan, GridSidesGiveTheSamePlan)
+{
+  const SurfaceMesh mesh = test::icosphere(3);
+  const SurfaceLocator loc(mesh);
+  const Vec3 origin{-1.05, -1.02, -1.07}, step{0.07, 0.08, 0.075};
+  const std::array<int, 3> n{31, 27, 29};
+  std::vector<Vec3> pts;
+  for (int k = 0; k < n[2]; ++k)
+    for (int j = 0; j < n[1]; ++j)
+      for (int i = 0; i < n[0]; ++i) pts.push_back({origin[0] + i * step[0], origin[1] + j * step[1], origin[2] + k * step[2]});
+  const std::vector<signed char> side = grid_inside(loc, origin, step, n);
+  const InteriorPlan by_grid(loc, mesh, pts, {}, &side), by_winding(loc, mesh, pts);
+  int band = 0;
+  for (std::size_t p = 0; p < pts.size(); ++p) {
+    EXPECT_EQ(by_grid.kind(p), by_winding.kind(p)) << p;
+    band += by_grid.kind(p) == PointKind::Band;
+  }
+  EXPECT_GT(band, 500);
+  EXPECT_EQ(by_grid.evaluation_points(), by_winding.evaluation_points());
+}
+
 // Points of the band take a quadratic through the surface value and two integrated points:
 // exact for a linear field, on faces, near edges and at corners; outside points are NaN.
 TEST(InteriorPlan, BandIsExactForALinearField)

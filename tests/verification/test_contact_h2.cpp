@@ -85,3 +85,44 @@ TEST(ContactH2, HertzAgreesWithTheDenseReference)
   std::printf("H2 factorization: blocked solve against single solves %.1e\n", worst);
   EXPECT_LE(worst, 1e-14); // measured 2.3e-15
 }
+
+TEST(ContactH2, ToolFramesAndFrictionAgreeWithTheDenseReference)
+{
+  // The bottom clamped, a tool (sphere) pressed into the top slides along x over four frames,
+  // frictionless and with friction 0.3 (quasi-static steps: slip from the previous frame): on
+  // the H² reference (columns W̃ corrected by accurate solves every frame) against the dense one.
+  ProblemSpec spec = spec_for("cube_l0.msh", E, nu);
+  spec.rules = {rule(BoundaryRule::Kind::Displacement, region("z0"), {{0, 0, 0}})};
+  spec.contact.present = true;
+  const ProblemSetup s = setup_problem(std::move(spec), ProblemOverrides{});
+  const BemOperator op(*s.disc, s.material);
+  const NodeConditions base = apply_rules(s.spec.rules, *s.disc, s.spec.file);
+  const DenseReference dense(op, base.unknown_pattern());
+  H2ReferenceOptions ho;
+  ho.compression.rel_tol = 1e-5, ho.compression.single_precision = true, ho.compression.leaf_size = 16; // several levels on the small cube
+  const H2Reference h2(op, base.unknown_pattern(), ho);
+  const Obstacle tool = Obstacle::sphere("tool", {0.25, 0.5, 1.5 - 0.08}, 0.5);
+  for (double mu : {0.0, 0.3}) {
+    ContactSettings settings;
+    settings.friction = mu;
+    ContactEngine ed(*s.disc, dense, {tool}, settings), eh(*s.disc, h2, {tool}, settings);
+    double du = 0, um = 0, dp = 0, pm = 0;
+    long long least = 1 << 30, corrections = 0;
+    for (int f = 0; f < 4; ++f) {
+      ContactSolution sd, sh;
+      ed.solve(selection_of(base), {Vec3{0.1 * f, 0, 0}}, sd);
+      const ContactFrameReport rh = eh.solve(selection_of(base), {Vec3{0.1 * f, 0, 0}}, sh);
+      corrections += rh.corrections;
+      least = std::min(least, rh.active_vertices);
+      EXPECT_LE(rh.correction, 1e-8) << "mu " << mu << " frame " << f;
+      for (std::size_t i = 0; i < sd.u.size(); ++i) du = std::max(du, norm(sh.u[i] - sd.u[i])), um = std::max(um, norm(sd.u[i]));
+      for (std::size_t v = 0; v < sd.pressure.size(); ++v) dp = std::max(dp, std::abs(sh.pressure[v] - sd.pressure[v])), pm = std::max(pm, sd.pressure[v]);
+    }
+    std::printf("H2 against dense, a tool sliding over four frames, friction %.1f: u %.2e, pressure %.2e (of the peak); %lld corrections; at least %lld touching\n", mu, du / um,
+                dp / pm, corrections, least);
+    EXPECT_GT(least, 0);
+    EXPECT_GE(corrections, 4);
+    EXPECT_LE(du, 8e-7 * um); // measured 2.5e-7 (frictionless), 1.8e-7 (friction 0.3)
+    EXPECT_LE(dp, 1e-7 * pm); // measured 2.8e-8, 3.3e-8
+  }
+}

@@ -62,7 +62,17 @@ private:
     int eval[2] = {-1, -1};
     double w_surface = 0, w[2] = {0, 0};
   };
-  Recipe band_recipe(const SurfaceLocator &locator, const SurfaceMesh &mesh, const Vec3 &x, const SurfaceLocator::Nearest &n, double delta);
+  /// Distances of the classification: on the surface, the band's search radius, its depth in element sizes.
+  struct Reach {
+    double on = 0, band = 0, band_depth = 0;
+  };
+  /// The recipe of point x (side: 1 inside, 0 outside, −1 unknown), its evaluation points in
+  /// `support` (eval[s] = 0 marks support[s] as used; numbered by the constructor).
+  static Recipe classify(const SurfaceLocator &locator, const SurfaceMesh &mesh, const Vec3 &x, signed char side, const Reach &reach,
+                         std::array<Vec3, 2> &support);
+  static Recipe band_recipe(const SurfaceLocator &locator, const SurfaceMesh &mesh, const Vec3 &x, const SurfaceLocator::Nearest &n, double delta,
+                            std::array<Vec3, 2> &support);
+  static Recipe deep_recipe(const Vec3 &x, std::array<Vec3, 2> &support);
 
   std::vector<Recipe> m_recipe;
   std::vector<Vec3> m_eval;

@@ -104,6 +104,13 @@ struct ContactSolution {
 void check_bodies_held(const Discretization &disc, const std::vector<std::array<bool, 3>> &known, const std::vector<Obstacle> &obstacles,
                        const ContactSettings &settings, const ContactOptions &options = {});
 
+/// Per unknown, 1 where a contact of these obstacles and settings may load it in some frame (and
+/// so ask its column of W): the candidates' unknowns, and the master nodes of the body pairs
+/// (found once, in the undeformed geometry). What a dense reference must keep of K₀′
+/// (DenseReferenceOptions::kept_columns), with the unknowns whose known values are not zero.
+std::vector<char> contact_loaded_unknowns(const Discretization &disc, const std::vector<char> &pattern, const std::vector<Obstacle> &obstacles, const ContactSettings &settings,
+                                          const ContactOptions &options = {});
+
 class ContactEngine {
 public:
   /// `reference` (whose pattern must leave the candidates traction-known where they are not

@@ -12,9 +12,9 @@
 ///   exact_columns() is false, and an engine corrects its answer with accurate solves (the
 ///   contact engine does: docs/contact.md, "The H² reference").
 ///
-/// One body only: the H² matrix couples every collocation point with every triangle, so separate
-/// bodies are not kept apart as DenseReferenceOptions::node_body does (their near-contact
-/// integrals are nearly singular); the contact driver refuses several bodies on this path.
+/// One body: the H² matrix couples every collocation point with every triangle, so separate
+/// bodies would not be kept apart (their near-contact integrals are nearly singular); several
+/// bodies take one H2Reference each in a CompositeReference (composite_reference.hpp).
 #pragma once
 
 #include "hssbem/h2/h2_compression.hpp"

@@ -61,10 +61,22 @@ struct DenseReferenceOptions {
   /// other-body integrals vanish analytically, but where bodies nearly touch (contact) they are
   /// nearly singular, and their quadrature error moved two Hertz spheres' contact radius by 7 %.
   std::vector<int> node_body;
+  /// Keep only K₀′ — the columns of K = [H, −G] that A₀ does not use, all that columns() and
+  /// free_response() read — instead of H and G: the rows are assembled straight into A₀ (then
+  /// factored in place) and K₀′, so the set-up holds 16 N² bytes, not 24 N². rhs() then takes
+  /// the reference pattern only, and apply() and system_matrix() refuse (scenes' refactor and
+  /// krylov strategies need H and G). One body only (node_body empty: see CompositeReference).
+  bool reference_columns_only = false;
+  /// With reference_columns_only: per unknown, 1 where its column of K₀′ is kept (empty: every
+  /// one). A column not kept can be neither asked of columns() nor carry a non-zero known value
+  /// in free_response() (std::invalid_argument): K₀′ takes 8 N · kept bytes. A contact needs the
+  /// candidates' columns and those of the unknowns whose known values are not zero.
+  std::vector<char> kept_columns;
 };
 
 /// The dense reference: H and G assembled, A₀ = LU (LAPACK), W's columns by getrs on demand.
-/// Memory 8 N² bytes for the LU, plus 16 N² for H and G (keep_operator) and 8 N² / 3 for Gn.
+/// Memory 8 N² bytes for the LU, plus 16 N² for H and G (keep_operator) or 8 N · kept for K₀′
+/// alone (reference_columns_only), and 8 N² / 3 for Gn.
 class DenseReference final : public ReferenceFactorization {
 public:
   /// Assembles and factors A₀ for `pattern` (one entry per unknown, 1 where u is known). Throws
@@ -97,6 +109,11 @@ public:
 
 private:
   void assemble(const BemOperator &op);
+  /// Row block r0 .. r0 + rows of H and G (row-major, ld N) into their places: H and G, or A₀ and K₀′.
+  void place_rows(int r0, int rows, const double *H, const double *G, double sums[2]);
+  void check_options() const;
+  /// Column j of K₀′ is at hand (H and G, or kept in K₀′).
+  bool has_column(int j) const { return has_operator() || (!m_kpos.empty() && m_kpos[j] >= 0); }
   /// Separate bodies' rows and columns made independent (DenseReferenceOptions::node_body).
   void separate_bodies(const BemOperator &op);
   void factor();
@@ -107,6 +124,8 @@ private:
   DenseReferenceOptions m_opt;
   std::vector<char> m_pattern;
   std::vector<double> m_H, m_G, m_Gn; ///< the operator, column-major
+  std::vector<double> m_K;            ///< reference_columns_only: the kept columns of K₀′, column-major
+  std::vector<int> m_kpos;            ///< per unknown: its column in m_K, or -1
   std::vector<double> m_lu;           ///< LU of A₀, column-major, and its pivots
   std::vector<int> m_piv;
   double m_scale_t = 1;
