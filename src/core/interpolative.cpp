@@ -63,16 +63,7 @@ ColumnId gram_id(const double *a, int m, int n, int ld, const IdOptions &options
 {
   std::vector<double> G(Size(n) * Size(n));
   lapack::syrk_t(n, m, 1.0, a, ld, 0.0, G.data(), n);
-  double largest = 0;
-  for (int j = 0; j < n; ++j) largest = std::max(largest, G[Size(j) * Size(n) + Size(j)]);
-  std::vector<int> piv(static_cast<Size>(n));
-  int k = largest > 0 ? lapack::pstrf_upper(n, G.data(), n, piv.data(), options.rel_tol * options.rel_tol * largest) : 0;
-  if (largest <= 0) std::iota(piv.begin(), piv.end(), 1);
-  if (options.max_rank >= 0) k = std::min(k, options.max_rank);
-  ColumnId id;
-  for (int j = 0; j < n; ++j) (j < k ? id.skeleton : id.redundant).push_back(piv[Size(j)] - 1);
-  id.T = interpolation_matrix(G.data(), n, k, n);
-  return id;
+  return gram_column_id(G.data(), n, options);
 }
 
 /// Column ID of the m×n matrix in `work` (leading dimension ld), which is overwritten.
@@ -120,6 +111,20 @@ void check_id(const ColumnId &id, int n, const char *what)
 }
 
 } // namespace
+
+ColumnId gram_column_id(double *G, int n, const IdOptions &options)
+{
+  double largest = 0;
+  for (int j = 0; j < n; ++j) largest = std::max(largest, G[Size(j) * Size(n) + Size(j)]);
+  std::vector<int> piv(static_cast<Size>(n));
+  int k = largest > 0 ? lapack::pstrf_upper(n, G, n, piv.data(), options.rel_tol * options.rel_tol * largest) : 0;
+  if (largest <= 0) std::iota(piv.begin(), piv.end(), 1);
+  if (options.max_rank >= 0) k = std::min(k, options.max_rank);
+  ColumnId id;
+  for (int j = 0; j < n; ++j) (j < k ? id.skeleton : id.redundant).push_back(piv[Size(j)] - 1);
+  id.T = interpolation_matrix(G, n, k, n);
+  return id;
+}
 
 ColumnId column_id(const double *A, int m, int n, int lda, const IdOptions &options)
 {

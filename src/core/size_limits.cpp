@@ -154,7 +154,7 @@ double h2_top_bytes(long long unknowns, const SizeOptions &o, const MachineLimit
   const bool   single_panels = o.pc_h2_rel_tol >= 1e-5;
   const bool   reduced       = o.pc_h2_mixed_top > 0 && top >= static_cast<double>(o.pc_h2_mixed_top);
   if (!reduced) return k_h2_double_top * top * top;        // the double LU
-  if (!single_panels) return 12.0 * top * top;              // the double block and its single LU
+  if (!single_panels) return (m.ranks > 1 ? k_h2_double_top : 12.0) * top * top; // the double block and its single LU (several ranks: and the rows arriving)
   if (o.pc_h2_spread_top && m.ranks > 1) return 4.0 * top * top * m.ranks_per_node / m.ranks;
   return 4.0 * top * top;                                  // the single LU alone
 }

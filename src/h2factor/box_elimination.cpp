@@ -8,7 +8,6 @@
 #include "hssbem/h2factor/h2_breakdown.hpp"
 
 #include <algorithm>
-#include <cmath>
 #include <numeric>
 #include <string>
 
@@ -27,32 +26,14 @@ void gram_add(DenseMatrix &G, const DenseMatrix &P, char trans)
   dsyrk_("U", &trans, &m, &q, &one, P.data(), &ld, &one, G.data(), &m);
 }
 
-/// Skeleton from the Gram G of the features (rows = candidates): a pivoted Cholesky of G is the
-/// column-pivoted QR of the features' transpose (same pivots, R = U), stopped where the pivot
-/// falls below tol² × the largest diagonal entry (the ID rule of interpolative.hpp, squared).
-BoxSkeleton skeleton_from_gram(DenseMatrix G, double tol)
+/// A box's skeleton from a row ID of its features (rows = its candidates).
+BoxSkeleton from_id(const ColumnId &id)
 {
-  const int m = G.m;
   BoxSkeleton sk;
-  double gmax = 0;
-  for (int i = 0; i < m; ++i) gmax = std::max(gmax, G(i, i));
-  if (!(gmax > 0)) {
-    for (int i = 0; i < m; ++i) sk.R.push_back(i);
-    sk.T = DenseMatrix(0, m);
-    return sk;
-  }
-  std::vector<int> piv(m);
-  std::vector<double> work(2 * static_cast<std::size_t>(m));
-  int rank = 0, info = 0;
-  const double threshold = tol * tol * gmax;
-  dpstrf_("U", &m, G.data(), &m, piv.data(), &rank, &threshold, work.data(), &info);
-  if (info < 0) throw std::runtime_error("H2 factorization: dpstrf failed");
-  for (int i = 0; i < m; ++i) (i < rank ? sk.S : sk.R).push_back(piv[i] - 1);
-  const int k = rank, r = m - rank;
-  sk.T = DenseMatrix(k, r);
-  for (int j = 0; j < r; ++j)
-    for (int i = 0; i < k; ++i) sk.T(i, j) = G(i, k + j);
-  if (k > 0 && r > 0) lapack::trsm('L', 'U', 'N', 'N', k, r, 1.0, G.data(), m, sk.T.data(), sk.T.ld());
+  sk.S = id.skeleton;
+  sk.R = id.redundant;
+  sk.T = DenseMatrix(id.rank(), static_cast<int>(sk.R.size()));
+  std::copy(id.T.begin(), id.T.end(), sk.T.a.begin());
   return sk;
 }
 
@@ -68,18 +49,7 @@ BoxSkeleton skeleton_from_features(const std::vector<DenseMatrix> &parts, int m,
     dense::put(F, 0, off, P);
     off += P.n;
   }
-  BoxSkeleton sk;
-  if (nf == 0) {
-    for (int i = 0; i < m; ++i) sk.R.push_back(i);
-    sk.T = DenseMatrix(0, m);
-    return sk;
-  }
-  const ColumnId id = row_id(F.data(), m, nf, F.ld(), IdOptions{tol, -1});
-  sk.S = id.skeleton;
-  sk.R = id.redundant;
-  sk.T = DenseMatrix(id.rank(), static_cast<int>(sk.R.size()));
-  std::copy(id.T.begin(), id.T.end(), sk.T.a.begin());
-  return sk;
+  return from_id(row_id(F.data(), m, nf, F.ld(), IdOptions{tol, -1}));
 }
 
 DenseMatrix transposed(const DenseMatrix &B)
@@ -218,7 +188,7 @@ BoxSkeleton Frontier::skeleton(int X, double tol) const
   for (const StoredBlock *B : m_fill_col_blocks[X]) gram_add(G, B->value(), 'T');
   for (int Y : m_cross[X]) gram_add(G, m_X[X].at(Y).value(), 'N');
   for (int Z : m_cross[X]) gram_add(G, m_G[Z].at(X).value(), 'T');
-  return skeleton_from_gram(std::move(G), tol);
+  return from_id(gram_column_id(G.data(), m, IdOptions{tol, -1})); // pivoted Cholesky of the Gram: the ID's rule, squared
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -1,4 +1,6 @@
-// The elimination steps of the H² factorization as the solve replays them (see elimination_step.hpp).
+// The elimination steps of the H² factorization as the solve replays them (see elimination_step.hpp):
+// on one right-hand side by matrix-vector products, on a block by matrix products, so that the
+// factors stream once per block (the solve is memory-bound).
 #include "elimination_step.hpp"
 
 #include "hssbem/core/lapack.hpp"
@@ -15,6 +17,47 @@ void gemv_single(int m, int n, double alpha, const float *A, const double *x, do
     const double xj = alpha * x[j];
     for (int i = 0; i < m; ++i) y[i] += static_cast<double>(a[i]) * xj;
   }
+}
+
+/// Rows idx of X (leading dimension ld, nrhs columns) into the packed |idx| × nrhs block B, or back.
+void gather(const std::vector<int> &idx, const double *X, std::size_t ld, int nrhs, std::vector<double> &B)
+{
+  const std::size_t m = idx.size();
+  B.resize(m * nrhs);
+  for (int c = 0; c < nrhs; ++c)
+    for (std::size_t i = 0; i < m; ++i) B[i + c * m] = X[idx[i] + c * ld];
+}
+
+void scatter(const std::vector<int> &idx, const std::vector<double> &B, int nrhs, double *X, std::size_t ld)
+{
+  const std::size_t m = idx.size();
+  for (int c = 0; c < nrhs; ++c)
+    for (std::size_t i = 0; i < m; ++i) X[idx[i] + c * ld] = B[i + c * m];
+}
+
+/// C (m × nrhs, packed) += alpha op(A) B (B packed, inner dimension k): one column by GEMV, which
+/// reads A once where a GEMM of one column would pack it first.
+void multiply(char ta, int m, int nrhs, int k, double alpha, const double *A, int lda, const double *B, double *C)
+{
+  if (nrhs == 1) lapack::gemv(ta, ta == 'N' ? m : k, ta == 'N' ? k : m, alpha, A, lda, B, 1.0, C);
+  else lapack::gemm(ta, 'N', m, nrhs, k, alpha, A, lda, B, k, 1.0, C, m);
+}
+
+/// C (m × nrhs) −= P B for a panel P (m × k) in double, or in single precision in Ps: one column
+/// straight from the floats, a block through P widened into buf.
+void panel_update(const DenseMatrix &P, const std::vector<float> &Ps, int m, int nrhs, int k, const double *B, double *C, std::vector<double> &buf)
+{
+  if (Ps.empty()) return multiply('N', m, nrhs, k, -1.0, P.data(), m, B, C);
+  if (nrhs == 1) return gemv_single(m, k, -1.0, Ps.data(), B, C);
+  buf.assign(Ps.begin(), Ps.end());
+  lapack::gemm('N', 'N', m, nrhs, k, -1.0, buf.data(), m, B, k, 1.0, C, m);
+}
+
+/// B (n × nrhs, packed) ← op(T)⁻¹ B for a triangle T of an LU (uplo, diag as in trsv).
+void triangular(char uplo, char diag, int n, int nrhs, const DenseMatrix &LU, double *B)
+{
+  if (nrhs == 1) lapack::trsv(uplo, diag, n, LU.data(), LU.ld(), B);
+  else lapack::trsm('L', uplo, 'N', diag, n, nrhs, 1.0, LU.data(), LU.ld(), B, n);
 }
 
 } // namespace
@@ -35,53 +78,48 @@ void Step::demote()
   Up.a.shrink_to_fit();
 }
 
-void Step::forward(double *b, std::vector<double> &work) const
+void Step::forward(double *X, std::size_t ld, int nrhs, Work &w) const
 {
   const int k = static_cast<int>(S.size()), r = static_cast<int>(R.size()), nI = static_cast<int>(I.size());
   if (r == 0) return;
-  work.resize(static_cast<std::size_t>(k) + r + nI);
-  double *bs = work.data(), *br = bs + k, *bi = br + r;
-  for (int i = 0; i < k; ++i) bs[i] = b[S[i]];
-  for (int i = 0; i < r; ++i) br[i] = b[R[i]];
-  if (k > 0) lapack::gemv('T', k, r, -1.0, T.data(), T.ld(), bs, 1.0, br);
-  lapack::laswp(1, br, r, r, piv.data());
-  lapack::trsv('L', 'U', r, LU.data(), LU.ld(), br);
-  for (int i = 0; i < nI; ++i) bi[i] = b[I[i]];
-  if (nI > 0) {
-    if (Lps.empty()) lapack::gemv('N', nI, r, -1.0, Lp.data(), Lp.ld(), br, 1.0, bi);
-    else gemv_single(nI, r, -1.0, Lps.data(), br, bi);
+  gather(R, X, ld, nrhs, w.r);
+  if (k > 0) {
+    gather(S, X, ld, nrhs, w.s);
+    multiply('T', r, nrhs, k, -1.0, T.data(), T.ld(), w.s.data(), w.r.data());
   }
-  for (int i = 0; i < nI; ++i) b[I[i]] = bi[i];
-  for (int i = 0; i < r; ++i) b[R[i]] = br[i];
+  lapack::laswp(nrhs, w.r.data(), r, r, piv.data());
+  triangular('L', 'U', r, nrhs, LU, w.r.data());
+  if (nI > 0) {
+    gather(I, X, ld, nrhs, w.i);
+    panel_update(Lp, Lps, nI, nrhs, r, w.r.data(), w.i.data(), w.panel);
+    scatter(I, w.i, nrhs, X, ld);
+  }
+  scatter(R, w.r, nrhs, X, ld);
 }
 
-void Step::backward(double *b, std::vector<double> &work) const
+void Step::backward(double *X, std::size_t ld, int nrhs, Work &w) const
 {
   const int k = static_cast<int>(S.size()), r = static_cast<int>(R.size()), nI = static_cast<int>(I.size());
   if (r > 0) {
-    work.resize(static_cast<std::size_t>(k) + r + nI);
-    double *xs = work.data(), *xr = xs + k, *xi = xr + r;
-    for (int i = 0; i < r; ++i) xr[i] = b[R[i]];
-    for (int i = 0; i < nI; ++i) xi[i] = b[I[i]];
+    gather(R, X, ld, nrhs, w.r);
     if (nI > 0) {
-      if (Ups.empty()) lapack::gemv('N', r, nI, -1.0, Up.data(), Up.ld(), xi, 1.0, xr);
-      else gemv_single(r, nI, -1.0, Ups.data(), xi, xr);
+      gather(I, X, ld, nrhs, w.i);
+      panel_update(Up, Ups, r, nrhs, nI, w.i.data(), w.r.data(), w.panel);
     }
-    lapack::trsv('U', 'N', r, LU.data(), LU.ld(), xr);
-    for (int i = 0; i < r; ++i) b[R[i]] = xr[i];
+    triangular('U', 'N', r, nrhs, LU, w.r.data());
+    scatter(R, w.r, nrhs, X, ld);
     if (k > 0) {
-      for (int i = 0; i < k; ++i) xs[i] = b[S[i]];
-      lapack::gemv('N', k, r, -1.0, T.data(), T.ld(), xr, 1.0, xs);
-      for (int i = 0; i < k; ++i) b[S[i]] = xs[i];
+      gather(S, X, ld, nrhs, w.s);
+      multiply('N', k, nrhs, r, -1.0, T.data(), T.ld(), w.r.data(), w.s.data());
+      scatter(S, w.s, nrhs, X, ld);
     }
   }
   // The unknowns were A_XX x: x = A_XX⁻¹ (that).
   const int m = static_cast<int>(box.size());
   if (m == 0) return;
-  work.resize(m);
-  for (int i = 0; i < m; ++i) work[i] = b[box[i]];
-  lapack::getrs('N', m, 1, D.data(), D.ld(), dpiv.data(), work.data(), m);
-  for (int i = 0; i < m; ++i) b[box[i]] = work[i];
+  gather(box, X, ld, nrhs, w.s);
+  lapack::getrs('N', m, nrhs, D.data(), D.ld(), dpiv.data(), w.s.data(), m);
+  scatter(box, w.s, nrhs, X, ld);
 }
 
 } // namespace hssbem::h2f

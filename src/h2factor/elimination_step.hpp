@@ -32,9 +32,13 @@ struct Step {
   std::vector<float> Lps, Ups; ///< ... or in single precision (then Lp, Up keep their sizes but no entries)
   int candidates = 0;          ///< active unknowns of the box before (statistics)
   std::size_t bytes() const;
-  /// Forward and backward halves of the solve of this step, on the whole vector b.
-  void forward(double *b, std::vector<double> &work) const;
-  void backward(double *b, std::vector<double> &work) const;
+  /// Forward and backward halves of the solve of this step on nrhs columns of X (column-major,
+  /// leading dimension ld, all of this rank's rows); w holds the packed blocks between calls.
+  struct Work {
+    std::vector<double> s, r, i, panel;
+  };
+  void forward(double *X, std::size_t ld, int nrhs, Work &w) const;
+  void backward(double *X, std::size_t ld, int nrhs, Work &w) const;
   /// Move the panels to single precision.
   void demote();
 };

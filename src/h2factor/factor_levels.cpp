@@ -20,13 +20,9 @@ namespace hssbem {
 namespace {
 
 /// Whether factoring the remaining unknowns densely now costs less than eliminating level l
-/// first. The level's Schur complements cost at most Σ_X 2 |I_X|² |D_X| flops (I_X: X and its
-/// close neighbours, every active unknown of X redundant at worst) at the eliminations' BLAS rate;
-/// the dense top (2/3) n³, in single precision at twice that rate when n reaches
-/// single_top_from. At the upper levels of a tight factorization on a small surface, a box's close
-/// neighbours hold most of what is left and its skeleton most of its unknowns: at 1e-7 on a 20k
-/// sphere, the level with 16 boxes of ~600 unknowns cost 7.0 s to eliminate (7.5e11 Schur flop in
-/// all) where the 9 600-unknown dense top it left behind takes about 3 s.
+/// first: the level's Schur complements at most Σ_X 2 |I_X|² |D_X| flops (I_X: X and its close
+/// neighbours, every active unknown of X redundant at worst) against the dense top's (2/3) n³, in
+/// single precision at twice the rate from single_top_from on (docs/h2-factorization.md).
 bool dense_top_is_cheaper(const h2f::Frontier &F, const std::vector<int> &boxes, double n, const RankComm &comm, int mixed_from)
 {
   double level = collectively(comm, [&] {

@@ -1,4 +1,5 @@
-// The H² factorization's solve and its error estimate (see h2_factorization.hpp).
+// The H² factorization's solve, for one right-hand side or a block of them (the steps replayed:
+// elimination_step.cpp), and its error estimate (see h2_factorization.hpp).
 #include "factors.hpp"
 
 #include "hssbem/core/phase.hpp"
@@ -12,31 +13,43 @@ namespace hssbem {
 
 void H2Factorization::solve(const double *b, double *x) const
 {
+  const std::size_t n = 3 * static_cast<std::size_t>(m_count);
+  if (x != b) std::copy(b, b + n, x);
+  solve_block(x, 1, static_cast<int>(n));
+}
+
+void H2Factorization::solve_block(double *X, int nrhs, int ld) const
+{
   PhaseScope phase(Phase::H2Solve);
   const RankComm &comm = *m_comm;
   const Factors &f = *m_f;
-  const std::size_t n = 3 * static_cast<std::size_t>(m_count), first = 3 * static_cast<std::size_t>(m_first);
-  std::vector<double> y, t, work;
+  const std::size_t n = 3 * static_cast<std::size_t>(m_count), first = 3 * static_cast<std::size_t>(m_first), nt = static_cast<std::size_t>(f.top_n), stride = static_cast<std::size_t>(ld);
+  h2f::Step::Work w;
+  std::vector<double> t; // the top's right-hand sides, whole on every rank
   collectively(comm, [&] {
-    y.assign(b, b + n);
-    t.assign(static_cast<std::size_t>(f.top_n), 0.0);
-    for (const h2f::Step &s : f.steps) s.forward(y.data(), work);
-    for (std::size_t i = 0; i < f.top_own.size(); ++i) t[f.top_pos[i]] = y[f.top_own[i]];
+    if (nrhs < 0 || ld < 0 || stride < n) throw std::invalid_argument("H2 factorization: a block solve needs nrhs >= 0 and ld >= the rows");
+    for (const h2f::Step &s : f.steps) s.forward(X, stride, nrhs, w);
+    t.assign(nt * nrhs, 0.0);
+    for (int c = 0; c < nrhs; ++c)
+      for (std::size_t i = 0; i < f.top_own.size(); ++i) t[c * nt + f.top_pos[i]] = X[c * stride + f.top_own[i]];
   });
-  comm.sum(t.data(), f.top_n); // the top's right-hand side, whole on every rank
-  if (f.spread) f.top->solve(t.data()); // collective
+  comm.sum(t.data(), static_cast<int>(t.size()));
+  if (f.spread)
+    for (int c = 0; c < nrhs; ++c) f.top->solve(t.data() + c * nt); // collective
   else {
     collectively(comm, [&] {
-      if (f.top) f.top->solve(t.data()); // rank 0
-      else std::fill(t.begin(), t.end(), 0.0);
+      for (int c = 0; c < nrhs; ++c) // rank 0; refined in double when mixed
+        if (f.top) f.top->solve(t.data() + c * nt);
+      if (!f.top) std::fill(t.begin(), t.end(), 0.0);
     });
-    comm.sum(t.data(), f.top_n); // and its unknowns to every rank
+    comm.sum(t.data(), static_cast<int>(t.size())); // and its unknowns to every rank
   }
   collectively(comm, [&] {
-    for (std::size_t i = 0; i < f.top_own.size(); ++i) y[f.top_own[i]] = t[f.top_pos[i]];
-    for (auto it = f.steps.rbegin(); it != f.steps.rend(); ++it) it->backward(y.data(), work);
-    // A-hat = A D: x = D y.
-    for (std::size_t i = 0; i < n; ++i) x[i] = y[i] * m_K.col_scale(f.pattern.slot[first + i]);
+    for (int c = 0; c < nrhs; ++c)
+      for (std::size_t i = 0; i < f.top_own.size(); ++i) X[c * stride + f.top_own[i]] = t[c * nt + f.top_pos[i]];
+    for (auto it = f.steps.rbegin(); it != f.steps.rend(); ++it) it->backward(X, stride, nrhs, w);
+    for (int c = 0; c < nrhs; ++c) // A-hat = A D: x = D y
+      for (std::size_t i = 0; i < n; ++i) X[i + c * stride] *= m_K.col_scale(f.pattern.slot[first + i]);
   });
 }
 

@@ -18,11 +18,8 @@ namespace hssbem {
 
 namespace {
 
-/// Whether the top's LU runs in single precision (given single panels: SpreadTop alone; else
-/// TopBlock's mixed LU): when the top is large enough. The mixed LU would refine each of its
-/// solves to double against a copy of the top in double that the single-precision steps below
-/// it cannot use, and it takes three times the memory: on 2 ranks of an 80k sphere at 2e-3,
-/// rank 0's 5 174-unknown top took 306 MB, the single LU 102 MB.
+/// Whether the top's LU runs in single precision (given single panels: SpreadTop alone, a third
+/// of the mixed LU's memory; else TopBlock's mixed LU): when the top is large enough.
 bool top_in_single(double n, const H2FactorOptions &o) { return o.single_top_from > 0 && n >= o.single_top_from; }
 
 /// The trial solve's bound for a single-precision top: the factorization's own tolerance (at
@@ -61,14 +58,13 @@ void H2Factorization::factor_top(std::optional<h2f::Frontier> &front, bool singl
   const bool single = single_store && top_in_single(n, m_options);
   f.spread = single && P > 1 && m_options.spread_top;
   return_free_memory(); // what the levels freed, before the top is allocated
-  std::optional<h2f::BlockGrid> grid;
   std::vector<float> local;
+  DenseMatrix block; // the double top: all its columns on rank 0
   std::vector<double> row_sums;
   std::unique_ptr<h2f::TopSink> sink;
   collectively(comm, [&] {
-    if (single) sink = std::make_unique<h2f::SpreadSink>(h2f::SpreadTop::kBlock, me, f.spread ? P : 1, &local, &row_sums);
-    else if (me == 0) sink = std::make_unique<h2f::GridSink>(grid.emplace());
-    else sink = std::make_unique<h2f::RowSink>();
+    if (single) sink = std::make_unique<h2f::ColumnSink<float>>(h2f::SpreadTop::kBlock, me, f.spread ? P : 1, &local, &row_sums);
+    else sink = std::make_unique<h2f::ColumnSink<double>>(h2f::SpreadTop::kBlock, me, 1, &block.a, &row_sums);
   });
   f.top_n = front->take_top(*sink, &f.top_own, &f.top_pos);
   if (single && !f.spread) comm.sum(row_sums.data(), f.top_n); // A·1 on every rank's rows, for rank 0's top
@@ -89,7 +85,8 @@ void H2Factorization::factor_top(std::optional<h2f::Frontier> &front, bool singl
       f.top = std::move(top);
     } else if (!f.spread && me == 0) {
       auto top = std::make_unique<h2f::TopBlock>();
-      if (!top->factor(std::move(*grid), m_options.single_top_from))
+      block.m = block.n = f.top_n;
+      if (!top->factor(std::move(block), m_options.single_top_from))
         throw H2Breakdown("H2 factorization broke down: the top block (" + std::to_string(f.top_n) + " unknowns) is singular to working precision");
       m_stats.top_mixed = top->mixed();
       f.top = std::move(top);
@@ -111,8 +108,7 @@ double h2_top_peak_bytes(const H2FactorOptions &o, long long unknowns, long long
   const bool single_panels = (o.single_panels < 0 ? o.rel_tol >= 1e-5 : o.single_panels == 1) && unknowns > o.top_size;
   const bool reduced = top_in_single(static_cast<double>(top_unknowns), o);
   const double vectors = 32.0 * static_cast<double>(top_unknowns); // pivots, offsets, the trial's and the solves' vectors
-  if (!reduced) return 16 * n2 + vectors;
-  if (!single_panels) return 12 * n2 + vectors;
+  if (!reduced || !single_panels) return (ranks > 1 ? 16 : reduced ? 12 : 8) * n2 + vectors;
   if (ranks > 1 && o.spread_top) return 12 * n2 / ranks + vectors;
   return 8 * n2 + vectors;
 }

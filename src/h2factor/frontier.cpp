@@ -83,7 +83,7 @@ void Frontier::init_leaves()
     for (int b : m_part.near[a]) {
       if (!mine(a)) continue;
       DenseMatrix B = leaf_near(a, b);
-      add_regularisation(B, a, b);
+      add_regularisation(B.m, B.n, B.data(), B.ld(), a, b);
       if (!same_part(a, b)) { // a cross block, in its two copies (the other rank's: exchange_leaf_copies)
         if (mine(b)) settle(m_G[a].emplace(b, StoredBlock(B)).first->second);
         settle(m_X[a].emplace(b, StoredBlock(std::move(B))).first->second);
@@ -122,8 +122,6 @@ DenseMatrix Frontier::leaf_near(int a, int b) const
     }
   return out;
 }
-
-void Frontier::add_regularisation(DenseMatrix &B, int P, int Q) const { add_regularisation(B.m, B.n, B.data(), B.ld(), P, Q); }
 
 void Frontier::add_regularisation(int m, int n, double *out, int ld, int P, int Q) const
 {
@@ -170,6 +168,14 @@ DenseMatrix Frontier::restricted_basis(int P, int a, bool rows) const
   return E;
 }
 
+std::pair<int, int> Frontier::far_pair(int P, int Q) const
+{
+  for (int a = P; a >= 0; a = m_tree.cluster(a).parent)
+    for (int b = Q; b >= 0; b = m_tree.cluster(b).parent)
+      if (m_part.is_far(a, b)) return {a, b};
+  throw std::logic_error("H2 factorization: no far block above a pair that is not close");
+}
+
 void Frontier::add_far_part(int P, int Q, double *out, int ld) const
 {
   const int m = static_cast<int>(m_D[P].size()), n = static_cast<int>(m_D[Q].size());
@@ -180,35 +186,27 @@ void Frontier::add_far_part(int P, int Q, double *out, int ld) const
   if (!same_part(P, Q) && m_part.is_close(P, Q)) return add(m_X[P].at(Q).value()); // a cross block holds the whole current value
   const auto done = m_pair_far.find({P, Q});
   if (done != m_pair_far.end()) return add(done->second); // computed by P's rank
-  for (int a = P; a >= 0; a = m_tree.cluster(a).parent)
-    for (int b = Q; b >= 0; b = m_tree.cluster(b).parent) {
-      if (!m_part.is_far(a, b)) continue;
-      if (m == 0 || n == 0) return;
-      const H2Block &F = find_far_block(m_K, a, b);
-      std::vector<double> buf;
-      const double *f = F.data(buf); // any stored form, in double
-      // The bases as they rest when they need no carrying up, else carried to a and b.
-      DenseMatrix Uc, Wc;
-      const DenseMatrix *U = a == P ? m_Eu[P].peek() : nullptr, *W = b == Q && mine(Q) ? m_Ew[Q].peek() : nullptr;
-      if (!U) U = &(Uc = restricted_basis(P, a, true));
-      if (!W) W = &(Wc = col_basis_to(Q, b));
-      if (F.M.m > 0 && F.M.n > 0) {
-        DenseMatrix UF(m, F.M.n);
-        lapack::gemm('N', 'N', m, F.M.n, F.M.m, 1.0, U->data(), U->ld(), f, F.M.ld(), 0.0, UF.data(), UF.ld());
-        lapack::gemm('N', 'T', m, n, F.M.n, 1.0, UF.data(), UF.ld(), W->data(), W->ld(), 1.0, out, ld);
-      }
-      add_regularisation(m, n, out, ld, P, Q);
-      const auto it = m_F[P].find(Q);
-      if (it != m_F[P].end()) {
-        DenseMatrix fc;
-        const DenseMatrix *fill = it->second.peek();
-        if (!fill) fill = &(fc = it->second.value());
-        for (int j = 0; j < n; ++j)
-          for (int i = 0; i < m; ++i) out[i + static_cast<std::size_t>(j) * ld] += (*fill)(i, j);
-      }
-      return;
-    }
-  throw std::logic_error("H2 factorization: no far block above a pair that is not close");
+  const auto [a, b] = far_pair(P, Q);
+  if (m == 0 || n == 0) return;
+  const H2Block &F = find_far_block(m_K, a, b);
+  std::vector<double> buf;
+  const double *f = F.data(buf); // any stored form, in double
+  // The bases as they rest when they need no carrying up, else carried to a and b.
+  DenseMatrix Uc, Wc;
+  const DenseMatrix *U = a == P ? m_Eu[P].peek() : nullptr, *W = b == Q && mine(Q) ? m_Ew[Q].peek() : nullptr;
+  if (!U) U = &(Uc = restricted_basis(P, a, true));
+  if (!W) W = &(Wc = col_basis_to(Q, b));
+  if (F.M.m > 0 && F.M.n > 0) {
+    DenseMatrix UF(m, F.M.n);
+    lapack::gemm('N', 'N', m, F.M.n, F.M.m, 1.0, U->data(), U->ld(), f, F.M.ld(), 0.0, UF.data(), UF.ld());
+    lapack::gemm('N', 'T', m, n, F.M.n, 1.0, UF.data(), UF.ld(), W->data(), W->ld(), 1.0, out, ld);
+  }
+  add_regularisation(m, n, out, ld, P, Q);
+  const auto it = m_F[P].find(Q);
+  if (it == m_F[P].end()) return;
+  DenseMatrix fc;
+  const DenseMatrix *fill = it->second.peek();
+  add(fill ? *fill : (fc = it->second.value()));
 }
 
 DenseMatrix Frontier::far_part(int P, int Q) const

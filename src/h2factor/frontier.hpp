@@ -51,19 +51,11 @@ class Frontier {
 public:
   /// The leaves of K, with their near blocks in A-hat form; `single`: blocks rest in single
   /// precision (StoredBlock). `part` (per cluster: its part, −1 above the parts; empty: one part)
-  /// splits the boxes into parts that are never close to each other: a pair of boxes of
-  /// different parts that the H² partition calls close keeps a *cross block* (its full current
-  /// value) in two copies, one for each side, that enter both boxes' skeletons and never receive
-  /// a Schur complement; each box's step applies its own side to its copies, and
-  /// finish_level() the other side (CrossSide).
-  ///
-  /// On several ranks (comm with more than one rank; `part` then required, part p on rank p) this
-  /// rank holds its boxes' unknowns, bases and blocks, its rows of the cross blocks and the copies
-  /// of those in its boxes' columns; K is this rank's part of a distributed H² matrix and the
-  /// sketch its rows. What crosses ranks: the leaves' cross blocks (the copies in the other
-  /// side's columns), the sides at a level's end, the data of merged cross blocks (the other
-  /// side's unknowns, its column basis carried to the far block and Ψ; the far parts for the
-  /// copies in the columns) and the top's rows. Every exchange is collective.
+  /// splits the boxes into parts that are never close to each other: their couplings stay as
+  /// cross blocks in two copies, one for each side (docs/h2-factorization.md, "Parts and
+  /// ranks"). On several ranks (`part` then required, part p on rank p) this rank holds its
+  /// boxes' unknowns, bases and blocks, its rows of the cross blocks and the copies of those in
+  /// its boxes' columns; K is this rank's part of a distributed H² matrix and the sketch its rows.
   Frontier(const H2Matrix &K, const FarFieldSketch &sketch, const Pattern &pattern, bool single, std::vector<int> part, const RankComm &comm);
   /// Whether this rank holds box c (always on one rank).
   bool mine(int c) const { return m_owner.empty() || m_owner[c] == m_rank; }
@@ -91,10 +83,8 @@ public:
   /// inserts into the maps of the store): the fill-in blocks in X's columns, located once, so
   /// that the steps never search a map that a concurrent add_fill() may change.
   void claim(int X);
-  /// Step 0: the unknowns of X become A_XX x_X (a block-Jacobi change of variables), so that X's
-  /// diagonal block is the identity and the pivot block of step 3 is I + TᵀT, well conditioned
-  /// whatever the mix of H and G columns in X. The LU of A_XX goes to st (box, D, dpiv). Throws
-  /// H2Breakdown when A_XX is singular to working precision.
+  /// Step 0: the unknowns of X become A_XX x_X (a block-Jacobi change of variables); the LU of
+  /// A_XX goes to st (box, D, dpiv). Throws H2Breakdown when A_XX is singular to working precision.
   void precondition(int X, Step *st);
   /// Step 1: the joint row/column skeleton of X at relative tolerance tol.
   BoxSkeleton skeleton(int X, double tol) const;
@@ -102,10 +92,8 @@ public:
   /// complement to the blocks of X's skeleton and neighbours; X keeps its skeleton. The rest of
   /// the step goes to st; adds the Schur complement's flops to *flops. Fill-in on pairs that had
   /// none goes to *fresh, for add_fill(). Throws H2Breakdown for a singular pivot block. Boxes
-  /// with disjoint closed neighbourhoods may go through steps 0–3 concurrently: they touch
-  /// disjoint blocks, and add_fill() for one of them (serialised with claim()) inserts only
-  /// into the rows of its own neighbourhood, which the other's steps reach through claim()'s
-  /// pointers alone.
+  /// with disjoint closed neighbourhoods may go through steps 0–3 concurrently (add_fill() for
+  /// one of them, serialised with claim(), inserts only into the rows of its neighbourhood).
   void eliminate(int X, const BoxSkeleton &sk, Step *st, double *flops, std::vector<NewFill> *fresh);
   /// eliminate()'s parts: rows R −= Tᵀ rows S and columns R −= columns S T in every block of X
   /// (the redundant unknowns then couple to X and its neighbours only); the LU of the redundant
@@ -148,8 +136,7 @@ private:
   std::vector<int> my_positions() const;
   DenseMatrix leaf_col_basis(int c) const;
   DenseMatrix leaf_near(int a, int b) const;
-  void add_regularisation(DenseMatrix &B, int P, int Q) const;
-  /// The same into an m × n block at out (leading dimension ld).
+  /// The m × n block at out (leading dimension ld) += c Φ_P Ψ_Qᵀ, the regularisation between P and Q.
   void add_regularisation(int m, int n, double *out, int ld, int P, int Q) const;
   DenseMatrix restricted_basis(int P, int a, bool rows) const;
   /// out (|P| × |Q|, leading dimension ld) += the current block between boxes P and Q that are
@@ -171,6 +158,9 @@ private:
   /// Several ranks: the far parts of pairs (b mine, c another rank's) for the copies in c's
   /// columns, with b's unknowns.
   void send_far_parts(const std::vector<std::pair<int, int>> &pairs);
+  /// What those two and exchange_leaf_copies() send: other ranks' boxes' unknowns, Ψ, column
+  /// bases, far parts and cross blocks.
+  void read_records(const std::vector<std::vector<double>> &recv);
   /// The leaves' unknowns, restricted bases, Φ, Ψ and blocks (this rank's).
   void init_leaves();
   /// Several ranks: the leaves' cross blocks, copied to the ranks of their columns.

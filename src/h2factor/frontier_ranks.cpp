@@ -37,8 +37,9 @@ std::vector<int> read_ints(const std::vector<double> &r, std::size_t &at)
   return v;
 }
 
-/// What a record of the merges' and the top's exchanges carries.
-enum Record { BoxData = 0, ColumnBasis = 1, FarPart = 2 };
+/// What a record of the exchanges of the leaves' copies, the merges and the top carries
+/// (Frontier::read_records).
+enum Record { BoxData = 0, ColumnBasis = 1, FarPart = 2, Unknowns = 3, LeafCopy = 4 };
 
 /// A record of `kind` about clusters `ids`, then a matrix.
 void append_record(std::vector<double> &r, Record kind, std::initializer_list<int> ids, const DenseMatrix &M)
@@ -48,24 +49,16 @@ void append_record(std::vector<double> &r, Record kind, std::initializer_list<in
   append_matrix(r, M);
 }
 
-/// Box c's unknowns D and its Ψ (BoxData).
-void append_box(std::vector<double> &r, int c, const std::vector<int> &D, const DenseMatrix &Psi)
+/// Box c's unknowns D, and with Psi its Ψ (BoxData; else Unknowns).
+void append_box(std::vector<double> &r, int c, const std::vector<int> &D, const DenseMatrix *Psi)
 {
-  r.push_back(BoxData);
+  r.push_back(Psi ? BoxData : Unknowns);
   r.push_back(c);
   append_ints(r, D);
-  append_matrix(r, Psi);
+  if (Psi) append_matrix(r, *Psi);
 }
 
 } // namespace
-
-std::pair<int, int> Frontier::far_pair(int P, int Q) const
-{
-  for (int a = P; a >= 0; a = m_tree.cluster(a).parent)
-    for (int b = Q; b >= 0; b = m_tree.cluster(b).parent)
-      if (m_part.is_far(a, b)) return {a, b};
-  throw std::logic_error("H2 factorization: no far block above a pair that is not close");
-}
 
 DenseMatrix Frontier::col_basis_to(int Q, int b) const
 {
@@ -82,22 +75,11 @@ void Frontier::exchange_leaf_copies()
     [&](std::vector<std::vector<double>> &send) {
       for (int a : m_front) {
         if (!mine(a)) continue;
-        for (int b : m_cross[a]) {
-          if (mine(b)) continue;
-          std::vector<double> &r = send[m_owner[b]];
-          r.push_back(a);
-          r.push_back(b);
-          append_matrix(r, m_X[a].at(b).value());
-        }
+        for (int b : m_cross[a])
+          if (!mine(b)) append_record(send[m_owner[b]], LeafCopy, {a, b}, m_X[a].at(b).value());
       }
     },
-    [&](const std::vector<std::vector<double>> &recv) {
-      for (const std::vector<double> &r : recv)
-        for (std::size_t at = 0; at < r.size();) {
-          const int a = read_int(r, at), b = read_int(r, at);
-          settle(m_G[a].emplace(b, StoredBlock(read_matrix(r, at))).first->second);
-        }
-    });
+    [&](const std::vector<std::vector<double>> &recv) { read_records(recv); });
 }
 
 void Frontier::exchange_sides()
@@ -140,26 +122,13 @@ void Frontier::send_column_data(const std::vector<std::pair<int, int>> &pairs)
       for (const auto &[b, c] : pairs) {
         const int q = m_owner[b];
         std::vector<double> &r = send[q];
-        if (boxes.insert({q, c}).second) append_box(r, c, m_D[c], m_Psi[c]);
+        if (boxes.insert({q, c}).second) append_box(r, c, m_D[c], &m_Psi[c]);
         if (cross_close(b, c)) continue; // the cross block holds the pair's value
         const int bb = far_pair(b, c).second;
         if (bases.insert({q, c, bb}).second) append_record(r, ColumnBasis, {c, bb}, col_basis_to(c, bb));
       }
     },
-    [&](const std::vector<std::vector<double>> &recv) {
-      for (const std::vector<double> &r : recv)
-        for (std::size_t at = 0; at < r.size();) {
-          const int kind = read_int(r, at), c = read_int(r, at);
-          if (kind == BoxData) {
-            m_D[c] = read_ints(r, at);
-            m_Psi[c] = read_matrix(r, at);
-          } else if (kind == ColumnBasis) {
-            const int bb = read_int(r, at);
-            m_remote_w[{c, bb}] = read_matrix(r, at);
-          } else
-            throw std::logic_error("H2 factorization: an unknown record from another rank");
-        }
-    });
+    [&](const std::vector<std::vector<double>> &recv) { read_records(recv); });
 }
 
 void Frontier::send_far_parts(const std::vector<std::pair<int, int>> &pairs)
@@ -177,26 +146,31 @@ void Frontier::send_far_parts(const std::vector<std::pair<int, int>> &pairs)
         const auto [b, c] = pairs[i];
         const int q = m_owner[c];
         std::vector<double> &r = send[q];
-        if (boxes.insert({q, b}).second) append_box(r, b, m_D[b], DenseMatrix()); // no Ψ: the rows' rank adds the regularisation
+        if (boxes.insert({q, b}).second) append_box(r, b, m_D[b], nullptr); // no Ψ: the rows' rank adds the regularisation
         if (cross_close(b, c)) continue;
         append_record(r, FarPart, {b, c}, far[i]);
         m_pair_far[{b, c}] = std::move(far[i]); // this rank's copy (the rows) uses it too
       }
     },
-    [&](const std::vector<std::vector<double>> &recv) {
-      for (const std::vector<double> &r : recv)
-        for (std::size_t at = 0; at < r.size();) {
-          const int kind = read_int(r, at), b = read_int(r, at);
-          if (kind == BoxData) {
-            m_D[b] = read_ints(r, at);
-            read_matrix(r, at); // empty
-          } else if (kind == FarPart) {
-            const int c = read_int(r, at);
-            m_pair_far[{b, c}] = read_matrix(r, at);
-          } else
-            throw std::logic_error("H2 factorization: an unknown record from another rank");
-        }
-    });
+    [&](const std::vector<std::vector<double>> &recv) { read_records(recv); });
+}
+
+void Frontier::read_records(const std::vector<std::vector<double>> &recv)
+{
+  for (const std::vector<double> &r : recv)
+    for (std::size_t at = 0; at < r.size();) {
+      const int kind = read_int(r, at), c = read_int(r, at);
+      if (kind == BoxData || kind == Unknowns) m_D[c] = read_ints(r, at);
+      if (kind == BoxData) m_Psi[c] = read_matrix(r, at);
+      else if (kind == ColumnBasis || kind == FarPart) {
+        const int d = read_int(r, at); // the cluster c's basis is carried to, or the far part's column box
+        (kind == ColumnBasis ? m_remote_w : m_pair_far)[{c, d}] = read_matrix(r, at);
+      } else if (kind == LeafCopy) {
+        const int d = read_int(r, at); // the copy of the cross block (c, d) in d's columns
+        settle(m_G[c].emplace(d, StoredBlock(read_matrix(r, at))).first->second);
+      } else if (kind != Unknowns)
+        throw std::logic_error("H2 factorization: an unknown record from another rank");
+    }
 }
 
 void Frontier::prepare_cross_merge(int l, const std::vector<int> &front, const std::vector<char> &in_front)

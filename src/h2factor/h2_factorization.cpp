@@ -81,10 +81,8 @@ h2f::Pattern make_pattern(const H2Matrix &K, const SystemSelection &sel, const s
 }
 
 /// The level of the first boxes factored: the highest whose clusters hold at most leaf_size
-/// nodes. With leaf_size 0 the leaves' level, or below rel_tol 1e-5 the level above it: there a
-/// leaf's skeleton keeps most of its unknowns (20k sphere: 155 of 157 at 1e-7, 143 at 1e-6, 121 at
-/// 1e-5), so its elimination costs a level's time for little (starting one level up: 1e-7 34.4 ->
-/// 29.8 s, 1e-6 23.5 -> 20.8 s).
+/// nodes. With leaf_size 0 the leaves' level, or below rel_tol 1e-5 the level above it, where a
+/// leaf's skeleton keeps most of its unknowns (docs/h2-factorization.md).
 int first_level(const ClusterTree &tree, int leaf_size, double rel_tol)
 {
   int l = tree.levels() - 1;

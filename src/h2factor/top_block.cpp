@@ -3,7 +3,6 @@
 
 #include "hssbem/h2factor/h2_breakdown.hpp"
 
-#include "hssbem/core/blas_threads.hpp"
 #include "hssbem/core/dense_ops.hpp"
 #include "hssbem/core/fault.hpp"
 #include "hssbem/core/lapack.hpp"
@@ -13,7 +12,6 @@
 #include <cstdio>
 #include <string>
 #include <limits>
-#include <numeric>
 #include <stdexcept>
 
 namespace hssbem::h2f {
@@ -30,98 +28,37 @@ double inf_norm(const double *v, int n)
   return s;
 }
 
-std::vector<int> box_rows(const BlockGrid &G)
-{
-  std::vector<int> rows(G.boxes());
-  std::iota(rows.begin(), rows.end(), 0);
-  return rows;
-}
-
 } // namespace
-
-// ---------------------------------------------------------------------------------------------
-// The grid of blocks.
-
-std::size_t BlockGrid::bytes() const
-{
-  std::size_t s = off.size() * sizeof(int);
-  for (const DenseMatrix &B : blocks) s += B.bytes();
-  return s;
-}
-
-DenseMatrix BlockGrid::dense() const
-{
-  const int n = size(), nb = boxes();
-  DenseMatrix A(n, n);
-  for_each_cluster(box_rows(*this), [&](int s) {
-    for (int t = 0; t < nb; ++t) {
-      const DenseMatrix &B = block(s, t);
-      for (int j = 0; j < B.n; ++j) std::copy_n(B.data() + static_cast<std::size_t>(j) * B.m, B.m, &A(off[s], off[t] + j));
-    }
-  });
-  return A;
-}
-
-void BlockGrid::dense_single(float *out, double *norm) const
-{
-  const std::size_t n = static_cast<std::size_t>(size());
-  const int nb = boxes();
-  std::vector<double> rows(n, 0.0);
-  for_each_cluster(box_rows(*this), [&](int s) { // box s's rows, by one thread
-    for (int t = 0; t < nb; ++t) {
-      const DenseMatrix &B = block(s, t);
-      for (int j = 0; j < B.n; ++j) {
-        const double *src = B.data() + static_cast<std::size_t>(j) * B.m;
-        float *dst = out + (off[t] + j) * n + off[s];
-        double *row = rows.data() + off[s];
-        for (int i = 0; i < B.m; ++i) {
-          dst[i] = static_cast<float>(src[i]);
-          row[i] += std::abs(src[i]);
-        }
-      }
-    }
-  });
-  *norm = h2f::inf_norm(rows.data(), static_cast<int>(n));
-}
-
-void BlockGrid::gemv(double alpha, const double *x, double *y) const
-{
-  const int nb = boxes();
-  for (int s = 0; s < nb; ++s)
-    for (int t = 0; t < nb; ++t) {
-      const DenseMatrix &B = block(s, t);
-      if (B.m > 0 && B.n > 0) lapack::gemv('N', B.m, B.n, alpha, B.data(), B.ld(), x + off[t], 1.0, y + off[s]);
-    }
-}
 
 // ---------------------------------------------------------------------------------------------
 // The factorization and the solve.
 
-bool TopBlock::factor(BlockGrid A, int mixed_from)
+bool TopBlock::factor(DenseMatrix A, int mixed_from)
 {
-  const int n = A.size();
+  const int n = A.m;
   m_n = n;
   m_mixed = false;
   if (mixed_from > 0 && n >= mixed_from) {
-    // Not cleared first: every entry is written once, by the thread that owns its box row.
-    m_lu.resize(static_cast<std::size_t>(n) * n);
-    A.dense_single(m_lu.data(), &m_norm);
+    m_lu.resize(A.a.size());
+    std::vector<double> rows(n, 0.0), b(n), x(n), ones(n, 1.0);
+    for (std::size_t j = 0; j < static_cast<std::size_t>(n); ++j) // rounded, and ‖A‖_∞'s row sums, in one pass
+      for (std::size_t i = 0; i < static_cast<std::size_t>(n); ++i) {
+        m_lu[i + j * n] = static_cast<float>(A.a[i + j * n]);
+        rows[i] += std::abs(A.a[i + j * n]);
+      }
+    m_norm = inf_norm(rows.data(), n);
     m_piv.resize(n);
     if (lapack::getrf(n, m_lu.data(), n, m_piv.data()) == 0) {
-      m_grid = std::move(A);
+      m_A = std::move(A);
       m_mixed = true;
-      // A trial solve: b = A·1.
-      std::vector<double> b(n, 0.0), x(n), ones(n, 1.0);
-      m_grid.gemv(1.0, ones.data(), b.data());
+      lapack::gemv('N', n, n, 1.0, m_A.data(), m_A.ld(), ones.data(), 0.0, b.data()); // a trial solve: b = A·1
       if (refine(b.data(), x.data())) return true;
-      A = std::move(m_grid); // the single-precision factor does not contract: LU in double
-      m_grid = BlockGrid();
+      A = std::move(m_A); // the single-precision factor does not contract: LU in double
       m_mixed = false;
     }
     std::vector<float>().swap(m_lu);
   }
-  m_A = A.dense();
-  A = BlockGrid();
+  m_A = std::move(A);
   return dense::lu_regular(m_A, m_piv);
 }
 
@@ -138,7 +75,7 @@ bool TopBlock::refine(const double *b, double *x) const
     lapack::getrs('N', n, 1, m_lu.data(), n, m_piv.data(), d.data(), n);
     for (int i = 0; i < n; ++i) x[i] += d[i];
     std::copy(b, b + n, r.begin());
-    m_grid.gemv(-1.0, x, r.data());
+    lapack::gemv('N', n, n, -1.0, m_A.data(), m_A.ld(), x, 1.0, r.data());
     const double rn = inf_norm(r.data(), n);
     if (rn <= inf_norm(x, n) * cte) return true;
     if (!(rn < 0.5 * last)) { // stalled or diverging: keep the better of the last two iterates

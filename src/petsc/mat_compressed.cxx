@@ -1,8 +1,6 @@
-/* The BEM operator as a MatShell backed by a compressed K (HSS with -bem_mat_type hss, H² with
-   -bem_mat_type h2), distributed over the ranks (one rank is one part): MatMult by the O(N·r)
-   product, MatGetDiagonal from the leaves' true entries, MatView with ranks and memory. One shell
-   serves both formats through hssbem::DistributedBemSystem; only MatView and the construction
-   tell them apart. */
+/* The BEM operator as a MatShell backed by a compressed K (HSS or H²) distributed over the ranks:
+   MatMult by the O(N·r) product, MatGetDiagonal from the leaves' true entries, MatView with ranks
+   and memory; one shell for both formats (hssbem::DistributedBemSystem). */
 #include "mat_compressed.hpp"
 
 #include "hssbem/petsc/log.h"

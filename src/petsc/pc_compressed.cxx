@@ -18,13 +18,14 @@ static std::vector<PetscInt> RowMap_Private(const HssbemSystemContext &p, std::v
   return {};
 }
 
-/* The skeleton's own state goes: the scatter, its vectors and the layout. */
-static PetscErrorCode ResetSkeleton_Private(PC_Compressed *c)
+/* The scatter to the PC's rows and its vectors go; with `all`, the layout too. */
+static PetscErrorCode ResetSkeleton_Private(PC_Compressed *c, bool all)
 {
   PetscFunctionBegin;
   PetscCall(VecScatterDestroy(&c->scatter));
   PetscCall(VecDestroy(&c->xs));
   PetscCall(VecDestroy(&c->ys));
+  if (!all) PetscFunctionReturn(PETSC_SUCCESS);
   c->own_layout.reset();
   c->layout = nullptr;
   c->system = nullptr;
@@ -47,10 +48,7 @@ PetscErrorCode PCSetUp_Compressed(PC pc)
   PetscCall(HssbemMatGetSystemContext(pc->pmat, &p));
   PetscCheck(p, comm, PETSC_ERR_ARG_WRONG, "%s factors BEM system matrices only: build the matrix with HssbemCreateSystem() (the hssbem driver does)", what);
   c->fresh = c->system != p;
-  if (c->fresh) PetscCall(ResetSkeleton_Private(c));
-  PetscCall(VecScatterDestroy(&c->scatter));
-  PetscCall(VecDestroy(&c->xs));
-  PetscCall(VecDestroy(&c->ys));
+  PetscCall(ResetSkeleton_Private(c, c->fresh));
   c->system = p;
   if (p->layout) c->layout = p->layout.get();
   else if (!c->own_layout) {
@@ -126,7 +124,7 @@ PetscErrorCode PCReset_Compressed(PC pc)
 
   PetscFunctionBegin;
   c->Drop();
-  PetscCall(ResetSkeleton_Private(c));
+  PetscCall(ResetSkeleton_Private(c, true));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

@@ -1,8 +1,6 @@
-/* Private to the PETSc layer: the skeleton PC hss and PC h2 share. Each factors a distributed
-   compression of the BEM system (the matrix's own, or one of its own on the matrix's partition;
-   on a dense matrix, on a partition made for the PC): one path for every matrix and number of
-   ranks. The skeleton owns the layout, the scatter between the matrix's rows and the PC's (when
-   they differ), the guards of set-up and apply, and the breakdown's report. */
+/* Private to the PETSc layer: the skeleton PC hss and PC h2 share (docs/distributed.md). It owns
+   the layout, the scatter between the matrix's rows and the PC's (when they differ), the guards
+   of set-up and apply, and the breakdown's report; each PC factors a distributed compression. */
 #pragma once
 
 #include "system_context.hpp"

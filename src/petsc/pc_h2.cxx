@@ -125,15 +125,14 @@ PetscErrorCode PCSetFromOptions_H2(PC pc, PetscOptionItems *PetscOptionsObject)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* How the top's LU runs, between open and close; empty for the double LU. */
-std::string TopLU_Private(const hssbem::H2Factorization &F, const char *open, const char *close)
+/* How the top's LU runs, in parentheses; empty for the double LU. */
+std::string TopLU_Private(const hssbem::H2Factorization &F)
 {
-  const hssbem::H2FactorStats &st = F.stats();
-  if (st.top_mixed) return std::string(open) + "LU in single precision, solves refined in double" + close;
-  if (!st.top_single) return "";
   char trial[96];
-  std::snprintf(trial, sizeof trial, "LU in single precision like the panels, a trial solve off by %.1e", F.top_trial());
-  return std::string(open) + trial + close;
+  if (F.stats().top_mixed) return " (LU in single precision, solves refined in double)";
+  if (!F.stats().top_single) return "";
+  std::snprintf(trial, sizeof trial, " (LU in single precision like the panels, a trial solve off by %.1e)", F.top_trial());
+  return trial;
 }
 
 /* The factorization: the top (on rank 0, or spread), then each rank's part (collective). */
@@ -151,7 +150,7 @@ PetscErrorCode ViewFactorization_Private(PetscViewer viewer, const hssbem::H2Fac
   else PetscCall(PetscViewerASCIIPrintf(viewer, "top on rank 0: "));
   PetscCall(PetscViewerASCIIUseTabs(viewer, PETSC_FALSE));
   PetscCall(PetscViewerASCIIPrintf(viewer, "%d unknowns of %d boxes, %.1f MB%s%s, %.2f s; sketch of %d vectors\n", st.top_size, st.top_boxes, st.top_bytes / 1048576.0, st.top_spread > 0 ? " on rank 0" : "",
-                                   TopLU_Private(F, " (", ")").c_str(), st.time_top, st.sketch_columns));
+                                   TopLU_Private(F).c_str(), st.time_top, st.sketch_columns));
   PetscCall(PetscViewerASCIIUseTabs(viewer, PETSC_TRUE));
   for (const hssbem::H2FactorLevelStats &l : st.levels) {
     cross = std::max(cross, l.cross_bytes);
@@ -285,9 +284,8 @@ PetscErrorCode PCH2SetTopSize(PC pc, PetscInt n)
 
 /*@
   PCH2SetTopWhenCheaper - Sets whether the factorization stops at a level whose eliminations would
-  cost more flops (an upper bound of its Schur complements) than factoring every unknown left
-  densely; the rest becomes the top. PETSC_FALSE: go on while a level has a far field and more
-  than the top size of unknowns remain.
+  cost more flops than factoring every unknown left densely (PETSC_FALSE: go on while a level has
+  a far field and more than the top size of unknowns remain).
 
   Logically Collective
 
@@ -302,10 +300,8 @@ PetscErrorCode PCH2SetTopWhenCheaper(PC pc, PetscBool flg)
 
 /*@
   PCH2SetSingleTopFrom - Sets the top size from which the dense top's LU runs in single precision:
-  with single-precision panels (a tolerance of 1e-5 or looser: the preconditioner) the LU alone,
-  solved in double arithmetic, a third of the mixed LU's memory; with double panels every solve is
-  refined in double against the top block (as accurate as a double LU, about half its time). 0 or
-  less: always in double.
+  alone with single-precision panels (a tolerance of 1e-5 or looser), else refined in double by
+  every solve (as accurate as a double LU). 0 or less: always in double.
 
   Logically Collective
 

@@ -18,6 +18,23 @@ PetscLogEvent H2_Tree, H2_Compress, H2_NearField, H2_MatMult, H2F_Factor, H2F_Sk
 PetscLogEvent SCN_Setup, SCN_Update, SCN_Apply, SCN_Refactor, SCN_Krylov, SCN_Frame;
 PetscLogEvent CNT_Setup, CNT_Detect, CNT_Solve, CNT_Fields, CNT_Correct;
 
+/* Every log event, in the order -log_view lists them (sub-events with a leading space). */
+static const struct {
+  const char    *name;
+  PetscLogEvent *event;
+} Events_Private[] = {
+  {"BEMMesh", &BEM_Mesh}, {"BEMAssembly", &BEM_Assembly}, {" BEMPartition", &BEM_Partition}, {"BEMSolve", &BEM_Solve}, {"BEMPost", &BEM_Post}, {" BEMStress", &BEM_Stress},
+  {" BEMInterior", &BEM_Interior}, {"BEMOutput", &BEM_Output},
+  {"HSSTree", &HSS_Tree}, {"HSSCompress", &HSS_Compress}, {"HSSNearField", &HSS_NearField}, {"HSSTruncate", &HSS_Truncate}, {"HSSFactor", &HSS_Factor},
+  {"HSSSolve", &HSS_Solve}, {"HSSMatMult", &HSS_MatMult}, {" HSSFactorTop", &HSS_FactorTop}, {" HSSSolveTop", &HSS_SolveTop},
+  {"H2Tree", &H2_Tree}, {"H2Compress", &H2_Compress}, {"H2NearField", &H2_NearField}, {"H2MatMult", &H2_MatMult},
+  {"H2Factor", &H2F_Factor}, {" H2FactorSketch", &H2F_Sketch}, {" H2FactorLevels", &H2F_Eliminate}, {" H2FactorMerge", &H2F_Merge}, {" H2FactorTop", &H2F_Top},
+  {"H2FactorSolve", &H2F_Solve},
+  {"SceneSetup", &SCN_Setup}, {"SceneFrame", &SCN_Frame}, {" SceneUpdate", &SCN_Update}, {" SceneApply", &SCN_Apply}, {" SceneRefactor", &SCN_Refactor},
+  {" SceneKrylov", &SCN_Krylov},
+  {"ContactSetup", &CNT_Setup}, {" ContactDetect", &CNT_Detect}, {" ContactSolve", &CNT_Solve}, {" ContactFields", &CNT_Fields}, {" ContactCorrect", &CNT_Correct}
+};
+
 /* The engine's phases as log events (engine phases open and close on the calling thread). */
 static void PhaseHook_Private(hssbem::Phase phase, bool begin)
 {
@@ -72,26 +89,8 @@ static PetscErrorCode ProgressFromOptions_Private(void)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* Test-only fault injection (core/fault.hpp), from options that -help does not list:
-   -hssbem_fault <site>           a fault point: MeshRead, Setup, Operator, RigidModes (the set-up,
-                                  every rank), MatMult, MatGetDiagonal, PCSetUp, PCApply,
-                                  Compression, HssSkeletons, HssCouplings, HssTruncate,
-                                  UlvSubtree (every rank's part of the distributed HSS steps),
-                                  UlvTop (rank 0's top of the distributed factorization),
-                                  DenseAssembly, Breakdown, Gather (the solve),
-                                  Post, Write, Commit, SceneSetup, Frame (rank 0's work), Driver
-                                  (unguarded: the last resort of app/main.hpp)
-   -hssbem_fault_kind <kind>      error (default), oom (std::bad_alloc), pause, unreadable
-                                  (MeshRead: the mesh file cannot be opened), or alloc (the
-                                  -hssbem_fault_count'th large allocation from the fault point to
-                                  the site's end fails; needs the test shim tests/mpi/fail_new.cpp
-                                  preloaded; sites PCSetUp of PC h2 and PC hss)
-   -hssbem_fault_rank <r>         only on rank r of PETSC_COMM_WORLD (default: every rank)
-   -hssbem_fault_seconds <s>      how long a pause lasts (default 60)
-   -hssbem_fault_count <n>        alloc: which large allocation fails (0: none, only counted)
-   Further sites: Partition (every rank's part of the METIS partition), Exchange (the allocation
-   of what arrives in an exchange of records), SpreadTopBreakdown (a spread top's trial solve
-   counts as failed on that rank). */
+/* Test-only fault injection (core/fault.hpp), from options that -help does not list: -hssbem_fault
+   <site>, _kind, _rank, _seconds and _count (the sites and kinds: docs/reliability.md, "Checks"). */
 static PetscErrorCode ArmFaultFromOptions_Private(void)
 {
   char              site[64] = "", kind[16] = "error";
@@ -147,44 +146,7 @@ PetscErrorCode HssbemInitializePackage(void)
   if (HssbemPackageInitialized) PetscFunctionReturn(PETSC_SUCCESS);
   HssbemPackageInitialized = PETSC_TRUE;
   PetscCall(PetscClassIdRegister("hssbem", &HSSBEM_CLASSID));
-  PetscCall(PetscLogEventRegister("BEMMesh", HSSBEM_CLASSID, &BEM_Mesh));
-  PetscCall(PetscLogEventRegister("BEMAssembly", HSSBEM_CLASSID, &BEM_Assembly));
-  PetscCall(PetscLogEventRegister(" BEMPartition", HSSBEM_CLASSID, &BEM_Partition));
-  PetscCall(PetscLogEventRegister("BEMSolve", HSSBEM_CLASSID, &BEM_Solve));
-  PetscCall(PetscLogEventRegister("BEMPost", HSSBEM_CLASSID, &BEM_Post));
-  PetscCall(PetscLogEventRegister(" BEMStress", HSSBEM_CLASSID, &BEM_Stress));
-  PetscCall(PetscLogEventRegister(" BEMInterior", HSSBEM_CLASSID, &BEM_Interior));
-  PetscCall(PetscLogEventRegister("BEMOutput", HSSBEM_CLASSID, &BEM_Output));
-  PetscCall(PetscLogEventRegister("HSSTree", HSSBEM_CLASSID, &HSS_Tree));
-  PetscCall(PetscLogEventRegister("HSSCompress", HSSBEM_CLASSID, &HSS_Compress));
-  PetscCall(PetscLogEventRegister("HSSNearField", HSSBEM_CLASSID, &HSS_NearField));
-  PetscCall(PetscLogEventRegister("HSSTruncate", HSSBEM_CLASSID, &HSS_Truncate));
-  PetscCall(PetscLogEventRegister("HSSFactor", HSSBEM_CLASSID, &HSS_Factor));
-  PetscCall(PetscLogEventRegister("HSSSolve", HSSBEM_CLASSID, &HSS_Solve));
-  PetscCall(PetscLogEventRegister("HSSMatMult", HSSBEM_CLASSID, &HSS_MatMult));
-  PetscCall(PetscLogEventRegister(" HSSFactorTop", HSSBEM_CLASSID, &HSS_FactorTop));
-  PetscCall(PetscLogEventRegister(" HSSSolveTop", HSSBEM_CLASSID, &HSS_SolveTop));
-  PetscCall(PetscLogEventRegister("H2Tree", HSSBEM_CLASSID, &H2_Tree));
-  PetscCall(PetscLogEventRegister("H2Compress", HSSBEM_CLASSID, &H2_Compress));
-  PetscCall(PetscLogEventRegister("H2NearField", HSSBEM_CLASSID, &H2_NearField));
-  PetscCall(PetscLogEventRegister("H2MatMult", HSSBEM_CLASSID, &H2_MatMult));
-  PetscCall(PetscLogEventRegister("H2Factor", HSSBEM_CLASSID, &H2F_Factor));
-  PetscCall(PetscLogEventRegister(" H2FactorSketch", HSSBEM_CLASSID, &H2F_Sketch));
-  PetscCall(PetscLogEventRegister(" H2FactorLevels", HSSBEM_CLASSID, &H2F_Eliminate));
-  PetscCall(PetscLogEventRegister(" H2FactorMerge", HSSBEM_CLASSID, &H2F_Merge));
-  PetscCall(PetscLogEventRegister(" H2FactorTop", HSSBEM_CLASSID, &H2F_Top));
-  PetscCall(PetscLogEventRegister("H2FactorSolve", HSSBEM_CLASSID, &H2F_Solve));
-  PetscCall(PetscLogEventRegister("SceneSetup", HSSBEM_CLASSID, &SCN_Setup));
-  PetscCall(PetscLogEventRegister("SceneFrame", HSSBEM_CLASSID, &SCN_Frame));
-  PetscCall(PetscLogEventRegister(" SceneUpdate", HSSBEM_CLASSID, &SCN_Update));
-  PetscCall(PetscLogEventRegister(" SceneApply", HSSBEM_CLASSID, &SCN_Apply));
-  PetscCall(PetscLogEventRegister(" SceneRefactor", HSSBEM_CLASSID, &SCN_Refactor));
-  PetscCall(PetscLogEventRegister(" SceneKrylov", HSSBEM_CLASSID, &SCN_Krylov));
-  PetscCall(PetscLogEventRegister("ContactSetup", HSSBEM_CLASSID, &CNT_Setup));
-  PetscCall(PetscLogEventRegister(" ContactDetect", HSSBEM_CLASSID, &CNT_Detect));
-  PetscCall(PetscLogEventRegister(" ContactSolve", HSSBEM_CLASSID, &CNT_Solve));
-  PetscCall(PetscLogEventRegister(" ContactFields", HSSBEM_CLASSID, &CNT_Fields));
-  PetscCall(PetscLogEventRegister(" ContactCorrect", HSSBEM_CLASSID, &CNT_Correct));
+  for (const auto &e : Events_Private) PetscCall(PetscLogEventRegister(e.name, HSSBEM_CLASSID, e.event));
   hssbem::set_phase_hook(PhaseHook_Private);
   PetscCall(PCRegister(PCHSS, PCCreate_HSS));
   PetscCall(PCRegister(PCH2, PCCreate_H2));

@@ -43,19 +43,6 @@ static PetscErrorCode FactorMatType_Private(KSP ksp, Mat A, MatType *type)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* to := from, for vectors with the same global size and different layouts (ScaLAPACK picks its own). */
-static PetscErrorCode CopyAcrossLayouts_Private(Vec from, Vec to)
-{
-  VecScatter sc;
-
-  PetscFunctionBegin;
-  PetscCall(HssbemRowScatterCreate(from, to, {}, &sc));
-  PetscCall(VecScatterBegin(sc, from, to, INSERT_VALUES, SCATTER_FORWARD));
-  PetscCall(VecScatterEnd(sc, from, to, INSERT_VALUES, SCATTER_FORWARD));
-  PetscCall(VecScatterDestroy(&sc));
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
-
 /* Solve with vectors in the operator's layout (ScaLAPACK picks its own), copying in and out;
    the relative residual ||b - A x|| / ||b|| is measured there too. */
 static PetscErrorCode KSPSolveInLayout_Private(KSP ksp, Mat op, Vec b, Vec x, PetscReal *residual)
@@ -65,9 +52,9 @@ static PetscErrorCode KSPSolveInLayout_Private(KSP ksp, Mat op, Vec b, Vec x, Pe
 
   PetscFunctionBegin;
   PetscCall(MatCreateVecs(op, &xo, &bo));
-  PetscCall(CopyAcrossLayouts_Private(b, bo));
+  PetscCall(HssbemRowScatterOnce(b, bo, {}, SCATTER_FORWARD)); /* the same rows in another layout */
   PetscCall(KSPSolve(ksp, bo, xo));
-  PetscCall(CopyAcrossLayouts_Private(xo, x));
+  PetscCall(HssbemRowScatterOnce(xo, x, {}, SCATTER_FORWARD));
   PetscCall(VecDuplicate(bo, &r));
   PetscCall(MatMult(op, xo, r));
   PetscCall(VecAYPX(r, -1.0, bo));
@@ -146,7 +133,6 @@ PetscErrorCode HssbemKSPCreate(MPI_Comm comm, const char *mat_type, KSP *ksp)
 {
   PC                   pc;
   hssbem::OperatorType type;
-  const char          *pc_type;
   KSPProgress_Private *progress;
 
   PetscFunctionBegin;
@@ -160,8 +146,7 @@ PetscErrorCode HssbemKSPCreate(MPI_Comm comm, const char *mat_type, KSP *ksp)
     PetscCall(KSPSetPCSide(*ksp, PC_RIGHT));
   }
   PetscCall(KSPGetPC(*ksp, &pc));
-  PetscCall(HssbemDefaultPCType(comm, type, &pc_type));
-  PetscCall(PCSetType(pc, pc_type));
+  PetscCall(PCSetType(pc, HssbemDefaultPCType(type)));
   PetscCallCXX(progress = new KSPProgress_Private);
   PetscCall(KSPMonitorSet(*ksp, KSPMonitorProgress_Private, progress, KSPProgressDestroy_Private));
   PetscCall(KSPSetFromOptions(*ksp));

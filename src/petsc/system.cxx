@@ -178,7 +178,8 @@ static PetscErrorCode H2SolverSizeOptions_Private(hssbem::SizeOptions *o)
   if (!o->h2_factored) PetscFunctionReturn(PETSC_SUCCESS);
   PetscCall(PetscOptionsGetReal(NULL, NULL, "-pc_h2_rel_tol", &tol, NULL));
   PetscCall(PetscOptionsGetInt(NULL, NULL, "-pc_h2_top_size", &top, NULL));
-  PetscCall(PetscOptionsGetInt(NULL, NULL, "-pc_h2_mixed_top", &mixed, NULL));
+  PetscCall(PetscOptionsGetInt(NULL, NULL, "-pc_h2_mixed_top", &mixed, NULL)); /* its former name */
+  PetscCall(PetscOptionsGetInt(NULL, NULL, "-pc_h2_single_top_from", &mixed, NULL));
   PetscCall(PetscOptionsGetBool(NULL, NULL, "-pc_h2_spread_top", &spread, NULL));
   o->pc_h2_rel_tol    = (double)tol;
   o->pc_h2_top_size   = top;
@@ -213,6 +214,7 @@ PetscErrorCode HssbemCreateSystem(MPI_Comm comm, const hssbem::BemOperator &op, 
 {
   hssbem::OperatorType type;
   std::unique_ptr<HssbemSystemContext> ctx; /* owned here until A owns it: an error path frees it */
+  hssbem::SizeOptions size_options;
 
   PetscFunctionBegin;
   PetscCall(HssbemOperatorTypeFromName(comm, mat_type, &type));
@@ -223,12 +225,7 @@ PetscErrorCode HssbemCreateSystem(MPI_Comm comm, const hssbem::BemOperator &op, 
   if (rigid_modes) PetscCallCXX(ctx->modes = *rigid_modes);
   /* a pressure load needs the Gn columns */
   const bool pressure = std::any_of(sel.pressure.begin(), sel.pressure.end(), [](double p) { return !std::isnan(p); });
-  switch (type) {
-  case hssbem::OperatorType::Dense:
-    PetscCall(CheckSize_Private(comm, type, op.num_nodes(), hssbem::SizeOptions{}));
-    PetscCall(HssbemAssembleDense(comm, op, sel, rigid_modes, A, b));
-    break;
-  case hssbem::OperatorType::H2: {
+  if (type == hssbem::OperatorType::H2) {
     ctx->h2_options.pressure_columns = pressure;
     /* The driver's defaults (docs/performance.md, "Choosing the operator"): 1e-5 keeps the H² solution within
        ~5e-6 of dense LU's, well below the discretisation error of any mesh it pays on, and
@@ -236,27 +233,19 @@ PetscErrorCode HssbemCreateSystem(MPI_Comm comm, const hssbem::BemOperator &op, 
     ctx->h2_options.rel_tol          = 1e-5;
     ctx->h2_options.single_precision = true;
     PetscCall(HssbemH2OptionsFromDatabase(comm, NULL, &ctx->h2_options));
-    hssbem::SizeOptions size_options;
     size_options.single_precision = ctx->h2_options.single_precision;
     size_options.h2_rel_tol       = ctx->h2_options.rel_tol;
-    PetscCall(HssbemH2WillBeFactored(comm, &size_options.h2_factored));
+    PetscCall(HssbemH2WillBeFactored(&size_options.h2_factored));
     PetscCall(H2SolverSizeOptions_Private(&size_options));
-    PetscCall(CheckSize_Private(comm, type, op.num_nodes(), size_options));
-    PetscCall(HssbemMatCreateCompressed_Private(comm, ctx.get(), A, b));
-    break;
-  }
-  case hssbem::OperatorType::Hss:
+  } else if (type == hssbem::OperatorType::Hss) {
     ctx->hss_options.rel_tol          = 1e-8;
     ctx->hss_options.pressure_columns = pressure;
     PetscCall(HssbemHssOptionsFromDatabase(comm, NULL, &ctx->hss_options));
-    {
-      hssbem::SizeOptions size_options;
-      size_options.hss_rel_tol = ctx->hss_options.rel_tol;
-      PetscCall(CheckSize_Private(comm, type, op.num_nodes(), size_options));
-    }
-    PetscCall(HssbemMatCreateCompressed_Private(comm, ctx.get(), A, b));
-    break;
+    size_options.hss_rel_tol = ctx->hss_options.rel_tol;
   }
+  PetscCall(CheckSize_Private(comm, type, op.num_nodes(), size_options));
+  if (type == hssbem::OperatorType::Dense) PetscCall(HssbemAssembleDense(comm, op, sel, rigid_modes, A, b));
+  else PetscCall(HssbemMatCreateCompressed_Private(comm, ctx.get(), A, b));
   PetscCall(HssbemMatComposeSystemContext(*A, ctx.get()));
   ctx.release();
   PetscFunctionReturn(PETSC_SUCCESS);
@@ -266,20 +255,11 @@ PetscErrorCode HssbemCreateSystem(MPI_Comm comm, const hssbem::BemOperator &op, 
 static PetscErrorCode MeshOrderScatter_Private(Mat A, Vec x, Vec y, ScatterMode mode)
 {
   HssbemSystemContext *p;
-  VecScatter           sc;
 
   PetscFunctionBegin;
   PetscCall(HssbemMatGetSystemContext(A, &p));
-  /* no map: mesh order already, perhaps in another layout (ScaLAPACK's) */
-  PetscCall(HssbemRowScatterCreate(y, x, p ? p->system_of_dof : std::vector<PetscInt>(), &sc));
-  if (mode == SCATTER_FORWARD) {
-    PetscCall(VecScatterBegin(sc, x, y, INSERT_VALUES, SCATTER_REVERSE));
-    PetscCall(VecScatterEnd(sc, x, y, INSERT_VALUES, SCATTER_REVERSE));
-  } else {
-    PetscCall(VecScatterBegin(sc, y, x, INSERT_VALUES, SCATTER_FORWARD));
-    PetscCall(VecScatterEnd(sc, y, x, INSERT_VALUES, SCATTER_FORWARD));
-  }
-  PetscCall(VecScatterDestroy(&sc));
+  /* the scatter from y to x; no map: mesh order already, perhaps in another layout (ScaLAPACK's) */
+  PetscCall(HssbemRowScatterOnce(y, x, p ? p->system_of_dof : std::vector<PetscInt>(), mode == SCATTER_FORWARD ? SCATTER_REVERSE : SCATTER_FORWARD));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

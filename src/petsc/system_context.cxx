@@ -99,24 +99,16 @@ PetscErrorCode HssbemOperatorTypeFromName(MPI_Comm comm, const char *mat_type, h
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-PetscErrorCode HssbemDefaultPCType(MPI_Comm comm, hssbem::OperatorType type, const char **pc_type)
-{
-  PetscFunctionBegin;
-  (void)comm;
-  *pc_type = type == hssbem::OperatorType::Hss ? PCHSS : type == hssbem::OperatorType::H2 ? PCH2 : PCLU;
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
+const char *HssbemDefaultPCType(hssbem::OperatorType type) { return type == hssbem::OperatorType::Hss ? PCHSS : type == hssbem::OperatorType::H2 ? PCH2 : PCLU; }
 
-PetscErrorCode HssbemH2WillBeFactored(MPI_Comm comm, bool *factored)
+PetscErrorCode HssbemH2WillBeFactored(bool *factored)
 {
-  char        given[64];
-  PetscBool   set;
-  const char *def;
+  char      given[64];
+  PetscBool set;
 
   PetscFunctionBegin;
   PetscCall(PetscOptionsGetString(NULL, NULL, "-pc_type", given, sizeof(given), &set));
-  PetscCall(HssbemDefaultPCType(comm, hssbem::OperatorType::H2, &def));
-  *factored = std::string(set ? given : def) == PCH2;
+  *factored = std::string(set ? given : HssbemDefaultPCType(hssbem::OperatorType::H2)) == PCH2;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -145,6 +137,19 @@ PetscErrorCode HssbemRowScatterCreate(Vec x, Vec y, const std::vector<PetscInt> 
   PetscCall(VecScatterCreate(x, from, y, to, sc));
   PetscCall(ISDestroy(&from));
   PetscCall(ISDestroy(&to));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode HssbemRowScatterOnce(Vec x, Vec y, const std::vector<PetscInt> &map, ScatterMode mode)
+{
+  const bool forward = mode == SCATTER_FORWARD;
+  VecScatter sc;
+
+  PetscFunctionBegin;
+  PetscCall(HssbemRowScatterCreate(x, y, map, &sc));
+  PetscCall(VecScatterBegin(sc, forward ? x : y, forward ? y : x, INSERT_VALUES, mode));
+  PetscCall(VecScatterEnd(sc, forward ? x : y, forward ? y : x, INSERT_VALUES, mode));
+  PetscCall(VecScatterDestroy(&sc));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

@@ -71,11 +71,11 @@ PetscErrorCode HssbemMatGetSystemContext(Mat A, HssbemSystemContext **ctx);
 /* The operator type named mat_type (HSSBEM_MAT_*); an error on comm for any other name. */
 PetscErrorCode HssbemOperatorTypeFromName(MPI_Comm comm, const char *mat_type, hssbem::OperatorType *type);
 
-/* The main solver's default PC for an operator type on comm (PCHSS, PCH2 for H² on any number of
-   ranks, PCLU for dense), and whether the H² operator will be factored by PC h2 (the
-   -pc_type of the options database, else that default). */
-PetscErrorCode HssbemDefaultPCType(MPI_Comm comm, hssbem::OperatorType type, const char **pc_type);
-PetscErrorCode HssbemH2WillBeFactored(MPI_Comm comm, bool *factored);
+/* The main solver's default PC for an operator type (PCHSS, PCH2 for H² on any number of ranks,
+   PCLU for dense), and whether the H² operator will be factored by PC h2 (the -pc_type of the
+   options database, else that default). */
+const char *HssbemDefaultPCType(hssbem::OperatorType type);
+PetscErrorCode HssbemH2WillBeFactored(bool *factored);
 
 /* Dof nodes owned by this rank: a contiguous block [nstart, nstart + nlocal), 3 rows each. */
 PetscErrorCode HssbemOwnedNodes(MPI_Comm comm, PetscInt nnodes, PetscInt *nstart, PetscInt *nlocal);
@@ -84,6 +84,8 @@ PetscErrorCode HssbemOwnedNodes(MPI_Comm comm, PetscInt nnodes, PetscInt *nstart
    order and y in a distributed system's rows: map = its rows, y[map[d]] being dof d); an empty
    map: at y's entry r (the same global row in another layout). */
 PetscErrorCode HssbemRowScatterCreate(Vec x, Vec y, const std::vector<PetscInt> &map, VecScatter *sc);
+/* That scatter once: y from x (SCATTER_FORWARD), or x from y (SCATTER_REVERSE). */
+PetscErrorCode HssbemRowScatterOnce(Vec x, Vec y, const std::vector<PetscInt> &map, ScatterMode mode);
 
 /* y += c Q (Qᵀ x) for the rigid-mode regularisation (modes: Q, 3N × 6 row-major, mesh order) on
    this rank's rows of the distributed system s (Qᵀ x summed over its ranks, comm); and

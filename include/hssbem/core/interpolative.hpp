@@ -68,6 +68,11 @@ ColumnId column_id(const double *A, int m, int n, int lda, const IdOptions &opti
 /// 0..m−1 and T is k×(m−k) with A(R, :) ≈ Tᵀ A(S, :). A is not modified.
 ColumnId row_id(const double *A, int m, int n, int lda, const IdOptions &options = {});
 
+/// Column ID of a matrix A from its Gram matrix AᵀA (n×n, upper triangle, leading dimension n;
+/// overwritten) by the pivots of IdOptions::gram, for a caller that sums the Gram matrix of a
+/// matrix it never forms (the H² factorization's skeletons).
+ColumnId gram_column_id(double *G, int n, const IdOptions &options = {});
+
 /// Reconstruct A ≈ A(:, S) [I T] Pᵀ from a column ID `id` of A into `out` (m×n, leading
 /// dimension ldout ≥ max(1, m)): skeleton columns are copied, redundant ones interpolated.
 void column_id_reconstruct(const ColumnId &id, const double *A, int m, int n, int lda, double *out, int ldout);

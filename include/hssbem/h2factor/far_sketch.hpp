@@ -1,15 +1,10 @@
 /// \file far_sketch.hpp
 /// Random sketches of the far-field couplings of an H² matrix, the weights that turn its nested
-/// bases into features for the factorization's skeletons (h2_factorization.hpp).
-///
-/// For cluster a with row skeleton S_a, the H² matrix holds every entry that a's rows see beyond
-/// its close neighbours as K(rows_a, F_a) = Û_a Z_a, Z_a = K(S_a, F_a) (through a's far blocks
-/// and its ancestors'). A row ID of Û_a Z_a restricted to some rows needs Z_a Z_aᵀ, not Z_a; the
-/// sketch Z_a Ω / √p, Ω Gaussian with p columns, has that Gram in expectation. Likewise for the
-/// columns: K(F_b, cols_b) = Z'_b Ŵ_bᵀ with the sketch (Ω'ᵀ Z'_b)ᵀ / √p. Both come from one H²
-/// product pass each with p random vectors (H2Matrix::skeleton_far_field and its transpose), and
-/// depend on K only: any boundary-condition pattern reuses them. The row sketch covers all of K's
-/// H and G columns (slots 0–5), a superset of any pattern's.
+/// bases into features for the factorization's skeletons: for cluster a, Z_a Ω / √p with Z_a =
+/// K(S_a, F_a) what a's row skeleton sees beyond its close neighbours and Ω Gaussian with p
+/// columns (Z_a Z_aᵀ in expectation), likewise for the columns; one H² product pass each
+/// (H2Matrix::skeleton_far_field and its transpose). They depend on K only: any
+/// boundary-condition pattern reuses them (docs/h2-factorization.md).
 #pragma once
 
 #include "hssbem/core/dense_matrix.hpp"

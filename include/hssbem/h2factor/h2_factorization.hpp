@@ -1,49 +1,9 @@
 /// \file h2_factorization.hpp
 /// A fast direct factorization of the BEM system A = K E_S on the H² matrix of K (strong
-/// admissibility): strong recursive skeletonization (Minden, Ho, Damle, Ying 2017; in the FMM-LU
-/// form of Sushnikova, Greengard, O'Neil, Rachh 2023), with the H² matrix's own nested bases in
-/// place of proxy surfaces.
-///
-/// The unknowns are factored box by box, bottom-up over the H² cluster tree. For a box X of the
-/// current level, with active unknowns D_X (all of a leaf's, or its children's skeletons):
-///  1. Skeleton. One interpolative decomposition of D_X against what X sees outside its close
-///     neighbours N(X) (the boxes the H² partition does not separate from X): the H² far field of
-///     X's rows and columns, in both directions at once (a joint row/column skeleton S_X), and the
-///     *modified* entries between X and boxes beyond N(X) that earlier eliminations created
-///     (fill-in). The far field comes from the H² bases restricted to D_X, weighted by a random
-///     sketch of the couplings beyond (far_sketch.hpp), so no kernel entry is evaluated.
-///  2. Sparsify. Rows and columns of the redundant unknowns R_X = D_X \ S_X minus their
-///     interpolation from S_X: they then couple to X and N(X) only (to the tolerance).
-///  3. Eliminate R_X (LU of the R_X block) and add the Schur complement to the explicit blocks of
-///     S_X ∪ N(X): blocks between close boxes, and fill-in blocks between boxes that are
-///     not close (they enter later skeletons as step 1 says).
-/// Then S_X is all that remains of X; a parent's unknowns are its children's skeletons. When no
-/// box of a level sees a far field any more, the remaining unknowns are factored densely (the top).
-///
-/// Ranks. The factorization runs on the ranks that hold its H² matrix (H2FactorCache::comm(); one
-/// rank is the case of one part): on a tree whose top levels are parts, one per rank, each rank
-/// eliminates its part's subtree (see "Parts" below), and what is left, the top, is factored
-/// densely on rank 0 or, in single precision, spread over all ranks. Every rank solves on its own
-/// rows; only the top's unknowns cross ranks.
-///
-/// A is factored with its columns scaled as the H² matrix holds K (G columns × μ/L-like scales,
-/// see kernel_column_scales), so one relative tolerance serves H and G columns. A pure-traction
-/// problem adds c Φ Φᵀ (rigid modes, rank 6): as explicit entries in close blocks and as a rank-6
-/// part of every far field.
-///
-/// Parts. On a tree whose top levels are parts (one per rank), the parts are eliminated
-/// separately: two boxes of different parts are never close, even where the H² partition calls
-/// them close. Their coupling (a *cross block*, its full current value) is handled like fill-in:
-/// it enters both boxes' skeletons, is truncated by the sparsification and never receives a
-/// Schur complement. So every step touches only blocks of its own part, each part's subtree (its
-/// root included) is eliminated alone, and what is left (the parts' roots' skeletons) is
-/// factored densely. A step acts on a cross block from one side (rows kept, or columns
-/// transformed), so each side keeps its own copy and gets the other side's part at the level's
-/// end: within a level a box sees the other part's cross blocks as they were at the level's start.
-///
-/// What a new boundary-condition pattern redoes: the whole elimination (skeletons, LU, Schur
-/// complements), from the H² matrix's near blocks, far blocks and bases. What it does not: any
-/// kernel evaluation, and the far-field sketch (a property of K, cached in H2FactorCache).
+/// admissibility) by strong recursive skeletonization, on the ranks that hold the matrix: each
+/// rank eliminates its part's subtree box by box, and the rest, the top, is factored densely. The
+/// method (skeletons, sparsification, elimination, parts and cross blocks, the top) is described
+/// in docs/h2-factorization.md.
 #pragma once
 
 #include "hssbem/bem/bem_operator.hpp"
@@ -72,19 +32,18 @@ struct H2FactorOptions {
   int sketch_columns = 0;  ///< random vectors of the far-field sketch; 0: chosen from rel_tol
   int top_size = 2000;     ///< factor the rest densely once at most this many unknowns remain
   int single_panels = -1;  ///< elimination panels and the working blocks at rest in single precision: 1, 0, or -1 (when rel_tol ≥ 1e-5)
-  /// From this many unknowns on, the dense top's LU is in single precision: with panels in
-  /// double, every solve refines in double against the top block (as accurate as a double LU,
-  /// which is twice the time); with panels in single precision (a preconditioner), the single
-  /// LU alone, a third of the memory, its accuracy checked by a trial solve. ≤ 0: always double.
+  /// From this many unknowns on, the dense top's LU is in single precision: refined in double by
+  /// every solve with double panels, alone with single panels (its accuracy checked by a trial
+  /// solve). ≤ 0: always double.
   int single_top_from = 4000;
   /// Stop at a level whose eliminations would cost more flops than factoring everything left
   /// densely (an upper bound of the level's Schur complements against the top's LU); false: go
   /// on while a level has a far field and more than top_size unknowns remain.
   bool top_when_cheaper = true;
   /// On one rank, on a tree with parts (ClusterTree's partition constructor): eliminate each
-  /// part's subtree separately, as several ranks do with one part each (boxes of different parts
-  /// are never close; their couplings stay as cross blocks, see "Parts"), the parts simulated on
-  /// this rank. Ignored on a tree without parts; always so on several ranks.
+  /// part's subtree separately, as several ranks do with one part each (cross blocks between the
+  /// parts), the parts simulated on this rank. Ignored on a tree without parts; always so on
+  /// several ranks.
   bool within_parts = false;
   /// On several ranks, a single-precision top (single panels, single_top_from or more unknowns)
   /// is spread over the ranks (ScaLAPACK, blocks of 128 columns); false: factored on rank 0.
@@ -159,12 +118,9 @@ private:
 class H2Factorization {
 public:
   /// Factor A-hat = (K E_S + c Φ Φᵀ) D for the pattern `sel` on the H² matrix `cache.matrix()`
-  /// (which must outlive this object) on the cache's ranks (collective, failure-atomic). On
-  /// several ranks each eliminates its part's subtree (no communication during a level; the
-  /// cross blocks' other sides at its end, the data of merged cross blocks at the merges), and
-  /// the top is factored from the ranks' rows of it: spread over all ranks when it is a
-  /// single-precision top (spread_top), else on rank 0; the same steps as one rank with
-  /// within_parts on the same tree. `rigid_modes`: row-major 3N × 6 orthonormal modes (mesh
+  /// (which must outlive this object) on the cache's ranks (collective, failure-atomic); on
+  /// several ranks the same steps as one rank with within_parts on the same tree (see
+  /// docs/h2-factorization.md). `rigid_modes`: row-major 3N × 6 orthonormal modes (mesh
   /// order) of a pure-traction problem's regularisation, or null. Throws H2Breakdown on every
   /// rank for a singular pivot block on any rank, std::invalid_argument for bad options; another
   /// error on its rank and PeerFault on the others (fault sites H2FSubtree, H2FTop).
@@ -175,12 +131,11 @@ public:
 
   /// x = A⁻¹ b on this rank's rows (collective): 3 values per point of this rank, in cluster
   /// order (one rank: every point; ClusterTree::to_cluster_order converts), x may alias b. Only
-  /// the top's unknowns cross ranks: summed over the ranks, solved (on rank 0, or spread), and
-  /// summed back.
+  /// the top's unknowns cross ranks.
   void solve(const double *b, double *x) const;
   /// X ← A⁻¹ X for nrhs right-hand sides at once (column-major, leading dimension ld ≥ 3
-  /// num_points(), cluster order), on a factorization held by one rank: solve()'s steps as matrix
-  /// products over the block (factor_solve_block.cpp), the factors read once per block.
+  /// num_points(), this rank's rows as solve() takes them; collective): solve()'s steps as
+  /// matrix products over the block, the factors read once per block.
   void solve_block(double *X, int nrhs, int ld) const;
   const RankComm &comm() const { return *m_comm; }
   const H2Matrix &matrix() const { return m_K; }
@@ -229,17 +184,16 @@ void solve_mesh_order(const H2Factorization &F, const double *b, double *x);
 /// the figure on): the bytes PC h2's dense top of n = `top_unknowns` unknowns (of `unknowns` in
 /// all) takes at its peak on the rank that holds the most of it, with these options on `ranks`
 /// ranks. The options decide its precision and place (H2FactorStats::top_*): in double on rank 0,
-/// 16 n² while the LU is made from the block (8 n² after); mixed (double panels, or everything in
-/// the top, and n ≥ single_top_from), 12 n² (the block in double beside the single LU); single
-/// precision alone on rank 0 (single panels), 4 n² and the other ranks' rows as they arrive, at
-/// most 4 n² more; spread over P ranks, 4 n² / P for the columns and up to twice that in
-/// messages, 12 n² / P.
+/// 8 n² (the LU in place of the block); mixed (double panels, or everything in the top, and n ≥
+/// single_top_from), 12 n² (the block in double beside the single LU); on several ranks 16 n² for
+/// either, the block and the other ranks' rows as they arrive; single precision alone on rank 0
+/// (single panels), 4 n² and the rows as they arrive, at most 4 n² more; spread over P ranks,
+/// 4 n² / P for the columns and up to twice that in messages, 12 n² / P.
 double h2_top_peak_bytes(const H2FactorOptions &options, long long unknowns, long long top_unknowns, int ranks);
 
 /// The top's unknowns that the options alone decide for a system of `unknowns` unknowns: all of
 /// them when they are at most top_size (everything factored densely), else 0: then the levels
-/// decide when to stop (a few thousand unknowns in the runs measured: 1 761 on a 20k disk organ
-/// at the default tolerance, 5 174 on an 80k sphere on 2 ranks, 9 567 on a 20k sphere at 1e-7).
+/// decide when to stop.
 long long h2_top_unknowns_from_options(const H2FactorOptions &options, long long unknowns);
 
 /// ‖I − A F⁻¹‖₂ estimated by power iterations from a random vector (the largest of the ratios

@@ -8,11 +8,7 @@
 PETSC_EXTERN PetscClassId  HSSBEM_CLASSID;
 PETSC_EXTERN PetscLogEvent BEM_Mesh, BEM_Assembly, BEM_Partition, BEM_Solve, BEM_Post, BEM_Stress, BEM_Interior, BEM_Output;
 /* Phases of the engines (hssbem::Phase), reported through their phase hook, each event named after
-   the format that does the work. HSS: tree, compression, near field, truncation, ULV
-   factorization and solve, product; HSS_FactorTop and HSS_SolveTop: the distributed ULV's
-   exchanges with rank 0 and its top there. H²: tree, compression, near field, product. The H²
-   factorization (PC h2): the whole, its sketch, levels (eliminations), merges and dense top; its
-   solve. */
+   the format that does the work (what each times: docs/running.md, "Log events"). */
 PETSC_EXTERN PetscLogEvent HSS_Tree, HSS_Compress, HSS_NearField, HSS_Truncate, HSS_Factor, HSS_Solve, HSS_MatMult, HSS_FactorTop, HSS_SolveTop;
 PETSC_EXTERN PetscLogEvent H2_Tree, H2_Compress, H2_NearField, H2_MatMult, H2F_Factor, H2F_Sketch, H2F_Eliminate, H2F_Merge, H2F_Top, H2F_Solve;
 /* Phases of a scene (frames): set-up, capacitance update, Woodbury/LU solve, refactorization, Krylov; and one whole frame. */

@@ -1,21 +1,7 @@
-/* The HSS preconditioner and direct solver, PC type "hss" (registered by HssbemInitializePackage()).
-
-   PCSetUp factors the system matrix of the operator's boundary-condition pattern by ULV from an
-   HSS compression at -pc_hss_rel_tol:
-   - of the matrix itself when it is the HSS MatShell and the tolerance, leaf size and rank cap
-     are the matrix's (no new work but the factorization);
-   - truncated from the matrix's compression when the PC's tolerance is looser (or it has a rank
-     cap): no kernel entry is evaluated again;
-   - compressed from the operator otherwise (a dense or H² matrix, a tighter tolerance, another
-     leaf size); on the H² matrix at 1e-3 unless -pc_hss_rel_tol says otherwise.
-   PCApply solves with the factors. With -ksp_type preonly it is a direct solver to about
-   -pc_hss_rel_tol; with GMRES at a loose tolerance (1e-2 .. 1e-4) a preconditioner.
-   On a distributed matrix (HSS, or H² on several ranks) the compression and the factorization
-   are distributed too: each rank its part's subtree, rank 0 the parts' roots' reduced blocks
-   (the matrix's own compression, truncated on the ranks, or compressed anew on the matrix's
-   METIS partition). On the dense matrix on several ranks they live on rank 0, which gathers
-   each vector.
-   A breakdown of the factorization sets PC_FACTOR_NUMERIC_ZEROPIVOT (KSP: DIVERGED_PC_FAILED). */
+/* The HSS preconditioner and direct solver, PC type "hss" (registered by HssbemInitializePackage()):
+   the ULV factorization of an HSS compression of the system matrix, distributed like the matrix.
+   Which compression it factors, its options and its failures: the manual page PCHSS
+   (src/petsc/pc_hss.cxx); the method: docs/hss.md. */
 #pragma once
 
 #include "hssbem/petsc/compat.h"

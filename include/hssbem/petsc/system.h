@@ -20,24 +20,15 @@
 #define HSSBEM_MAT_DENSE "dense"
 #define HSSBEM_MAT_H2    "h2"
 
-/* Assemble A and b = Σ_known (−H u + G t) of the pattern `sel` on comm (3 rows per dof node,
-   nodes split in contiguous blocks across the ranks, block size 3).
-   - mat_type HSSBEM_MAT_HSS: a MATSHELL whose MatMult applies the HSS compression of K = [H, G]
-     made at -mat_hss_rel_tol (see HssbemHssOptionsFromDatabase()); MatGetDiagonal and MatView
-     work. On several ranks it is distributed like the H² matrix below (METIS parts, each rank
-     its part's subtree, rank 0 the levels above the parts; rows in cluster order), and so is
-     PC hss's factorization of it.
-   - mat_type HSSBEM_MAT_H2: the same MatShell over an H² compression (strong admissibility,
-     -mat_h2_* options, see HssbemH2OptionsFromDatabase()): cheaper to build and to apply at
-     scale, for Krylov solvers; -pc_type hss then compresses its own HSS preconditioner. On
-     several ranks it is distributed: METIS splits the surface into one part per rank, each rank
-     compresses and applies its part, and the rows are in cluster order, rank p holding part p's
-     nodes (HssbemVecToMeshOrder() converts; see below).
-   - mat_type HSSBEM_MAT_DENSE: MATDENSE, filled row by row with the operator primitive.
-   With rigid_modes (orthonormal, row-major 3N × 6, see orthonormal_rigid_modes()), A gets
-   + rigid_regularization_weight · Q Qᵀ (pure-traction problems).
-   Every such matrix carries the system (operator, pattern, modes), so -pc_type hss can factor it.
-   op must outlive A. */
+/* Assemble A and b = Σ_known (−H u + G t) of the pattern `sel` on comm (3 rows per dof node, block
+   size 3): for HSSBEM_MAT_DENSE a MATDENSE filled row by row with the operator primitive (nodes
+   split in contiguous blocks across the ranks); for HSSBEM_MAT_HSS and HSSBEM_MAT_H2 a MatShell
+   (MatMult, MatGetDiagonal, MatView) over the HSS or H² compression of K = [H, G] made with the
+   -mat_hss_* or -mat_h2_* options, distributed by a METIS partition of the surface, one part per
+   rank (rows in cluster order, see below). With rigid_modes (orthonormal, row-major 3N × 6, see
+   orthonormal_rigid_modes()), A gets + rigid_regularization_weight · Q Qᵀ (pure-traction
+   problems). Every such matrix carries the system (operator, pattern, modes), so PC hss and
+   PC h2 can factor it (docs/performance.md, "Choosing the operator"). op must outlive A. */
 PetscErrorCode HssbemCreateSystem(MPI_Comm comm, const hssbem::BemOperator &op, const hssbem::SystemSelection &sel, const std::vector<double> *rigid_modes, const char *mat_type, Mat *A,
                                   Vec *b);
 
@@ -76,9 +67,8 @@ struct HssbemSolveInfo {
 };
 
 /* The main KSP (no prefix) with the defaults of the matrix type, then the options database:
-   preonly + PC hss (a direct HSS solve) for HSSBEM_MAT_HSS, GMRES(100) + PC jacobi at
-   -ksp_rtol 1e-8 for HSSBEM_MAT_H2 (-pc_type hss works there too: an HSS preconditioner compressed anew, at
-   -pc_hss_rel_tol 1e-3 by default), preonly + LU for HSSBEM_MAT_DENSE. */
+   preonly + PC hss (a direct HSS solve) for HSSBEM_MAT_HSS, GMRES(100) right-preconditioned by
+   PC h2 at -ksp_rtol 1e-8 for HSSBEM_MAT_H2, preonly + LU for HSSBEM_MAT_DENSE. */
 PetscErrorCode HssbemKSPCreate(MPI_Comm comm, const char *mat_type, KSP *ksp);
 
 /* The largest true relative residual ||b - A x|| / ||b|| that HssbemSolveSystem() accepts as a
