@@ -1,6 +1,7 @@
 // Solve a problem given in code through the library's dense path, for verification tests.
 #pragma once
 
+#include "hssbem/bem/mesh.hpp"
 #include "hssbem/bem/post.hpp"
 #include "hssbem/bem/rigid_modes.hpp"
 #include "hssbem/app/run.hpp"
@@ -19,6 +20,20 @@ struct Solved {
 };
 
 inline std::string mesh_file(const std::string &name) { return std::string(HSSBEM_MESHES) + "/" + name; }
+
+/// Two bodies in one mesh: the shipped unit cube and a copy of it `gap` above (z from 1 + gap
+/// to 2 + gap), validated and oriented.
+inline SurfaceMesh stacked_cubes(double gap)
+{
+  SurfaceMesh two = read_mesh(mesh_file("cube_l0.msh"));
+  const SurfaceMesh one = two;
+  for (const Vec3 &v : one.vertices) two.vertices.push_back(v + Vec3{0, 0, 1 + gap});
+  for (const auto &t : one.triangles) two.triangles.push_back({t[0] + one.num_vertices(), t[1] + one.num_vertices(), t[2] + one.num_vertices()});
+  two.triangle_region.insert(two.triangle_region.end(), one.triangle_region.begin(), one.triangle_region.end());
+  std::vector<std::string> notices;
+  validate_and_orient(two, notices);
+  return two;
+}
 
 inline BoundaryRule rule(BoundaryRule::Kind kind, Selector where, std::vector<Vec3> rows)
 {

@@ -299,13 +299,7 @@ TEST(Contact, TwoStackedCubesShareTheLoad)
 {
   // Two unit cubes, one on the other with a gap g, pushed together by δ: each carries E (δ − g) / 2.
   const double g = 0.1 * delta, p = 0.5 * E * (delta - g); // gap/h = 0.004
-  SurfaceMesh two = read_mesh(mesh_file("cube_l0.msh"));
-  const SurfaceMesh one = two;
-  for (const Vec3 &v : one.vertices) two.vertices.push_back(v + Vec3{0, 0, 1 + g});
-  for (const auto &t : one.triangles) two.triangles.push_back({t[0] + one.num_vertices(), t[1] + one.num_vertices(), t[2] + one.num_vertices()});
-  two.triangle_region.insert(two.triangle_region.end(), one.triangle_region.begin(), one.triangle_region.end());
-  std::vector<std::string> notices;
-  validate_and_orient(two, notices);
+  const SurfaceMesh two = stacked_cubes(g);
   const Discretization disc(two, 40.0);
   const BemOperator op(disc, Material{E, nu});
   std::vector<std::array<bool, 3>> held(disc.num_nodes(), {false, false, false});
@@ -337,7 +331,7 @@ TEST(Contact, TwoStackedCubesShareTheLoad)
   std::printf("stacked cubes: %d bodies, %lld points touching, pressure error %.2e, body forces %.6f %.6f\n", engine.bodies().count, rep.active_vertices, perr, sol.body_force[0][2],
               sol.body_force[1][2]);
   EXPECT_EQ(engine.bodies().count, 2);
-  EXPECT_EQ(touching, 2 * static_cast<int>(bottom_vertices(one).size()));
+  EXPECT_EQ(touching, 2 * static_cast<int>(bottom_vertices(read_mesh(mesh_file("cube_l0.msh"))).size()));
   EXPECT_LE(perr, 1e-4); // measured 6.0e-5; 8.3e-3 with the bodies' blocks coupled (DenseReferenceOptions::node_body)
   EXPECT_NEAR(sol.body_force[0][2] + sol.body_force[1][2], 0.0, 1e-12 * p);
   EXPECT_NEAR(sol.body_force[1][2], p, 1e-4 * p); // the upper cube is pushed up by the lower

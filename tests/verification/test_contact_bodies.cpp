@@ -36,13 +36,7 @@ struct StackedCubes {
 
   explicit StackedCubes(double g)
   {
-    mesh = read_mesh(mesh_file("cube_l0.msh"));
-    const SurfaceMesh one = mesh;
-    for (const Vec3 &v : one.vertices) mesh.vertices.push_back(v + Vec3{0, 0, 1 + g});
-    for (const auto &t : one.triangles) mesh.triangles.push_back({t[0] + one.num_vertices(), t[1] + one.num_vertices(), t[2] + one.num_vertices()});
-    mesh.triangle_region.insert(mesh.triangle_region.end(), one.triangle_region.begin(), one.triangle_region.end());
-    std::vector<std::string> notices;
-    validate_and_orient(mesh, notices);
+    mesh = stacked_cubes(g);
     disc = std::make_unique<Discretization>(mesh, 40.0);
     op = std::make_unique<BemOperator>(*disc, Material{E, nu});
     const int nn = disc->num_nodes();

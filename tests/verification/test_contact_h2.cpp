@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <string>
 
 using namespace hssbem;
 using namespace hssbem::test;
@@ -35,25 +36,52 @@ ContactRun contact(const ProblemSetup &s, const NodeConditions &base, const Refe
   return r;
 }
 
+/// A problem's dense reference and its H² one (the driver's H² defaults, `leaf_size` if given).
+struct References {
+  ProblemSetup s;
+  std::unique_ptr<BemOperator> op;
+  NodeConditions base;
+  std::unique_ptr<DenseReference> dense;
+  std::unique_ptr<H2Reference> h2;
+  References(const std::string &mesh, BoundaryRule held, int leaf_size = 0)
+  {
+    ProblemSpec spec = spec_for(mesh, E, nu);
+    spec.rules = {std::move(held)};
+    spec.contact.present = true;
+    s = setup_problem(std::move(spec), ProblemOverrides{});
+    op = std::make_unique<BemOperator>(*s.disc, s.material);
+    base = apply_rules(s.spec.rules, *s.disc, s.spec.file);
+    dense = std::make_unique<DenseReference>(*op, base.unknown_pattern());
+    H2ReferenceOptions ho;
+    ho.compression.rel_tol = 1e-5, ho.compression.single_precision = true;
+    if (leaf_size > 0) ho.compression.leaf_size = leaf_size;
+    h2 = std::make_unique<H2Reference>(*op, base.unknown_pattern(), ho);
+  }
+};
+
+/// The largest differences of displacement and pressure between two contact solutions, and the
+/// largest values of the reference's, over the solutions added.
+struct Differences {
+  double du = 0, um = 0, dp = 0, pm = 0;
+  void add(const ContactSolution &ref, const ContactSolution &other)
+  {
+    for (std::size_t i = 0; i < ref.u.size(); ++i) du = std::max(du, norm(other.u[i] - ref.u[i])), um = std::max(um, norm(ref.u[i]));
+    for (std::size_t v = 0; v < ref.pressure.size(); ++v)
+      dp = std::max(dp, std::abs(other.pressure[v] - ref.pressure[v])), pm = std::max(pm, ref.pressure[v]);
+  }
+};
+
 } // namespace
 
 TEST(ContactH2, HertzAgreesWithTheDenseReference)
 {
-  ProblemSpec spec = spec_for("hertz_hemisphere.msh", E, nu);
-  spec.rules = {rule(BoundaryRule::Kind::Displacement, region("flat"), {{0, 0, -delta}})};
-  spec.contact.present = true;
-  const ProblemSetup s = setup_problem(std::move(spec), ProblemOverrides{});
-  const BemOperator op(*s.disc, s.material);
-  const NodeConditions base = apply_rules(s.spec.rules, *s.disc, s.spec.file);
-  const DenseReference dense(op, base.unknown_pattern());
-  H2ReferenceOptions ho;
-  ho.compression.rel_tol = 1e-5, ho.compression.single_precision = true; // the driver's H² defaults
-  const H2Reference h2(op, base.unknown_pattern(), ho);
-  const ContactRun d = contact(s, base, dense), h = contact(s, base, h2);
+  const References r("hertz_hemisphere.msh", rule(BoundaryRule::Kind::Displacement, region("flat"), {{0, 0, -delta}}));
+  const H2Reference &h2 = *r.h2;
+  const ContactRun d = contact(r.s, r.base, *r.dense), h = contact(r.s, r.base, h2);
 
-  double du = 0, um = 0, dp = 0, pm = 0;
-  for (std::size_t i = 0; i < d.sol.u.size(); ++i) du = std::max(du, norm(h.sol.u[i] - d.sol.u[i])), um = std::max(um, norm(d.sol.u[i]));
-  for (std::size_t v = 0; v < d.sol.pressure.size(); ++v) dp = std::max(dp, std::abs(h.sol.pressure[v] - d.sol.pressure[v])), pm = std::max(pm, d.sol.pressure[v]);
+  Differences diff;
+  diff.add(d.sol, h.sol);
+  const double du = diff.du, um = diff.um, dp = diff.dp, pm = diff.pm;
   const double F = d.sol.obstacle_force[0][2], dF = std::abs(h.sol.obstacle_force[0][2] - F);
   const H2ReferenceStats &st = h2.stats();
   std::printf("H2 reference: %lld columns, %d corrections (last %.1e), %lld accurate solves, %lld GMRES iterations; touching %lld (dense %lld)\n", st.columns,
@@ -91,22 +119,15 @@ TEST(ContactH2, ToolFramesAndFrictionAgreeWithTheDenseReference)
   // The bottom clamped, a tool (sphere) pressed into the top slides along x over four frames,
   // frictionless and with friction 0.3 (quasi-static steps: slip from the previous frame): on
   // the H² reference (columns W̃ corrected by accurate solves every frame) against the dense one.
-  ProblemSpec spec = spec_for("cube_l0.msh", E, nu);
-  spec.rules = {rule(BoundaryRule::Kind::Displacement, region("z0"), {{0, 0, 0}})};
-  spec.contact.present = true;
-  const ProblemSetup s = setup_problem(std::move(spec), ProblemOverrides{});
-  const BemOperator op(*s.disc, s.material);
-  const NodeConditions base = apply_rules(s.spec.rules, *s.disc, s.spec.file);
-  const DenseReference dense(op, base.unknown_pattern());
-  H2ReferenceOptions ho;
-  ho.compression.rel_tol = 1e-5, ho.compression.single_precision = true, ho.compression.leaf_size = 16; // several levels on the small cube
-  const H2Reference h2(op, base.unknown_pattern(), ho);
+  const References r("cube_l0.msh", rule(BoundaryRule::Kind::Displacement, region("z0"), {{0, 0, 0}}), 16); // leaves of 16: several levels on the small cube
+  const ProblemSetup &s = r.s;
+  const NodeConditions &base = r.base;
   const Obstacle tool = Obstacle::sphere("tool", {0.25, 0.5, 1.5 - 0.08}, 0.5);
   for (double mu : {0.0, 0.3}) {
     ContactSettings settings;
     settings.friction = mu;
-    ContactEngine ed(*s.disc, dense, {tool}, settings), eh(*s.disc, h2, {tool}, settings);
-    double du = 0, um = 0, dp = 0, pm = 0;
+    ContactEngine ed(*s.disc, *r.dense, {tool}, settings), eh(*s.disc, *r.h2, {tool}, settings);
+    Differences diff;
     long long least = 1 << 30, corrections = 0;
     for (int f = 0; f < 4; ++f) {
       ContactSolution sd, sh;
@@ -115,9 +136,9 @@ TEST(ContactH2, ToolFramesAndFrictionAgreeWithTheDenseReference)
       corrections += rh.corrections;
       least = std::min(least, rh.active_vertices);
       EXPECT_LE(rh.correction, 1e-8) << "mu " << mu << " frame " << f;
-      for (std::size_t i = 0; i < sd.u.size(); ++i) du = std::max(du, norm(sh.u[i] - sd.u[i])), um = std::max(um, norm(sd.u[i]));
-      for (std::size_t v = 0; v < sd.pressure.size(); ++v) dp = std::max(dp, std::abs(sh.pressure[v] - sd.pressure[v])), pm = std::max(pm, sd.pressure[v]);
+      diff.add(sd, sh);
     }
+    const double du = diff.du, um = diff.um, dp = diff.dp, pm = diff.pm;
     std::printf("H2 against dense, a tool sliding over four frames, friction %.1f: u %.2e, pressure %.2e (of the peak); %lld corrections; at least %lld touching\n", mu, du / um,
                 dp / pm, corrections, least);
     EXPECT_GT(least, 0);
