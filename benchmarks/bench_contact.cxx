@@ -244,8 +244,7 @@ int run(const Args &a)
   const int nv = st.s.mesh->num_vertices(), N = 3 * st.s.disc->num_nodes();
   std::printf("bench_contact: %s, scenario %s: %d vertices, %d unknowns, friction %.2g, target %.0f %% touching, %d frames; OMP_NUM_THREADS=%s, load %.2f\n", a.mesh.c_str(),
               a.scenario.c_str(), nv, N, a.friction, 100 * a.target, a.frames, std::getenv("OMP_NUM_THREADS") ? std::getenv("OMP_NUM_THREADS") : "unset", load_average());
-  std::vector<char> pattern(N);
-  for (int j = 0; j < N; ++j) pattern[j] = st.base.displacement_prescribed[j / 3][j % 3];
+  const std::vector<char> pattern = st.base.unknown_pattern();
   Timer t;
   ContactOptions opt;
   opt.reach = a.reach;
