@@ -410,6 +410,37 @@ TEST(DenseScene, SinglePrecisionFieldsKeepTheSwitchedUnknownsInDouble)
   EXPECT_GT(worst, 0.0);
 }
 
+TEST(DenseScene, CandidateColumnsOnlyGiveTheSameFramesAndRefuseOthers)
+{
+  const Cardioid &c = cardioid();
+  std::vector<SystemSelection> frames;
+  for (int f = 0; f < 4; ++f) frames.push_back(c.frame(0.08 * f, f % 2 ? 0.05 : 0.03, f % 2 == 0));
+  SceneOptions opt;
+  for (const SystemSelection &f : frames) mark_scene_candidates(c.reference(), f, opt.candidates);
+  const long long count = std::count(opt.candidates.begin(), opt.candidates.end(), 1);
+  DenseScene scene(*c.op, c.reference(), opt), twin(*c.op, c.reference());
+  const double N = scene.num_unknowns();
+  ASSERT_GT(count, 0);
+  ASSERT_LT(count, N / 2); // the patches' unknowns only
+  EXPECT_LE(scene.memory_bytes(), twin.memory_bytes() - 8.0 * N * (N - count)); // W's other columns are not kept
+  std::vector<double> x, y;
+  for (int round = 0; round < 2; ++round)
+    for (const SystemSelection &f : frames) { // updates, then the same patterns again
+      scene.solve(f, x);
+      twin.solve(f, y);
+      EXPECT_LT(rel_diff(x, y), 1e-12); // measured 0: the same columns, the same arithmetic
+    }
+  try { // a patch on the other side switches unknowns that are no candidates
+    scene.solve(c.frame(3.0, 0.05, true), x);
+    ADD_FAILURE() << "a frame outside the candidates was solved";
+  } catch (const std::invalid_argument &e) {
+    EXPECT_NE(std::string(e.what()).find("not among the scene's candidates"), std::string::npos) << e.what();
+  }
+  scene.solve(frames[1], x); // and the scene goes on
+  twin.solve(frames[1], y);
+  EXPECT_LT(rel_diff(x, y), 1e-12);
+}
+
 TEST(Scene, PerVertexFramesMatchTheEngineAndTheHapticForcesMatchTheTractions)
 {
   const Cardioid &c = cardioid();
