@@ -173,15 +173,19 @@ void DenseScene::factor_reference(const BemOperator &op, const SystemSelection &
   m_ref = pattern_of(SystemSelection{reference.displacement_known, std::vector<Vec3>(m_nodes), {}});
   DenseReferenceOptions ro;
   ro.with_pressure = m_opt.with_pressure;
+  const Timer t_reference;
   m_reference = std::make_unique<DenseReference>(op, m_ref, ro);
+  m_reference_seconds = t_reference.seconds();
   progress.report(0.25);
   if (!m_opt.candidates.empty() && static_cast<int>(m_opt.candidates.size()) != N) throw std::invalid_argument("DenseScene: one candidate flag per unknown");
   std::vector<int> kept;
   m_wcol.assign(N, -1);
   for (int j = 0; j < N; ++j)
     if (m_opt.candidates.empty() || m_opt.candidates[j]) m_wcol[j] = static_cast<int>(kept.size()), kept.push_back(j);
+  const Timer t_columns;
   m_W.resize(static_cast<std::size_t>(N) * kept.size());
   m_reference->columns(kept, m_W.data());
+  m_columns_seconds = t_columns.seconds();
   progress.report(0.9);
   if (m_opt.with_pressure) {
     m_Wp.resize(static_cast<std::size_t>(N) * m_nodes);

@@ -145,6 +145,9 @@ public:
 
   int num_unknowns() const { return m_n; }
   double setup_seconds() const { return m_setup_seconds; }
+  /// Of the set-up: the reference (assembly of H and G, LU of A₀) and W's columns.
+  double reference_seconds() const { return m_reference_seconds; }
+  double columns_seconds() const { return m_columns_seconds; }
   /// Bytes held (W, H, G, W_p, Gn, factors, capacitance).
   std::size_t memory_bytes() const;
   /// Measured rates of the cost model: bytes/s of a gathered matrix-vector product over W's
@@ -218,7 +221,7 @@ private:
   enum class Last { None, Woodbury, Lu } m_last_factor = Last::Woodbury; ///< the last factorization made
   double m_bandwidth = 1e10, m_flops = 1e10, m_lu_flops = 1e10;
   std::array<double, 5> m_correction{{1, 1, 1, 1, 1}}; ///< measured / predicted, per strategy
-  double m_setup_seconds = 0;
+  double m_setup_seconds = 0, m_reference_seconds = 0, m_columns_seconds = 0;
   SceneFrameReport m_report;
 };
 
