@@ -28,9 +28,9 @@ struct Sample {
   Vec3 du;
 };
 
-/// Least squares min ‖A X − B‖ by Householder QR, A m × k (column-major, m ≥ k), B m × 3; the
-/// solution in X (k × 3, column-major). False when A is numerically rank deficient.
-bool least_squares(std::vector<double> A, int m, int k, std::vector<double> B, double *X)
+/// Least squares min ‖A X − B‖ by Householder QR, A m × k (column-major, m ≥ k), B m × nrhs;
+/// the solution in X (k × nrhs, column-major). False when A is numerically rank deficient.
+bool least_squares(std::vector<double> A, int m, int k, std::vector<double> B, int nrhs, double *X)
 {
   for (int j = 0; j < k; ++j) {
     double *a = &A[static_cast<std::size_t>(j) * m];
@@ -48,10 +48,10 @@ bool least_squares(std::vector<double> A, int m, int k, std::vector<double> B, d
       for (int i = j; i < m; ++i) c[i] -= d * a[i];
     };
     for (int c = j + 1; c < k; ++c) reflect(&A[static_cast<std::size_t>(c) * m]);
-    for (int c = 0; c < 3; ++c) reflect(&B[static_cast<std::size_t>(c) * m]);
+    for (int c = 0; c < nrhs; ++c) reflect(&B[static_cast<std::size_t>(c) * m]);
     a[j] = alpha; // R_jj; the reflector below the diagonal is no longer needed
   }
-  for (int c = 0; c < 3; ++c)
+  for (int c = 0; c < nrhs; ++c)
     for (int j = k - 1; j >= 0; --j) {
       double s = B[static_cast<std::size_t>(c) * m + j];
       for (int l = j + 1; l < k; ++l) s -= A[static_cast<std::size_t>(l) * m + j] * X[static_cast<std::size_t>(c) * k + l];
@@ -60,49 +60,102 @@ bool least_squares(std::vector<double> A, int m, int k, std::vector<double> B, d
   return true;
 }
 
-/// The corners of node i's triangles other than its own, in its tangent frame (each node once).
-std::vector<Sample> neighbour_samples(const Discretization &disc, int i, const std::vector<Vec3> &u, const Vec3 &e1, const Vec3 &e2, const Vec3 &n)
+/// Rings of neighbours a smooth node's fit reaches over, and the polynomial's degree there.
+constexpr int k_fit_rings = 3, k_fit_degree = 4;
+
+/// The nodes within `rings` edges of node i over its triangles, i excluded, each once (mark: a
+/// per-node workspace of num_nodes() entries and a stamp; a call takes a new stamp).
+std::vector<int> patch_nodes(const Discretization &disc, int i, int rings, std::vector<int> &mark)
 {
-  std::vector<int> seen;
-  std::vector<Sample> out;
-  const Vec3 &x0 = disc.node_position(i);
-  for (const int *t = disc.support_begin(i); t != disc.support_end(i); ++t)
-    for (int c = 0; c < 3; ++c) {
-      const int j = disc.element_node(*t, c);
-      if (j == i || std::find(seen.begin(), seen.end(), j) != seen.end()) continue;
-      seen.push_back(j);
-      const Vec3 d = disc.node_position(j) - x0;
-      out.push_back({dot(d, e1), dot(d, e2), dot(d, n), u[j] - u[i]});
-    }
+  const int stamp = ++mark.back(); // the workspace's last entry counts the calls
+  std::vector<int> out;
+  mark[i] = stamp;
+  std::vector<int> front{i};
+  for (int r = 0; r < rings; ++r) {
+    const std::size_t size = out.size();
+    for (int j : front)
+      for (const int *t = disc.support_begin(j); t != disc.support_end(j); ++t)
+        for (int c = 0; c < 3; ++c) {
+          const int k = disc.element_node(*t, c);
+          if (mark[k] != stamp) mark[k] = stamp, out.push_back(k);
+        }
+    front.assign(out.begin() + static_cast<std::ptrdiff_t>(size), out.end());
+  }
   return out;
 }
 
-/// ∂u/∂e1 and ∂u/∂e2 at the node from its samples, each sample's change of u less w · dun (its
-/// normal offset times ∂u/∂n): quadratic least squares when `quadratic` and well posed, else
-/// linear. False when even the linear fit is not.
-bool fit_gradient(const std::vector<Sample> &s, bool quadratic, const Vec3 &dun, Vec3 &du1, Vec3 &du2)
+/// The samples of node i's fit in its tangent frame, and the fit's degree: for a smooth node
+/// whose k_fit_rings rings are all smooth (the patch crosses no sharp edge), those rings and
+/// degree k_fit_degree; else the corners of its own triangles, quadratic for a smooth node and
+/// linear for one of a sharp vertex's nodes (its fan is open).
+std::vector<Sample> fit_samples(const Discretization &disc, int i, const std::vector<Vec3> &u, const Vec3 &e1, const Vec3 &e2, const Vec3 &n, std::vector<int> &mark, int &degree)
+{
+  const auto smooth = [&](int k) { return disc.node_count(disc.node(k).vertex) == 1; };
+  std::vector<int> nodes;
+  degree = smooth(i) ? 2 : 1;
+  if (smooth(i)) {
+    nodes = patch_nodes(disc, i, k_fit_rings, mark);
+    if (std::all_of(nodes.begin(), nodes.end(), smooth)) degree = k_fit_degree;
+    else nodes.clear();
+  }
+  if (nodes.empty()) nodes = patch_nodes(disc, i, 1, mark);
+  std::vector<Sample> out;
+  const Vec3 &x0 = disc.node_position(i);
+  for (int j : nodes) {
+    const Vec3 d = disc.node_position(j) - x0;
+    out.push_back({dot(d, e1), dot(d, e2), dot(d, n), u[j] - u[i]});
+  }
+  return out;
+}
+
+/// The tangential derivatives' weights of a least-squares fit: ∂f/∂e1 ≈ Σ_r g1[r] f_r, ∂f/∂e2
+/// ≈ Σ_r g2[r] f_r over the samples' values f_r (changes from the node's value).
+struct TangentFit {
+  std::vector<double> g1, g2;
+};
+
+/// The fit of the samples by a polynomial of the given degree (≤ 4) in the tangent frame, where
+/// the samples are enough for it (6, 14 and 22 for degrees 2 to 4: about 1.5 per term) and the
+/// fit is well posed, else of lower degree down to linear: the first two rows of the
+/// pseudo-inverse. False when even the linear fit is not.
+bool tangent_fit(const std::vector<Sample> &s, int degree, TangentFit &fit)
 {
   const int m = static_cast<int>(s.size());
   double h = 0;
   for (const Sample &p : s) h += std::sqrt(p.xi * p.xi + p.eta * p.eta);
   if (m < 2 || !(h > 0)) return false;
   h /= m; // scale: columns of about unit size
-  for (int k : {quadratic && m >= 6 ? 5 : 2, 2}) {
-    std::vector<double> A(static_cast<std::size_t>(m) * k), B(static_cast<std::size_t>(m) * 3), X(static_cast<std::size_t>(k) * 3);
+  constexpr int terms[5] = {0, 2, 5, 9, 14}, least[5] = {0, 2, 6, 14, 22}; // monomials of degree 1 .. d in two variables
+  std::vector<double> I(static_cast<std::size_t>(m) * m, 0.0);
+  for (int r = 0; r < m; ++r) I[static_cast<std::size_t>(r) * m + r] = 1;
+  for (int d = std::min(degree, 4); d >= 1; --d) {
+    const int k = terms[d];
+    if (m < least[d]) continue;
+    std::vector<double> A(static_cast<std::size_t>(m) * k), X(static_cast<std::size_t>(k) * m);
     for (int r = 0; r < m; ++r) {
       const double a = s[r].xi / h, b = s[r].eta / h;
-      const double col[5] = {a, b, a * a, a * b, b * b};
+      const double col[14] = {a, b, a * a, a * b, b * b, a * a * a, a * a * b, a * b * b, b * b * b, a * a * a * a, a * a * a * b, a * a * b * b, a * b * b * b, b * b * b * b};
       for (int c = 0; c < k; ++c) A[static_cast<std::size_t>(c) * m + r] = col[c];
-      for (int c = 0; c < 3; ++c) B[static_cast<std::size_t>(c) * m + r] = s[r].du[c] - s[r].w * dun[c];
     }
-    if (!least_squares(A, m, k, B, X.data())) continue;
-    for (int c = 0; c < 3; ++c) {
-      du1[c] = X[static_cast<std::size_t>(c) * k] / h;
-      du2[c] = X[static_cast<std::size_t>(c) * k + 1] / h;
-    }
+    if (!least_squares(A, m, k, I, m, X.data())) continue;
+    fit.g1.resize(m);
+    fit.g2.resize(m);
+    for (int r = 0; r < m; ++r) fit.g1[r] = X[static_cast<std::size_t>(r) * k] / h, fit.g2[r] = X[static_cast<std::size_t>(r) * k + 1] / h;
     return true;
   }
   return false;
+}
+
+/// ∂u/∂e1 and ∂u/∂e2 at the node from the fit of its samples, each sample's change of u less
+/// w · dun (its normal offset times ∂u/∂n).
+void fit_gradient(const std::vector<Sample> &s, const TangentFit &fit, const Vec3 &dun, Vec3 &du1, Vec3 &du2)
+{
+  du1 = du2 = Vec3{0, 0, 0};
+  for (std::size_t r = 0; r < s.size(); ++r) {
+    const Vec3 f = s[r].du - s[r].w * dun;
+    du1 = du1 + fit.g1[r] * f;
+    du2 = du2 + fit.g2[r] * f;
+  }
 }
 
 /// σ and the displacement gradient from the traction t on the plane of normal n and the
@@ -158,23 +211,26 @@ Voigt hooke_stress(const Material &m, const Mat3 &G)
 std::vector<NodeStress> node_stresses(const Discretization &disc, const Material &material, const std::vector<Vec3> &u, const std::vector<Vec3> &t)
 {
   std::vector<NodeStress> out(disc.num_nodes());
+  std::vector<int> mark(disc.num_nodes() + 1, 0); // patch_nodes' workspace and stamp
   for (int i = 0; i < disc.num_nodes(); ++i) {
     const DofNode &node = disc.node(i);
     const Vec3 &n = node.normal;
     Vec3 e1, e2, du1{}, du2{}, dun{};
     tangent_frame(n, e1, e2);
-    const std::vector<Sample> samples = neighbour_samples(disc, i, u, e1, e2, n);
-    const bool smooth = disc.node_count(node.vertex) == 1;
+    int degree = 1;
+    const std::vector<Sample> samples = fit_samples(disc, i, u, e1, e2, n, mark, degree);
     // The neighbours of a curved surface lie off the tangent plane by w = O(h²): their change of
     // u holds w ∂u/∂n, which the traction gives once the tangential gradient is known: a fixed
     // point that gains a factor ~h/R a round and makes a linear field exact on any surface.
+    TangentFit fit;
+    if (!tangent_fit(samples, degree, fit)) {
+      out[i].stress.fill(nan_value);
+      out[i].gradient.fill(nan_value);
+      continue;
+    }
     for (int round = 0; round < 10; ++round) {
       const Vec3 previous = dun;
-      if (!fit_gradient(samples, smooth, dun, du1, du2)) {
-        out[i].stress.fill(nan_value);
-        out[i].gradient.fill(nan_value);
-        break;
-      }
+      fit_gradient(samples, fit, dun, du1, du2);
       out[i] = stress_from_surface(material, n, e1, e2, t[i], du1, du2);
       const Mat3 &G = out[i].gradient;
       for (int r = 0; r < 3; ++r) dun[r] = G[3 * r] * n[0] + G[3 * r + 1] * n[1] + G[3 * r + 2] * n[2];
