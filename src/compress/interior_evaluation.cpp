@@ -31,7 +31,7 @@ std::vector<double> pseudo_inverse(std::vector<double> A, int m, int n)
 {
   const int k = std::min(m, n);
   std::vector<double> s(k), U(static_cast<std::size_t>(m) * k), Vt(static_cast<std::size_t>(k) * n);
-  if (lapack::gesvd(m, n, A.data(), m, s.data(), U.data(), m, Vt.data(), k) != 0) throw std::runtime_error("interior evaluation: SVD of a fit failed");
+  if (lapack::gesdd(m, n, A.data(), m, s.data(), U.data(), m, Vt.data(), k) != 0) throw std::runtime_error("interior evaluation: SVD of a fit failed");
   int kept = 0;
   while (kept < k && s[kept] > pinv_tol * s[0]) ++kept;
   for (int l = 0; l < kept; ++l) // U diag(1/s)

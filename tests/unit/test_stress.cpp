@@ -5,11 +5,14 @@
 #include "hssbem/bem/surface_locator.hpp"
 #include "hssbem/bem/surface_stress.hpp"
 #include "hssbem/compress/interior_evaluation.hpp"
+#include "hssbem/core/lapack.hpp"
 
 #include "test_shapes.hpp"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <random>
 
@@ -233,6 +236,32 @@ TEST(InteriorEvaluation, FastMatchesDirect)
     for (std::size_t i = 0; i < w.size(); ++i) sum[i] += w[i];
   }
   EXPECT_EQ(sum, v);
+}
+
+// The fits' pseudo-inverses come from lapack::gesdd (divide and conquer): the same singular
+// values as gesvd, and U diag(s) Vᵀ gives the matrix back.
+TEST(InteriorEvaluation, GesddMatchesGesvd)
+{
+  const int m = 60, n = 45;
+  std::mt19937 rng(3);
+  std::normal_distribution<double> g;
+  std::vector<double> A(static_cast<std::size_t>(m) * n);
+  for (double &a : A) a = g(rng);
+  std::vector<double> B = A, C = A, s(n), t(n), U(static_cast<std::size_t>(m) * n), Vt(static_cast<std::size_t>(n) * n), U2 = U, Vt2 = Vt;
+  ASSERT_EQ(lapack::gesdd(m, n, B.data(), m, s.data(), U.data(), m, Vt.data(), n), 0);
+  ASSERT_EQ(lapack::gesvd(m, n, C.data(), m, t.data(), U2.data(), m, Vt2.data(), n), 0);
+  double ds = 0, dA = 0, nA = 0;
+  for (int l = 0; l < n; ++l) ds = std::max(ds, std::abs(s[l] - t[l]) / t[0]);
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < m; ++i) {
+      double a = 0;
+      for (int l = 0; l < n; ++l) a += U[static_cast<std::size_t>(l) * m + i] * s[l] * Vt[static_cast<std::size_t>(j) * n + l];
+      dA = std::max(dA, std::abs(a - A[static_cast<std::size_t>(j) * m + i])), nA = std::max(nA, std::abs(A[static_cast<std::size_t>(j) * m + i]));
+    }
+  std::printf("gesdd against gesvd: singular values %.1e, reconstruction %.1e (relative)\n", ds, dA / nA);
+  EXPECT_LE(ds, 1e-14); // measured 1.7e-15
+  EXPECT_LE(dA / nA, 1e-14); // measured 2.5e-15
+  EXPECT_GT(s[n - 1], 0.0); // a random matrix has full rank: every singular value was computed
 }
 
 TEST(SurfaceLocator, NearestPointAndWindingNumber)
