@@ -10,6 +10,8 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <tuple>
+#include <utility>
 
 namespace hssbem {
 
@@ -75,29 +77,39 @@ void nest_radii(const ClusterTree &tree, const std::vector<Vec3> &C, double chec
     }
 }
 
-/// A centre for the ball around the balls of cluster cl's triangles (each about its centroid):
-/// Bădoiu–Clarkson steps from the box's centre towards the far side of the farthest triangle,
-/// the centre of the smallest ball met kept. On sphere_13k the source leaves' near zones then
-/// hold 10 % fewer particles per point than around the boxes' centres.
-Vec3 ball_centre(const SomiglianaSources &src, const ClusterTree &tree, const Cluster &cl)
+/// A ball (centre, radius) and its far side's distance from some point.
+struct FarBall {
+  Vec3 c{};
+  double r = 0, distance = -1;
+};
+
+/// The centre and radius of a small ball around a set of balls, given farthest(x) (the ball whose
+/// far side is farthest from x): Bădoiu–Clarkson steps from `start` towards that far side, the
+/// smallest ball met kept.
+template <class Farthest>
+std::pair<Vec3, double> small_ball(const Vec3 &start, const Farthest &farthest)
 {
-  Vec3 x = cl.centre, best = x;
+  Vec3 x = start, best = x;
   double best_r = std::numeric_limits<double>::max();
   for (int it = 1; it <= centre_steps; ++it) {
-    double r = -1;
-    int far = -1;
-    for (int p = cl.begin; p < cl.end; ++p) {
-      const int e = tree.perm()[p];
-      const double d = norm(src.centroid(e) - x) + src.radius(e);
-      if (d > r) r = d, far = e;
-    }
-    if (r < best_r) best_r = r, best = x;
-    const Vec3 to = src.centroid(far) - x;
-    const double n = norm(to);
-    if (n == 0) break;
-    x = x + ((n + src.radius(far)) / (n * (it + 1))) * to;
+    const FarBall f = farthest(x);
+    if (f.distance < best_r) best_r = f.distance, best = x;
+    const Vec3 to = f.c - x;
+    const double d = norm(to);
+    if (d == 0) break;
+    x = x + ((d + f.r) / (d * (it + 1))) * to;
   }
-  return best;
+  return {best, best_r};
+}
+
+/// The ball of a triangle of [begin, end) (tree order) whose far side is farthest from x, if farther than f.
+void farthest_triangle(const SomiglianaSources &src, const ClusterTree &tree, int begin, int end, const Vec3 &x, FarBall &f)
+{
+  for (int p = begin; p < end; ++p) {
+    const int e = tree.perm()[p];
+    const double d = norm(src.centroid(e) - x) + src.radius(e);
+    if (d > f.distance) f = {src.centroid(e), src.radius(e), d};
+  }
 }
 
 } // namespace
@@ -206,9 +218,35 @@ void InteriorEvaluator::Impl::add_leaf(const Vec3 &x, int b, double *out, Interi
 
 void InteriorEvaluator::Impl::source_centres()
 {
-  C.resize(tree.num_clusters());
+  const int nc = tree.num_clusters();
+  C.resize(nc);
+  std::vector<double> r(nc);
+  std::vector<int> leaves; // in the order of their triangles
+  for (int c = 0; c < nc; ++c)
+    if (tree.is_leaf(c)) leaves.push_back(c);
+  std::sort(leaves.begin(), leaves.end(), [&](int a, int b) { return tree.cluster(a).begin < tree.cluster(b).begin; });
 #pragma omp parallel for schedule(dynamic)
-  for (int c = 0; c < tree.num_clusters(); ++c) C[c] = ball_centre(src, tree, tree.cluster(c));
+  for (std::size_t i = 0; i < leaves.size(); ++i) { // over the triangles
+    const Cluster &cl = tree.cluster(leaves[i]);
+    std::tie(C[leaves[i]], r[leaves[i]]) = small_ball(cl.centre, [&](const Vec3 &x) {
+      FarBall f;
+      farthest_triangle(src, tree, cl.begin, cl.end, x, f);
+      return f;
+    });
+  }
+#pragma omp parallel for schedule(dynamic)
+  for (int c = 0; c < nc; ++c) { // over the triangles too, skipping the leaves whose balls lie closer than the farthest so far
+    const Cluster &cl = tree.cluster(c);
+    if (tree.is_leaf(c)) continue;
+    const auto first = std::lower_bound(leaves.begin(), leaves.end(), cl.begin, [&](int l, int at) { return tree.cluster(l).begin < at; });
+    const auto last = std::lower_bound(first, leaves.end(), cl.end, [&](int l, int at) { return tree.cluster(l).begin < at; });
+    C[c] = small_ball(cl.centre, [&](const Vec3 &x) {
+             FarBall f;
+             for (auto l = first; l != last; ++l)
+               if (norm(C[*l] - x) + r[*l] > f.distance) farthest_triangle(src, tree, tree.cluster(*l).begin, tree.cluster(*l).end, x, f);
+             return f;
+           }).first;
+  }
 }
 
 void InteriorEvaluator::Impl::source_radii()

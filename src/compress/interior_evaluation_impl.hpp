@@ -92,7 +92,8 @@ struct InteriorEvaluator::Impl {
   /// out[0..9) += the field at x of source cluster b's equivalent forces.
   void add_equivalent(const Vec3 &x, int b, double *out) const;
   /// Centres closer to those of the smallest balls around the clusters' triangles than their
-  /// boxes' centres (smaller balls are far sooner).
+  /// boxes' centres (smaller balls are far sooner): a leaf's by Bădoiu–Clarkson steps over its
+  /// triangles, a parent's over its leaves' balls.
   void source_centres();
   void source_radii();
   void upward_leaf(int c);
