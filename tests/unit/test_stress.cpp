@@ -284,6 +284,28 @@ TEST(SurfaceLocator, NearestPointAndWindingNumber)
 // The flood fill of a grid agrees with the winding number at every point, on the cube (points on
 // its faces are inside or outside by the winding number's rounding; they are left out) and on a
 // sphere.
+// Inside or outside from the nearest point's triangle (where it lies inside one) agrees with the
+// winding number, near faces, edges and corners.
+TEST(SurfaceLocator, InsideFromTheNearestPointMatchesTheWindingNumber)
+{
+  std::mt19937 rng(7);
+  for (int shape = 0; shape < 2; ++shape) {
+    const SurfaceMesh mesh = shape == 0 ? test::unit_cube(4) : test::icosphere(3);
+    const SurfaceLocator loc(mesh);
+    std::uniform_real_distribution<double> u(-1.3, 1.3);
+    int inside = 0, checked = 0;
+    while (checked < 2000) {
+      const Vec3 x{u(rng), u(rng), u(rng)};
+      const SurfaceLocator::Nearest n = loc.nearest(x, 0.1);
+      if (n.triangle < 0 || n.distance < 1e-9) continue; // only points near the surface, not on it
+      EXPECT_EQ(loc.inside(x, n), loc.inside(x)) << x[0] << " " << x[1] << " " << x[2];
+      inside += loc.inside(x), ++checked;
+    }
+    EXPECT_GT(inside, checked / 10);
+    EXPECT_LT(inside, checked - checked / 10);
+  }
+}
+
 TEST(SurfaceLocator, GridInsideMatchesTheWindingNumber)
 {
   for (int shape = 0; shape < 2; ++shape) {
