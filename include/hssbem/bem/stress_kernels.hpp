@@ -111,18 +111,21 @@ inline void kelvin_force_point(const SomiglianaConstants &k, T d0, T d1, T d2, T
 {
   const T inv_r = T(1) / std::sqrt(d0 * d0 + d1 * d1 + d2 * d2);
   const T g0 = d0 * inv_r, g1 = d1 * inv_r, g2 = d2 * inv_r;
-  const T gq = g0 * q0 + g1 * q1 + g2 * q2, cu_diag = T(k.cu_diag), om = T(k.om);
-  const T au = T(k.cu) * inv_r, ad = T(k.cd) * inv_r * inv_r;
-  u0 = au * (cu_diag * q0 + g0 * gq);
-  u1 = au * (cu_diag * q1 + g1 * gq);
-  u2 = au * (cu_diag * q2 + g2 * gq);
+  const T gq = g0 * q0 + g1 * q1 + g2 * q2, om = T(k.om);
+  const T au = T(k.cu) * inv_r, aq = au * gq, ud = au * T(k.cu_diag), ad = T(k.cd) * inv_r * inv_r;
+  u0 = ud * q0 + aq * g0;
+  u1 = ud * q1 + aq * g1;
+  u2 = ud * q2 + aq * g2;
+  // σ = dgg g⊗g + dd I + dfg (q⊗g + g⊗q), grouped as h = dgg g + w and w = dfg q (the fewest
+  // multiplies: the far field's sums are bound by them).
   const T dgg = T(3) * ad * gq, dd = -ad * om * gq, dfg = ad * om;
-  s0 = dgg * g0 * g0 + dd + T(2) * dfg * q0 * g0;
-  s1 = dgg * g1 * g1 + dd + T(2) * dfg * q1 * g1;
-  s2 = dgg * g2 * g2 + dd + T(2) * dfg * q2 * g2;
-  s3 = dgg * g1 * g2 + dfg * (q1 * g2 + q2 * g1);
-  s4 = dgg * g0 * g2 + dfg * (q0 * g2 + q2 * g0);
-  s5 = dgg * g0 * g1 + dfg * (q0 * g1 + q1 * g0);
+  const T w0 = dfg * q0, w1 = dfg * q1, w2 = dfg * q2, h0 = dgg * g0 + w0, h1 = dgg * g1 + w1, h2 = dgg * g2 + w2;
+  s0 = g0 * (h0 + w0) + dd;
+  s1 = g1 * (h1 + w1) + dd;
+  s2 = g2 * (h2 + w2) + dd;
+  s3 = g2 * h1 + w2 * g1;
+  s4 = g2 * h0 + w2 * g0;
+  s5 = g1 * h0 + w1 * g0;
 }
 
 /// The same, added to out[k · stride], k = 0..8.
