@@ -72,7 +72,7 @@ TEST(StressKernels, MatchFiniteDifferencesOfTheDisplacementKernels)
     double err = 0, scale = 0;
     for (int v = 0; v < 6; ++v) err = std::max(err, std::abs(out[3 + v] - fd[v])), scale = std::max(scale, std::abs(fd[v]));
     std::printf("nu %.2f: stress kernel vs finite differences %.2e (scale %.2e)\n", nu, err / scale, scale);
-    EXPECT_LE(err / scale, 1e-7); // measured 1e-10 .. 4e-10
+    EXPECT_LE(err / scale, 1e-7); // measured 1.9e-10 (nu 0) .. 9.3e-9 (nu 0.49, the finite differences' own error)
     EXPECT_GT(scale, 1e-3);
     // The force-only kernel is the same with m = 0.
     std::array<double, 9> q{};
