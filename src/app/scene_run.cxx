@@ -110,35 +110,53 @@ private:
   double                           m_frame_seconds = 0, m_slowest = 0, m_output_seconds = 0;
 };
 
-/// The scene engine set up on the reference pattern: the base rules where they hold the body,
-/// else frame 0's.
-std::unique_ptr<DenseScene> set_up_scene(const ProblemSetup &s, const BemOperator &op, const SceneRunOptions &o, std::map<std::string, double> &seconds)
+/// The reference pattern (the base rules where they hold the body, else frame 0's) and the
+/// unknowns that some frame switches or loads: the only columns of W the scene computes.
+struct SceneReference {
+  SystemSelection   selection;
+  std::string       name;
+  std::vector<char> candidates;
+  long long         count() const { return std::count(candidates.begin(), candidates.end(), 1); }
+};
+
+SceneReference scene_reference(const ProblemSetup &s)
 {
   NodeConditions ref_nc   = apply_rules(s.spec.rules, *s.disc, s.spec.file);
   std::string    ref_name = "the base rules";
   if (analyse_constraints(*s.disc, ref_nc.displacement_prescribed).rank != 6) ref_nc = frame_conditions(s.spec, 0, *s.disc), ref_name = "frame 0";
+  SceneReference ref{selection_of(ref_nc), ref_name, std::vector<char>(3 * static_cast<std::size_t>(s.disc->num_nodes()), 0)};
+  for (std::size_t f = 0; f < s.spec.frames.size(); ++f) mark_scene_candidates(ref.selection, selection_of(frame_conditions(s.spec, f, *s.disc)), ref.candidates);
+  return ref;
+}
+
+/// The scene engine set up on the reference pattern, with W for the candidates only.
+std::unique_ptr<DenseScene> set_up_scene(const BemOperator &op, const SceneReference &ref, const SceneRunOptions &o, bool pressure, std::map<std::string, double> &seconds)
+{
   SceneOptions so;
   so.strategy      = o.strategy;
-  so.with_pressure = uses_pressure(s.spec);
+  so.with_pressure = pressure;
   so.refresh_every = o.refresh_every;
   so.single_from   = o.single_from;
   so.single_fields_from = o.single_fields_from;
   so.krylov_rtol   = o.krylov_rtol;
+  so.candidates    = ref.candidates;
   const Timer timer;
   fault_point("SceneSetup");
-  auto scene = std::make_unique<DenseScene>(op, selection_of(ref_nc), so, HssbemSceneKrylovCreate());
+  auto scene = std::make_unique<DenseScene>(op, ref.selection, so, HssbemSceneKrylovCreate());
   seconds["scene_setup"] += timer.seconds();
-  HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF, "hssbem: scene: set up in %.2f s (reference pattern: %s; %.0f MB)\n", scene->setup_seconds(), ref_name.c_str(), scene->memory_bytes() / 1e6));
+  HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF, "hssbem: scene: set up in %.2f s (reference pattern: %s; W for %lld of %zu unknowns, those the frames switch or load; %.0f MB)\n",
+                              scene->setup_seconds(), ref.name.c_str(), ref.count(), ref.candidates.size(), scene->memory_bytes() / 1e6));
   return scene;
 }
 
-/// The dense scene's memory: W, the reference LU, H and G (and the pressure columns).
-void check_scene_size(MPI_Comm comm, const ProblemSetup &s, const SceneRunOptions &o)
+/// The dense scene's memory: W's candidate columns, the reference LU, H and G (and the pressure columns).
+void check_scene_size(MPI_Comm comm, const ProblemSetup &s, const SceneRunOptions &o, const SceneReference &ref)
 {
   const long long N = 3LL * s.disc->num_nodes();
   MachineLimits   limits;
   HssbemCallThrow(HssbemMachineLimits(comm, &limits));
-  const double need = 8.0 * N * N * (uses_pressure(s.spec) ? 6.7 : 6.0) * (o.strategy == SceneStrategy::Refactor || o.strategy == SceneStrategy::Auto ? 1.0 : 5.0 / 6.0);
+  const double need = 8.0 * N * N * (uses_pressure(s.spec) ? 6.7 : 6.0) * (o.strategy == SceneStrategy::Refactor || o.strategy == SceneStrategy::Auto ? 1.0 : 5.0 / 6.0) -
+                      8.0 * N * static_cast<double>(N - ref.count()); // W's columns that are no candidates
   if (need > 0.9 * static_cast<double>(limits.node_memory_bytes))
     throw std::runtime_error("the scene needs about " + std::to_string(static_cast<long long>(need / 1e9 + 0.5)) + " GB for " + std::to_string(N) +
                              " unknowns (dense reference factorization, W = A0^-1 K0', H and G), more than this node's " +
@@ -173,12 +191,13 @@ void run_scene(MPI_Comm comm, const ProblemSetup &s, const BemOperator &op, std:
   HssbemCallMPIThrow(MPI_Comm_size(comm, &size));
   if (asked && *asked != OperatorType::Dense)
     throw std::runtime_error(std::string("-bem_mat_type ") + operator_type_name(*asked) + ": scenes (problem files with \"frames\") run on the dense scene engine; use -bem_mat_type dense or auto");
-  check_scene_size(comm, s, o);
+  const SceneReference ref = scene_reference(s);
+  check_scene_size(comm, s, o, ref);
   const std::size_t nframes = s.spec.frames.size();
   HssbemCallThrow(PetscPrintf(comm, "hssbem: scene: %zu frames on the dense scene engine (rank 0), strategy %s\n", nframes, scene_strategy_name(o.strategy)));
   run_collectively(comm, [&] {
     if (rank != 0) return;
-    const std::unique_ptr<DenseScene> scene = set_up_scene(s, op, o, seconds);
+    const std::unique_ptr<DenseScene> scene = set_up_scene(op, ref, o, uses_pressure(s.spec), seconds);
     std::unique_ptr<FrameWriter>      writer;
     if (!s.output.empty()) writer = std::make_unique<FrameWriter>(s.output, scene_base(s, size, o));
     FrameLoop loop(s, o, *scene, writer.get());

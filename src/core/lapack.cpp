@@ -231,4 +231,23 @@ int getrs(char trans, int n, int nrhs, const float *a, int lda, const int *ipiv,
   return info;
 }
 
+namespace {
+/// getri for either precision: query the workspace, then invert.
+template <class T, class F> int getri_with(int n, T *a, int lda, const int *ipiv, F &&routine)
+{
+  if (n == 0) return 0;
+  int info = 0, lwork = -1;
+  T query = 0;
+  routine(&n, a, &lda, ipiv, &query, &lwork, &info);
+  if (info != 0) return info;
+  lwork = std::max(n, static_cast<int>(query + 0.5f));
+  std::vector<T> work(static_cast<std::size_t>(lwork));
+  routine(&n, a, &lda, ipiv, work.data(), &lwork, &info);
+  return info;
+}
+} // namespace
+
+int getri(int n, double *a, int lda, const int *ipiv) { return getri_with(n, a, lda, ipiv, dgetri_); }
+int getri(int n, float *a, int lda, const int *ipiv) { return getri_with(n, a, lda, ipiv, sgetri_); }
+
 } // namespace hssbem::lapack

@@ -3,6 +3,7 @@
 #include "hssbem/scene/dense_scene.hpp"
 
 #include "hssbem/core/blas_threads.hpp"
+#include "hssbem/core/cluster_tree.hpp"
 #include "hssbem/core/lapack.hpp"
 #include "hssbem/core/phase.hpp"
 #include "hssbem/core/progress.hpp"
@@ -29,25 +30,40 @@ constexpr double k_parallel_entries = 1e6;
 
 std::size_t sq(int n) { return static_cast<std::size_t>(n) * n; }
 
-/// y += Σ_i coef[i] M(:, cols[i]) for the column-major n-row matrix M (double, or single
-/// precision: the products and sums are in double either way): a gathered product, threaded
-/// over row blocks (each thread streams its rows of the chosen columns).
+/// Row ranges [first, second) of at most `block` rows covering [0, n).
+std::vector<std::pair<int, int>> row_blocks(int n)
+{
+  constexpr int block = 4096; // 32 kB of y per thread stays in cache while the columns stream by
+  std::vector<std::pair<int, int>> out;
+  for (int r0 = 0; r0 < n; r0 += block) out.push_back({r0, std::min(n, r0 + block)});
+  return out;
+}
+
+/// y(rows) += Σ_i coef[i] M(rows, cols[i]) for the column-major n-row matrix M (double, or
+/// single precision: the products and sums are in double either way) over the row ranges
+/// `chunks`: a gathered product, threaded over the chunks (each thread streams its rows of the
+/// chosen columns), eight columns per pass over a chunk (a float panel of 15 078 × 3 015: 6.4
+/// against 7.0 ms with four, two cores).
 template <class T>
-void gather_axpy(const T *M, int n, const std::vector<int> &cols, const std::vector<double> &coef, double *y)
+void gather_axpy(const T *M, int n, const std::vector<int> &cols, const std::vector<double> &coef, double *y, const std::vector<std::pair<int, int>> &chunks)
 {
   if (cols.empty()) return;
-  constexpr int block = 4096; // 32 kB of y per thread stays in cache while the columns stream by
-  const int nb = (n + block - 1) / block;
+  constexpr int width = 8;
+  const int nb = static_cast<int>(chunks.size());
   const std::size_t nc = cols.size();
 #pragma omp parallel for schedule(static) if (static_cast<double>(n) * nc > k_parallel_entries)
   for (int b = 0; b < nb; ++b) {
-    const int r0 = b * block, r1 = std::min(n, r0 + block);
+    const int r0 = chunks[b].first, r1 = chunks[b].second;
     std::size_t i = 0;
-    for (; i + 4 <= nc; i += 4) { // four columns per pass over the block: a quarter of the y traffic
-      const T *m0 = M + static_cast<std::size_t>(cols[i]) * n, *m1 = M + static_cast<std::size_t>(cols[i + 1]) * n,
-              *m2 = M + static_cast<std::size_t>(cols[i + 2]) * n, *m3 = M + static_cast<std::size_t>(cols[i + 3]) * n;
-      const double c0 = coef[i], c1 = coef[i + 1], c2 = coef[i + 2], c3 = coef[i + 3];
-      for (int r = r0; r < r1; ++r) y[r] += c0 * static_cast<double>(m0[r]) + c1 * static_cast<double>(m1[r]) + c2 * static_cast<double>(m2[r]) + c3 * static_cast<double>(m3[r]);
+    for (; i + width <= nc; i += width) {
+      const T *m[width];
+      double c[width];
+      for (int q = 0; q < width; ++q) m[q] = M + static_cast<std::size_t>(cols[i + q]) * n, c[q] = coef[i + q];
+      for (int r = r0; r < r1; ++r) {
+        double sum = 0;
+        for (int q = 0; q < width; ++q) sum += c[q] * static_cast<double>(m[q][r]);
+        y[r] += sum;
+      }
     }
     for (; i < nc; ++i) {
       const T *m = M + static_cast<std::size_t>(cols[i]) * n;
@@ -55,6 +71,12 @@ void gather_axpy(const T *M, int n, const std::vector<int> &cols, const std::vec
       for (int r = r0; r < r1; ++r) y[r] += c * static_cast<double>(m[r]);
     }
   }
+}
+
+template <class T>
+void gather_axpy(const T *M, int n, const std::vector<int> &cols, const std::vector<double> &coef, double *y)
+{
+  gather_axpy(M, n, cols, coef, y, row_blocks(n));
 }
 
 bool has_pressure(const SystemSelection &sel, int node) { return !sel.pressure.empty() && !std::isnan(sel.pressure[node]); }
@@ -80,6 +102,19 @@ std::optional<SceneStrategy> parse_scene_strategy(const std::string &s)
   return std::nullopt;
 }
 
+void mark_scene_candidates(const SystemSelection &reference, const SystemSelection &frame, std::vector<char> &candidates)
+{
+  const std::size_t nodes = reference.displacement_known.size();
+  if (frame.displacement_known.size() != nodes || frame.known.size() != nodes) throw std::invalid_argument("mark_scene_candidates: the frame does not match the reference's nodes");
+  candidates.resize(3 * nodes, 0);
+  for (std::size_t node = 0; node < nodes; ++node)
+    for (int a = 0; a < 3; ++a) {
+      const bool u = frame.displacement_known[node][a], switched = u != static_cast<bool>(reference.displacement_known[node][a]);
+      const bool loads = !switched && frame.known[node][a] != 0.0 && !(!u && has_pressure(frame, static_cast<int>(node)));
+      if (switched || loads) candidates[3 * node + a] = 1;
+    }
+}
+
 DenseScene::DenseScene(const BemOperator &op, const SystemSelection &reference, const SceneOptions &options, std::unique_ptr<KrylovSolver> krylov)
     : m_n(3 * op.num_nodes()), m_nodes(op.num_nodes()), m_opt(options), m_krylov(std::move(krylov)), m_cap(nullptr, 3 * op.num_nodes(), options.single_from)
 {
@@ -92,14 +127,35 @@ DenseScene::DenseScene(const BemOperator &op, const SystemSelection &reference, 
     factor_reference(op, reference, progress);
     measure_rates();
   }
+  panel_order(op);
   progress.report(0.95);
-  m_cap = CapacitanceInverse(m_W.data(), m_n, m_opt.single_from);
+  m_cap = CapacitanceInverse(std::make_shared<StoredColumns>(m_W.data(), m_n, &m_wcol), m_n, m_opt.single_from);
   m_cap.rebuild({});
   m_cap_pattern = m_ref;
   m_setup_seconds = timer.seconds();
 }
 
 DenseScene::~DenseScene() = default;
+
+std::vector<int> DenseScene::stored(const std::vector<int> &js) const
+{
+  std::vector<int> out(js.size());
+  for (std::size_t p = 0; p < js.size(); ++p) out[p] = m_wcol[js[p]];
+  return out;
+}
+
+void DenseScene::check_candidates(const SystemSelection &sel, const std::vector<char> &pattern) const
+{
+  if (m_opt.candidates.empty()) return;
+  for (int j = 0; j < m_n; ++j) {
+    if (m_wcol[j] >= 0) continue;
+    const int node = j / 3;
+    const bool loads = pattern[j] == m_ref[j] && sel.known[node][j % 3] != 0.0 && !(!pattern[j] && has_pressure(sel, node));
+    if (pattern[j] != m_ref[j] || loads)
+      throw std::invalid_argument("scene frame: node " + std::to_string(node) + " component " + std::to_string(j % 3) + (loads ? " carries a known value" : " switches its boundary condition") +
+                                  " but is not among the scene's candidates (SceneOptions::candidates)");
+  }
+}
 
 std::vector<char> DenseScene::pattern_of(const SystemSelection &sel) const
 {
@@ -110,19 +166,26 @@ std::vector<char> DenseScene::pattern_of(const SystemSelection &sel) const
   return p;
 }
 
-/// The reference factorization (reference.hpp), W = A₀⁻¹ K₀' (every column) and W_p = A₀⁻¹ Gn.
+/// The reference factorization (reference.hpp), W = A₀⁻¹ K₀' (the candidates' columns) and W_p = A₀⁻¹ Gn.
 void DenseScene::factor_reference(const BemOperator &op, const SystemSelection &reference, const Progress &progress)
 {
   const int N = m_n;
   m_ref = pattern_of(SystemSelection{reference.displacement_known, std::vector<Vec3>(m_nodes), {}});
   DenseReferenceOptions ro;
   ro.with_pressure = m_opt.with_pressure;
+  const Timer t_reference;
   m_reference = std::make_unique<DenseReference>(op, m_ref, ro);
+  m_reference_seconds = t_reference.seconds();
   progress.report(0.25);
-  std::vector<int> all(N);
-  std::iota(all.begin(), all.end(), 0);
-  m_W.resize(sq(N));
-  m_reference->columns(all, m_W.data());
+  if (!m_opt.candidates.empty() && static_cast<int>(m_opt.candidates.size()) != N) throw std::invalid_argument("DenseScene: one candidate flag per unknown");
+  std::vector<int> kept;
+  m_wcol.assign(N, -1);
+  for (int j = 0; j < N; ++j)
+    if (m_opt.candidates.empty() || m_opt.candidates[j]) m_wcol[j] = static_cast<int>(kept.size()), kept.push_back(j);
+  const Timer t_columns;
+  m_W.resize(static_cast<std::size_t>(N) * kept.size());
+  m_reference->columns(kept, m_W.data());
+  m_columns_seconds = t_columns.seconds();
   progress.report(0.9);
   if (m_opt.with_pressure) {
     m_Wp.resize(static_cast<std::size_t>(N) * m_nodes);
@@ -133,11 +196,24 @@ void DenseScene::factor_reference(const BemOperator &op, const SystemSelection &
   if (!m_opt.keep_operator) m_reference->drop_operator(); // W and A₀ hold what the Woodbury path needs
 }
 
+/// The panel's row order: the unknowns of the nodes in cluster order (core/cluster_tree.hpp).
+void DenseScene::panel_order(const BemOperator &op)
+{
+  std::vector<Vec3> points(m_nodes);
+  for (int i = 0; i < m_nodes; ++i) points[i] = op.discretization().node_position(i);
+  const ClusterTree tree(points);
+  m_panel_order.resize(m_n);
+  m_panel_position.resize(m_n);
+  for (int k = 0; k < m_nodes; ++k)
+    for (int a = 0; a < 3; ++a) m_panel_order[3 * k + a] = 3 * tree.perm()[k] + a;
+  for (int r = 0; r < m_n; ++r) m_panel_position[m_panel_order[r]] = r;
+}
+
 /// The cost model's rates: a gathered product over all of W's columns (bytes/s), a GEMM (flop/s).
 void DenseScene::measure_rates()
 {
   const int N = m_n;
-  std::vector<int> cols(N);
+  std::vector<int> cols(m_W.size() / N); // every stored column
   std::iota(cols.begin(), cols.end(), 0);
   std::vector<double> coef(N, 1e-3), y(N, 0.0);
   double best = k_inf;
@@ -146,7 +222,7 @@ void DenseScene::measure_rates()
     gather_axpy(m_W.data(), N, cols, coef, y.data());
     best = std::min(best, t.seconds());
   }
-  m_bandwidth = 8.0 * sq(N) / std::max(best, 1e-7);
+  m_bandwidth = 8.0 * static_cast<double>(m_W.size()) / std::max(best, 1e-7);
   const int m = std::min(N, 384);
   std::vector<double> A(sq(m), 1e-3), B(sq(m), 2e-3), C(sq(m), 0.0);
   best = k_inf;
@@ -162,14 +238,14 @@ void DenseScene::measure_rates()
 void DenseScene::reference_solve(const SystemSelection &sel, const std::vector<char> &pattern, std::vector<double> &y) const
 {
   y.assign(m_n, 0.0);
-  std::vector<int> cols, pcols;
+  std::vector<int> cols, pcols; // W's stored columns, W_p's
   std::vector<double> coef, pcoef;
   for (int j = 0; j < m_n; ++j) {
     const int node = j / 3;
     if (!pattern[j] && has_pressure(sel, node)) continue; // traction of a pressure load: through W_p
     const double v = sel.known[node][j % 3];
     if (pattern[j] != m_ref[j]) y[j] -= v;
-    else if (v != 0.0) cols.push_back(j), coef.push_back(-v);
+    else if (v != 0.0) cols.push_back(m_wcol[j]), coef.push_back(-v); // a candidate (check_candidates)
   }
   for (int node = 0; node < m_nodes; ++node)
     if (has_pressure(sel, node)) pcols.push_back(node), pcoef.push_back(-sel.pressure[node]);
@@ -196,46 +272,67 @@ void DenseScene::capacitance_correct(double *y) const
   const Timer t_fields;
   if (k >= m_opt.single_fields_from) single_fields_correct(s, y);
   else {
-    std::vector<float>().swap(m_panel); // a set too small for the panel: its memory back
+    m_panel.reset(); // a set too small for the panel: its memory back
     m_panel_index.clear();
     for (int p = 0; p < k; ++p) minus_s[p] = -s[p];
-    gather_axpy(m_W.data(), m_n, J, minus_s, y);
+    gather_axpy(m_W.data(), m_n, stored(J), minus_s, y);
     for (int p = 0; p < k; ++p) y[J[p]] += s[p];
   }
   m_fields_seconds += t_fields.seconds();
 }
 
-/// The same product from the single-precision panel, over its used slots. The switched rows
-/// get x(J) = s: in exact arithmetic x(J) = y(J) − C s + s, and y(J) − C s is the refined
-/// capacitance residual (≤ 1e-13 ‖y(J)‖), so they keep double accuracy.
+/// The same product from the single-precision panel, over its used slots and the rows outside
+/// J only: the switched rows get x(J) = s. In exact arithmetic x(J) = y(J) − C s + s, and
+/// y(J) − C s is the refined capacitance residual (≤ 1e-10 ‖y(J)‖, capacitance.hpp), so they
+/// keep that accuracy. The panel's rows are in cluster order, where J (a contact patch) is a few
+/// long runs: skipping them saves their share of the bytes (20 % on the 10k organ).
 void DenseScene::single_fields_correct(const std::vector<double> &s, double *y) const
 {
   refresh_panel();
   const std::vector<int> &J = m_cap.indices(), &slot = m_cap.position_slots();
-  const int k = m_cap.size();
-  std::vector<double> minus_s(k);
+  const int k = m_cap.size(), n = m_n;
+  std::vector<char> skip(n, 0);
+  for (int j : J) skip[m_panel_position[j]] = 1;
+  std::vector<std::pair<int, int>> chunks; // the runs of rows outside J, cut at 4096 rows
+  for (int r = 0; r < n;) {
+    if (skip[r]) {
+      ++r;
+      continue;
+    }
+    const int r0 = r;
+    while (r < n && !skip[r] && r - r0 < 4096) ++r;
+    chunks.push_back({r0, r});
+  }
+  std::vector<double> minus_s(k), z(n, 0.0);
   for (int p = 0; p < k; ++p) minus_s[p] = -s[p];
-  gather_axpy(m_panel.data(), m_n, slot, minus_s, y);
+  gather_axpy(m_panel.get(), n, slot, minus_s, z.data(), chunks);
+  for (int r = 0; r < n; ++r)
+    if (!skip[r]) y[m_panel_order[r]] += z[r];
   for (int p = 0; p < k; ++p) y[J[p]] = s[p];
 }
 
 void DenseScene::refresh_panel() const
 {
-  const std::size_t cols = static_cast<std::size_t>(m_cap.capacity());
+  const std::size_t cols = static_cast<std::size_t>(m_cap.capacity()), n = static_cast<std::size_t>(m_n);
   if (m_panel_index.size() != cols) { // the capacitance grew (slots kept) or is new: columns keep their place
-    m_panel.resize(cols * m_n);
+    // Not zero-filled: a new panel's pages are first touched by the threads that convert into
+    // it (190 MB on the 10k organ's first contact).
+    std::unique_ptr<float[]> grown(new float[cols * n]);
+    const std::size_t keep = std::min(cols, m_panel_index.size());
+#pragma omp parallel for schedule(static) if (keep > 8)
+    for (std::size_t p = 0; p < keep; ++p) std::copy_n(&m_panel[p * n], n, &grown[p * n]);
+    m_panel = std::move(grown);
     m_panel_index.resize(cols, -1);
   }
   const std::vector<int> &idx = m_cap.slot_indices();
   std::vector<int> stale;
   for (std::size_t p = 0; p < idx.size(); ++p)
     if (idx[p] >= 0 && idx[p] != m_panel_index[p]) stale.push_back(static_cast<int>(p));
-  const int n = m_n;
 #pragma omp parallel for schedule(static) if (stale.size() > 8)
   for (std::size_t q = 0; q < stale.size(); ++q) {
-    const double *w = &m_W[static_cast<std::size_t>(idx[stale[q]]) * n];
+    const double *w = &m_W[static_cast<std::size_t>(m_wcol[idx[stale[q]]]) * n];
     float *f = &m_panel[static_cast<std::size_t>(stale[q]) * n];
-    for (int i = 0; i < n; ++i) f[i] = static_cast<float>(w[i]);
+    for (std::size_t i = 0; i < n; ++i) f[i] = static_cast<float>(w[m_panel_order[i]]);
   }
   for (int p : stale) m_panel_index[p] = idx[p];
 }
@@ -398,6 +495,7 @@ const SceneFrameReport &DenseScene::solve(const SystemSelection &sel, std::vecto
 {
   const Timer timer;
   const std::vector<char> pattern = pattern_of(sel);
+  check_candidates(sel, pattern);
   const std::array<double, 5> predicted = predict(sel, pattern);
   SceneStrategy s = force != SceneStrategy::Auto ? force : m_opt.strategy;
   const bool same = pattern == m_cap_pattern || (!m_lu_pattern.empty() && pattern == m_lu_pattern);
@@ -468,6 +566,7 @@ const SceneFrameReport &DenseScene::solve(const SystemSelection &sel, std::vecto
 void DenseScene::solve_switched(const SystemSelection &sel, std::vector<double> &out)
 {
   const std::vector<char> pattern = pattern_of(sel);
+  check_candidates(sel, pattern);
   if (pattern != m_cap_pattern) throw std::invalid_argument("scene: solve_switched needs the pattern of the last update (solve the frame first)");
   const std::vector<int> &J = m_cap.indices();
   const int k = m_cap.size();
@@ -481,7 +580,7 @@ void DenseScene::solve_switched(const SystemSelection &sel, std::vector<double> 
     if (pattern[j] != m_ref[j] || (!pattern[j] && has_pressure(sel, node))) continue;
     const double v = sel.known[node][j % 3];
     if (v == 0.0) continue;
-    const double *w = &m_W[static_cast<std::size_t>(j) * m_n];
+    const double *w = &m_W[static_cast<std::size_t>(m_wcol[j]) * m_n];
     for (int p = 0; p < k; ++p) yJ[p] -= w[J[p]] * v;
   }
   for (int node = 0; node < m_nodes; ++node)
@@ -509,7 +608,7 @@ double DenseScene::residual(const SystemSelection &sel, const std::vector<double
 std::size_t DenseScene::memory_bytes() const
 {
   const std::size_t d = m_W.size() + m_Wp.size() + m_lu.size() + sq(m_cap.size());
-  return 8 * d + 4 * m_panel.size() + m_reference->memory_bytes();
+  return 8 * d + 4 * m_panel_index.size() * static_cast<std::size_t>(m_n) + m_reference->memory_bytes();
 }
 
 } // namespace hssbem

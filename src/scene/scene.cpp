@@ -25,14 +25,22 @@ SystemSelection node_selection(const Discretization &disc, const Scene::Pattern 
 } // namespace
 
 Scene::Scene(const SurfaceMesh &mesh, const Material &material, const Pattern &reference, const SceneOptions &options, std::unique_ptr<KrylovSolver> krylov,
-             double feature_angle_deg)
+             double feature_angle_deg, const std::vector<char> &candidate_vertices)
     : m_mesh(mesh)
 {
   if (reference.size() != mesh.vertices.size()) throw std::invalid_argument("Scene: the reference pattern needs one entry per vertex");
   if (options.with_pressure) throw std::invalid_argument("Scene: pressure loads are not part of the Scene API (give tractions)");
+  if (!options.candidates.empty()) throw std::invalid_argument("Scene: give the candidates per vertex (candidate_vertices), not per unknown");
+  if (!candidate_vertices.empty() && candidate_vertices.size() != mesh.vertices.size()) throw std::invalid_argument("Scene: candidate_vertices needs one entry per vertex");
   m_disc = std::make_unique<Discretization>(m_mesh, feature_angle_deg);
   m_op = std::make_unique<BemOperator>(*m_disc, material);
-  m_scene = std::make_unique<DenseScene>(*m_op, node_selection(*m_disc, reference, {}), options, std::move(krylov));
+  SceneOptions opt = options;
+  if (!candidate_vertices.empty()) {
+    opt.candidates.resize(3 * static_cast<std::size_t>(m_disc->num_nodes()));
+    for (int n = 0; n < m_disc->num_nodes(); ++n)
+      for (int a = 0; a < 3; ++a) opt.candidates[3 * n + a] = candidate_vertices[m_disc->node(n).vertex] ? 1 : 0;
+  }
+  m_scene = std::make_unique<DenseScene>(*m_op, node_selection(*m_disc, reference, {}), opt, std::move(krylov));
   m_pattern = reference;
   m_values.assign(mesh.vertices.size(), Vec3{0, 0, 0});
   m_area = node_areas(*m_disc);

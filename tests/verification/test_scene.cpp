@@ -410,6 +410,37 @@ TEST(DenseScene, SinglePrecisionFieldsKeepTheSwitchedUnknownsInDouble)
   EXPECT_GT(worst, 0.0);
 }
 
+TEST(DenseScene, CandidateColumnsOnlyGiveTheSameFramesAndRefuseOthers)
+{
+  const Cardioid &c = cardioid();
+  std::vector<SystemSelection> frames;
+  for (int f = 0; f < 4; ++f) frames.push_back(c.frame(0.08 * f, f % 2 ? 0.05 : 0.03, f % 2 == 0));
+  SceneOptions opt;
+  for (const SystemSelection &f : frames) mark_scene_candidates(c.reference(), f, opt.candidates);
+  const long long count = std::count(opt.candidates.begin(), opt.candidates.end(), 1);
+  DenseScene scene(*c.op, c.reference(), opt), twin(*c.op, c.reference());
+  const double N = scene.num_unknowns();
+  ASSERT_GT(count, 0);
+  ASSERT_LT(count, N / 2); // the patches' unknowns only
+  EXPECT_LE(scene.memory_bytes(), twin.memory_bytes() - 8.0 * N * (N - count)); // W's other columns are not kept
+  std::vector<double> x, y;
+  for (int round = 0; round < 2; ++round)
+    for (const SystemSelection &f : frames) { // updates, then the same patterns again
+      scene.solve(f, x);
+      twin.solve(f, y);
+      EXPECT_LT(rel_diff(x, y), 1e-12); // measured 0: the same columns, the same arithmetic
+    }
+  try { // a patch on the other side switches unknowns that are no candidates
+    scene.solve(c.frame(3.0, 0.05, true), x);
+    ADD_FAILURE() << "a frame outside the candidates was solved";
+  } catch (const std::invalid_argument &e) {
+    EXPECT_NE(std::string(e.what()).find("not among the scene's candidates"), std::string::npos) << e.what();
+  }
+  scene.solve(frames[1], x); // and the scene goes on
+  twin.solve(frames[1], y);
+  EXPECT_LT(rel_diff(x, y), 1e-12);
+}
+
 TEST(Scene, PerVertexFramesMatchTheEngineAndTheHapticForcesMatchTheTractions)
 {
   const Cardioid &c = cardioid();
@@ -458,6 +489,47 @@ TEST(Scene, PerVertexFramesMatchTheEngineAndTheHapticForcesMatchTheTractions)
   }
   EXPECT_THROW(scene.set_pattern(Scene::Pattern(3)), std::invalid_argument);
   EXPECT_THROW(scene.set_values(std::vector<Vec3>(3)), std::invalid_argument);
+}
+
+TEST(Scene, CandidateVerticesGiveTheSameFrames)
+{
+  const Cardioid &c = cardioid();
+  const int nv = c.mesh.num_vertices();
+  Scene::Pattern reference(nv, {false, false, false});
+  for (int v = 0; v < nv; ++v)
+    if (c.mesh.vertices[v][2] < 0.044) reference[v] = {true, true, true};
+  const auto patch = [&](double phi) {
+    const Vec3 centre{0.45 * std::cos(phi), 0.45 * std::sin(phi), 0.5};
+    std::vector<char> in(nv, 0);
+    for (int v = 0; v < nv; ++v) in[v] = !reference[v][0] && norm(c.mesh.vertices[v] - centre) < 0.3;
+    return in;
+  };
+  std::vector<char> candidates(nv, 0);
+  for (int f = 0; f < 3; ++f)
+    for (int v = 0; v < nv; ++v) candidates[v] |= patch(0.3 * f)[v];
+  Scene lean(c.mesh, Material::from_lame(1000.0, 500.0), reference, {}, nullptr, 40.0, candidates), full(c.mesh, Material::from_lame(1000.0, 500.0), reference);
+  EXPECT_LT(lean.engine().memory_bytes(), full.engine().memory_bytes()); // W's other columns are not computed
+  for (int f = 0; f < 3; ++f) {
+    Scene::Pattern pattern = reference;
+    std::vector<Vec3> values(nv, Vec3{0, 0, 0});
+    const std::vector<char> in = patch(0.3 * f);
+    for (int v = 0; v < nv; ++v)
+      if (in[v]) pattern[v] = {true, true, true}, values[v] = {0, 0, -0.02};
+    for (Scene *s : {&lean, &full}) s->set_pattern(pattern), s->set_values(values), s->solve();
+    double d = 0, n = 0;
+    for (int v = 0; v < nv; ++v) d = std::max(d, norm(lean.displacement()[v] - full.displacement()[v])), n = std::max(n, norm(full.displacement()[v]));
+    EXPECT_GT(n, 0.0);
+    EXPECT_LE(d, 1e-12 * n); // measured 0: the same columns
+  }
+  Scene::Pattern away = reference; // a vertex on the far side is no candidate
+  const std::vector<char> far = patch(3.0);
+  for (int v = 0; v < nv; ++v)
+    if (far[v] && !candidates[v]) away[v] = {true, true, true};
+  lean.set_pattern(away);
+  EXPECT_THROW(lean.solve(), std::invalid_argument);
+  SceneOptions per_unknown;
+  per_unknown.candidates.assign(3, 1);
+  EXPECT_THROW(Scene(c.mesh, Material::from_lame(1000.0, 500.0), reference, per_unknown), std::invalid_argument);
 }
 
 TEST(SceneStrategy, NamesRoundTrip)

@@ -11,12 +11,15 @@
 /// Precision. C itself is kept explicitly in double. Its inverse is kept in double, or — for
 /// large sets, where the updates' GEMMs dominate a frame — in single precision (twice the GEMM
 /// rate, half the memory traffic), and then every solve is refined in double against C
-/// (s ← s + C⁻¹(r − C s)) until ‖r − C s‖ ≤ 1e-13 ‖r‖: the answer is double-accurate as long as
-/// the single-precision inverse contracts the residual. The last step's residual is not
-/// computed when the contraction measured so far puts it 100x below the tolerance (a pass over
-/// C in double is the dearest part of a solve). When it stops contracting (rounding
-/// accumulated over many updates, or an ill-conditioned C), solve() says so and the owner
-/// rebuilds (in double if that was single already).
+/// (s ← s + C⁻¹(r − C s)) until ‖r − C s‖ ≤ 1e-10 ‖r‖ (k_refine_tol). A scene's unknowns then
+/// differ from the exact Woodbury answer by about that (its switched unknowns are s, the others
+/// −W(:, J) s = −W(:, J) C⁻¹ r, a bounded map of the residual), two orders below the rounding of
+/// the single-precision W(:, J) that goes with a single-precision inverse (dense_scene.hpp; the
+/// contact engine keeps its inverse in double). The last step's residual is not computed when
+/// the contraction measured so far puts it 10x below the tolerance (a pass over C in double is
+/// the dearest part of a solve). When it stops contracting (rounding accumulated over many
+/// updates, or an ill-conditioned C), solve() says so and the owner rebuilds (in double if that
+/// was single already).
 ///
 /// Storage. C and its inverse live in square arrays with room to spare, one slot per index: a
 /// dropped index leaves its slot empty (its row and column zero in both), an added one takes an
@@ -43,6 +46,23 @@ public:
   virtual ~MatrixEntries() = default;
   /// out[p + q ld] = W(rows[p], cols[q]).
   virtual void block(const std::vector<int> &rows, const std::vector<int> &cols, double *out, std::size_t ld) const = 0;
+};
+
+/// The relative residual a single-precision inverse's solves are refined to.
+constexpr double k_refine_tol = 1e-10;
+
+/// Entries of a stored column-major matrix with n rows: W(i, j) at W[i + column(j) · n], where
+/// column(j) = j, or (*column)[j] for a matrix that keeps some of its columns (the map must
+/// outlive this object and give every index asked for).
+class StoredColumns final : public MatrixEntries {
+public:
+  StoredColumns(const double *W, int n, const std::vector<int> *column = nullptr) : m_W(W), m_n(n), m_column(column) {}
+  void block(const std::vector<int> &rows, const std::vector<int> &cols, double *out, std::size_t ld) const override;
+
+private:
+  const double *m_W;
+  int m_n;
+  const std::vector<int> *m_column;
 };
 
 class CapacitanceInverse {
@@ -79,7 +99,7 @@ public:
   /// Refinement steps of the last solve() (1 in double: the product with the inverse).
   int last_iterations() const { return m_last_iterations; }
 
-  /// s = C⁻¹ r for r of length size(); in single precision refined to ‖r − C s‖ ≤ 1e-13 ‖r‖.
+  /// s = C⁻¹ r for r of length size(); in single precision refined to ‖r − C s‖ ≤ k_refine_tol ‖r‖.
   /// Returns false when the refinement stopped contracting (s is then the best iterate): rebuild.
   bool solve(const double *r, double *s) const;
   /// Entry (p, q) of the current inverse (tests).

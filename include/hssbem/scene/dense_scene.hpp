@@ -33,7 +33,7 @@
 /// switched unknowns x(J) = s keep double accuracy; the others carry W's rounding (~5e-9
 /// relative on the cardioid, docs/scenes.md).
 ///
-/// Memory: W and the LU of A₀ (8 N² bytes each), H and G (16 N² bytes, for refactor, krylov and residuals; see
+/// Memory: W (8 N² bytes, or 8 N per candidate: SceneOptions::candidates) and the LU of A₀ (8 N² bytes), H and G (16 N² bytes, for refactor, krylov and residuals; see
 /// SceneOptions::keep_operator), W_p and Gn (8 N² / 3 bytes each) with pressure loads, one
 /// N² factor after a refactor, and the single-precision W(:, J) (4 N |J| bytes). Thread-safety:
 /// one frame at a time.
@@ -74,6 +74,11 @@ struct SceneOptions {
   /// double, the other unknowns carry W's single-precision rounding, ~1e-7 relative); INT_MAX:
   /// always double.
   int single_fields_from = 1024;
+  /// Per unknown (3 · node + component), 1 where some frame may switch it (prescribe the other
+  /// quantity than the reference pattern) or give it a non-zero known value: W is computed and
+  /// kept for those columns only (2 N² flops and 8 N bytes per candidate, instead of every
+  /// column), and a frame that switches or loads another unknown is refused. Empty: every unknown.
+  std::vector<char> candidates;
   double krylov_rtol = 1e-10;  ///< GMRES relative tolerance (true residual) of the krylov strategy
   int krylov_max_it = 200;     ///< and its iteration limit (reaching it is an error)
 };
@@ -103,6 +108,12 @@ struct KrylovSolver {
   virtual long long solve(int n, const std::function<void(const double *, double *)> &apply_A, const std::function<void(const double *, double *)> &apply_M,
                           const double *b, double *x, double rtol, int max_it) = 0;
 };
+
+/// Marks in `candidates` (3 per node; sized here when empty) the unknowns that `frame` switches
+/// against the reference pattern or loads with a non-zero known value (a traction under a
+/// pressure load goes through the pressure columns instead): the union over a scene's frames is
+/// its SceneOptions::candidates.
+void mark_scene_candidates(const SystemSelection &reference, const SystemSelection &frame, std::vector<char> &candidates);
 
 class DenseScene {
 public:
@@ -134,6 +145,9 @@ public:
 
   int num_unknowns() const { return m_n; }
   double setup_seconds() const { return m_setup_seconds; }
+  /// Of the set-up: the reference (assembly of H and G, LU of A₀) and W's columns.
+  double reference_seconds() const { return m_reference_seconds; }
+  double columns_seconds() const { return m_columns_seconds; }
   /// Bytes held (W, H, G, W_p, Gn, factors, capacitance).
   std::size_t memory_bytes() const;
   /// Measured rates of the cost model: bytes/s of a gathered matrix-vector product over W's
@@ -172,7 +186,12 @@ private:
   std::unique_ptr<KrylovSolver> m_krylov;
   std::vector<char> m_ref;           ///< reference pattern: 1 where u is known (t unknown)
   std::unique_ptr<DenseReference> m_reference; ///< A₀'s LU, and H, G, Gn (keep_operator)
-  std::vector<double> m_W, m_Wp;     ///< A₀⁻¹ K₀' and A₀⁻¹ Gn, column-major
+  std::vector<double> m_W, m_Wp;     ///< A₀⁻¹ K₀' (the candidates' columns) and A₀⁻¹ Gn, column-major
+  std::vector<int> m_wcol;           ///< per unknown: its column in m_W, or -1 (no candidate)
+  /// The columns of m_W holding W(:, js) (each a candidate).
+  std::vector<int> stored(const std::vector<int> &js) const;
+  /// Throws std::invalid_argument when the frame switches or loads an unknown that is no candidate.
+  void check_candidates(const SystemSelection &sel, const std::vector<char> &pattern) const;
   /// W(J, J)⁻¹ for the current switched set; mutable: a solve whose single-precision refinement
   /// stops contracting rebuilds it (in double) on the spot.
   mutable CapacitanceInverse m_cap;
@@ -185,7 +204,10 @@ private:
   void refresh_panel() const;
   /// W(:, index of slot p) in single precision as column p (N rows), per capacitance slot;
   /// m_panel_index: the index each column holds (-1: none). Mutable: refreshed on use.
-  mutable std::vector<float> m_panel;
+  mutable std::unique_ptr<float[]> m_panel;
+  /// The panel's rows in cluster order: m_panel_order[r] the unknown of row r, m_panel_position its inverse.
+  std::vector<int> m_panel_order, m_panel_position;
+  void panel_order(const BemOperator &op);
   mutable std::vector<int> m_panel_index;
   mutable int m_last_refinements = 0;
   mutable double m_cap_seconds = 0, m_fields_seconds = 0; ///< of the frame (the report's)
@@ -199,7 +221,7 @@ private:
   enum class Last { None, Woodbury, Lu } m_last_factor = Last::Woodbury; ///< the last factorization made
   double m_bandwidth = 1e10, m_flops = 1e10, m_lu_flops = 1e10;
   std::array<double, 5> m_correction{{1, 1, 1, 1, 1}}; ///< measured / predicted, per strategy
-  double m_setup_seconds = 0;
+  double m_setup_seconds = 0, m_reference_seconds = 0, m_columns_seconds = 0;
   SceneFrameReport m_report;
 };
 

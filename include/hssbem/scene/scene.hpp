@@ -33,8 +33,12 @@ public:
   /// The mesh must be a valid closed surface, oriented outward (validate_and_orient()); the
   /// scene keeps a copy. `reference` is the pattern factored once (e.g. the clamped base with the
   /// rest traction-free); it must hold the body. Pressure loads are not part of this API.
+  /// `candidate_vertices` (one entry per vertex, or empty: all) names the vertices whose
+  /// conditions a frame may switch or load with a non-zero value: the engine computes W only for
+  /// them (a contact region: set-up time and memory in proportion), and a frame beyond them is
+  /// refused (std::invalid_argument). options.candidates (per unknown) must be left empty.
   Scene(const SurfaceMesh &mesh, const Material &material, const Pattern &reference, const SceneOptions &options = {},
-        std::unique_ptr<KrylovSolver> krylov = nullptr, double feature_angle_deg = 40.0);
+        std::unique_ptr<KrylovSolver> krylov = nullptr, double feature_angle_deg = 40.0, const std::vector<char> &candidate_vertices = {});
   ~Scene();
   Scene(const Scene &) = delete; // the discretization points into the scene's copy of the mesh
   Scene &operator=(const Scene &) = delete;
