@@ -90,7 +90,7 @@ InteriorPlan::Recipe InteriorPlan::classify(const SurfaceLocator &locator, const
     r.kind = PointKind::Surface, r.triangle = n.triangle, r.bary = n.bary, r.w_surface = 1;
     return r;
   }
-  if (side == 0 || (side < 0 && !locator.inside(x))) return r; // Outside
+  if (side == 0 || (side < 0 && !(n.triangle >= 0 ? locator.inside(x, n) : locator.inside(x)))) return r; // Outside
   const double delta = n.triangle >= 0 ? reach.band_depth * longest_edge(mesh, n.triangle) : 0.0;
   if (n.triangle >= 0 && n.distance < delta) return band_recipe(locator, mesh, x, n, delta, support);
   return deep_recipe(x, support);
@@ -136,8 +136,9 @@ std::vector<signed char> grid_inside(const SurfaceLocator &locator, const Vec3 &
 #pragma omp parallel for schedule(dynamic, 256)
   for (long long p = 0; p < total; ++p) {
     const Vec3 x = point(p);
-    clear[p] = locator.nearest(x, step).triangle < 0;
-    if (!clear[p]) side[p] = locator.inside(x);
+    const SurfaceLocator::Nearest near = locator.nearest(x, step);
+    clear[p] = near.triangle < 0;
+    if (!clear[p]) side[p] = locator.inside(x, near);
   }
   std::vector<int> parent(static_cast<std::size_t>(total));
   for (long long p = 0; p < total; ++p) parent[p] = static_cast<int>(p);

@@ -145,4 +145,14 @@ double SurfaceLocator::winding_in(int c, const Vec3 &x) const
 
 double SurfaceLocator::winding_number(const Vec3 &x) const { return winding_in(0, x) / (4.0 * M_PI); }
 
+bool SurfaceLocator::inside(const Vec3 &x, const Nearest &n) const
+{
+  constexpr double interior = 1e-6, off_plane = 1e-9; // barycentric margin; distance from the plane relative to the surface's size
+  if (n.triangle >= 0 && std::min({n.bary[0], n.bary[1], n.bary[2]}) > interior) {
+    const double side = dot(x - n.point, m_mesh->triangle_normal(n.triangle));
+    if (std::abs(side) > off_plane * m_size) return side < 0;
+  }
+  return inside(x);
+}
+
 } // namespace hssbem

@@ -76,6 +76,7 @@ struct InteriorEvaluator::Impl {
   detail::Fit up;   ///< sources: equivalent sphere inside, check sphere outside
   detail::Fit down; ///< targets: check sphere inside, equivalent sphere outside
   ClusterTree tree; ///< over the triangles' centroids
+  std::vector<Vec3> C;                ///< per source cluster: the centre of its spheres (see source_centres)
   std::vector<double> R, reach;       ///< per source cluster: ball of its triangles (enlarged for the upward pass, see nest_radii), of their near zones
   std::vector<std::vector<double>> q; ///< per source cluster: equivalent forces (SoA, 3 pe)
   std::vector<std::vector<float>> qf; ///< the same in single precision (the evaluation at points)
@@ -90,6 +91,10 @@ struct InteriorEvaluator::Impl {
   void add_leaf(const Vec3 &x, int b, double *out, InteriorEvaluationStats &s) const;
   /// out[0..9) += the field at x of source cluster b's equivalent forces.
   void add_equivalent(const Vec3 &x, int b, double *out) const;
+  /// Centres closer to those of the smallest balls around the clusters' triangles than their
+  /// boxes' centres (smaller balls are far sooner): a leaf's by Bădoiu–Clarkson steps over its
+  /// triangles, a parent's over its leaves' balls.
+  void source_centres();
   void source_radii();
   void upward_leaf(int c);
   void upward_inner(int c);

@@ -131,7 +131,7 @@ void TargetPass::downward(int a)
   const SomiglianaConstants &k = m_s.src.constants();
   std::vector<double> field(3 * pc, 0.0);
   if (inherit) detail::add_forces_to(k, p, pc, m_tree.cluster(parent).centre - ta.centre, m_R[parent] * down.r_equiv, down.equiv, m_localf[parent].data(), field.data());
-  for (int b : m_far[a]) detail::add_forces_to(k, p, pc, m_s.tree.cluster(b).centre - ta.centre, m_s.R[b] * up.r_equiv, up.equiv, m_s.qf[b].data(), field.data());
+  for (int b : m_far[a]) detail::add_forces_to(k, p, pc, m_s.C[b] - ta.centre, m_s.R[b] * up.r_equiv, up.equiv, m_s.qf[b].data(), field.data());
   down.solve(m_R[a], field, m_local[a]);
   m_localf[a] = detail::to_float(m_local[a]);
 #pragma omp atomic

@@ -62,6 +62,19 @@ int gesvd(int m, int n, double *a, int lda, double *s, double *u, int ldu, doubl
   return info;
 }
 
+int gesdd(int m, int n, double *a, int lda, double *s, double *u, int ldu, double *vt, int ldvt)
+{
+  int info = 0, lwork = -1;
+  double query = 0;
+  std::vector<int> iwork(8 * static_cast<std::size_t>(std::max(1, std::min(m, n))));
+  dgesdd_("S", &m, &n, a, &lda, s, u, &ldu, vt, &ldvt, &query, &lwork, iwork.data(), &info);
+  if (info != 0) return info;
+  lwork = std::max(1, static_cast<int>(query + 0.5));
+  std::vector<double> work(static_cast<std::size_t>(lwork));
+  dgesdd_("S", &m, &n, a, &lda, s, u, &ldu, vt, &ldvt, work.data(), &lwork, iwork.data(), &info);
+  return info;
+}
+
 int syev(int n, double *a, double *w)
 {
   int info = 0, lwork = -1;

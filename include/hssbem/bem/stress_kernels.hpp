@@ -62,22 +62,25 @@ inline void somigliana_point(const SomiglianaConstants &k, T d0, T d1, T d2, T f
   // Displacement: U f − P m.
   const T au = T(k.cu) * inv_r, ap = T(k.cp) * inv_r2;
   const T pu = ap * gn * om, pg = ap * (T(3) * gn * gm - om * nm), pn = ap * om * gm;
-  u0 = au * (cu_diag * f0 + g0 * gf) - (pu * m0 + pg * g0 + pn * n0);
-  u1 = au * (cu_diag * f1 + g1 * gf) - (pu * m1 + pg * g1 + pn * n1);
-  u2 = au * (cu_diag * f2 + g2 * gf) - (pu * m2 + pg * g2 + pn * n2);
+  const T uf = au * cu_diag, ug = au * gf - pg; // u = uf f + ug g − pu m − pn n
+  u0 = uf * f0 + ug * g0 - pu * m0 - pn * n0;
+  u1 = uf * f1 + ug * g1 - pu * m1 - pn * n1;
+  u2 = uf * f2 + ug * g2 - pu * m2 - pn * n2;
   // Stress: D f − S m, the kernels above contracted with f and m and grouped by tensor product:
-  // dgg g⊗g + dd I + (w⊗g + g⊗w) + dnm (n⊗m + m⊗n), w = dfg f + dmg m + dng n.
+  // dgg g⊗g + dd I + (w⊗g + g⊗w) + dnm (n⊗m + m⊗n), w = dfg f + dmg m + dng n; computed with
+  // h = dgg g + w and p = dnm m (the fewest multiplies: the near particles' sums are bound by them).
   const T ad = T(k.cd) * inv_r2, as = T(k.cs) * inv_r2 * inv_r;
   const T dgg = T(3) * ad * gf - as * (om * T(3) * nm - T(15) * gn * gm);
   const T dd = -ad * om * gf - as * (T(3) * gn * om * gm - (T(1) - T(4) * nu) * nm);
   const T dfg = ad * om, dmg = -as * T(3) * gn * nu, dng = -as * T(3) * nu * gm, dnm = -as * om;
   const T w0 = dfg * f0 + dmg * m0 + dng * n0, w1 = dfg * f1 + dmg * m1 + dng * n1, w2 = dfg * f2 + dmg * m2 + dng * n2;
-  s0 = dgg * g0 * g0 + dd + T(2) * (w0 * g0 + dnm * n0 * m0);
-  s1 = dgg * g1 * g1 + dd + T(2) * (w1 * g1 + dnm * n1 * m1);
-  s2 = dgg * g2 * g2 + dd + T(2) * (w2 * g2 + dnm * n2 * m2);
-  s3 = dgg * g1 * g2 + w1 * g2 + w2 * g1 + dnm * (n2 * m1 + n1 * m2);
-  s4 = dgg * g0 * g2 + w0 * g2 + w2 * g0 + dnm * (n2 * m0 + n0 * m2);
-  s5 = dgg * g0 * g1 + w0 * g1 + w1 * g0 + dnm * (n1 * m0 + n0 * m1);
+  const T h0 = dgg * g0 + w0, h1 = dgg * g1 + w1, h2 = dgg * g2 + w2, p0 = dnm * m0, p1 = dnm * m1, p2 = dnm * m2;
+  s0 = g0 * (h0 + w0) + T(2) * n0 * p0 + dd;
+  s1 = g1 * (h1 + w1) + T(2) * n1 * p1 + dd;
+  s2 = g2 * (h2 + w2) + T(2) * n2 * p2 + dd;
+  s3 = g2 * h1 + g1 * w2 + n2 * p1 + n1 * p2;
+  s4 = g2 * h0 + g0 * w2 + n2 * p0 + n0 * p2;
+  s5 = g1 * h0 + g0 * w1 + n1 * p0 + n0 * p1;
 }
 
 /// The same, added to out[k · stride], k = 0..8 (displacement, then stress).
@@ -111,18 +114,21 @@ inline void kelvin_force_point(const SomiglianaConstants &k, T d0, T d1, T d2, T
 {
   const T inv_r = T(1) / std::sqrt(d0 * d0 + d1 * d1 + d2 * d2);
   const T g0 = d0 * inv_r, g1 = d1 * inv_r, g2 = d2 * inv_r;
-  const T gq = g0 * q0 + g1 * q1 + g2 * q2, cu_diag = T(k.cu_diag), om = T(k.om);
-  const T au = T(k.cu) * inv_r, ad = T(k.cd) * inv_r * inv_r;
-  u0 = au * (cu_diag * q0 + g0 * gq);
-  u1 = au * (cu_diag * q1 + g1 * gq);
-  u2 = au * (cu_diag * q2 + g2 * gq);
+  const T gq = g0 * q0 + g1 * q1 + g2 * q2, om = T(k.om);
+  const T au = T(k.cu) * inv_r, aq = au * gq, ud = au * T(k.cu_diag), ad = T(k.cd) * inv_r * inv_r;
+  u0 = ud * q0 + aq * g0;
+  u1 = ud * q1 + aq * g1;
+  u2 = ud * q2 + aq * g2;
+  // σ = dgg g⊗g + dd I + dfg (q⊗g + g⊗q), grouped as h = dgg g + w and w = dfg q (the fewest
+  // multiplies: the far field's sums are bound by them).
   const T dgg = T(3) * ad * gq, dd = -ad * om * gq, dfg = ad * om;
-  s0 = dgg * g0 * g0 + dd + T(2) * dfg * q0 * g0;
-  s1 = dgg * g1 * g1 + dd + T(2) * dfg * q1 * g1;
-  s2 = dgg * g2 * g2 + dd + T(2) * dfg * q2 * g2;
-  s3 = dgg * g1 * g2 + dfg * (q1 * g2 + q2 * g1);
-  s4 = dgg * g0 * g2 + dfg * (q0 * g2 + q2 * g0);
-  s5 = dgg * g0 * g1 + dfg * (q0 * g1 + q1 * g0);
+  const T w0 = dfg * q0, w1 = dfg * q1, w2 = dfg * q2, h0 = dgg * g0 + w0, h1 = dgg * g1 + w1, h2 = dgg * g2 + w2;
+  s0 = g0 * (h0 + w0) + dd;
+  s1 = g1 * (h1 + w1) + dd;
+  s2 = g2 * (h2 + w2) + dd;
+  s3 = g2 * h1 + w2 * g1;
+  s4 = g2 * h0 + w2 * g0;
+  s5 = g1 * h0 + w1 * g0;
 }
 
 /// The same, added to out[k · stride], k = 0..8.

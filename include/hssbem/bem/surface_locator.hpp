@@ -34,6 +34,10 @@ public:
   double winding_number(const Vec3 &x) const;
   /// Whether x lies inside the body (winding number above 1/2).
   bool inside(const Vec3 &x) const { return winding_number(x) > 0.5; }
+  /// The same given n = nearest(x): by the side of n's triangle where n lies inside that triangle
+  /// and x clearly off its plane (exact for a closed, consistently oriented surface: the segment
+  /// from x to n meets no other surface point), else by the winding number.
+  bool inside(const Vec3 &x, const Nearest &n) const;
 
   /// The diagonal of the surface's bounding box.
   double size() const { return m_size; }

@@ -10,6 +10,7 @@
 
 extern "C" {
 void dgesvd_(const char *jobu, const char *jobvt, const int *m, const int *n, double *a, const int *lda, double *s, double *u, const int *ldu, double *vt, const int *ldvt, double *work, const int *lwork, int *info);
+void dgesdd_(const char *jobz, const int *m, const int *n, double *a, const int *lda, double *s, double *u, const int *ldu, double *vt, const int *ldvt, double *work, const int *lwork, int *iwork, int *info);
 void dsyev_(const char *jobz, const char *uplo, const int *n, double *a, const int *lda, double *w, double *work, const int *lwork, int *info);
 void dgesv_(const int *n, const int *nrhs, double *a, const int *lda, int *ipiv, double *b, const int *ldb, int *info);
 void dgeqp3_(const int *m, const int *n, double *a, const int *lda, int *jpvt, double *tau, double *work, const int *lwork, int *info);
@@ -43,6 +44,9 @@ int syev(int n, double *a, double *w);
 /// Thin SVD A = U diag(s) Vᵀ of the m×n matrix a (destroyed; column-major): s gets min(m, n)
 /// singular values (descending), u m × min(m, n), vt min(m, n) × n (dgesvd 'S', 'S'). Returns info.
 int gesvd(int m, int n, double *a, int lda, double *s, double *u, int ldu, double *vt, int ldvt);
+/// The same by divide and conquer (dgesdd 'S'): several times faster for the vectors of a large
+/// matrix; a is overwritten. Returns info.
+int gesdd(int m, int n, double *a, int lda, double *s, double *u, int ldu, double *vt, int ldvt);
 /// Solve A X = B in place (column-major); returns LAPACK's info.
 int gesv(int n, int nrhs, double *a, double *b);
 
