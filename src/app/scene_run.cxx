@@ -149,14 +149,15 @@ std::unique_ptr<DenseScene> set_up_scene(const BemOperator &op, const SceneRefer
   return scene;
 }
 
-/// The dense scene's memory: W's candidate columns, the reference LU, H and G (and the pressure columns).
+/// The dense scene's memory: W's candidate columns (and their single-precision copy), the reference LU, H and G (and the pressure columns).
 void check_scene_size(MPI_Comm comm, const ProblemSetup &s, const SceneRunOptions &o, const SceneReference &ref)
 {
   const long long N = 3LL * s.disc->num_nodes();
   MachineLimits   limits;
   HssbemCallThrow(HssbemMachineLimits(comm, &limits));
   const double need = 8.0 * N * N * (uses_pressure(s.spec) ? 6.7 : 6.0) * (o.strategy == SceneStrategy::Refactor || o.strategy == SceneStrategy::Auto ? 1.0 : 5.0 / 6.0) -
-                      8.0 * N * static_cast<double>(N - ref.count()); // W's columns that are no candidates
+                      8.0 * N * static_cast<double>(N - ref.count()) + // W's columns that are no candidates
+                      4.0 * N * static_cast<double>(ref.count());       // W's single-precision copy
   if (need > 0.9 * static_cast<double>(limits.node_memory_bytes))
     throw std::runtime_error("the scene needs about " + std::to_string(static_cast<long long>(need / 1e9 + 0.5)) + " GB for " + std::to_string(N) +
                              " unknowns (dense reference factorization, W = A0^-1 K0', H and G), more than this node's " +

@@ -42,7 +42,7 @@ std::vector<std::pair<int, int>> row_blocks(int n)
 /// y(rows) += Σ_i coef[i] M(rows, cols[i]) for the column-major n-row matrix M (double, or
 /// single precision: the products and sums are in double either way) over the row ranges
 /// `chunks`: a gathered product, threaded over the chunks (each thread streams its rows of the
-/// chosen columns), eight columns per pass over a chunk (a float panel of 15 078 × 3 015: 6.4
+/// chosen columns), eight columns per pass over a chunk (15 078 × 3 015 in single precision: 6.4
 /// against 7.0 ms with four, two cores).
 template <class T>
 void gather_axpy(const T *M, int n, const std::vector<int> &cols, const std::vector<double> &coef, double *y, const std::vector<std::pair<int, int>> &chunks)
@@ -127,7 +127,7 @@ DenseScene::DenseScene(const BemOperator &op, const SystemSelection &reference, 
     factor_reference(op, reference, progress);
     measure_rates();
   }
-  panel_order(op);
+  single_copy(op);
   progress.report(0.95);
   m_cap = CapacitanceInverse(std::make_shared<StoredColumns>(m_W.data(), m_n, &m_wcol), m_n, m_opt.single_from);
   m_cap.rebuild({});
@@ -196,17 +196,28 @@ void DenseScene::factor_reference(const BemOperator &op, const SystemSelection &
   if (!m_opt.keep_operator) m_reference->drop_operator(); // W and A₀ hold what the Woodbury path needs
 }
 
-/// The panel's row order: the unknowns of the nodes in cluster order (core/cluster_tree.hpp).
-void DenseScene::panel_order(const BemOperator &op)
+/// W's single-precision copy for the fields: its rows in cluster order (core/cluster_tree.hpp),
+/// room for every stored column (pages are touched only when a column is converted), and every
+/// column converted now when the scene was given its candidates (they are the columns its
+/// frames use: no frame pays for converting, 0.3 s of the 10k organ's first contact before).
+void DenseScene::single_copy(const BemOperator &op)
 {
+  const int columns = static_cast<int>(m_W.size() / m_n);
+  if (m_n < m_opt.single_fields_from || columns < m_opt.single_fields_from) return;
   std::vector<Vec3> points(m_nodes);
   for (int i = 0; i < m_nodes; ++i) points[i] = op.discretization().node_position(i);
   const ClusterTree tree(points);
-  m_panel_order.resize(m_n);
-  m_panel_position.resize(m_n);
+  m_row_order.resize(m_n);
+  m_row_position.resize(m_n);
   for (int k = 0; k < m_nodes; ++k)
-    for (int a = 0; a < 3; ++a) m_panel_order[3 * k + a] = 3 * tree.perm()[k] + a;
-  for (int r = 0; r < m_n; ++r) m_panel_position[m_panel_order[r]] = r;
+    for (int a = 0; a < 3; ++a) m_row_order[3 * k + a] = 3 * tree.perm()[k] + a;
+  for (int r = 0; r < m_n; ++r) m_row_position[m_row_order[r]] = r;
+  m_Wf.reset(new float[m_W.size()]);
+  m_wf_ready.assign(columns, 0);
+  if (m_opt.candidates.empty()) return;
+  std::vector<int> all(columns);
+  std::iota(all.begin(), all.end(), 0);
+  single_columns(all);
 }
 
 /// The cost model's rates: a gathered product over all of W's columns (bytes/s), a GEMM (flop/s).
@@ -272,8 +283,6 @@ void DenseScene::capacitance_correct(double *y) const
   const Timer t_fields;
   if (k >= m_opt.single_fields_from) single_fields_correct(s, y);
   else {
-    m_panel.reset(); // a set too small for the panel: its memory back
-    m_panel_index.clear();
     for (int p = 0; p < k; ++p) minus_s[p] = -s[p];
     gather_axpy(m_W.data(), m_n, stored(J), minus_s, y);
     for (int p = 0; p < k; ++p) y[J[p]] += s[p];
@@ -281,60 +290,60 @@ void DenseScene::capacitance_correct(double *y) const
   m_fields_seconds += t_fields.seconds();
 }
 
-/// The same product from the single-precision panel, over its used slots and the rows outside
-/// J only: the switched rows get x(J) = s. In exact arithmetic x(J) = y(J) − C s + s, and
-/// y(J) − C s is the refined capacitance residual (≤ 1e-10 ‖y(J)‖, capacitance.hpp), so they
-/// keep that accuracy. The panel's rows are in cluster order, where J (a contact patch) is a few
-/// long runs: skipping them saves their share of the bytes (20 % on the 10k organ).
+/// The same product from W's single-precision copy, over the rows outside J only: the switched
+/// rows get x(J) = s. In exact arithmetic x(J) = y(J) − C s + s, and y(J) − C s is the refined
+/// capacitance residual (≤ 1e-10 ‖y(J)‖, capacitance.hpp), so they keep that accuracy. The
+/// copy's rows are in cluster order, where J (a contact patch) falls in runs of rows: the
+/// product skips the runs of at least 256 rows and takes the short ones along (a chunk of rows
+/// streams best whole).
 void DenseScene::single_fields_correct(const std::vector<double> &s, double *y) const
 {
-  refresh_panel();
-  const std::vector<int> &J = m_cap.indices(), &slot = m_cap.position_slots();
+  const std::vector<int> &J = m_cap.indices();
   const int k = m_cap.size(), n = m_n;
+  const std::vector<int> cols = stored(J);
+  single_columns(cols);
   std::vector<char> skip(n, 0);
-  for (int j : J) skip[m_panel_position[j]] = 1;
-  std::vector<std::pair<int, int>> chunks; // the runs of rows outside J, cut at 4096 rows
+  for (int j : J) skip[m_row_position[j]] = 1;
+  constexpr int block = 4096, gap = 256;
+  std::vector<std::pair<int, int>> chunks; // rows outside J's long runs, at most `block` per chunk
   for (int r = 0; r < n;) {
-    if (skip[r]) {
-      ++r;
+    int run = 0; // J's run starting at r
+    while (r + run < n && skip[r + run]) ++run;
+    if (run >= gap || r + run == n) {
+      r += run;
       continue;
     }
     const int r0 = r;
-    while (r < n && !skip[r] && r - r0 < 4096) ++r;
-    chunks.push_back({r0, r});
+    for (r += run; r < n && r - r0 < block; ++r) {
+      if (!skip[r]) continue;
+      int len = 0;
+      while (r + len < n && skip[r + len]) ++len;
+      if (len >= gap) break;
+      r += len - 1;
+    }
+    chunks.push_back({r0, std::min(r, n)});
   }
   std::vector<double> minus_s(k), z(n, 0.0);
   for (int p = 0; p < k; ++p) minus_s[p] = -s[p];
-  gather_axpy(m_panel.get(), n, slot, minus_s, z.data(), chunks);
+  gather_axpy(m_Wf.get(), n, cols, minus_s, z.data(), chunks);
   for (int r = 0; r < n; ++r)
-    if (!skip[r]) y[m_panel_order[r]] += z[r];
+    if (!skip[r]) y[m_row_order[r]] += z[r];
   for (int p = 0; p < k; ++p) y[J[p]] = s[p];
 }
 
-void DenseScene::refresh_panel() const
+void DenseScene::single_columns(const std::vector<int> &cols) const
 {
-  const std::size_t cols = static_cast<std::size_t>(m_cap.capacity()), n = static_cast<std::size_t>(m_n);
-  if (m_panel_index.size() != cols) { // the capacitance grew (slots kept) or is new: columns keep their place
-    // Not zero-filled: a new panel's pages are first touched by the threads that convert into
-    // it (190 MB on the 10k organ's first contact).
-    std::unique_ptr<float[]> grown(new float[cols * n]);
-    const std::size_t keep = std::min(cols, m_panel_index.size());
-#pragma omp parallel for schedule(static) if (keep > 8)
-    for (std::size_t p = 0; p < keep; ++p) std::copy_n(&m_panel[p * n], n, &grown[p * n]);
-    m_panel = std::move(grown);
-    m_panel_index.resize(cols, -1);
+  std::vector<int> missing;
+  for (int c : cols)
+    if (!m_wf_ready[c]) missing.push_back(c);
+  const std::size_t n = static_cast<std::size_t>(m_n);
+#pragma omp parallel for schedule(static) if (missing.size() > 8)
+  for (std::size_t q = 0; q < missing.size(); ++q) {
+    const double *w = &m_W[static_cast<std::size_t>(missing[q]) * n];
+    float *f = &m_Wf[static_cast<std::size_t>(missing[q]) * n];
+    for (std::size_t i = 0; i < n; ++i) f[i] = static_cast<float>(w[m_row_order[i]]);
   }
-  const std::vector<int> &idx = m_cap.slot_indices();
-  std::vector<int> stale;
-  for (std::size_t p = 0; p < idx.size(); ++p)
-    if (idx[p] >= 0 && idx[p] != m_panel_index[p]) stale.push_back(static_cast<int>(p));
-#pragma omp parallel for schedule(static) if (stale.size() > 8)
-  for (std::size_t q = 0; q < stale.size(); ++q) {
-    const double *w = &m_W[static_cast<std::size_t>(m_wcol[idx[stale[q]]]) * n];
-    float *f = &m_panel[static_cast<std::size_t>(stale[q]) * n];
-    for (std::size_t i = 0; i < n; ++i) f[i] = static_cast<float>(w[m_panel_order[i]]);
-  }
-  for (int p : stale) m_panel_index[p] = idx[p];
+  for (int c : missing) m_wf_ready[c] = 1;
 }
 
 void DenseScene::capacitance_solve(const double *r, double *s) const
@@ -473,7 +482,7 @@ std::array<double, 5> DenseScene::predict(const SystemSelection &sel, const std:
     changed_cap += pattern[j] != m_cap_pattern[j];
     changed_prev += pattern[j] != prev[j];
   }
-  // the values' columns of W, the fields' product over W(:, J) (single: the panel) and the
+  // the values' columns of W, the fields' product over W(:, J) (single: W's copy) and the
   // capacitance solve (single: C⁻¹ in float and C in double per refinement step, ~3 steps)
   const double field_bytes = k >= m_opt.single_fields_from ? 4.0 : 8.0, cap_bytes = k >= m_opt.single_from ? 3 * 12.0 : 8.0;
   const double apply = (8.0 * N * static_cast<double>(nv) + field_bytes * N * static_cast<double>(k) + cap_bytes * static_cast<double>(k) * k) / bw;
@@ -608,7 +617,7 @@ double DenseScene::residual(const SystemSelection &sel, const std::vector<double
 std::size_t DenseScene::memory_bytes() const
 {
   const std::size_t d = m_W.size() + m_Wp.size() + m_lu.size() + sq(m_cap.size());
-  return 8 * d + 4 * m_panel_index.size() * static_cast<std::size_t>(m_n) + m_reference->memory_bytes();
+  return 8 * d + 4 * static_cast<std::size_t>(m_n) * static_cast<std::size_t>(std::count(m_wf_ready.begin(), m_wf_ready.end(), 1)) + m_reference->memory_bytes();
 }
 
 } // namespace hssbem

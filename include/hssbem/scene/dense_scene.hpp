@@ -28,14 +28,15 @@
 ///
 /// Precision. From SceneOptions::single_from switched unknowns on, C⁻¹ is kept in single
 /// precision and refined in double (capacitance.hpp); from single_fields_from on, the product
-/// x −= W(:, J) s reads W(:, J) from a single-precision copy kept per capacitance slot (a moved
-/// contact converts only its new columns): half the bytes of the frame's largest product. The
+/// x −= W(:, J) s reads W(:, J) from a single-precision copy of W (each column converted on its
+/// first use, or all of them at set-up when the scene has candidates), its rows in cluster order
+/// so that the product skips J's rows in runs: half the bytes of the frame's largest product. The
 /// switched unknowns x(J) = s keep double accuracy; the others carry W's rounding (~5e-9
 /// relative on the cardioid, docs/scenes.md).
 ///
 /// Memory: W (8 N² bytes, or 8 N per candidate: SceneOptions::candidates) and the LU of A₀ (8 N² bytes), H and G (16 N² bytes, for refactor, krylov and residuals; see
 /// SceneOptions::keep_operator), W_p and Gn (8 N² / 3 bytes each) with pressure loads, one
-/// N² factor after a refactor, and the single-precision W(:, J) (4 N |J| bytes). Thread-safety:
+/// N² factor after a refactor, and W's single-precision copy (4 N per column converted). Thread-safety:
 /// one frame at a time.
 #pragma once
 
@@ -197,18 +198,18 @@ private:
   mutable CapacitanceInverse m_cap;
   /// s = W(J, J)⁻¹ r with the current capacitance, rebuilding it when its refinement fails.
   void capacitance_solve(const double *r, double *s) const;
-  /// y −= W(:, J) s, y(J) = s from the single-precision panel (SceneOptions::single_fields_from).
+  /// y −= W(:, J) s, y(J) = s from W's single-precision copy (SceneOptions::single_fields_from).
   void single_fields_correct(const std::vector<double> &s, double *y) const;
-  /// Brings the panel up to the capacitance's slots: converts the columns of the slots whose
-  /// index changed since (an update touches the added ones only).
-  void refresh_panel() const;
-  /// W(:, index of slot p) in single precision as column p (N rows), per capacitance slot;
-  /// m_panel_index: the index each column holds (-1: none). Mutable: refreshed on use.
-  mutable std::unique_ptr<float[]> m_panel;
-  /// The panel's rows in cluster order: m_panel_order[r] the unknown of row r, m_panel_position its inverse.
-  std::vector<int> m_panel_order, m_panel_position;
-  void panel_order(const BemOperator &op);
-  mutable std::vector<int> m_panel_index;
+  /// Converts the stored columns `cols` into the single-precision copy where not done yet.
+  void single_columns(const std::vector<int> &cols) const;
+  /// Sets up the single-precision copy (and fills it when the scene has candidates).
+  void single_copy(const BemOperator &op);
+  /// W's stored columns in single precision, rows in cluster order (m_row_order[r]: the unknown
+  /// of row r; m_row_position its inverse); m_wf_ready: the columns converted so far. Mutable:
+  /// converted on first use.
+  mutable std::unique_ptr<float[]> m_Wf;
+  mutable std::vector<char> m_wf_ready;
+  std::vector<int> m_row_order, m_row_position;
   mutable int m_last_refinements = 0;
   mutable double m_cap_seconds = 0, m_fields_seconds = 0; ///< of the frame (the report's)
   std::vector<char> m_cap_pattern;   ///< the pattern m_cap serves
