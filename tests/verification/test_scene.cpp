@@ -441,13 +441,20 @@ TEST(DenseScene, CandidateColumnsOnlyGiveTheSameFramesAndRefuseOthers)
   EXPECT_LT(rel_diff(x, y), 1e-12);
 }
 
+/// The Scene API's reference pattern on the cardioid: its base (z < 0.044) clamped.
+Scene::Pattern clamped_base(const Cardioid &c)
+{
+  Scene::Pattern reference(c.mesh.num_vertices(), {false, false, false});
+  for (int v = 0; v < c.mesh.num_vertices(); ++v)
+    if (c.mesh.vertices[v][2] < 0.044) reference[v] = {true, true, true};
+  return reference;
+}
+
 TEST(Scene, PerVertexFramesMatchTheEngineAndTheHapticForcesMatchTheTractions)
 {
   const Cardioid &c = cardioid();
   const int nv = c.mesh.num_vertices();
-  Scene::Pattern reference(nv, {false, false, false});
-  for (int v = 0; v < nv; ++v)
-    if (c.mesh.vertices[v][2] < 0.044) reference[v] = {true, true, true};
+  const Scene::Pattern reference = clamped_base(c);
   Scene scene(c.mesh, Material::from_lame(1000.0, 500.0), reference);
   for (int f = 0; f < 3; ++f) {
     Scene::Pattern pattern = reference;
@@ -495,9 +502,7 @@ TEST(Scene, CandidateVerticesGiveTheSameFrames)
 {
   const Cardioid &c = cardioid();
   const int nv = c.mesh.num_vertices();
-  Scene::Pattern reference(nv, {false, false, false});
-  for (int v = 0; v < nv; ++v)
-    if (c.mesh.vertices[v][2] < 0.044) reference[v] = {true, true, true};
+  const Scene::Pattern reference = clamped_base(c);
   const auto patch = [&](double phi) {
     const Vec3 centre{0.45 * std::cos(phi), 0.45 * std::sin(phi), 0.5};
     std::vector<char> in(nv, 0);
