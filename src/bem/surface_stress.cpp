@@ -28,38 +28,6 @@ struct Sample {
   Vec3 du;
 };
 
-/// Least squares min ‖A X − B‖ by Householder QR, A m × k (column-major, m ≥ k), B m × nrhs;
-/// the solution in X (k × nrhs, column-major). False when A is numerically rank deficient.
-bool least_squares(std::vector<double> A, int m, int k, std::vector<double> B, int nrhs, double *X)
-{
-  for (int j = 0; j < k; ++j) {
-    double *a = &A[static_cast<std::size_t>(j) * m];
-    double s = 0;
-    for (int i = j; i < m; ++i) s += a[i] * a[i];
-    const double alpha = a[j] > 0 ? -std::sqrt(s) : std::sqrt(s);
-    if (std::abs(alpha) < 1e-10) return false; // columns are scaled to about unit size
-    a[j] -= alpha;
-    double vn = 0;
-    for (int i = j; i < m; ++i) vn += a[i] * a[i];
-    auto reflect = [&](double *c) {
-      double d = 0;
-      for (int i = j; i < m; ++i) d += a[i] * c[i];
-      d *= 2.0 / vn;
-      for (int i = j; i < m; ++i) c[i] -= d * a[i];
-    };
-    for (int c = j + 1; c < k; ++c) reflect(&A[static_cast<std::size_t>(c) * m]);
-    for (int c = 0; c < nrhs; ++c) reflect(&B[static_cast<std::size_t>(c) * m]);
-    a[j] = alpha; // R_jj; the reflector below the diagonal is no longer needed
-  }
-  for (int c = 0; c < nrhs; ++c)
-    for (int j = k - 1; j >= 0; --j) {
-      double s = B[static_cast<std::size_t>(c) * m + j];
-      for (int l = j + 1; l < k; ++l) s -= A[static_cast<std::size_t>(l) * m + j] * X[static_cast<std::size_t>(c) * k + l];
-      X[static_cast<std::size_t>(c) * k + j] = s / A[static_cast<std::size_t>(j) * m + j];
-    }
-  return true;
-}
-
 /// Rings of neighbours a smooth node's fit reaches over, and the polynomial's degree there.
 constexpr int k_fit_rings = 3, k_fit_degree = 4;
 
@@ -114,6 +82,49 @@ struct TangentFit {
   std::vector<double> g1, g2;
 };
 
+/// Rows 0 and 1 of the pseudo-inverse of A (m × k, column-major, m ≥ k; overwritten) into p0,
+/// p1: A = QR by Householder reflections, then row i = (Q R⁻ᵀ e_i)ᵀ, the reflections applied to
+/// one vector each (4 k m flops, not the k m² of solving for every column of the identity).
+/// False when A is numerically rank deficient (its columns are scaled to about unit size).
+bool pinv_rows(std::vector<double> &A, int m, int k, std::vector<double> &p0, std::vector<double> &p1)
+{
+  std::vector<double> vn(k), diag(k);
+  for (int j = 0; j < k; ++j) {
+    double *a = &A[static_cast<std::size_t>(j) * m];
+    double s = 0;
+    for (int i = j; i < m; ++i) s += a[i] * a[i];
+    const double alpha = a[j] > 0 ? -std::sqrt(s) : std::sqrt(s);
+    if (std::abs(alpha) < 1e-10) return false;
+    a[j] -= alpha; // the reflector v = a(j:m) − α e_j stays in place below R's strict upper part
+    for (int i = j; i < m; ++i) vn[j] += a[i] * a[i];
+    diag[j] = alpha;
+    for (int c = j + 1; c < k; ++c) {
+      double *col = &A[static_cast<std::size_t>(c) * m];
+      double d = 0;
+      for (int i = j; i < m; ++i) d += a[i] * col[i];
+      d *= 2.0 / vn[j];
+      for (int i = j; i < m; ++i) col[i] -= d * a[i];
+    }
+  }
+  for (int row = 0; row < 2; ++row) {
+    std::vector<double> y(m, 0.0); // w = R⁻ᵀ e_row by forward substitution, then Q [w; 0]
+    for (int j = 0; j < k; ++j) {
+      double t = j == row ? 1.0 : 0.0;
+      for (int l = 0; l < j; ++l) t -= A[static_cast<std::size_t>(j) * m + l] * y[l];
+      y[j] = t / diag[j];
+    }
+    for (int j = k - 1; j >= 0; --j) {
+      const double *v = &A[static_cast<std::size_t>(j) * m];
+      double d = 0;
+      for (int i = j; i < m; ++i) d += v[i] * y[i];
+      d *= 2.0 / vn[j];
+      for (int i = j; i < m; ++i) y[i] -= d * v[i];
+    }
+    (row == 0 ? p0 : p1) = std::move(y);
+  }
+  return true;
+}
+
 /// The fit of the samples by a polynomial of the given degree (≤ 4) in the tangent frame, where
 /// the samples are enough for it (6, 14 and 22 for degrees 2 to 4: about 1.5 per term) and the
 /// fit is well posed, else of lower degree down to linear: the first two rows of the
@@ -126,21 +137,17 @@ bool tangent_fit(const std::vector<Sample> &s, int degree, TangentFit &fit)
   if (m < 2 || !(h > 0)) return false;
   h /= m; // scale: columns of about unit size
   constexpr int terms[5] = {0, 2, 5, 9, 14}, least[5] = {0, 2, 6, 14, 22}; // monomials of degree 1 .. d in two variables
-  std::vector<double> I(static_cast<std::size_t>(m) * m, 0.0);
-  for (int r = 0; r < m; ++r) I[static_cast<std::size_t>(r) * m + r] = 1;
   for (int d = std::min(degree, 4); d >= 1; --d) {
     const int k = terms[d];
     if (m < least[d]) continue;
-    std::vector<double> A(static_cast<std::size_t>(m) * k), X(static_cast<std::size_t>(k) * m);
+    std::vector<double> A(static_cast<std::size_t>(m) * k);
     for (int r = 0; r < m; ++r) {
       const double a = s[r].xi / h, b = s[r].eta / h;
       const double col[14] = {a, b, a * a, a * b, b * b, a * a * a, a * a * b, a * b * b, b * b * b, a * a * a * a, a * a * a * b, a * a * b * b, a * b * b * b, b * b * b * b};
       for (int c = 0; c < k; ++c) A[static_cast<std::size_t>(c) * m + r] = col[c];
     }
-    if (!least_squares(A, m, k, I, m, X.data())) continue;
-    fit.g1.resize(m);
-    fit.g2.resize(m);
-    for (int r = 0; r < m; ++r) fit.g1[r] = X[static_cast<std::size_t>(r) * k] / h, fit.g2[r] = X[static_cast<std::size_t>(r) * k + 1] / h;
+    if (!pinv_rows(A, m, k, fit.g1, fit.g2)) continue;
+    for (int r = 0; r < m; ++r) fit.g1[r] /= h, fit.g2[r] /= h;
     return true;
   }
   return false;
@@ -208,34 +215,47 @@ Voigt hooke_stress(const Material &m, const Mat3 &G)
   return s;
 }
 
+namespace {
+
+/// The stress at dof node i (mark: patch_nodes' workspace).
+NodeStress node_stress(const Discretization &disc, const Material &material, const std::vector<Vec3> &u, const std::vector<Vec3> &t, int i, std::vector<int> &mark)
+{
+  const Vec3 &n = disc.node(i).normal;
+  Vec3 e1, e2, du1{}, du2{}, dun{};
+  tangent_frame(n, e1, e2);
+  int degree = 1;
+  const std::vector<Sample> samples = fit_samples(disc, i, u, e1, e2, n, mark, degree);
+  NodeStress out;
+  TangentFit fit;
+  if (!tangent_fit(samples, degree, fit)) {
+    out.stress.fill(nan_value);
+    out.gradient.fill(nan_value);
+    return out;
+  }
+  // The neighbours of a curved surface lie off the tangent plane by w = O(h²): their change of
+  // u holds w ∂u/∂n, which the traction gives once the tangential gradient is known: a fixed
+  // point that gains a factor ~h/R a round and makes a linear field exact on any surface.
+  for (int round = 0; round < 10; ++round) {
+    const Vec3 previous = dun;
+    fit_gradient(samples, fit, dun, du1, du2);
+    out = stress_from_surface(material, n, e1, e2, t[i], du1, du2);
+    const Mat3 &G = out.gradient;
+    for (int r = 0; r < 3; ++r) dun[r] = G[3 * r] * n[0] + G[3 * r + 1] * n[1] + G[3 * r + 2] * n[2];
+    if (norm(dun - previous) <= 1e-14 * (norm(dun) + norm(du1) + norm(du2))) break;
+  }
+  return out;
+}
+
+} // namespace
+
 std::vector<NodeStress> node_stresses(const Discretization &disc, const Material &material, const std::vector<Vec3> &u, const std::vector<Vec3> &t)
 {
   std::vector<NodeStress> out(disc.num_nodes());
-  std::vector<int> mark(disc.num_nodes() + 1, 0); // patch_nodes' workspace and stamp
-  for (int i = 0; i < disc.num_nodes(); ++i) {
-    const DofNode &node = disc.node(i);
-    const Vec3 &n = node.normal;
-    Vec3 e1, e2, du1{}, du2{}, dun{};
-    tangent_frame(n, e1, e2);
-    int degree = 1;
-    const std::vector<Sample> samples = fit_samples(disc, i, u, e1, e2, n, mark, degree);
-    // The neighbours of a curved surface lie off the tangent plane by w = O(h²): their change of
-    // u holds w ∂u/∂n, which the traction gives once the tangential gradient is known: a fixed
-    // point that gains a factor ~h/R a round and makes a linear field exact on any surface.
-    TangentFit fit;
-    if (!tangent_fit(samples, degree, fit)) {
-      out[i].stress.fill(nan_value);
-      out[i].gradient.fill(nan_value);
-      continue;
-    }
-    for (int round = 0; round < 10; ++round) {
-      const Vec3 previous = dun;
-      fit_gradient(samples, fit, dun, du1, du2);
-      out[i] = stress_from_surface(material, n, e1, e2, t[i], du1, du2);
-      const Mat3 &G = out[i].gradient;
-      for (int r = 0; r < 3; ++r) dun[r] = G[3 * r] * n[0] + G[3 * r + 1] * n[1] + G[3 * r + 2] * n[2];
-      if (norm(dun - previous) <= 1e-14 * (norm(dun) + norm(du1) + norm(du2))) break;
-    }
+#pragma omp parallel
+  {
+    std::vector<int> mark(disc.num_nodes() + 1, 0); // patch_nodes' workspace and stamp, per thread
+#pragma omp for schedule(dynamic, 64)
+    for (int i = 0; i < disc.num_nodes(); ++i) out[i] = node_stress(disc, material, u, t, i, mark);
   }
   return out;
 }
