@@ -228,12 +228,12 @@ void DenseScene::measure_rates()
   std::iota(cols.begin(), cols.end(), 0);
   std::vector<double> coef(N, 1e-3), y(N, 0.0);
   double best = k_inf;
-  for (int rep = 0; rep < 3; ++rep) {
+  for (int rep = 0; rep < 3 && !cols.empty(); ++rep) { // no candidates: the default rate stays
     const Timer t;
     gather_axpy(m_W.data(), N, cols, coef, y.data());
     best = std::min(best, t.seconds());
   }
-  m_bandwidth = 8.0 * static_cast<double>(m_W.size()) / std::max(best, 1e-7);
+  if (!cols.empty()) m_bandwidth = 8.0 * static_cast<double>(m_W.size()) / std::max(best, 1e-7);
   const int m = std::min(N, 384);
   std::vector<double> A(sq(m), 1e-3), B(sq(m), 2e-3), C(sq(m), 0.0);
   best = k_inf;

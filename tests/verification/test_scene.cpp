@@ -439,6 +439,11 @@ TEST(DenseScene, CandidateColumnsOnlyGiveTheSameFramesAndRefuseOthers)
   scene.solve(frames[1], x); // and the scene goes on
   twin.solve(frames[1], y);
   EXPECT_LT(rel_diff(x, y), 1e-12);
+  SceneOptions none; // no candidates at all: W is empty, the cost model keeps finite rates
+  none.candidates.assign(static_cast<std::size_t>(N), 0);
+  const DenseScene bare(*c.op, c.reference(), none);
+  EXPECT_GT(bare.bandwidth(), 0.0);
+  EXPECT_TRUE(std::isfinite(bare.bandwidth()));
 }
 
 /// The Scene API's reference pattern on the cardioid: its base (z < 0.044) clamped.
