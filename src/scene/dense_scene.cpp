@@ -30,12 +30,34 @@ constexpr double k_parallel_entries = 1e6;
 
 std::size_t sq(int n) { return static_cast<std::size_t>(n) * n; }
 
-/// Row ranges [first, second) of at most `block` rows covering [0, n).
-std::vector<std::pair<int, int>> row_blocks(int n)
+/// Row ranges [first, second) of at most 4096 rows (32 kB of y per thread stays in cache while
+/// the columns stream by) over the rows not skipped: runs of at least 256 skipped rows are left
+/// out, shorter ones taken along (a chunk of rows streams best whole).
+std::vector<std::pair<int, int>> row_chunks(const std::vector<char> &skip)
 {
-  constexpr int block = 4096; // 32 kB of y per thread stays in cache while the columns stream by
+  constexpr int block = 4096, gap = 256;
+  const int n = static_cast<int>(skip.size());
+  const auto run_at = [&](int r) { // the skipped run starting at r
+    int len = 0;
+    while (r + len < n && skip[r + len]) ++len;
+    return len;
+  };
   std::vector<std::pair<int, int>> out;
-  for (int r0 = 0; r0 < n; r0 += block) out.push_back({r0, std::min(n, r0 + block)});
+  for (int r = 0; r < n;) {
+    const int run = run_at(r);
+    if (run >= gap || r + run == n) {
+      r += run;
+      continue;
+    }
+    const int r0 = r;
+    for (r += run; r < n && r - r0 < block; ++r) {
+      if (!skip[r]) continue;
+      const int len = run_at(r);
+      if (len >= gap) break;
+      r += len - 1;
+    }
+    out.push_back({r0, std::min(r, n)});
+  }
   return out;
 }
 
@@ -76,10 +98,20 @@ void gather_axpy(const T *M, int n, const std::vector<int> &cols, const std::vec
 template <class T>
 void gather_axpy(const T *M, int n, const std::vector<int> &cols, const std::vector<double> &coef, double *y)
 {
-  gather_axpy(M, n, cols, coef, y, row_blocks(n));
+  gather_axpy(M, n, cols, coef, y, row_chunks(std::vector<char>(n, 0)));
 }
 
 bool has_pressure(const SystemSelection &sel, int node) { return !sel.pressure.empty() && !std::isnan(sel.pressure[node]); }
+
+/// Whether a frame reads W's column j (3 · node + component): it switches the unknown (u known
+/// differs from the reference's), or loads it with a non-zero known value that is not the
+/// traction of a pressure load (that one goes through W_p). Sets *loads to the second case.
+bool reads_column(const SystemSelection &sel, int j, bool u_known, bool reference_u_known, bool *loads)
+{
+  const int node = j / 3;
+  *loads = u_known == reference_u_known && sel.known[node][j % 3] != 0.0 && !(!u_known && has_pressure(sel, node));
+  return u_known != reference_u_known || *loads;
+}
 
 } // namespace
 
@@ -107,12 +139,10 @@ void mark_scene_candidates(const SystemSelection &reference, const SystemSelecti
   const std::size_t nodes = reference.displacement_known.size();
   if (frame.displacement_known.size() != nodes || frame.known.size() != nodes) throw std::invalid_argument("mark_scene_candidates: the frame does not match the reference's nodes");
   candidates.resize(3 * nodes, 0);
+  bool loads = false;
   for (std::size_t node = 0; node < nodes; ++node)
-    for (int a = 0; a < 3; ++a) {
-      const bool u = frame.displacement_known[node][a], switched = u != static_cast<bool>(reference.displacement_known[node][a]);
-      const bool loads = !switched && frame.known[node][a] != 0.0 && !(!u && has_pressure(frame, static_cast<int>(node)));
-      if (switched || loads) candidates[3 * node + a] = 1;
-    }
+    for (int a = 0; a < 3; ++a)
+      if (reads_column(frame, static_cast<int>(3 * node + a), frame.displacement_known[node][a], reference.displacement_known[node][a], &loads)) candidates[3 * node + a] = 1;
 }
 
 DenseScene::DenseScene(const BemOperator &op, const SystemSelection &reference, const SceneOptions &options, std::unique_ptr<KrylovSolver> krylov)
@@ -147,14 +177,11 @@ std::vector<int> DenseScene::stored(const std::vector<int> &js) const
 void DenseScene::check_candidates(const SystemSelection &sel, const std::vector<char> &pattern) const
 {
   if (m_opt.candidates.empty()) return;
-  for (int j = 0; j < m_n; ++j) {
-    if (m_wcol[j] >= 0) continue;
-    const int node = j / 3;
-    const bool loads = pattern[j] == m_ref[j] && sel.known[node][j % 3] != 0.0 && !(!pattern[j] && has_pressure(sel, node));
-    if (pattern[j] != m_ref[j] || loads)
-      throw std::invalid_argument("scene frame: node " + std::to_string(node) + " component " + std::to_string(j % 3) + (loads ? " carries a known value" : " switches its boundary condition") +
+  bool loads = false;
+  for (int j = 0; j < m_n; ++j)
+    if (m_wcol[j] < 0 && reads_column(sel, j, pattern[j], m_ref[j], &loads))
+      throw std::invalid_argument("scene frame: node " + std::to_string(j / 3) + " component " + std::to_string(j % 3) + (loads ? " carries a known value" : " switches its boundary condition") +
                                   " but is not among the scene's candidates (SceneOptions::candidates)");
-  }
 }
 
 std::vector<char> DenseScene::pattern_of(const SystemSelection &sel) const
@@ -293,9 +320,8 @@ void DenseScene::capacitance_correct(double *y) const
 /// The same product from W's single-precision copy, over the rows outside J only: the switched
 /// rows get x(J) = s. In exact arithmetic x(J) = y(J) − C s + s, and y(J) − C s is the refined
 /// capacitance residual (≤ 1e-10 ‖y(J)‖, capacitance.hpp), so they keep that accuracy. The
-/// copy's rows are in cluster order, where J (a contact patch) falls in runs of rows: the
-/// product skips the runs of at least 256 rows and takes the short ones along (a chunk of rows
-/// streams best whole).
+/// copy's rows are in cluster order, where J (a contact patch) falls in runs of rows that the
+/// product skips (row_chunks).
 void DenseScene::single_fields_correct(const std::vector<double> &s, double *y) const
 {
   const std::vector<int> &J = m_cap.indices();
@@ -304,28 +330,9 @@ void DenseScene::single_fields_correct(const std::vector<double> &s, double *y) 
   single_columns(cols);
   std::vector<char> skip(n, 0);
   for (int j : J) skip[m_row_position[j]] = 1;
-  constexpr int block = 4096, gap = 256;
-  std::vector<std::pair<int, int>> chunks; // rows outside J's long runs, at most `block` per chunk
-  for (int r = 0; r < n;) {
-    int run = 0; // J's run starting at r
-    while (r + run < n && skip[r + run]) ++run;
-    if (run >= gap || r + run == n) {
-      r += run;
-      continue;
-    }
-    const int r0 = r;
-    for (r += run; r < n && r - r0 < block; ++r) {
-      if (!skip[r]) continue;
-      int len = 0;
-      while (r + len < n && skip[r + len]) ++len;
-      if (len >= gap) break;
-      r += len - 1;
-    }
-    chunks.push_back({r0, std::min(r, n)});
-  }
   std::vector<double> minus_s(k), z(n, 0.0);
   for (int p = 0; p < k; ++p) minus_s[p] = -s[p];
-  gather_axpy(m_Wf.get(), n, cols, minus_s, z.data(), chunks);
+  gather_axpy(m_Wf.get(), n, cols, minus_s, z.data(), row_chunks(skip));
   for (int r = 0; r < n; ++r)
     if (!skip[r]) y[m_row_order[r]] += z[r];
   for (int p = 0; p < k; ++p) y[J[p]] = s[p];
