@@ -50,8 +50,8 @@ using namespace hssbem;
 struct Args {
   std::string kase = "kelvin", mesh, bc = "traction", methods = "plain,band,subtract", csv, mat_type = "dense";
   double nu = 0.3, band = 1.0, near_ratio = 2.0;
-  int samples = 200, speed = 0, direct_speed = 0, equivalent_points = 128, target_leaf = 128, source_leaf = 48, grid_cells = 0;
-  double check_ratio = 2.6, equivalent_ratio = 1.05, check_factor = 1.25;
+  int samples = 200, speed = 0, direct_speed = 0, equivalent_points = 128, target_leaf = 160, source_leaf = 32, grid_cells = 0, inner_points = 192;
+  double check_ratio = 2.6, equivalent_ratio = 1.05, check_factor = 1.25, inner_ratio = 2.2;
 };
 
 Args parse(int argc, char **argv)
@@ -82,6 +82,8 @@ Args parse(int argc, char **argv)
     else if (k == "--check-ratio") a.check_ratio = std::stod(next());
     else if (k == "--check-factor") a.check_factor = std::stod(next());
     else if (k == "--equivalent-ratio") a.equivalent_ratio = std::stod(next());
+    else if (k == "--inner-points") a.inner_points = std::stoi(next());
+    else if (k == "--inner-ratio") a.inner_ratio = std::stod(next());
     else throw std::invalid_argument("unknown argument " + k);
   }
   if (a.mesh.empty()) throw std::invalid_argument("give --mesh");
@@ -409,15 +411,16 @@ int grid_speed(const Args &a)
   InteriorEvaluationOptions eo;
   eo.equivalent_points = a.equivalent_points, eo.target_leaf = a.target_leaf, eo.source_leaf = a.source_leaf;
   eo.check_ratio = a.check_ratio, eo.check_factor = a.check_factor, eo.equivalent_ratio = a.equivalent_ratio;
+  eo.inner_points = a.inner_points, eo.inner_ratio = a.inner_ratio;
   Timer total;
   const double c_start = cpu_seconds();
   Timer timer;
   const SurfaceLocator loc(mesh);
-  const std::vector<signed char> side = grid_inside(loc, g.lo, g.spacing(), g.points_per_axis());
-  const double t_inside = timer.seconds(), c_inside = cpu_seconds() - c_start;
-  timer.restart();
   InteriorPlanOptions po;
   po.band = a.band;
+  const std::vector<signed char> side = grid_inside(loc, g.lo, g.spacing(), g.points_per_axis(), InteriorPlan::search_reach(loc, mesh, po));
+  const double t_inside = timer.seconds(), c_inside = cpu_seconds() - c_start;
+  timer.restart();
   const InteriorPlan plan(loc, mesh, pts, po, &side);
   const double t_plan = timer.seconds(), c_plan = cpu_seconds() - c_start - c_inside;
   timer.restart();
@@ -431,10 +434,11 @@ int grid_speed(const Args &a)
   const std::vector<FieldValue> f = plan.finish(v, corner_displacements(disc, u), corner_stress(disc, nodes));
   const double t_finish = timer.seconds(), wall = total.seconds(), cpu = cpu_seconds() - c_start;
   long long inside = 0;
-  for (signed char c : side) inside += c == 1;
+  long long marked_deep = 0;
+  for (signed char c : side) inside += c >= 1, marked_deep += c == 2;
   const InteriorEvaluationStats &st = fast.stats();
-  std::printf("%s: %d triangles (%d unknowns), grid %d^3 = %zu points, %lld inside, %zu integrated; threads %d\n", a.mesh.c_str(), mesh.num_triangles(),
-              3 * disc.num_nodes(), n + 1, pts.size(), inside, plan.evaluation_points().size(),
+  std::printf("%s: %d triangles (%d unknowns), grid %d^3 = %zu points, %lld inside (%lld deep without a search), %zu integrated; threads %d\n", a.mesh.c_str(), mesh.num_triangles(),
+              3 * disc.num_nodes(), n + 1, pts.size(), inside, marked_deep, plan.evaluation_points().size(),
 #ifdef _OPENMP
               omp_get_max_threads()
 #else
@@ -445,9 +449,10 @@ int grid_speed(const Args &a)
               t_inside, t_plan, t_up, t_eval, t_finish, wall, pts.size() / wall, inside / wall, cpu);
   std::printf("cpu seconds: inside %.2f, plan %.2f, sources + upward %.2f, evaluation %.2f, finish %.2f; %.0f inside points per cpu second\n", c_inside, c_plan, c_up,
               c_eval, cpu - c_inside - c_plan - c_up - c_eval, inside / cpu);
-  std::printf("evaluation: far pairs %lld, fits %lld, per integrated point: far kernels %.0f, fit kernels %.0f, near particles %.0f, split triangles %.2f\n",
+  std::printf("evaluation: far pairs %lld, fits %lld, per integrated point: far kernels %.0f, fit kernels %.0f, near particles %.0f, inner kernels %.0f, split triangles %.2f\n",
               st.far_pairs, st.local_fits, double(st.kernel_far) / v.size() * field_outputs, double(st.kernel_fit) / v.size() * field_outputs,
-              double(st.kernel_near) / v.size() * field_outputs, double(st.adaptive_triangles) / v.size() * field_outputs);
+              double(st.kernel_near) / v.size() * field_outputs, double(st.kernel_inner) / v.size() * field_outputs,
+              double(st.adaptive_triangles) / v.size() * field_outputs);
   const int nd = std::min<int>(a.direct_speed > 0 ? a.direct_speed : 100, static_cast<int>(plan.evaluation_points().size()));
   std::vector<Vec3> sub;
   for (int i = 0; i < nd; ++i) sub.push_back(plan.evaluation_points()[(static_cast<std::size_t>(i) * plan.evaluation_points().size()) / nd]);
@@ -534,6 +539,8 @@ int run(const Args &a)
   eo.check_ratio = a.check_ratio;
   eo.check_factor = a.check_factor;
   eo.equivalent_ratio = a.equivalent_ratio;
+  eo.inner_points = a.inner_points;
+  eo.inner_ratio = a.inner_ratio;
   const double b = std::max(1e-2, 2 * e_u);
   std::stringstream ms(a.methods);
   std::string method;

@@ -111,7 +111,7 @@ void interior_fields(MPI_Comm comm, const ProblemSetup &s, const NodalSolution &
     std::vector<signed char> inside(s.spec.interior_points.size(), -1); // explicit points: the winding number
     if (s.spec.interior_grid) {
       const InteriorGrid &g = *s.spec.interior_grid;
-      const std::vector<signed char> grid = grid_inside(*is.locator, g.lo, g.spacing(), g.points_per_axis());
+      const std::vector<signed char> grid = grid_inside(*is.locator, g.lo, g.spacing(), g.points_per_axis(), InteriorPlan::search_reach(*is.locator, *s.mesh, o.plan));
       inside.insert(inside.end(), grid.begin(), grid.end());
     }
     is.plan.emplace(*is.locator, *s.mesh, is.points, o.plan, &inside);
@@ -138,6 +138,7 @@ void interior_fields(MPI_Comm comm, const ProblemSetup &s, const NodalSolution &
 . -bem_interior_near_ratio <r>        - split a triangle while the point is closer than r of its diameters
 . -bem_interior_max_depth <n>         - levels of splits at most
 . -bem_interior_equivalent_points <n> - points per equivalent sphere of the fast evaluation
+. -bem_interior_inner_points <n>      - points of each source leaf's inner forces, used near the leaf instead of its particles (0: none)
 . -bem_interior_source_leaf <n>       - triangles per source leaf
 . -bem_interior_target_leaf <n>       - points per target leaf
 - -bem_interior_direct                - every point against every triangle (no fast evaluation; the reference)
@@ -145,7 +146,7 @@ void interior_fields(MPI_Comm comm, const ProblemSetup &s, const NodalSolution &
 PetscErrorCode InteriorOptionsFromDatabase_Private(MPI_Comm comm, InteriorRunOptions *o)
 {
   PetscBool direct = o->fast.direct ? PETSC_TRUE : PETSC_FALSE;
-  PetscInt  depth = o->quad.max_depth, pe = o->fast.equivalent_points, sl = o->fast.source_leaf, tl = o->fast.target_leaf;
+  PetscInt  depth = o->quad.max_depth, pe = o->fast.equivalent_points, ip = o->fast.inner_points, sl = o->fast.source_leaf, tl = o->fast.target_leaf;
 
   PetscFunctionBegin;
   PetscOptionsBegin(comm, NULL, "hssbem: displacement and stress inside the body (interior points and grids)", "hssbem");
@@ -153,6 +154,7 @@ PetscErrorCode InteriorOptionsFromDatabase_Private(MPI_Comm comm, InteriorRunOpt
   PetscCall(PetscOptionsReal("-bem_interior_near_ratio", "Split a triangle while the point is closer than this many of its diameters", "", o->quad.near_ratio, &o->quad.near_ratio, NULL));
   PetscCall(PetscOptionsInt("-bem_interior_max_depth", "Levels of 1:4 splits at most", "", depth, &depth, NULL));
   PetscCall(PetscOptionsInt("-bem_interior_equivalent_points", "Points on each equivalent sphere of the fast evaluation", "", pe, &pe, NULL));
+  PetscCall(PetscOptionsInt("-bem_interior_inner_points", "Points of each source leaf's inner forces, taken near the leaf instead of its particles (0: none)", "", ip, &ip, NULL));
   PetscCall(PetscOptionsInt("-bem_interior_source_leaf", "Triangles per source leaf of the fast evaluation", "", sl, &sl, NULL));
   PetscCall(PetscOptionsInt("-bem_interior_target_leaf", "Points per target leaf of the fast evaluation", "", tl, &tl, NULL));
   PetscCall(PetscOptionsBool("-bem_interior_direct", "Every point against every triangle (the reference; no fast evaluation)", "", direct, &direct, NULL));
@@ -161,9 +163,11 @@ PetscErrorCode InteriorOptionsFromDatabase_Private(MPI_Comm comm, InteriorRunOpt
   PetscCheck(o->quad.near_ratio >= 1 && o->quad.near_ratio <= 20, comm, PETSC_ERR_ARG_OUTOFRANGE, "-bem_interior_near_ratio must lie in [1, 20]");
   PetscCheck(depth >= 0 && depth <= 20, comm, PETSC_ERR_ARG_OUTOFRANGE, "-bem_interior_max_depth must lie in [0, 20]");
   PetscCheck(pe >= 16 && pe <= 2000, comm, PETSC_ERR_ARG_OUTOFRANGE, "-bem_interior_equivalent_points must lie in [16, 2000]");
+  PetscCheck(ip == 0 || (ip >= 16 && ip <= 2000), comm, PETSC_ERR_ARG_OUTOFRANGE, "-bem_interior_inner_points must be 0 or lie in [16, 2000]");
   PetscCheck(sl >= 1 && tl >= 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-bem_interior_source_leaf and -bem_interior_target_leaf must be at least 1");
   o->quad.max_depth = (int)depth;
   o->fast.equivalent_points = (int)pe;
+  o->fast.inner_points = (int)ip;
   o->fast.source_leaf = (int)sl;
   o->fast.target_leaf = (int)tl;
   o->fast.direct = direct == PETSC_TRUE;

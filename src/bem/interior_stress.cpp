@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 
 namespace hssbem {
 
@@ -34,11 +35,22 @@ Vec3 interpolate(const std::array<Vec3, 3> &v, const Vec3 &b) { return b[0] * v[
 /// The quadrature points of one (point, triangle) pair, gathered from the pieces of a split
 /// before one vectorised pass sums them: position, weight and barycentric coordinates.
 struct PieceRule {
-  std::vector<double> y[3], w, b[3];
-  void clear()
+  std::size_t size = 0, capacity = 0;
+  std::unique_ptr<double[]> y[3], w, b[3]; ///< not value-initialised: a split fills thousands of entries per point
+  void clear() { size = 0; }
+  /// Room for `more` entries beyond size (the entries kept).
+  void reserve_more(std::size_t more)
   {
-    for (int c = 0; c < 3; ++c) y[c].clear(), b[c].clear();
-    w.clear();
+    if (size + more <= capacity) return;
+    const std::size_t cap = std::max<std::size_t>(2 * capacity, size + more + 64);
+    auto grow = [&](std::unique_ptr<double[]> &a) {
+      std::unique_ptr<double[]> n(new double[cap]);
+      std::copy_n(a.get(), size, n.get());
+      a = std::move(n);
+    };
+    for (int c = 0; c < 3; ++c) grow(y[c]), grow(b[c]);
+    grow(w);
+    capacity = cap;
   }
 };
 
@@ -52,13 +64,17 @@ PieceRule &piece_rule()
 /// Appends the 7-point rule of piece s (area A).
 void gather_rule(const Piece &s, double A, PieceRule &R)
 {
-  for (const auto &q : rule7) {
+  R.reserve_more(7);
+  const std::size_t at = R.size;
+  for (int q = 0; q < 7; ++q) {
+    const double *l = rule7[q];
     for (int c = 0; c < 3; ++c) {
-      R.y[c].push_back(q[0] * s.p[0][c] + q[1] * s.p[1][c] + q[2] * s.p[2][c]);
-      R.b[c].push_back(q[0] * s.b[0][c] + q[1] * s.b[1][c] + q[2] * s.b[2][c]);
+      R.y[c][at + q] = l[0] * s.p[0][c] + l[1] * s.p[1][c] + l[2] * s.p[2][c];
+      R.b[c][at + q] = l[0] * s.b[0][c] + l[1] * s.b[1][c] + l[2] * s.b[2][c];
     }
-    R.w.push_back(A * q[3]);
+    R.w[at + q] = A * l[3];
   }
+  R.size += 7;
 }
 
 void subdivide(const InteriorQuadrature &q, const Vec3 &x, const Piece &s, double A, int depth, PieceRule &R)
@@ -83,8 +99,8 @@ void sum_rule(const SomiglianaConstants &k, const Vec3 &x, const Vec3 &n, const 
               double *out)
 {
   double a0 = 0, a1 = 0, a2 = 0, a3 = 0, a4 = 0, a5 = 0, a6 = 0, a7 = 0, a8 = 0;
-  const std::size_t np = R.w.size();
-  const double *y0 = R.y[0].data(), *y1 = R.y[1].data(), *y2 = R.y[2].data(), *w = R.w.data(), *b0 = R.b[0].data(), *b1 = R.b[1].data(), *b2 = R.b[2].data();
+  const std::size_t np = R.size;
+  const double *y0 = R.y[0].get(), *y1 = R.y[1].get(), *y2 = R.y[2].get(), *w = R.w.get(), *b0 = R.b[0].get(), *b1 = R.b[1].get(), *b2 = R.b[2].get();
 #pragma omp simd reduction(+ : a0, a1, a2, a3, a4, a5, a6, a7, a8)
   for (std::size_t j = 0; j < np; ++j) {
     double f[3], m[3], v[field_outputs];

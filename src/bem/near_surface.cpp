@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 namespace hssbem {
 
@@ -80,12 +81,62 @@ InteriorPlan::Recipe InteriorPlan::deep_recipe(const Vec3 &x, std::array<Vec3, 2
   return r;
 }
 
-InteriorPlan::Recipe InteriorPlan::classify(const SurfaceLocator &locator, const SurfaceMesh &mesh, const Vec3 &x, signed char side, const Reach &reach,
+/// What classify needs of the surface near a point: its nearest point within `reach` (the band's
+/// search reach), or none, when the plan's decision does not depend on it. A point whose nearest
+/// triangle T lies at d is in the band when d < band · longest_edge(T), so beyond band · ℓ (ℓ: a
+/// percentile of the longest edges) only the triangles longer than ℓ can make it so. Staged:
+/// first the nearest point within band · ℓ; if there is none, the nearest among the longer
+/// triangles within the reach (their own tree); if that one puts the point in the band, the
+/// nearest point overall is either it or a shorter triangle closer still (which leaves the point
+/// deep). The decisions are those of one search within the reach.
+class InteriorPlan::Search {
+public:
+  Search(const SurfaceLocator &locator, const SurfaceMesh &mesh, double band, double reach, bool staged) : m_all(locator), m_band(band), m_reach(reach)
+  {
+    if (!staged || band <= 0 || mesh.num_triangles() == 0) return;
+    std::vector<double> edge(mesh.num_triangles());
+    for (int t = 0; t < mesh.num_triangles(); ++t) edge[t] = longest_edge(mesh, t);
+    std::vector<double> sorted = edge;
+    const std::size_t at = (sorted.size() * 9) / 10;
+    std::nth_element(sorted.begin(), sorted.begin() + at, sorted.end());
+    const double first = band * sorted[at] * (1 + 1e-12);
+    if (!(first < reach)) return;
+    m_first = first;
+    m_long_mesh.vertices = mesh.vertices;
+    for (int t = 0; t < mesh.num_triangles(); ++t)
+      if (band * edge[t] * (1 + 1e-12) > first) m_long_mesh.triangles.push_back(mesh.triangles[t]), m_long_id.push_back(t);
+    if (!m_long_id.empty()) m_long.emplace(m_long_mesh);
+  }
+  const SurfaceLocator &locator() const { return m_all; }
+  SurfaceLocator::Nearest nearest(const Vec3 &x, const SurfaceMesh &mesh) const
+  {
+    if (m_first <= 0) return m_all.nearest(x, m_reach);
+    SurfaceLocator::Nearest n = m_all.nearest(x, m_first);
+    if (n.triangle >= 0 || !m_long) return n;
+    SurfaceLocator::Nearest l = m_long->nearest(x, m_reach);
+    if (l.triangle < 0) return l;
+    l.triangle = m_long_id[l.triangle];
+    if (!(l.distance < m_band * longest_edge(mesh, l.triangle))) return {}; // deep: its nearest triangle is this one or a closer short one
+    const SurfaceLocator::Nearest closer = m_all.nearest(x, l.distance);
+    return closer.triangle >= 0 && closer.distance < l.distance ? SurfaceLocator::Nearest{} : l; // a closer short triangle: deep
+  }
+
+private:
+  const SurfaceLocator &m_all;
+  double m_band, m_reach, m_first = 0;
+  SurfaceMesh m_long_mesh;
+  std::vector<int> m_long_id;
+  std::optional<SurfaceLocator> m_long;
+};
+
+InteriorPlan::Recipe InteriorPlan::classify(const Search &search, const SurfaceMesh &mesh, const Vec3 &x, signed char side, const Reach &reach,
                                             std::array<Vec3, 2> &support)
 {
   Recipe r;
+  if (side == 2) return deep_recipe(x, support); // no surface within reach.band (grid_inside)
+  const SurfaceLocator &locator = search.locator();
   // A point outside by the caller only needs to know whether it lies on the surface.
-  const SurfaceLocator::Nearest n = locator.nearest(x, (side == 0 ? reach.on : reach.band) * (1 + 1e-12));
+  const SurfaceLocator::Nearest n = side == 0 ? locator.nearest(x, reach.on * (1 + 1e-12)) : search.nearest(x, mesh);
   if (n.triangle >= 0 && n.distance <= reach.on) {
     r.kind = PointKind::Surface, r.triangle = n.triangle, r.bary = n.bary, r.w_surface = 1;
     return r;
@@ -96,16 +147,22 @@ InteriorPlan::Recipe InteriorPlan::classify(const SurfaceLocator &locator, const
   return deep_recipe(x, support);
 }
 
+double InteriorPlan::search_reach(const SurfaceLocator &locator, const SurfaceMesh &mesh, const InteriorPlanOptions &o)
+{
+  return std::max(o.on_surface * locator.size(), o.band * max_edge(mesh));
+}
+
 InteriorPlan::InteriorPlan(const SurfaceLocator &locator, const SurfaceMesh &mesh, const std::vector<Vec3> &points, const InteriorPlanOptions &o,
                            const std::vector<signed char> *inside)
   : m_recipe(points.size())
 {
   Reach reach;
-  reach.on = o.on_surface * locator.size(), reach.band = std::max(reach.on, o.band * max_edge(mesh)), reach.band_depth = o.band;
+  reach.on = o.on_surface * locator.size(), reach.band = search_reach(locator, mesh, o), reach.band_depth = o.band;
+  const Search search(locator, mesh, o.band, reach.band * (1 + 1e-12), o.staged_search);
   std::vector<std::array<Vec3, 2>> support(points.size());
   const long long np = static_cast<long long>(points.size());
 #pragma omp parallel for schedule(dynamic, 256)
-  for (long long p = 0; p < np; ++p) m_recipe[p] = classify(locator, mesh, points[p], inside ? (*inside)[p] : -1, reach, support[p]);
+  for (long long p = 0; p < np; ++p) m_recipe[p] = classify(search, mesh, points[p], inside ? (*inside)[p] : -1, reach, support[p]);
   // The evaluation points in the order of the points, each point's support points in turn.
   for (std::size_t p = 0; p < points.size(); ++p)
     for (int s = 0; s < 2; ++s)
@@ -113,6 +170,56 @@ InteriorPlan::InteriorPlan(const SurfaceLocator &locator, const SurfaceMesh &mes
 }
 
 namespace {
+
+/// Dilates the set `near` (one flag per grid point) by r points along axis a: afterwards a point
+/// is set when some point of the set lies at most r points from it along that axis.
+void dilate(const std::array<int, 3> &n, int a, int r, std::vector<char> &near)
+{
+  const long long stride[3] = {1, n[0], 1LL * n[0] * n[1]}, total = stride[2] * n[2];
+  const long long lines = total / n[a];
+#pragma omp parallel for schedule(static)
+  for (long long l = 0; l < lines; ++l) {
+    // the first point of line l: its index along a is 0, the others run over the other two axes
+    const int b = (a + 1) % 3, c = (a + 2) % 3;
+    const long long first = (l % n[b]) * stride[b] + (l / n[b]) * stride[c];
+    std::vector<char> was(static_cast<std::size_t>(n[a]));
+    for (int i = 0; i < n[a]; ++i) was[i] = near[first + i * stride[a]];
+    int last = -r - 1; // the last set point seen, forward then backward
+    for (int i = 0; i < n[a]; ++i) {
+      if (was[i]) last = i;
+      if (i - last <= r) near[first + i * stride[a]] = 1;
+    }
+    last = n[a] + r;
+    for (int i = n[a] - 1; i >= 0; --i) {
+      if (was[i]) last = i;
+      if (last - i <= r) near[first + i * stride[a]] = 1;
+    }
+  }
+}
+
+/// Inside points (side 1) at least `beyond` from the surface become 2 (grid_inside). The points
+/// within a step of the surface (not clear) and the grid's boundary (the surface may leave the
+/// grid) are dilated by a cube of r points each way: a point left out has none of them within r
+/// points along every axis, so the grid point nearest to its nearest surface point q (within a
+/// step of the surface, or on the boundary if q lies outside the grid) is more than r points away
+/// along some axis: |x − q| ≥ (r + 1 − ½) h, h the smallest spacing.
+void mark_deep(const std::array<int, 3> &n, const Vec3 &spacing, const std::vector<char> &clear, double beyond, std::vector<signed char> &side)
+{
+  const long long total = 1LL * n[0] * n[1] * n[2], stride[3] = {1, n[0], 1LL * n[0] * n[1]};
+  const double h = std::min({spacing[0], spacing[1], spacing[2]});
+  const double r = std::ceil(beyond / h - 0.5); // (r + ½) h ≥ beyond
+  if (!(r < std::max({n[0], n[1], n[2]}))) return;
+  std::vector<char> near(static_cast<std::size_t>(total));
+  for (long long p = 0; p < total; ++p) {
+    const long long idx[3] = {p % n[0], (p / n[0]) % n[1], p / stride[2]};
+    bool boundary = false;
+    for (int a = 0; a < 3; ++a) boundary = boundary || idx[a] == 0 || idx[a] == n[a] - 1;
+    near[p] = !clear[p] || boundary;
+  }
+  for (int a = 0; a < 3; ++a) dilate(n, a, static_cast<int>(r), near);
+  for (long long p = 0; p < total; ++p)
+    if (side[p] == 1 && !near[p]) side[p] = 2;
+}
 
 /// Union-find over grid points.
 int find_root(std::vector<int> &parent, int i)
@@ -123,18 +230,38 @@ int find_root(std::vector<int> &parent, int i)
 
 } // namespace
 
-std::vector<signed char> grid_inside(const SurfaceLocator &locator, const Vec3 &origin, const Vec3 &spacing, const std::array<int, 3> &n)
+std::vector<signed char> grid_inside(const SurfaceLocator &locator, const Vec3 &origin, const Vec3 &spacing, const std::array<int, 3> &n, double deep_beyond)
 {
   const long long total = 1LL * n[0] * n[1] * n[2];
   const double step = std::max({spacing[0], spacing[1], spacing[2]}) * (1 + 1e-9);
+  const long long stride[3] = {1, n[0], 1LL * n[0] * n[1]};
   auto point = [&](long long p) {
-    const long long i = p % n[0], j = (p / n[0]) % n[1], k = p / (1LL * n[0] * n[1]);
+    const long long i = p % n[0], j = (p / n[0]) % n[1], k = p / stride[2];
     return Vec3{origin[0] + i * spacing[0], origin[1] + j * spacing[1], origin[2] + k * spacing[2]};
   };
+  // The points within a step of some triangle's bounding box: only they can lie within a step of the surface.
+  std::vector<char> candidate(static_cast<std::size_t>(total), 0);
+  const SurfaceMesh &mesh = locator.mesh();
+  for (const auto &t : mesh.triangles) {
+    long long lo[3], hi[3];
+    bool empty = false;
+    for (int a = 0; a < 3; ++a) {
+      const double x0 = std::min({mesh.vertices[t[0]][a], mesh.vertices[t[1]][a], mesh.vertices[t[2]][a]}) - 1.01 * step;
+      const double x1 = std::max({mesh.vertices[t[0]][a], mesh.vertices[t[1]][a], mesh.vertices[t[2]][a]}) + 1.01 * step;
+      lo[a] = std::max(0LL, static_cast<long long>(std::ceil((x0 - origin[a]) / spacing[a])));
+      hi[a] = std::min(n[a] - 1LL, static_cast<long long>(std::floor((x1 - origin[a]) / spacing[a])));
+      empty = empty || lo[a] > hi[a];
+    }
+    if (empty) continue;
+    for (long long k = lo[2]; k <= hi[2]; ++k)
+      for (long long j = lo[1]; j <= hi[1]; ++j)
+        std::fill(candidate.begin() + (k * stride[2] + j * stride[1] + lo[0]), candidate.begin() + (k * stride[2] + j * stride[1] + hi[0] + 1), 1);
+  }
   std::vector<signed char> side(static_cast<std::size_t>(total), -1);
-  std::vector<char> clear(static_cast<std::size_t>(total));
+  std::vector<char> clear(static_cast<std::size_t>(total), 1);
 #pragma omp parallel for schedule(dynamic, 256)
   for (long long p = 0; p < total; ++p) {
+    if (!candidate[p]) continue;
     const Vec3 x = point(p);
     const SurfaceLocator::Nearest near = locator.nearest(x, step);
     clear[p] = near.triangle < 0;
@@ -142,7 +269,6 @@ std::vector<signed char> grid_inside(const SurfaceLocator &locator, const Vec3 &
   }
   std::vector<int> parent(static_cast<std::size_t>(total));
   for (long long p = 0; p < total; ++p) parent[p] = static_cast<int>(p);
-  const long long stride[3] = {1, n[0], 1LL * n[0] * n[1]};
   for (long long p = 0; p < total; ++p) {
     const long long idx[3] = {p % n[0], (p / n[0]) % n[1], p / stride[2]};
     for (int a = 0; a < 3; ++a)
@@ -157,6 +283,7 @@ std::vector<signed char> grid_inside(const SurfaceLocator &locator, const Vec3 &
     if (r < 0) r = locator.inside(point(p)); // a component that never nears the surface
     side[p] = r;
   }
+  if (deep_beyond > 0) mark_deep(n, spacing, clear, deep_beyond, side);
   return side;
 }
 

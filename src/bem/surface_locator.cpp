@@ -94,14 +94,29 @@ SurfaceLocator::SurfaceLocator(const SurfaceMesh &mesh) : m_mesh(&mesh), m_tree(
       area += A;
     }
     b.centre = (1.0 / area) * b.centre;
+    b.lo = b.hi = mesh.vertices[mesh.triangles[perm[cl.begin]][0]];
     for (int p = cl.begin; p < cl.end; ++p)
-      for (int v : mesh.triangles[perm[p]]) b.radius = std::max(b.radius, norm(mesh.vertices[v] - b.centre));
+      for (int v : mesh.triangles[perm[p]]) {
+        b.radius = std::max(b.radius, norm(mesh.vertices[v] - b.centre));
+        for (int a = 0; a < 3; ++a) b.lo[a] = std::min(b.lo[a], mesh.vertices[v][a]), b.hi[a] = std::max(b.hi[a], mesh.vertices[v][a]);
+      }
   }
+}
+
+double SurfaceLocator::distance_to(int c, const Vec3 &x) const
+{
+  const Ball &b = m_ball[c];
+  double box = 0;
+  for (int a = 0; a < 3; ++a) {
+    const double out = std::max({b.lo[a] - x[a], 0.0, x[a] - b.hi[a]});
+    box += out * out;
+  }
+  return std::max(norm(x - b.centre) - b.radius, std::sqrt(box));
 }
 
 void SurfaceLocator::nearest_in(int c, const Vec3 &x, Nearest &best) const
 {
-  if (norm(x - m_ball[c].centre) - m_ball[c].radius >= best.distance) return;
+  if (distance_to(c, x) >= best.distance) return;
   const Cluster &cl = m_tree.cluster(c);
   if (cl.left < 0) {
     for (int p = cl.begin; p < cl.end; ++p) {

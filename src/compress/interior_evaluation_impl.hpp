@@ -4,6 +4,7 @@
 
 #include "hssbem/compress/interior_evaluation.hpp"
 
+#include <memory>
 #include <vector>
 
 namespace hssbem::detail {
@@ -75,11 +76,13 @@ struct InteriorEvaluator::Impl {
   InteriorEvaluationOptions opt;
   detail::Fit up;   ///< sources: equivalent sphere inside, check sphere outside
   detail::Fit down; ///< targets: check sphere inside, equivalent sphere outside
+  std::unique_ptr<detail::Fit> inner; ///< source leaves, closer: check sphere at inner_ratio (none without inner_points)
   ClusterTree tree; ///< over the triangles' centroids
   std::vector<Vec3> C;                ///< per source cluster: the centre of its spheres (see source_centres)
   std::vector<double> R, reach;       ///< per source cluster: ball of its triangles (enlarged for the upward pass, see nest_radii), of their near zones
   std::vector<std::vector<double>> q; ///< per source cluster: equivalent forces (SoA, 3 pe)
   std::vector<std::vector<float>> qf; ///< the same in single precision (the evaluation at points)
+  std::vector<std::vector<float>> qi; ///< per source leaf: its inner forces (SoA, 3 inner pe) where upward_leaf made them, else empty
   detail::OrderedParticles particles; ///< in the tree's order
 
   Impl(const SomiglianaSources &s, const InteriorEvaluationOptions &o);
@@ -96,6 +99,8 @@ struct InteriorEvaluator::Impl {
   /// triangles, a parent's over its leaves' balls.
   void source_centres();
   void source_radii();
+  /// field (SoA, 3 pc) = the displacement of leaf c's particles at the check points of `fit`.
+  void leaf_field(int c, const detail::Fit &fit, std::vector<double> &field) const;
   void upward_leaf(int c);
   void upward_inner(int c);
   void upward();

@@ -174,6 +174,7 @@ void TargetPass::finish_points(int a, int begin, int end, std::vector<double> &o
     m_stats.direct_far += static_cast<long long>(deferred.size()) * n;
     m_stats.kernel_far += s.kernel_far;
     m_stats.kernel_near += s.kernel_near;
+    m_stats.kernel_inner += s.kernel_inner;
     m_stats.adaptive_triangles += s.adaptive_triangles;
   }
 }

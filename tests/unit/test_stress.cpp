@@ -204,7 +204,9 @@ std::vector<Vec3> random_points_in_ball(int n, double radius)
 
 } // namespace
 
-// The fast evaluation against the direct sums (every point against every triangle).
+// The fast evaluation against the direct sums (every point against every triangle), with the
+// source leaves' inner forces (the default) and without them: the inner forces take the place of
+// particles near the leaves, at the same accuracy.
 TEST(InteriorEvaluation, FastMatchesDirect)
 {
   const SurfaceMesh mesh = test::icosphere(4); // 5120 triangles
@@ -213,29 +215,46 @@ TEST(InteriorEvaluation, FastMatchesDirect)
   const KelvinData data = kelvin_data(disc, k);
   const SomiglianaSources src(disc, steel, data.u, data.t);
   const std::vector<Vec3> pts = random_points_in_ball(3000, 0.97);
-  InteriorEvaluationOptions fast;
-  const InteriorEvaluator evaluator(src, fast);
-  const std::vector<double> v = evaluator.evaluate(pts);
-  EXPECT_GT(evaluator.stats().far_pairs, 100); // the far field is used
-  fast.direct = true;
   const std::vector<Vec3> sub(pts.begin(), pts.begin() + 200);
-  const std::vector<double> ref = InteriorEvaluator(src, fast).evaluate(sub);
-  double eu = 0, nu = 0, es = 0, ns = 0;
-  for (std::size_t i = 0; i < sub.size() * field_outputs; ++i) {
-    const double d = v[i] - ref[i];
-    (i % field_outputs < 3 ? eu : es) += d * d;
-    (i % field_outputs < 3 ? nu : ns) += ref[i] * ref[i];
+  InteriorEvaluationOptions direct;
+  direct.direct = true;
+  const std::vector<double> ref = InteriorEvaluator(src, direct).evaluate(sub);
+  long long near_without = 0;
+  for (const int inner : {0, InteriorEvaluationOptions{}.inner_points}) {
+    InteriorEvaluationOptions fast;
+    fast.inner_points = inner;
+    const InteriorEvaluator evaluator(src, fast);
+    const std::vector<double> v = evaluator.evaluate(pts);
+    const InteriorEvaluationStats &st = evaluator.stats();
+    EXPECT_GT(st.far_pairs, 100); // the far field is used
+    if (inner == 0) {
+      EXPECT_EQ(st.kernel_inner, 0);
+      near_without = st.kernel_near;
+    } else { // the inner forces are used, in place of particles
+      EXPECT_GT(st.kernel_inner, 0);
+      EXPECT_LT(st.kernel_near, 0.9 * near_without);
+    }
+    double eu = 0, nu = 0, es = 0, ns = 0;
+    for (std::size_t i = 0; i < sub.size() * field_outputs; ++i) {
+      const double d = v[i] - ref[i];
+      (i % field_outputs < 3 ? eu : es) += d * d;
+      (i % field_outputs < 3 ? nu : ns) += ref[i] * ref[i];
+    }
+    std::printf("inner points %d: fast vs direct: displacement %.2e, stress %.2e (relative L2); near particles %lld, inner kernels %lld\n", inner,
+                std::sqrt(eu / nu), std::sqrt(es / ns), st.kernel_near, st.kernel_inner);
+    EXPECT_LE(std::sqrt(eu / nu), 1.5e-6); // measured 4.0e-7 without inner forces, 4.4e-7 with
+    EXPECT_LE(std::sqrt(es / ns), 6e-5); // measured 2.2e-5 without, 2.8e-5 with
+    // A share of the points per rank: the shares add up to the whole, value for value.
+    std::vector<double> sum(v.size(), 0.0);
+    for (int part = 0; part < 3; ++part) {
+      const std::vector<double> w = evaluator.evaluate(pts, part, 3);
+      for (std::size_t i = 0; i < w.size(); ++i) sum[i] += w[i];
+    }
+    EXPECT_EQ(sum, v);
   }
-  std::printf("fast vs direct: displacement %.2e, stress %.2e (relative L2)\n", std::sqrt(eu / nu), std::sqrt(es / ns));
-  EXPECT_LE(std::sqrt(eu / nu), 1.5e-6); // measured 5.0e-7 (4.1e-7 with the boxes' centres)
-  EXPECT_LE(std::sqrt(es / ns), 6e-5); // measured 2.3e-5 (1.9e-5 with the boxes' centres)
-  // A share of the points per rank: the shares add up to the whole, value for value.
-  std::vector<double> sum(v.size(), 0.0);
-  for (int part = 0; part < 3; ++part) {
-    const std::vector<double> w = evaluator.evaluate(pts, part, 3);
-    for (std::size_t i = 0; i < w.size(); ++i) sum[i] += w[i];
-  }
-  EXPECT_EQ(sum, v);
+  InteriorEvaluationOptions bad;
+  bad.inner_ratio = bad.equivalent_ratio; // the inner check sphere must lie outside the equivalent sphere
+  EXPECT_THROW(InteriorEvaluator(src, bad), std::invalid_argument);
 }
 
 // The fits' pseudo-inverses come from lapack::gesdd (divide and conquer): the same singular
@@ -314,19 +333,29 @@ TEST(SurfaceLocator, GridInsideMatchesTheWindingNumber)
     const Vec3 origin = shape == 0 ? Vec3{-0.13, -0.11, -0.17} : Vec3{-1.2, -1.1, -1.15};
     const Vec3 step = shape == 0 ? Vec3{0.05, 0.06, 0.07} : Vec3{0.1, 0.09, 0.11};
     const std::array<int, 3> n = shape == 0 ? std::array<int, 3>{30, 25, 20} : std::array<int, 3>{25, 26, 22};
-    const std::vector<signed char> side = grid_inside(loc, origin, step, n);
-    int inside = 0, checked = 0;
+    const double deep_beyond = 0.1;
+    const std::vector<signed char> side = grid_inside(loc, origin, step, n), marked = grid_inside(loc, origin, step, n, deep_beyond);
+    int inside = 0, checked = 0, deep = 0;
     for (int k = 0; k < n[2]; ++k)
       for (int j = 0; j < n[1]; ++j)
         for (int i = 0; i < n[0]; ++i) {
           const Vec3 x{origin[0] + i * step[0], origin[1] + j * step[1], origin[2] + k * step[2]};
-          if (loc.nearest(x).distance < 1e-9) continue;
+          const double d = loc.nearest(x).distance;
           const int p = i + n[0] * (j + n[1] * k);
+          // Marked deep: inside, and no surface within deep_beyond; else the same side.
+          EXPECT_EQ(marked[p] == 2 ? 1 : marked[p], side[p]) << p;
+          if (marked[p] == 2) {
+            EXPECT_GE(d, deep_beyond) << x[0] << " " << x[1] << " " << x[2];
+            ++deep;
+          }
+          if (d < 1e-9) continue;
           EXPECT_EQ(side[p], loc.inside(x) ? 1 : 0) << x[0] << " " << x[1] << " " << x[2];
           inside += side[p], ++checked;
         }
     EXPECT_GT(inside, checked / 10);
     EXPECT_LT(inside, checked);
+    std::printf("grid %d: %d of %d inside points marked deep\n", shape, deep, inside);
+    EXPECT_GT(deep, inside / 50); // the marking is used
   }
 }
 
@@ -344,14 +373,48 @@ TEST(InteriorPlan, GridSidesGiveTheSamePlan)
     for (int j = 0; j < n[1]; ++j)
       for (int i = 0; i < n[0]; ++i) pts.push_back({origin[0] + i * step[0], origin[1] + j * step[1], origin[2] + k * step[2]});
   const std::vector<signed char> side = grid_inside(loc, origin, step, n);
-  const InteriorPlan by_grid(loc, mesh, pts, {}, &side), by_winding(loc, mesh, pts);
+  // The same with the points surely beyond the plan's search marked deep: no search for them.
+  const std::vector<signed char> marked = grid_inside(loc, origin, step, n, InteriorPlan::search_reach(loc, mesh, {}));
+  EXPECT_GT(std::count(marked.begin(), marked.end(), 2), 500);
+  const InteriorPlan by_grid(loc, mesh, pts, {}, &side), by_marks(loc, mesh, pts, {}, &marked), by_winding(loc, mesh, pts);
   int band = 0;
   for (std::size_t p = 0; p < pts.size(); ++p) {
     EXPECT_EQ(by_grid.kind(p), by_winding.kind(p)) << p;
+    EXPECT_EQ(by_marks.kind(p), by_winding.kind(p)) << p;
     band += by_grid.kind(p) == PointKind::Band;
   }
   EXPECT_GT(band, 500);
   EXPECT_EQ(by_grid.evaluation_points(), by_winding.evaluation_points());
+  EXPECT_EQ(by_marks.evaluation_points(), by_winding.evaluation_points());
+}
+
+// The plan's staged search (the nearest surface point first within band × the 90th percentile
+// of the longest edges, then among the longer triangles) gives the plan of one search within
+// band × the longest edge, on a surface whose edges vary (a flattened, stretched sphere).
+TEST(InteriorPlan, StagedSearchGivesTheSamePlan)
+{
+  SurfaceMesh mesh = test::icosphere(3);
+  for (Vec3 &v : mesh.vertices) v = Vec3{1.6 * v[0], v[1], 0.35 * v[2]};
+  const SurfaceLocator loc(mesh);
+  const Vec3 origin{-1.65, -1.03, -0.37}, step{0.05, 0.045, 0.02};
+  const std::array<int, 3> n{67, 47, 38};
+  std::vector<Vec3> pts;
+  for (int k = 0; k < n[2]; ++k)
+    for (int j = 0; j < n[1]; ++j)
+      for (int i = 0; i < n[0]; ++i) pts.push_back({origin[0] + i * step[0], origin[1] + j * step[1], origin[2] + k * step[2]});
+  const std::vector<signed char> side = grid_inside(loc, origin, step, n);
+  InteriorPlanOptions staged, single;
+  single.staged_search = false;
+  const InteriorPlan a(loc, mesh, pts, staged, &side), b(loc, mesh, pts, single, &side);
+  int band = 0, deep = 0;
+  for (std::size_t p = 0; p < pts.size(); ++p) {
+    EXPECT_EQ(a.kind(p), b.kind(p)) << p;
+    band += a.kind(p) == PointKind::Band, deep += a.kind(p) == PointKind::Deep;
+  }
+  std::printf("staged search: %d band and %d deep points, the same plan\n", band, deep);
+  EXPECT_GT(band, 1000);
+  EXPECT_GT(deep, 1000);
+  EXPECT_EQ(a.evaluation_points(), b.evaluation_points());
 }
 
 // Points of the band take a quadratic through the surface value and two integrated points:

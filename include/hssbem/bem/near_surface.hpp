@@ -29,6 +29,10 @@ namespace hssbem {
 struct InteriorPlanOptions {
   double band = 1.0;        ///< depth of the band, in element sizes; 0: no band (every inside point integrated)
   double on_surface = 1e-9; ///< points closer than this × the surface's size are on it
+  /// Look for the nearest surface point first within band × the 90th percentile of the
+  /// triangles' longest edges, and beyond it only among the longer triangles: the same plan as
+  /// one search within band × the longest edge (false), cheaper where the edges vary.
+  bool staged_search = true;
 };
 
 enum class PointKind : char { Outside, Surface, Band, Deep };
@@ -40,12 +44,16 @@ class InteriorPlan {
 public:
   /// Classify `points` (and find the support points of the band). O(points · log triangles).
   /// `inside`, if given, says for each point whether it lies inside (1) or outside (0) the body,
-  /// or that the plan must find out (−1, by the winding number).
+  /// or that the plan must find out (−1, by the winding number); 2 says that it lies inside and
+  /// no surface point lies within search_reach() of it: deep, with no search (grid_inside).
   InteriorPlan(const SurfaceLocator &locator, const SurfaceMesh &mesh, const std::vector<Vec3> &points, const InteriorPlanOptions &options = {},
                const std::vector<signed char> *inside = nullptr);
 
   std::size_t num_points() const { return m_recipe.size(); }
   PointKind kind(std::size_t p) const { return m_recipe[p].kind; }
+  /// How far from a point the plan looks for the surface: a point with no surface point this
+  /// close is deep.
+  static double search_reach(const SurfaceLocator &locator, const SurfaceMesh &mesh, const InteriorPlanOptions &options);
   /// The points to integrate: each deep point, and the support points of the band.
   const std::vector<Vec3> &evaluation_points() const { return m_eval; }
 
@@ -66,10 +74,10 @@ private:
   struct Reach {
     double on = 0, band = 0, band_depth = 0;
   };
-  /// The recipe of point x (side: 1 inside, 0 outside, −1 unknown), its evaluation points in
+  /// The recipe of point x (side: 2 deep, 1 inside, 0 outside, −1 unknown), its evaluation points in
   /// `support` (eval[s] = 0 marks support[s] as used; numbered by the constructor).
-  static Recipe classify(const SurfaceLocator &locator, const SurfaceMesh &mesh, const Vec3 &x, signed char side, const Reach &reach,
-                         std::array<Vec3, 2> &support);
+  class Search; ///< the nearest surface point within the band's reach (near_surface.cpp)
+  static Recipe classify(const Search &search, const SurfaceMesh &mesh, const Vec3 &x, signed char side, const Reach &reach, std::array<Vec3, 2> &support);
   static Recipe band_recipe(const SurfaceLocator &locator, const SurfaceMesh &mesh, const Vec3 &x, const SurfaceLocator::Nearest &n, double delta,
                             std::array<Vec3, 2> &support);
   static Recipe deep_recipe(const Vec3 &x, std::array<Vec3, 2> &support);
@@ -82,7 +90,15 @@ private:
 /// k) * spacing, numbered x fastest: the winding number only at the points within a grid step of
 /// the surface; the others take the side of a neighbour, since a segment of one step from a point
 /// farther than a step from the surface cannot cross it (connected components of such steps,
-/// each taking the side of one of its points whose winding number is known).
-std::vector<signed char> grid_inside(const SurfaceLocator &locator, const Vec3 &origin, const Vec3 &spacing, const std::array<int, 3> &points);
+/// each taking the side of one of its points whose winding number is known). The points within a
+/// step of the surface are found among those within a step of some triangle's bounding box.
+///
+/// With `deep_beyond` > 0 (InteriorPlan::search_reach), an inside point that is surely farther
+/// than that from the surface is 2 instead of 1, and the plan takes it as deep without a search:
+/// a point with no point within a step of the surface (nor of the grid's boundary) within r grid
+/// points along every axis lies at least (r + ½) h from the surface (h the smallest spacing: the
+/// grid point nearest to its nearest surface point is within a step of the surface).
+std::vector<signed char> grid_inside(const SurfaceLocator &locator, const Vec3 &origin, const Vec3 &spacing, const std::array<int, 3> &points,
+                                     double deep_beyond = 0);
 
 } // namespace hssbem

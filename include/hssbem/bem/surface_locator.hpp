@@ -1,7 +1,7 @@
 /// \file surface_locator.hpp
 /// Where a point lies with respect to the closed surface: the nearest surface point (triangle,
 /// barycentric coordinates, distance) and the generalised winding number (1 inside, 0 outside,
-/// 1/2 on a face), both through a bounding-ball tree over the triangles.
+/// 1/2 on a face), both through a tree over the triangles with a ball and a box per cluster.
 ///
 /// The winding number is the sum of the triangles' solid angles over 4π, exact (Van Oosterom and
 /// Strackee) for the triangles near the point and through each far cluster's dipole Σ A_e n_e
@@ -41,13 +41,17 @@ public:
 
   /// The diagonal of the surface's bounding box.
   double size() const { return m_size; }
+  const SurfaceMesh &mesh() const { return *m_mesh; }
 
 private:
   struct Ball {
     Vec3 centre{};    ///< area-weighted centroid of the cluster's triangles
     double radius = 0; ///< largest distance from centre to one of their corners
     Vec3 dipole{};    ///< Σ A_e n_e
+    Vec3 lo{}, hi{};  ///< bounding box of the triangles' corners (tighter than the ball for flat patches)
   };
+  /// A lower bound of the distance from x to cluster c's triangles: the larger of the ball's and the box's.
+  double distance_to(int c, const Vec3 &x) const;
   void nearest_in(int c, const Vec3 &x, Nearest &best) const;
   double winding_in(int c, const Vec3 &x) const;
 

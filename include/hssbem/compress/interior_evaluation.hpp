@@ -19,7 +19,10 @@
 /// leaf it gives every point's displacement and stress (the Kelvin kernels U and D of the forces).
 /// A pair of clusters is far when each one's check sphere clears the other's equivalent sphere
 /// and the target ball lies outside the near zones of the source's triangles; what is not far at
-/// the leaves is near and goes through SomiglianaSources (adaptive quadrature) directly.
+/// the leaves is near and goes through SomiglianaSources (adaptive quadrature) directly, except
+/// that a point between inner_ratio and check_ratio radii from a source leaf (and outside its
+/// triangles' near zones) takes the leaf's inner forces: more of them, fitted closer
+/// (InteriorEvaluationOptions::inner_points).
 ///
 /// The fits are least squares on spheres scaled from one unit configuration: U(R x, R y) =
 /// U(x, y) / R, so two pseudo-inverses (truncated SVD) serve every cluster. The accuracy is set by
@@ -52,8 +55,15 @@ struct InteriorEvaluationOptions {
   double check_factor = 1.25;     ///< points on each check sphere / equivalent_points
   double equivalent_ratio = 1.05; ///< equivalent (sources) or check (targets) sphere radius / cluster radius
   double check_ratio = 2.6;       ///< check (sources) or equivalent (targets) sphere radius / cluster radius
-  int source_leaf = 48;           ///< triangles per source leaf (at most)
-  int target_leaf = 128;          ///< points per target leaf (at most)
+  int source_leaf = 32;           ///< triangles per source leaf (at most)
+  int target_leaf = 160;          ///< points per target leaf (at most)
+  /// A second, closer representation of each source leaf for the points near it: inner_points
+  /// forces on its equivalent sphere fitted at inner_ratio · R (0 points: none). A point between
+  /// inner_ratio · R and check_ratio · R from the leaf's centre (and beyond its triangles' near
+  /// zones) takes these instead of the leaf's particles (7 per triangle, each about twice a
+  /// force's kernel), for leaves where they are fewer kernels.
+  int inner_points = 192;
+  double inner_ratio = 2.2;
   bool direct = false;            ///< every point against every triangle (the reference; O(points · triangles))
 };
 
@@ -66,6 +76,7 @@ struct InteriorEvaluationStats {
   long long kernel_far = 0;       ///< point-force kernels at points (outer forces, far sources taken directly, near leaves through their forces)
   long long kernel_fit = 0;       ///< point-force kernels at check points (upward and downward fits)
   long long kernel_near = 0;      ///< particles of near leaves evaluated at points
+  long long kernel_inner = 0;     ///< point-force kernels of near leaves' inner forces at points (InteriorEvaluationOptions::inner_points)
   long long adaptive_triangles = 0; ///< (point, triangle) pairs integrated by splitting
   int source_clusters = 0, target_clusters = 0;
   double upward_seconds = 0, lists_seconds = 0, downward_seconds = 0, near_seconds = 0;
