@@ -359,6 +359,20 @@ TEST(SurfaceLocator, GridInsideMatchesTheWindingNumber)
   }
 }
 
+namespace {
+
+/// The points of a regular grid, x fastest (grid_inside's numbering).
+std::vector<Vec3> grid_points(const Vec3 &origin, const Vec3 &step, const std::array<int, 3> &n)
+{
+  std::vector<Vec3> pts;
+  for (int k = 0; k < n[2]; ++k)
+    for (int j = 0; j < n[1]; ++j)
+      for (int i = 0; i < n[0]; ++i) pts.push_back({origin[0] + i * step[0], origin[1] + j * step[1], origin[2] + k * step[2]});
+  return pts;
+}
+
+} // namespace
+
 // The plan of a grid is the same whether the sides come from the flood fill or from the winding
 // number at every point: the same kinds, the same evaluation points in the same order (the plan
 // is built in parallel and numbered afterwards).
@@ -368,10 +382,7 @@ TEST(InteriorPlan, GridSidesGiveTheSamePlan)
   const SurfaceLocator loc(mesh);
   const Vec3 origin{-1.05, -1.02, -1.07}, step{0.07, 0.08, 0.075};
   const std::array<int, 3> n{31, 27, 29};
-  std::vector<Vec3> pts;
-  for (int k = 0; k < n[2]; ++k)
-    for (int j = 0; j < n[1]; ++j)
-      for (int i = 0; i < n[0]; ++i) pts.push_back({origin[0] + i * step[0], origin[1] + j * step[1], origin[2] + k * step[2]});
+  const std::vector<Vec3> pts = grid_points(origin, step, n);
   const std::vector<signed char> side = grid_inside(loc, origin, step, n);
   // The same with the points surely beyond the plan's search marked deep: no search for them.
   const std::vector<signed char> marked = grid_inside(loc, origin, step, n, InteriorPlan::search_reach(loc, mesh, {}));
@@ -398,10 +409,7 @@ TEST(InteriorPlan, StagedSearchGivesTheSamePlan)
   const SurfaceLocator loc(mesh);
   const Vec3 origin{-1.65, -1.03, -0.37}, step{0.05, 0.045, 0.02};
   const std::array<int, 3> n{67, 47, 38};
-  std::vector<Vec3> pts;
-  for (int k = 0; k < n[2]; ++k)
-    for (int j = 0; j < n[1]; ++j)
-      for (int i = 0; i < n[0]; ++i) pts.push_back({origin[0] + i * step[0], origin[1] + j * step[1], origin[2] + k * step[2]});
+  const std::vector<Vec3> pts = grid_points(origin, step, n);
   const std::vector<signed char> side = grid_inside(loc, origin, step, n);
   InteriorPlanOptions staged, single;
   single.staged_search = false;
