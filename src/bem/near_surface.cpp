@@ -91,8 +91,9 @@ InteriorPlan::Recipe InteriorPlan::deep_recipe(const Vec3 &x, std::array<Vec3, 2
 /// deep). The decisions are those of one search within the reach.
 class InteriorPlan::Search {
 public:
-  Search(const SurfaceLocator &locator, const SurfaceMesh &mesh, double band, double reach, bool staged) : m_all(locator), m_band(band), m_reach(reach)
+  Search(const SurfaceLocator &locator, double band, double reach, bool staged) : m_all(locator), m_band(band), m_reach(reach)
   {
+    const SurfaceMesh &mesh = locator.mesh();
     if (!staged || band <= 0 || mesh.num_triangles() == 0) return;
     std::vector<double> edge(mesh.num_triangles());
     for (int t = 0; t < mesh.num_triangles(); ++t) edge[t] = longest_edge(mesh, t);
@@ -108,7 +109,7 @@ public:
     if (!m_long_id.empty()) m_long.emplace(m_long_mesh);
   }
   const SurfaceLocator &locator() const { return m_all; }
-  SurfaceLocator::Nearest nearest(const Vec3 &x, const SurfaceMesh &mesh) const
+  SurfaceLocator::Nearest nearest(const Vec3 &x) const
   {
     if (m_first <= 0) return m_all.nearest(x, m_reach);
     SurfaceLocator::Nearest n = m_all.nearest(x, m_first);
@@ -116,7 +117,7 @@ public:
     SurfaceLocator::Nearest l = m_long->nearest(x, m_reach);
     if (l.triangle < 0) return l;
     l.triangle = m_long_id[l.triangle];
-    if (!(l.distance < m_band * longest_edge(mesh, l.triangle))) return {}; // deep: its nearest triangle is this one or a closer short one
+    if (!(l.distance < m_band * longest_edge(m_all.mesh(), l.triangle))) return {}; // deep: its nearest triangle is this one or a closer short one
     const SurfaceLocator::Nearest closer = m_all.nearest(x, l.distance);
     return closer.triangle >= 0 && closer.distance < l.distance ? SurfaceLocator::Nearest{} : l; // a closer short triangle: deep
   }
@@ -136,7 +137,7 @@ InteriorPlan::Recipe InteriorPlan::classify(const Search &search, const SurfaceM
   if (side == 2) return deep_recipe(x, support); // no surface within reach.band (grid_inside)
   const SurfaceLocator &locator = search.locator();
   // A point outside by the caller only needs to know whether it lies on the surface.
-  const SurfaceLocator::Nearest n = side == 0 ? locator.nearest(x, reach.on * (1 + 1e-12)) : search.nearest(x, mesh);
+  const SurfaceLocator::Nearest n = side == 0 ? locator.nearest(x, reach.on * (1 + 1e-12)) : search.nearest(x);
   if (n.triangle >= 0 && n.distance <= reach.on) {
     r.kind = PointKind::Surface, r.triangle = n.triangle, r.bary = n.bary, r.w_surface = 1;
     return r;
@@ -158,7 +159,7 @@ InteriorPlan::InteriorPlan(const SurfaceLocator &locator, const SurfaceMesh &mes
 {
   Reach reach;
   reach.on = o.on_surface * locator.size(), reach.band = search_reach(locator, mesh, o), reach.band_depth = o.band;
-  const Search search(locator, mesh, o.band, reach.band * (1 + 1e-12), o.staged_search);
+  const Search search(locator, o.band, reach.band * (1 + 1e-12), o.staged_search);
   std::vector<std::array<Vec3, 2>> support(points.size());
   const long long np = static_cast<long long>(points.size());
 #pragma omp parallel for schedule(dynamic, 256)
@@ -170,6 +171,9 @@ InteriorPlan::InteriorPlan(const SurfaceLocator &locator, const SurfaceMesh &mes
 }
 
 namespace {
+
+/// The indices (i, j, k) of grid point p, numbered x fastest.
+std::array<long long, 3> grid_index(long long p, const std::array<int, 3> &n) { return {p % n[0], (p / n[0]) % n[1], p / (1LL * n[0] * n[1])}; }
 
 /// Dilates the set `near` (one flag per grid point) by r points along axis a: afterwards a point
 /// is set when some point of the set lies at most r points from it along that axis.
@@ -205,13 +209,13 @@ void dilate(const std::array<int, 3> &n, int a, int r, std::vector<char> &near)
 /// along some axis: |x − q| ≥ (r + 1 − ½) h, h the smallest spacing.
 void mark_deep(const std::array<int, 3> &n, const Vec3 &spacing, const std::vector<char> &clear, double beyond, std::vector<signed char> &side)
 {
-  const long long total = 1LL * n[0] * n[1] * n[2], stride[3] = {1, n[0], 1LL * n[0] * n[1]};
+  const long long total = 1LL * n[0] * n[1] * n[2];
   const double h = std::min({spacing[0], spacing[1], spacing[2]});
   const double r = std::ceil(beyond / h - 0.5); // (r + ½) h ≥ beyond
   if (!(r < std::max({n[0], n[1], n[2]}))) return;
   std::vector<char> near(static_cast<std::size_t>(total));
   for (long long p = 0; p < total; ++p) {
-    const long long idx[3] = {p % n[0], (p / n[0]) % n[1], p / stride[2]};
+    const std::array<long long, 3> idx = grid_index(p, n);
     bool boundary = false;
     for (int a = 0; a < 3; ++a) boundary = boundary || idx[a] == 0 || idx[a] == n[a] - 1;
     near[p] = !clear[p] || boundary;
@@ -236,8 +240,8 @@ std::vector<signed char> grid_inside(const SurfaceLocator &locator, const Vec3 &
   const double step = std::max({spacing[0], spacing[1], spacing[2]}) * (1 + 1e-9);
   const long long stride[3] = {1, n[0], 1LL * n[0] * n[1]};
   auto point = [&](long long p) {
-    const long long i = p % n[0], j = (p / n[0]) % n[1], k = p / stride[2];
-    return Vec3{origin[0] + i * spacing[0], origin[1] + j * spacing[1], origin[2] + k * spacing[2]};
+    const std::array<long long, 3> idx = grid_index(p, n);
+    return Vec3{origin[0] + idx[0] * spacing[0], origin[1] + idx[1] * spacing[1], origin[2] + idx[2] * spacing[2]};
   };
   // The points within a step of some triangle's bounding box: only they can lie within a step of the surface.
   std::vector<char> candidate(static_cast<std::size_t>(total), 0);
@@ -270,7 +274,7 @@ std::vector<signed char> grid_inside(const SurfaceLocator &locator, const Vec3 &
   std::vector<int> parent(static_cast<std::size_t>(total));
   for (long long p = 0; p < total; ++p) parent[p] = static_cast<int>(p);
   for (long long p = 0; p < total; ++p) {
-    const long long idx[3] = {p % n[0], (p / n[0]) % n[1], p / stride[2]};
+    const std::array<long long, 3> idx = grid_index(p, n);
     for (int a = 0; a < 3; ++a)
       if (idx[a] + 1 < n[a] && (clear[p] || clear[p + stride[a]])) parent[find_root(parent, static_cast<int>(p))] = find_root(parent, static_cast<int>(p + stride[a]));
   }

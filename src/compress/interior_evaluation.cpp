@@ -61,7 +61,8 @@ std::vector<Vec3> triangle_centroids(const SomiglianaSources &src)
   return c;
 }
 
-int check_points(const InteriorEvaluationOptions &o) { return std::max(o.equivalent_points, static_cast<int>(std::lround(o.check_factor * o.equivalent_points))); }
+/// Check points of a fit with `equivalent` equivalent points: check_factor times as many, at least as many.
+int check_points(const InteriorEvaluationOptions &o, int equivalent) { return std::max(equivalent, static_cast<int>(std::lround(o.check_factor * equivalent))); }
 
 ClusterTreeOptions leaves_of(int n)
 {
@@ -163,11 +164,11 @@ void Fit::solve(double R, const std::vector<double> &field, std::vector<double> 
 using detail::add_forces_at;
 
 InteriorEvaluator::Impl::Impl(const SomiglianaSources &s, const InteriorEvaluationOptions &o)
-  : src(s), opt(o), up(s.constants(), o.equivalent_points, check_points(o), o.equivalent_ratio, o.check_ratio),
-    down(s.constants(), o.equivalent_points, check_points(o), o.check_ratio, o.equivalent_ratio),
+  : src(s), opt(o), up(s.constants(), o.equivalent_points, check_points(o, o.equivalent_points), o.equivalent_ratio, o.check_ratio),
+    down(s.constants(), o.equivalent_points, check_points(o, o.equivalent_points), o.check_ratio, o.equivalent_ratio),
     tree(triangle_centroids(s), leaves_of(o.source_leaf))
 {
-  if (o.inner_points > 0 && !o.direct) inner = std::make_unique<detail::Fit>(s.constants(), o.inner_points, std::max(o.inner_points, static_cast<int>(std::lround(o.check_factor * o.inner_points))), o.equivalent_ratio, o.inner_ratio);
+  if (o.inner_points > 0 && !o.direct) inner = std::make_unique<detail::Fit>(s.constants(), o.inner_points, check_points(o, o.inner_points), o.equivalent_ratio, o.inner_ratio);
 }
 
 void InteriorEvaluator::Impl::order_particles()
