@@ -2,6 +2,7 @@
 #include "hssbem/contact/obstacle.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 namespace hssbem {
@@ -86,13 +87,78 @@ double ObstacleGeometry::size() const
   return norm(hi - lo);
 }
 
-bool ObstacleGeometry::gap(const Vec3 &x, const Vec3 &offset, double reach, ObstacleGap &out) const
+Pose Pose::translation(const Vec3 &t)
 {
-  const Vec3 y = x - offset; // the point in the obstacle's base frame
+  Pose p;
+  p.translate = t;
+  return p;
+}
+
+Pose Pose::turn(const Vec3 &axis, double angle_deg, const Vec3 &about, const Vec3 &t)
+{
+  if (!finite(axis) || norm(axis) == 0) throw std::invalid_argument("a turn needs a finite, non-zero axis");
+  if (!std::isfinite(angle_deg)) throw std::invalid_argument("a turn needs a finite angle");
+  if (!finite(about) || !finite(t)) throw std::invalid_argument("a turn needs a finite centre and translation");
+  const Vec3 k = normalized(axis);
+  const double a = angle_deg * M_PI / 180.0, c = std::cos(a), s = std::sin(a), v = 1 - c;
+  Pose p; // Rodrigues: R = c I + s [k]x + (1 − c) k kᵀ
+  p.rotation = {c + v * k[0] * k[0],        v * k[0] * k[1] - s * k[2], v * k[0] * k[2] + s * k[1],
+                v * k[1] * k[0] + s * k[2], c + v * k[1] * k[1],        v * k[1] * k[2] - s * k[0],
+                v * k[2] * k[0] - s * k[1], v * k[2] * k[1] + s * k[0], c + v * k[2] * k[2]};
+  p.about = about;
+  p.translate = t;
+  return p;
+}
+
+Vec3 Pose::rotate(const Vec3 &v) const
+{
+  const Mat3 &R = rotation;
+  return {R[0] * v[0] + R[1] * v[1] + R[2] * v[2], R[3] * v[0] + R[4] * v[1] + R[5] * v[2], R[6] * v[0] + R[7] * v[1] + R[8] * v[2]};
+}
+
+Vec3 Pose::rotate_back(const Vec3 &v) const
+{
+  const Mat3 &R = rotation;
+  return {R[0] * v[0] + R[3] * v[1] + R[6] * v[2], R[1] * v[0] + R[4] * v[1] + R[7] * v[2], R[2] * v[0] + R[5] * v[1] + R[8] * v[2]};
+}
+
+Vec3 Pose::apply(const Vec3 &x) const { return rotate(x - about) + about + translate; }
+Vec3 Pose::apply_inverse(const Vec3 &y) const { return rotate_back(y - translate - about) + about; }
+
+bool Pose::is_translation() const { return rotation == Mat3{1, 0, 0, 0, 1, 0, 0, 0, 1}; }
+
+Vec3 ObstacleGeometry::default_centre() const
+{
+  switch (m_o.shape) {
+  case Obstacle::Shape::Plane: return m_o.point;
+  case Obstacle::Shape::Sphere: return m_o.center;
+  case Obstacle::Shape::Mesh: break;
+  }
+  Vec3 c{0, 0, 0};
+  for (const Vec3 &v : m_o.vertices) c = c + v;
+  return (1.0 / static_cast<double>(m_o.vertices.size())) * c;
+}
+
+bool ObstacleGeometry::gap(const Vec3 &x, const Pose &pose, double reach, ObstacleGap &out) const
+{
+  if (pose.is_translation()) { // the common case: no rotation to apply
+    if (!base_gap(x - pose.translate, reach, out)) return false;
+    out.point = out.base_point + pose.translate;
+    return true;
+  }
+  if (!base_gap(pose.apply_inverse(x), reach, out)) return false;
+  out.normal = pose.rotate(out.normal);
+  out.point = pose.apply(out.base_point);
+  return true;
+}
+
+bool ObstacleGeometry::base_gap(const Vec3 &y, double reach, ObstacleGap &out) const
+{
   switch (m_o.shape) {
   case Obstacle::Shape::Plane:
     out.normal = m_o.normal;
     out.gap = dot(y - m_o.point, m_o.normal);
+    out.base_point = y - out.gap * m_o.normal;
     return out.gap <= reach;
   case Obstacle::Shape::Sphere: {
     const Vec3 d = y - m_o.center;
@@ -100,6 +166,7 @@ bool ObstacleGeometry::gap(const Vec3 &x, const Vec3 &offset, double reach, Obst
     if (r == 0) return false;
     out.gap = r - m_o.radius;
     out.normal = (1.0 / r) * d;
+    out.base_point = m_o.center + m_o.radius * out.normal;
     return out.gap <= reach;
   }
   case Obstacle::Shape::Mesh: return mesh_gap(y, reach, out);
@@ -116,6 +183,7 @@ bool ObstacleGeometry::mesh_gap(const Vec3 &y, double reach, ObstacleGap &out) c
   const Vec3 &nt = m_tri_normal[h.triangle];
   const Vec3 d = y - h.point;
   const double dist = norm(d);
+  out.base_point = h.point;
   if (h.interior || dist <= 1e-12 * std::max(1.0, size())) {
     out.normal = nt;
     out.gap = dot(d, nt);

@@ -96,6 +96,42 @@ TEST(ContactGeometry, ObstacleGapsAndNormals)
   EXPECT_NEAR(g.normal[0], 1.0, 1e-14);
 }
 
+TEST(ContactGeometry, ATurnedObstacleEqualsTheObstacleGivenAtTheTurnedPlace)
+{
+  // A turn of 90 degrees about z maps x to y: checked on the matrix itself.
+  const Pose quarter = Pose::turn({0, 0, 2}, 90, {0, 0, 0});
+  const Vec3 ex = quarter.apply({1, 0, 0});
+  EXPECT_NEAR(ex[0], 0, 1e-15);
+  EXPECT_NEAR(ex[1], 1, 1e-15);
+  EXPECT_NEAR(ex[2], 0, 1e-15);
+  // Each shape turned by 35 degrees about a tilted axis through a centre, then translated,
+  // against the same shape given at its turned place: the same gaps, normals and points.
+  const Pose pose = Pose::turn({1, -2, 0.5}, 35, {0.2, 0.1, -0.3}, {0.05, -0.4, 0.3});
+  SurfaceMesh box;
+  add_cube(box, {-0.5, -0.5, -2.0});
+  SurfaceMesh moved = box;
+  for (Vec3 &v : moved.vertices) v = pose.apply(v);
+  const std::vector<std::pair<Obstacle, Obstacle>> pairs{
+      {Obstacle::plane("p", {0, 0, -1}, {0, 0, 1}), Obstacle::plane("p", pose.apply({0, 0, -1}), pose.rotate({0, 0, 1}))},
+      {Obstacle::sphere("s", {0.3, 0, 1.5}, 0.4), Obstacle::sphere("s", pose.apply({0.3, 0, 1.5}), 0.4)},
+      {Obstacle::mesh("m", box), Obstacle::mesh("m", moved)}};
+  std::mt19937 gen(7);
+  std::uniform_real_distribution<double> u(-1.5, 1.5);
+  for (const auto &[base, placed] : pairs) {
+    const ObstacleGeometry a(base), b(placed);
+    for (int q = 0; q < 50; ++q) {
+      const Vec3 x{u(gen), u(gen), u(gen)};
+      ObstacleGap ga, gb;
+      ASSERT_EQ(a.gap(x, pose, 10.0, ga), b.gap(x, Vec3{0, 0, 0}, 10.0, gb));
+      EXPECT_NEAR(ga.gap, gb.gap, 1e-12);
+      EXPECT_NEAR(norm(ga.normal - gb.normal), 0, 1e-12);
+      EXPECT_NEAR(norm(ga.point - gb.point), 0, 1e-12);
+      EXPECT_NEAR(norm(pose.apply(ga.base_point) - ga.point), 0, 1e-12); // the material point moves with the pose
+    }
+  }
+  EXPECT_THROW(Pose::turn({0, 0, 0}, 10, {0, 0, 0}), std::invalid_argument);
+}
+
 TEST(ContactGeometry, ObstacleDescriptionsAreChecked)
 {
   auto message = [](const Obstacle &o) {
