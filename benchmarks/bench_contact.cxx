@@ -23,14 +23,14 @@
 // Prints one line of figures per scenario (and "csv," the same as a CSV row).
 #include "bench_support.hpp"
 
-#include "hssbem/bem/mesh.hpp"
-#include "hssbem/bem/post.hpp"
+#include "hssbem/mesh/mesh.hpp"
+#include "hssbem/post/post.hpp"
 #include "hssbem/contact/contact_engine.hpp"
 #include "hssbem/petsc/log.h"
 #include "hssbem/problem/problem.hpp"
 #include "hssbem/problem/setup.hpp"
-#include "hssbem/scene/composite_reference.hpp"
-#include "hssbem/scene/reference.hpp"
+#include "hssbem/reference/composite_reference.hpp"
+#include "hssbem/reference/reference.hpp"
 
 #include <petscsys.h>
 

@@ -12,7 +12,7 @@
 //               [--crossover] [--all-columns]
 #include "bench_support.hpp"
 
-#include "hssbem/bem/mesh.hpp"
+#include "hssbem/mesh/mesh.hpp"
 #include "hssbem/petsc/log.h"
 #include "hssbem/petsc/scene_krylov.h"
 #include "hssbem/problem/problem.hpp"

@@ -7,7 +7,7 @@ static const char help[] = "clamped_block: a body clamped at its base and presse
    that is ordinary PETSc, so -ksp_type, -pc_type, -pc_hss_rel_tol, -ksp_monitor, -log_view work. */
 
 #include "hssbem/bem/bem_operator.hpp"
-#include "hssbem/bem/mesh.hpp"
+#include "hssbem/mesh/mesh.hpp"
 #include "hssbem/petsc/log.h"
 #include "hssbem/petsc/pc_hss.h"
 #include "hssbem/petsc/system.h"

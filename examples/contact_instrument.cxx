@@ -11,7 +11,7 @@
 
 static const char help[] = "contact_instrument: a spherical instrument pressed into a body and slid across it, with hssbem::ContactScene\n";
 
-#include "hssbem/bem/mesh.hpp"
+#include "hssbem/mesh/mesh.hpp"
 #include "hssbem/contact/contact_scene.hpp"
 #include "hssbem/petsc/log.h"
 

@@ -12,7 +12,7 @@
 
 static const char help[] = "moving_contact: a contact patch sliding around a body, re-solved every frame with hssbem::Scene\n";
 
-#include "hssbem/bem/mesh.hpp"
+#include "hssbem/mesh/mesh.hpp"
 #include "hssbem/petsc/log.h"
 #include "hssbem/scene/scene.hpp"
 

@@ -6,7 +6,7 @@
 #include "stress_post.hpp"
 
 #include "hssbem/app/petsc_call.hpp"
-#include "hssbem/bem/post.hpp"
+#include "hssbem/post/post.hpp"
 #include "hssbem/bem/rigid_modes.hpp"
 #include "hssbem/contact/contact_engine.hpp"
 #include "hssbem/core/fault.hpp"
@@ -15,8 +15,8 @@
 #include "hssbem/io/hdf5_output.hpp"
 #include "hssbem/petsc/log.h"
 #include "hssbem/petsc/system.h"
-#include "hssbem/scene/composite_reference.hpp"
-#include "hssbem/scene/h2_reference.hpp"
+#include "hssbem/reference/composite_reference.hpp"
+#include "hssbem/reference/h2_reference.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -5,7 +5,7 @@
 #include "stress_post.hpp"
 
 #include "hssbem/app/petsc_call.hpp"
-#include "hssbem/bem/post.hpp"
+#include "hssbem/post/post.hpp"
 #include "hssbem/bem/rigid_modes.hpp"
 #include "hssbem/core/fault.hpp"
 #include "hssbem/core/progress.hpp"

@@ -6,8 +6,8 @@
 #pragma once
 
 #include "hssbem/app/options.hpp"
-#include "hssbem/bem/post.hpp"
-#include "hssbem/bem/surface_stress.hpp"
+#include "hssbem/post/post.hpp"
+#include "hssbem/post/surface_stress.hpp"
 #include "hssbem/io/hdf5_output.hpp"
 #include "hssbem/problem/setup.hpp"
 

@@ -124,4 +124,12 @@ Discretization::Discretization(const SurfaceMesh &mesh, double feature_angle_deg
     for (int i : m_element_nodes[t]) m_support[fill[i]++] = t;
 }
 
+std::vector<double> node_areas(const Discretization &disc)
+{
+  std::vector<double> a(disc.num_nodes(), 0.0);
+  for (int e = 0; e < disc.mesh().num_triangles(); ++e)
+    for (int c = 0; c < 3; ++c) a[disc.element_node(e, c)] += disc.mesh().triangle_area(e) / 3.0;
+  return a;
+}
+
 } // namespace hssbem

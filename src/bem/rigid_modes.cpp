@@ -1,5 +1,5 @@
 #include "hssbem/bem/rigid_modes.hpp"
-#include "hssbem/bem/post.hpp"
+#include "hssbem/bem/discretization.hpp"
 #include "hssbem/core/lapack.hpp"
 
 #include <algorithm>

@@ -4,7 +4,7 @@
 
 #include "contact_points.hpp"
 
-#include "hssbem/bem/post.hpp"
+#include "hssbem/bem/discretization.hpp"
 #include "hssbem/bem/rigid_modes.hpp"
 #include "hssbem/core/phase.hpp"
 #include "hssbem/core/timer.hpp"

@@ -6,8 +6,8 @@
 #include "hssbem/bem/discretization.hpp"
 #include "hssbem/contact/bodies.hpp"
 #include "hssbem/contact/obstacle.hpp"
-#include "hssbem/scene/capacitance.hpp"
-#include "hssbem/scene/reference.hpp"
+#include "hssbem/reference/capacitance.hpp"
+#include "hssbem/reference/reference.hpp"
 
 #include <array>
 #include <cstdint>

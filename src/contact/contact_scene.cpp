@@ -1,7 +1,7 @@
 // The simulator API of contact_scene.hpp over the contact engine and the dense reference.
 #include "hssbem/contact/contact_scene.hpp"
 
-#include "hssbem/bem/post.hpp"
+#include "hssbem/post/post.hpp"
 
 #include <stdexcept>
 

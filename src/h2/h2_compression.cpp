@@ -78,7 +78,7 @@ std::vector<std::vector<int>> rigid_term_leaves(const BemOperator &op, const Clu
   return out;
 }
 
-/// Add the rigid-body terms (DESIGN §2) to this rank's near blocks that hold them:
+/// Add the rigid-body terms (docs/discretisation.md, the rigid-body mode) to this rank's near blocks that hold them:
 /// D_i = −Σ_j H⁰(i, j), from one product of the compressed H⁰ (slots 0–2, scale 1) with the
 /// three translations.
 void add_rigid_body_terms(const BemOperator &op, H2Matrix &K, const RankComm &comm)

@@ -57,7 +57,7 @@ hssbem::HssOptions CompressionOptions_Private(const PC_HSS *hss, const HssbemSys
 {
   const bool         on_hss = p.type == hssbem::OperatorType::Hss;
   hssbem::HssOptions o      = on_hss ? p.hss_options : hssbem::HssOptions{};
-  if (!on_hss) o.rel_tol = p.type == hssbem::OperatorType::H2 ? 1e-3 : 1e-8; /* on H², a preconditioner for GMRES around the accurate product (DESIGN §6) */
+  if (!on_hss) o.rel_tol = p.type == hssbem::OperatorType::H2 ? 1e-3 : 1e-8; /* on H², a preconditioner for GMRES around the accurate product (docs/hss.md) */
   o.pressure_columns = false; /* the factorization needs H and G only */
   if (hss->rel_tol > 0) o.rel_tol = hss->rel_tol;
   if (hss->leaf_size > 0) o.leaf_size = (int)hss->leaf_size;

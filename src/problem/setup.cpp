@@ -1,5 +1,5 @@
 #include "hssbem/problem/setup.hpp"
-#include "hssbem/bem/post.hpp"
+#include "hssbem/bem/discretization.hpp"
 #include "hssbem/bem/rigid_modes.hpp"
 #include "hssbem/core/fault.hpp"
 

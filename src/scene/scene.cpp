@@ -1,7 +1,7 @@
 // The simulator API of scene.hpp over the dense scene engine.
 #include "hssbem/scene/scene.hpp"
 
-#include "hssbem/bem/post.hpp"
+#include "hssbem/post/post.hpp"
 
 #include <stdexcept>
 

@@ -1,8 +1,8 @@
 // Solve a problem given in code through the library's dense path, for verification tests.
 #pragma once
 
-#include "hssbem/bem/mesh.hpp"
-#include "hssbem/bem/post.hpp"
+#include "hssbem/mesh/mesh.hpp"
+#include "hssbem/post/post.hpp"
 #include "hssbem/bem/rigid_modes.hpp"
 #include "hssbem/app/run.hpp"
 #include "hssbem/problem/setup.hpp"

@@ -2,7 +2,7 @@
 #pragma once
 
 #include "hssbem/bem/kelvin.hpp"
-#include "hssbem/bem/mesh.hpp"
+#include "hssbem/mesh/mesh.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -4,7 +4,7 @@
 // else — another exception, a crash, a sanitizer report — is a bug.
 #pragma once
 
-#include "hssbem/bem/mesh.hpp"
+#include "hssbem/mesh/mesh.hpp"
 #include "hssbem/problem/problem.hpp"
 
 #include <cstddef>

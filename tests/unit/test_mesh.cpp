@@ -1,7 +1,7 @@
 /// \file test_mesh.cpp
 /// Mesh readers (.msh 2.2/4.1, STL, OFF, OBJ) and topology validation / orientation.
 
-#include "hssbem/bem/mesh.hpp"
+#include "hssbem/mesh/mesh.hpp"
 
 #include <gtest/gtest.h>
 

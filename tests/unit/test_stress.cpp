@@ -1,10 +1,10 @@
 // Stress kernels against finite differences of the displacement kernels, the surface stress on
 // linear fields (exact, sharp vertices included), and the interior identities on a linear field.
-#include "hssbem/bem/interior_stress.hpp"
-#include "hssbem/bem/near_surface.hpp"
-#include "hssbem/bem/surface_locator.hpp"
-#include "hssbem/bem/surface_stress.hpp"
-#include "hssbem/compress/interior_evaluation.hpp"
+#include "hssbem/post/interior_stress.hpp"
+#include "hssbem/post/near_surface.hpp"
+#include "hssbem/mesh/surface_locator.hpp"
+#include "hssbem/post/surface_stress.hpp"
+#include "hssbem/interior/interior_evaluation.hpp"
 #include "hssbem/core/lapack.hpp"
 
 #include "test_shapes.hpp"

@@ -3,10 +3,10 @@
 /// cases that decide it (crossing, touching, coplanar), the hierarchy against an all-pairs
 /// search, and the meshes the validator refuses (bodies overlapping, a surface through itself)
 /// or accepts (separate or touching bodies, cavities); and the scale check of the validator.
-#include "hssbem/bem/mesh.hpp"
-#include "hssbem/bem/surface_intersection.hpp"
+#include "hssbem/mesh/mesh.hpp"
+#include "hssbem/mesh/surface_intersection.hpp"
 
-#include "bem/triangle_crossing.hpp"
+#include "mesh/triangle_crossing.hpp"
 
 #include <gtest/gtest.h>
 

@@ -8,7 +8,7 @@
 
 #include "hssbem/contact/contact_engine.hpp"
 #include "hssbem/contact/contact_scene.hpp"
-#include "hssbem/scene/reference.hpp"
+#include "hssbem/reference/reference.hpp"
 
 #include <gtest/gtest.h>
 

@@ -4,7 +4,7 @@
 #include "solve_helpers.hpp"
 
 #include "hssbem/contact/contact_engine.hpp"
-#include "hssbem/scene/h2_reference.hpp"
+#include "hssbem/reference/h2_reference.hpp"
 
 #include <gtest/gtest.h>
 

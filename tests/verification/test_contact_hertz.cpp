@@ -8,8 +8,8 @@
 
 #include "hssbem/contact/contact_engine.hpp"
 #include "hssbem/core/lapack.hpp"
-#include "hssbem/scene/composite_reference.hpp"
-#include "hssbem/scene/reference.hpp"
+#include "hssbem/reference/composite_reference.hpp"
+#include "hssbem/reference/reference.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,6 +1,6 @@
 // The analytic verification problems through the HSS engine (compress once, ULV solve), beside
 // the dense path on the same discretisation.
-#include "hssbem/bem/post.hpp"
+#include "hssbem/post/post.hpp"
 #include "hssbem/bem/rigid_modes.hpp"
 #include "hssbem/hss/hss_system.hpp"
 #include "solve_helpers.hpp"

@@ -5,10 +5,10 @@
 #include "hssbem/petsc/scene_krylov.h"
 #include "hssbem/problem/problem.hpp"
 #include "hssbem/problem/setup.hpp"
-#include "hssbem/scene/capacitance.hpp"
+#include "hssbem/reference/capacitance.hpp"
 #include "hssbem/scene/dense_scene.hpp"
 #include "hssbem/scene/scene.hpp"
-#include "hssbem/bem/post.hpp"
+#include "hssbem/post/post.hpp"
 
 #include <gtest/gtest.h>
 

@@ -8,11 +8,11 @@
 // gives the same figures on the larger meshes of docs/stress.md.
 #include "solve_helpers.hpp"
 
-#include "hssbem/bem/interior_stress.hpp"
-#include "hssbem/bem/stress_kernels.hpp"
-#include "hssbem/bem/surface_locator.hpp"
-#include "hssbem/bem/surface_stress.hpp"
-#include "hssbem/compress/interior_evaluation.hpp"
+#include "hssbem/post/interior_stress.hpp"
+#include "hssbem/post/stress_kernels.hpp"
+#include "hssbem/mesh/surface_locator.hpp"
+#include "hssbem/post/surface_stress.hpp"
+#include "hssbem/interior/interior_evaluation.hpp"
 
 #include <gtest/gtest.h>
 

@@ -4,10 +4,10 @@
 /// petsc/system.h), and the check that every option given was used.
 #pragma once
 
-#include "hssbem/bem/interior_stress.hpp"
-#include "hssbem/bem/near_surface.hpp"
+#include "hssbem/post/interior_stress.hpp"
+#include "hssbem/post/near_surface.hpp"
 #include "hssbem/bem/quadrature.hpp"
-#include "hssbem/compress/interior_evaluation.hpp"
+#include "hssbem/interior/interior_evaluation.hpp"
 #include "hssbem/core/operator_type.hpp"
 #include "hssbem/core/size_limits.hpp"
 #include "hssbem/problem/setup.hpp"

@@ -11,7 +11,7 @@
 /// interpolates P1 over the dof nodes of its three corners.
 #pragma once
 
-#include "hssbem/bem/mesh.hpp"
+#include "hssbem/mesh/mesh.hpp"
 #include "hssbem/core/geometry.hpp"
 
 #include <vector>
@@ -60,5 +60,8 @@ private:
   std::vector<int> m_support_offset, m_support;
   int m_num_sharp = 0;
 };
+
+/// Lumped area of each dof node (integral of its shape function).
+std::vector<double> node_areas(const Discretization &disc);
 
 } // namespace hssbem

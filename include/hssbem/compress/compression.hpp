@@ -38,10 +38,6 @@ void check_compression_inputs(const BemOperator &op, const Opts &o, const std::s
     throw std::invalid_argument(format + ": the 3-point far rule (-mat_bem_far_ratio) breaks the smooth far field the compression relies on; set it to 0");
 }
 
-/// n nearly uniform points on the unit sphere (Fibonacci lattice): the proxy and equivalent
-/// surfaces of the compressions and of the fast interior evaluation.
-std::vector<Vec3> unit_sphere_points(int n);
-
 /// The collocation points of the dof nodes (mesh order): what the cluster tree partitions.
 std::vector<Vec3> collocation_points(const Discretization &disc);
 

@@ -1,5 +1,5 @@
 /// \file pattern_columns.hpp
-/// From a boundary-condition pattern to products with a compressed K = [H, G(, Gn)] (DESIGN §3),
+/// From a boundary-condition pattern to products with a compressed K = [H, G(, Gn)] (docs/hss.md, A = K E_S),
 /// shared by every compressed format (HSS, H²): A x = K E_S x and b = K (known values), where
 /// column (j, c) of A is H's when u is unknown and −G's when t is unknown.
 #pragma once

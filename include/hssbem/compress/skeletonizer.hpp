@@ -1,6 +1,6 @@
 /// \file skeletonizer.hpp
 /// Entries-only skeletonization of the BEM operator K = [H, G(, Gn)] with proxy spheres
-/// (DESIGN §5), one tree level at a time: the step shared by the HSS compression (weak
+/// (docs/hss.md), one tree level at a time: the step shared by the HSS compression (weak
 /// admissibility, hss/hss_compression.hpp) and the H² compression (strong admissibility,
 /// h2/h2_compression.hpp). The formats differ only in which other clusters' indices a cluster
 /// must be compressed against (its *sources*).

@@ -4,7 +4,7 @@
 #pragma once
 
 #include "hssbem/bem/discretization.hpp"
-#include "hssbem/bem/mesh.hpp"
+#include "hssbem/mesh/mesh.hpp"
 
 #include <vector>
 

@@ -25,7 +25,7 @@
 #include "hssbem/bem/discretization.hpp"
 #include "hssbem/contact/bodies.hpp"
 #include "hssbem/contact/obstacle.hpp"
-#include "hssbem/scene/reference.hpp"
+#include "hssbem/reference/reference.hpp"
 
 #include <cstdint>
 #include <functional>

@@ -20,7 +20,7 @@
 #pragma once
 
 #include "hssbem/bem/bem_operator.hpp"
-#include "hssbem/bem/mesh.hpp"
+#include "hssbem/mesh/mesh.hpp"
 #include "hssbem/contact/contact_engine.hpp"
 
 #include <array>

@@ -11,7 +11,7 @@
 /// corner n = ±(x − q)/|x − q|, the sign that of (x − q)·n_t for the closest triangle t.
 #pragma once
 
-#include "hssbem/bem/mesh.hpp"
+#include "hssbem/mesh/mesh.hpp"
 #include "hssbem/contact/triangle_bvh.hpp"
 
 #include <cmath>

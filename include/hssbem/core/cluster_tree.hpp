@@ -1,6 +1,6 @@
 /// \file cluster_tree.hpp
 /// Binary cluster tree over the dof nodes, and the one permutation between mesh order and
-/// cluster order (DESIGN §4).
+/// cluster order (docs/distributed.md).
 ///
 /// Points are the collocation points of the dof nodes; a point stands for its node's 3 dofs,
 /// which therefore always stay together. The tree reorders the points so that every cluster is a

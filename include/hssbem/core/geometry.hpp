@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cmath>
+#include <vector>
 
 namespace hssbem {
 
@@ -27,5 +28,9 @@ inline Vec3 normalized(const Vec3 &a)
   const double n = norm(a);
   return n > 0 ? (1.0 / n) * a : a;
 }
+
+/// n nearly uniform points on the unit sphere (Fibonacci lattice): the proxy and equivalent
+/// surfaces of the compressions and of the fast interior evaluation.
+std::vector<Vec3> unit_sphere_points(int n);
 
 } // namespace hssbem

@@ -11,7 +11,7 @@
 /// captured like any other. The cluster radius of the partition bounds both the collocation
 /// points and the support triangles, so every rigid-body term lands in a near block; the
 /// rigid-body terms are computed as in the HSS compression, by applying the compressed H without
-/// them to the three translations (DESIGN §2).
+/// them to the three translations (docs/discretisation.md, the rigid-body mode).
 /// No N×N array is formed. Work and memory are O(N·r) with ranks that stay bounded on a surface
 /// (measured in benchmarks/), against ranks that grow as the square root of a cluster's size
 /// with weak admissibility.

@@ -1,5 +1,5 @@
 /// \file hss_compression.hpp
-/// Entries-only HSS compression of the BEM operator K = [H, G(, Gn)] (DESIGN §3, §5), on the
+/// Entries-only HSS compression of the BEM operator K = [H, G(, Gn)] (docs/hss.md), on the
 /// skeletonizer of compress/ (K's column layout: compress/compression.hpp).
 ///
 /// Construction, bottom-up over the cluster tree (one level at a time, clusters in parallel):
@@ -16,7 +16,7 @@
 ///    couplings and leaf blocks are true entries.
 /// No N×N array is formed; memory is O(N·r).
 ///
-/// The rigid-body terms of H (DESIGN §2) are not integrated: the compressed H without them is
+/// The rigid-body terms of H (docs/discretisation.md, the rigid-body mode) are not integrated: the compressed H without them is
 /// applied to the three translations, and the result, which must vanish for the full H, gives
 /// them (D_i = −Σ_j H⁰(i, j)). A node collocated inside a triangle spreads its term over that
 /// triangle's corner nodes; such rows and columns are kept in the skeletons wherever the

@@ -1,5 +1,5 @@
 /// \file hss_system.hpp
-/// The collocation system of a problem through the HSS engine, in mesh order (DESIGN §3):
+/// The collocation system of a problem through the HSS engine, in mesh order (docs/hss.md, A = K E_S):
 /// compress K = [H, G(, Gn)] once; per boundary-condition pattern, a right-hand side by one fast
 /// product and a ULV factorization. The PETSc layer and the benchmarks build on this.
 #pragma once

@@ -1,5 +1,5 @@
 /// \file ulv.hpp
-/// ULV-type direct factorization of the system matrix A = K E_S held in HSS form (DESIGN §6).
+/// ULV-type direct factorization of the system matrix A = K E_S held in HSS form (docs/hss.md).
 ///
 /// The pattern S (which of u or t is unknown per dof) turns the compressed K = [H, G(, Gn)]
 /// into the HSS generators of A with no kernel evaluation: leaf blocks and leaf column bases keep
@@ -43,7 +43,7 @@ public:
 
 /// A low-rank term Y Zᵀ added to the system matrix (Y and Z: 3N × p, row-major, mesh order),
 /// e.g. the rigid-mode regularisation c Φ Φᵀ of a pure-traction problem. It widens every basis by
-/// p columns (DESIGN §2: the null space handled inside the factorization).
+/// p columns (docs/discretisation.md: the null space handled inside the factorization).
 struct LowRankTerm {
   int p = 0;
   std::vector<double> Y, Z;

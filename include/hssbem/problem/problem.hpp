@@ -5,7 +5,7 @@
 
 #include "hssbem/bem/discretization.hpp"
 #include "hssbem/bem/kelvin.hpp"
-#include "hssbem/bem/mesh.hpp"
+#include "hssbem/mesh/mesh.hpp"
 
 #include <limits>
 #include <optional>

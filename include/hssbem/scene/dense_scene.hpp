@@ -41,8 +41,8 @@
 #pragma once
 
 #include "hssbem/bem/bem_operator.hpp"
-#include "hssbem/scene/capacitance.hpp"
-#include "hssbem/scene/reference.hpp"
+#include "hssbem/reference/capacitance.hpp"
+#include "hssbem/reference/reference.hpp"
 
 #include <array>
 #include <functional>

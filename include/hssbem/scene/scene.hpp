@@ -17,7 +17,7 @@
 #pragma once
 
 #include "hssbem/bem/bem_operator.hpp"
-#include "hssbem/bem/mesh.hpp"
+#include "hssbem/mesh/mesh.hpp"
 #include "hssbem/scene/dense_scene.hpp"
 
 #include <array>

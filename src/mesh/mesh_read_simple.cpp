@@ -1,7 +1,7 @@
 /// \file mesh_read_simple.cpp
 /// Readers for the region-less formats: STL (ASCII and binary), OFF and Wavefront OBJ.
 
-#include "hssbem/bem/mesh.hpp"
+#include "hssbem/mesh/mesh.hpp"
 
 #include <algorithm>
 #include <cctype>

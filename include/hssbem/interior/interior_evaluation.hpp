@@ -40,8 +40,8 @@
 /// over the ranks gives every point once. The values do not depend on the number of ranks.
 #pragma once
 
-#include "hssbem/bem/interior_stress.hpp"
-#include "hssbem/bem/near_surface.hpp"
+#include "hssbem/post/interior_stress.hpp"
+#include "hssbem/post/near_surface.hpp"
 #include "hssbem/core/cluster_tree.hpp"
 #include "hssbem/core/dense_matrix.hpp"
 

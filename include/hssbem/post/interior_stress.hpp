@@ -17,7 +17,7 @@
 
 #include "hssbem/bem/bem_operator.hpp"
 #include "hssbem/bem/discretization.hpp"
-#include "hssbem/bem/stress_kernels.hpp"
+#include "hssbem/post/stress_kernels.hpp"
 
 #include <array>
 #include <vector>

@@ -1,5 +1,5 @@
 // The reference factorization on the H² path (see h2_reference.hpp).
-#include "hssbem/scene/h2_reference.hpp"
+#include "hssbem/reference/h2_reference.hpp"
 
 #include "hssbem/core/timer.hpp"
 

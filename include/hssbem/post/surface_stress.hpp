@@ -16,7 +16,7 @@
 
 #include "hssbem/bem/discretization.hpp"
 #include "hssbem/bem/kelvin.hpp"
-#include "hssbem/bem/stress_kernels.hpp"
+#include "hssbem/post/stress_kernels.hpp"
 
 #include <array>
 #include <vector>

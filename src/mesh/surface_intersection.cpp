@@ -2,7 +2,7 @@
 /// The intersection check (see surface_intersection.hpp): a bounding-volume hierarchy over the
 /// triangles' boxes (median splits along the longest axis, leaves of a few triangles), queried
 /// with each triangle's box; candidate pairs go to triangles_cross().
-#include "hssbem/bem/surface_intersection.hpp"
+#include "hssbem/mesh/surface_intersection.hpp"
 
 #include "triangle_crossing.hpp"
 

@@ -28,9 +28,6 @@ std::vector<std::array<Vec3, 3>> corner_values(const Discretization &disc, const
 /// the whole surface ("total").
 std::map<std::string, Vec3> reactions(const Discretization &disc, const std::vector<Vec3> &t);
 
-/// Lumped area of each dof node (integral of its shape function).
-std::vector<double> node_areas(const Discretization &disc);
-
 /// Somigliana's identity at interior points: u(x) = ∫ u* t - ∫ p* u.
 std::vector<Vec3> interior_displacement(const BemOperator &op, const NodalSolution &s, const std::vector<Vec3> &points);
 

@@ -16,7 +16,7 @@
 #pragma once
 
 #include "hssbem/bem/bem_operator.hpp"
-#include "hssbem/scene/reference.hpp"
+#include "hssbem/reference/reference.hpp"
 
 #include <functional>
 #include <memory>

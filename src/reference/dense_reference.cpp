@@ -1,6 +1,6 @@
 // The dense reference factorization of reference.hpp: H and G assembled by row chunks on the
 // OpenMP threads, A₀ = LU, and W's columns by blocked getrs; the column cache.
-#include "hssbem/scene/reference.hpp"
+#include "hssbem/reference/reference.hpp"
 
 #include "hssbem/core/lapack.hpp"
 #include "hssbem/core/timer.hpp"

@@ -2,7 +2,7 @@
 /// Gmsh .msh reader, ASCII versions 2.x and 4.1: keeps 3-node triangles (element type 2) and the
 /// dimension-2 physical names; every other element type is checked for syntax and dropped.
 
-#include "hssbem/bem/mesh.hpp"
+#include "hssbem/mesh/mesh.hpp"
 
 #include <algorithm>
 #include <unordered_map>

@@ -5,7 +5,7 @@
 /// to the mesh's size.
 #pragma once
 
-#include "hssbem/bem/mesh.hpp"
+#include "hssbem/mesh/mesh.hpp"
 
 #include <optional>
 

@@ -1,5 +1,5 @@
 // Nearest surface points and winding numbers through a bounding-ball tree (see surface_locator.hpp).
-#include "hssbem/bem/surface_locator.hpp"
+#include "hssbem/mesh/surface_locator.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -9,7 +9,7 @@
 /// which is all a threshold at 1/2 needs. O(log nt) per point on a well-shaped surface.
 #pragma once
 
-#include "hssbem/bem/mesh.hpp"
+#include "hssbem/mesh/mesh.hpp"
 #include "hssbem/core/cluster_tree.hpp"
 
 #include <limits>

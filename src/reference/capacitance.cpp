@@ -1,6 +1,6 @@
 // The capacitance inverse of capacitance.hpp: rebuilt by LU, updated by Schur complements, in
 // double or in single precision with refinement against the explicit C.
-#include "hssbem/scene/capacitance.hpp"
+#include "hssbem/reference/capacitance.hpp"
 
 #include "hssbem/core/blas_threads.hpp"
 #include "hssbem/core/lapack.hpp"

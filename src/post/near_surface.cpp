@@ -1,5 +1,5 @@
 // Interior points: outside, on the surface, in the band along it, or deep (see near_surface.hpp).
-#include "hssbem/bem/near_surface.hpp"
+#include "hssbem/post/near_surface.hpp"
 
 #include <algorithm>
 #include <cmath>

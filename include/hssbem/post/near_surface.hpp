@@ -18,8 +18,8 @@
 /// A point within `on_surface` × the surface's size of the surface takes the surface value.
 #pragma once
 
-#include "hssbem/bem/stress_kernels.hpp"
-#include "hssbem/bem/surface_locator.hpp"
+#include "hssbem/post/stress_kernels.hpp"
+#include "hssbem/mesh/surface_locator.hpp"
 
 #include <array>
 #include <vector>

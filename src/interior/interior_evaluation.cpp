@@ -1,7 +1,6 @@
 // Fast evaluation of Somigliana's identities at many points (see interior_evaluation.hpp).
 #include "interior_evaluation_impl.hpp"
 
-#include "hssbem/compress/compression.hpp"
 #include "hssbem/core/blas_threads.hpp"
 #include "hssbem/core/lapack.hpp"
 #include "hssbem/core/timer.hpp"

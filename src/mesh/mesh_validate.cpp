@@ -1,8 +1,8 @@
 /// \file mesh_validate.cpp
 /// Topology checks of a closed triangulated surface and outward orientation of its components.
 
-#include "hssbem/bem/mesh.hpp"
-#include "hssbem/bem/surface_intersection.hpp"
+#include "hssbem/mesh/mesh.hpp"
+#include "hssbem/mesh/surface_intersection.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "hssbem/bem/post.hpp"
+#include "hssbem/post/post.hpp"
 
 #include <cmath>
 #include <limits>
@@ -57,14 +57,6 @@ std::map<std::string, Vec3> reactions(const Discretization &disc, const std::vec
     out[key] = out[key] + f;
   }
   return out;
-}
-
-std::vector<double> node_areas(const Discretization &disc)
-{
-  std::vector<double> a(disc.num_nodes(), 0.0);
-  for (int e = 0; e < disc.mesh().num_triangles(); ++e)
-    for (int c = 0; c < 3; ++c) a[disc.element_node(e, c)] += disc.mesh().triangle_area(e) / 3.0;
-  return a;
 }
 
 std::vector<Vec3> interior_displacement(const BemOperator &op, const NodalSolution &s, const std::vector<Vec3> &points)

@@ -1,7 +1,7 @@
 /// \file mesh.cpp
 /// SurfaceMesh geometry, format dispatch and the line reader shared by the text formats.
 
-#include "hssbem/bem/mesh.hpp"
+#include "hssbem/mesh/mesh.hpp"
 
 #include <algorithm>
 #include <cctype>

@@ -1,6 +1,6 @@
 // The reference of several bodies (composite_reference.hpp): each body a mesh, a discretization,
 // an operator and a reference of its own; vectors split by body and scattered back.
-#include "hssbem/scene/composite_reference.hpp"
+#include "hssbem/reference/composite_reference.hpp"
 
 #include "hssbem/core/timer.hpp"
 

@@ -2,7 +2,7 @@
 // (interior_evaluation.cpp), shared with the target side (interior_targets.cpp).
 #pragma once
 
-#include "hssbem/compress/interior_evaluation.hpp"
+#include "hssbem/interior/interior_evaluation.hpp"
 
 #include <memory>
 #include <vector>

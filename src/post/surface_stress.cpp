@@ -1,6 +1,6 @@
 // The stress tensor at the dof nodes from the traction and the tangential gradient of the
 // displacement (see surface_stress.hpp).
-#include "hssbem/bem/surface_stress.hpp"
+#include "hssbem/post/surface_stress.hpp"
 
 #include "hssbem/core/lapack.hpp"
 

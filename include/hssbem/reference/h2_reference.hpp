@@ -20,7 +20,7 @@
 #include "hssbem/h2/h2_compression.hpp"
 #include "hssbem/h2/h2_system.hpp"
 #include "hssbem/h2factor/h2_factorization.hpp"
-#include "hssbem/scene/reference.hpp"
+#include "hssbem/reference/reference.hpp"
 
 #include <memory>
 

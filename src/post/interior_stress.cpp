@@ -1,7 +1,7 @@
 // Somigliana's identities for displacement and stress at interior points (see interior_stress.hpp).
-#include "hssbem/bem/interior_stress.hpp"
+#include "hssbem/post/interior_stress.hpp"
 
-#include "hssbem/bem/post.hpp"
+#include "hssbem/post/post.hpp"
 
 #include <algorithm>
 #include <cmath>
