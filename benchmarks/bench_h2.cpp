@@ -159,7 +159,9 @@ int main(int argc, char **argv)
   std::string mesh_path;
   H2Options opt;
   opt.rel_tol = 1e-5;
+  opt.single_precision = false; // --single 1 for the driver's blocks
   HssOptions hss;
+  hss.rel_tol = 1e-6;
   bool dense = false, run_hss = false, header = false;
   double rtol = 1e-8;
   int max_it = 1000;

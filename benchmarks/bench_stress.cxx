@@ -14,7 +14,7 @@
 // surface stress at the nearest point, O(triangles) per point: a reference).
 #include "bench_support.hpp"
 
-#include "hssbem/app/run.hpp"
+#include "hssbem/session/static_session.hpp"
 #include "hssbem/post/interior_stress.hpp"
 #include "hssbem/post/near_surface.hpp"
 #include "hssbem/post/post.hpp"

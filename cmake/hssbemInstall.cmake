@@ -15,7 +15,7 @@ install(TARGETS hssbem EXPORT hssbemTargets
 install(TARGETS hssbem_app RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 # The whole public header tree; the library's INSTALL_INTERFACE include directory is "include".
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/include/hssbem DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}
-  FILES_MATCHING PATTERN "*.h" PATTERN "*.hpp")
+  FILES_MATCHING PATTERN "*.h" PATTERN "*.hpp" PATTERN "*.def")
 install(EXPORT hssbemTargets NAMESPACE hssbem:: DESTINATION ${HSSBEM_INSTALL_CMAKEDIR})
 
 # The pkg-config directories of the PETSc and HDF5 found above. hssbemConfig.cmake searches them

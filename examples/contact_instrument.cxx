@@ -1,4 +1,4 @@
-/* contact_instrument: how a simulator drives hssbem's contact API (contact/contact_scene.hpp).
+/* contact_instrument: how a simulator drives hssbem's contact API (session/contact_scene.hpp).
 
    A soft body is held on its bottom 10 % (by height). A spherical instrument comes down on its
    top and slides across it; the simulator only says where the instrument is, and the solver
@@ -12,7 +12,7 @@
 static const char help[] = "contact_instrument: a spherical instrument pressed into a body and slid across it, with hssbem::ContactScene\n";
 
 #include "hssbem/mesh/mesh.hpp"
-#include "hssbem/contact/contact_scene.hpp"
+#include "hssbem/session/contact_scene.hpp"
 #include "hssbem/petsc/log.h"
 
 #include <petscsys.h>

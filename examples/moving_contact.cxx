@@ -1,4 +1,4 @@
-/* moving_contact: how a simulator drives hssbem's scene API (scene/scene.hpp) in its frame loop.
+/* moving_contact: how a simulator drives hssbem's scene API (session/scene.hpp) in its frame loop.
 
    A body is clamped on its bottom 10 % (by height); an instrument presses a broad patch of the
    surface (the `fraction` of the vertices nearest to the contact point) and slides around the
@@ -14,7 +14,7 @@ static const char help[] = "moving_contact: a contact patch sliding around a bod
 
 #include "hssbem/mesh/mesh.hpp"
 #include "hssbem/petsc/log.h"
-#include "hssbem/scene/scene.hpp"
+#include "hssbem/session/scene.hpp"
 
 #include <petscsys.h>
 

@@ -2,11 +2,12 @@
 #include "hssbem/app/main.hpp"
 
 #include "hssbem/app/options.hpp"
-#include "hssbem/app/petsc_call.hpp"
 #include "hssbem/app/run.hpp"
+#include "hssbem/session/petsc_call.hpp"
 #include "hssbem/petsc/log.h"
 
 #include <chrono>
+#include <cstring>
 #include <cmath>
 #include <cstdio>
 #include <exception>
@@ -40,12 +41,13 @@ private:
 };
 
 /// The run itself; returns the error message, empty on success.
-std::string run_and_catch(MPI_Comm comm, int *failed)
+std::string run_and_catch(MPI_Comm comm, bool version, int *failed)
 {
   *failed = 1;
   try {
     HssbemCallThrow(HssbemInitializePackage());
-    run_driver(comm);
+    if (version) print_version(comm);
+    else run_driver(comm);
     *failed = 0;
     return "";
   } catch (const std::bad_alloc &) {
@@ -130,10 +132,24 @@ std::string name_the_option(const std::string &message)
   return keys.empty() ? message : "option " + keys + " " + value + ": " + message;
 }
 
-int driver_main(MPI_Comm comm)
+bool take_version_option(int *argc, char **argv)
+{
+  bool found = false;
+  int  kept  = 1;
+  for (int i = 1; i < *argc; ++i) {
+    const bool v = !std::strcmp(argv[i], "-version") || !std::strcmp(argv[i], "--version");
+    found = found || v;
+    if (!v) argv[kept++] = argv[i];
+  }
+  *argc = kept;
+  argv[kept] = nullptr;
+  return found;
+}
+
+int driver_main(MPI_Comm comm, bool version)
 {
   PetscBool traceback = PETSC_FALSE;
-  double    timeout   = k_default_error_timeout; // a bad value is reported with the default
+  double    timeout   = option_default::hssbem_error_timeout; // a bad value is reported with the default
   MPI_Comm  agree;
   int       failed = 0;
 
@@ -144,7 +160,7 @@ int driver_main(MPI_Comm comm)
     const QuietPetscErrors quiet(!traceback);
     try { // every rank reads the same value, so every rank fails here or none
       timeout = read_error_timeout();
-      message = run_and_catch(comm, &failed);
+      message = run_and_catch(comm, version, &failed);
     } catch (const std::exception &e) {
       failed  = 1;
       message = name_the_option(e.what());

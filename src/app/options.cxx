@@ -1,170 +1,40 @@
-// The driver's options (see options.hpp). PETSc's option macros need functions that return a
-// PetscErrorCode: ProcessOptions_Private and CheckUnusedOptions_Private are written like PETSc
-// code, and read_app_options() and check_unused_options() turn their error codes into
-// exceptions, once each.
+// The driver's options (see options.hpp): read once by their rows of the table of options
+// (petsc/options.h), -help from the table, -version, and the check that every option was used.
+// PETSc's option macros need functions that return a PetscErrorCode: CheckUnusedOptions_Private
+// is written like PETSc code, and check_unused_options() turns its error code into an exception.
 #include "hssbem/app/options.hpp"
 
-#include "hssbem/app/petsc_call.hpp"
+#include "hssbem/petsc/options.h"
 #include "hssbem/petsc/system.h"
-#include "stress_post.hpp"
+#include "hssbem/session/petsc_call.hpp"
 
-#include <climits>
+#include <H5public.h>
+
 #include <cstdio>
 #include <cstring>
-#include <optional>
 #include <stdexcept>
 #include <string>
+
+#ifndef HSSBEM_GIT_REVISION
+#define HSSBEM_GIT_REVISION "unknown"
+#endif
+#ifndef HSSBEM_BUILD_TYPE
+#define HSSBEM_BUILD_TYPE "unknown"
+#endif
 
 namespace hssbem {
 
 namespace {
 
-PetscErrorCode OptionString_Private(const char *key, const char *text, std::string *value, PetscOptionItems *PetscOptionsObject)
-{
-  char      buf[PETSC_MAX_PATH_LEN];
-  PetscBool set;
-
-  PetscFunctionBegin;
-  PetscCall(PetscStrncpy(buf, value->c_str(), sizeof(buf)));
-  PetscCall(PetscOptionsString(key, text, "", buf, buf, sizeof(buf), &set));
-  if (set) *value = buf;
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
-
-/* Reads the driver's options; with -help, PETSc prints each with its default.
-
-  Options Database Keys:
-+ -problem <file.json>        - problem file
-. -mesh <file>                - mesh file (overrides the problem file)
-. -E <real>, -nu <real>       - Young's modulus and Poisson's ratio (override the problem file)
-. -o <file.h5>                - result file (overrides the problem file)
-. -bem_feature_angle <deg>    - dihedral angle above which an edge is sharp (double nodes)
-. -bem_mat_type <auto|dense|h2|hss> - operator: auto (default: dense below a measured size, H² above), dense, H²- or HSS-compressed MatShell
-. -hssbem_memory_limit <bytes> - memory per node that the size check assumes (default: the machine's)
-. -hssbem_traceback           - keep PETSc's error traceback (for debugging; the driver prints one line otherwise)
-. -mat_bem_quad_order <n>     - Gauss points per direction on singular triangles
-. -mat_bem_near_ratio <r>     - subdivide triangles closer than r diameters
-. -mat_bem_far_ratio <r>      - 3-point rule beyond r diameters (0: never, the default)
-. -mat_bem_max_depth <n>      - subdivision levels for nearly singular triangles
-. -scene_strategy <auto|solve|update|refactor|krylov> - per-frame strategy of a scene (auto: the cost model's cheapest)
-. -scene_refresh <n>          - incremental capacitance updates before a rebuild
-. -scene_single_from <n>      - single-precision capacitance inverse from this many switched unknowns (-1: never)
-. -scene_single_fields_from <n> - the fields' product with W(:, J) in single precision from this many switched unknowns (-1: never)
-. -scene_krylov_rtol <r>      - GMRES tolerance of the krylov strategy
-. -scene_monitor              - print one line per frame
-. -scene_keep_partial         - when a frame fails, keep the frames solved before it in the result file (the run still fails)
-. -hssbem_error_timeout <s>   - seconds the ranks wait for a rank whose error they have not joined before aborting (default 10)
-. -contact_tol <r>            - contact: relative tolerance of the gaps (times the mesh's size) and of friction's Newton residual
-. -contact_max_it <n>         - contact: active-set (or Newton) iterations per frame before it is an error
-. -contact_reach <length>     - contact: vertices within this gap of an obstacle or body are candidates (0: 5 % of the mesh's size)
-. -contact_monitor            - contact: print one line per iteration
-. -contact_h2_rtol <r>        - contact on -bem_mat_type h2: GMRES tolerance (true residual) of the reference's accurate solves
-- -contact_h2_factor_tol <r>  - contact on -bem_mat_type h2: tolerance of the reference's H2 factorization (its columns' accuracy)
-*/
-PetscErrorCode ProcessOptions_Private(MPI_Comm comm, AppOptions *opts)
-{
-  PetscBool   help, has_E, has_nu, traceback = PETSC_FALSE; /* -hssbem_traceback is acted on by app/main.cxx; listed here for -help */
-  PetscReal   memory_limit = 0;                               /* -hssbem_memory_limit: read and checked by HssbemMachineLimits() */
-  PetscReal   E = 0, nu = 0, feature_angle = opts->overrides.feature_angle_deg;
-  std::string mesh = opts->overrides.mesh.value_or(""), output = opts->overrides.output.value_or(""), mat_type = opts->operator_type ? operator_type_name(*opts->operator_type) : "auto";
-  QuadratureOptions &quad = opts->quad;
-  std::string strategy = scene_strategy_name(opts->scene.strategy);
-  PetscInt    refresh  = opts->scene.refresh_every, single_from = opts->scene.single_from;
-  PetscInt    single_fields_from = opts->scene.single_fields_from;
-  PetscBool   monitor  = opts->scene.monitor ? PETSC_TRUE : PETSC_FALSE, keep_partial = opts->scene.keep_partial ? PETSC_TRUE : PETSC_FALSE;
-  PetscReal   error_timeout = k_default_error_timeout; /* -hssbem_error_timeout: acted on by app/main.cxx (read_error_timeout); listed here for -help */
-  PetscBool   contact_monitor = opts->contact.monitor ? PETSC_TRUE : PETSC_FALSE;
-  PetscInt    contact_max_it  = opts->contact.max_it;
-
-  PetscFunctionBegin;
-  PetscCall(PetscOptionsHasHelp(NULL, &help));
-  opts->help = help;
-  PetscOptionsBegin(comm, NULL, "hssbem: 3D linear elastostatics by the boundary element method", "hssbem");
-  PetscCall(OptionString_Private("-problem", "Problem file (JSON)", &opts->problem, PetscOptionsObject));
-  PetscCall(OptionString_Private("-mesh", "Mesh file (.msh, .stl, .off, .obj); overrides the problem file", &mesh, PetscOptionsObject));
-  PetscCall(OptionString_Private("-o", "Result file (.h5); overrides the problem file", &output, PetscOptionsObject));
-  PetscCall(PetscOptionsReal("-E", "Young's modulus (default: the problem file's)", "", E, &E, &has_E));
-  PetscCall(PetscOptionsReal("-nu", "Poisson's ratio (default: the problem file's)", "", nu, &nu, &has_nu));
-  PetscCall(PetscOptionsReal("-bem_feature_angle", "Dihedral angle (degrees) above which an edge is sharp", "", feature_angle, &feature_angle, NULL));
-  PetscCall(OptionString_Private("-bem_mat_type", "Operator: auto (dense below a measured size, H2 above), dense, h2 (compressed, strong admissibility, MatShell) or hss (compressed, MatShell)", &mat_type, PetscOptionsObject));
-  PetscCall(PetscOptionsReal("-hssbem_memory_limit", "Memory per node (bytes) that the size check assumes (0: the machine's)", "", memory_limit, &memory_limit, NULL));
-  PetscCall(PetscOptionsBool("-hssbem_traceback", "Keep PETSc's error traceback (debugging)", "", traceback, &traceback, NULL));
-  PetscCall(PetscOptionsInt("-mat_bem_quad_order", "Gauss points per direction on singular triangles", "", quad.duffy_order, &quad.duffy_order, NULL));
-  PetscCall(PetscOptionsReal("-mat_bem_near_ratio", "Subdivide triangles closer than this many diameters", "", quad.near_ratio, &quad.near_ratio, NULL));
-  PetscCall(PetscOptionsReal("-mat_bem_far_ratio", "Use the 3-point rule beyond this many diameters (0: never)", "", quad.far_ratio, &quad.far_ratio, NULL));
-  PetscCall(PetscOptionsInt("-mat_bem_max_depth", "Subdivision levels for nearly singular triangles", "", quad.max_depth, &quad.max_depth, NULL));
-  PetscCall(OptionString_Private("-scene_strategy", "Scenes (frames): per-frame strategy: auto (cheapest by the cost model), solve, update, refactor or krylov", &strategy, PetscOptionsObject));
-  PetscCall(PetscOptionsInt("-scene_refresh", "Scenes: incremental capacitance updates before a rebuild from scratch", "", opts->scene.refresh_every, &refresh, NULL));
-  PetscCall(PetscOptionsInt("-scene_single_from", "Scenes: switched sets of at least this size keep the capacitance inverse in single precision, refined in double (-1: never)", "", single_from, &single_from, NULL));
-  PetscCall(PetscOptionsInt("-scene_single_fields_from", "Scenes: switched sets of at least this size take the fields' product with W(:, J) in single precision (switched unknowns stay double; -1: never)", "", single_fields_from, &single_fields_from, NULL));
-  PetscCall(PetscOptionsReal("-scene_krylov_rtol", "Scenes: GMRES relative tolerance (true residual) of the krylov strategy", "", opts->scene.krylov_rtol, &opts->scene.krylov_rtol, NULL));
-  PetscCall(PetscOptionsBool("-scene_monitor", "Scenes: print one line per frame (strategy, switched unknowns, time)", "", monitor, &monitor, NULL));
-  PetscCall(PetscOptionsBool("-scene_keep_partial", "Scenes: when a frame fails, commit the frames solved before it (the run still fails)", "", keep_partial, &keep_partial, NULL));
-  PetscCall(PetscOptionsReal("-hssbem_error_timeout", "Seconds the ranks wait for a rank whose error they have not joined before aborting the job", "", error_timeout, &error_timeout, NULL));
-  PetscCall(PetscOptionsReal("-contact_tol", "Contact: relative tolerance of the gaps (times the mesh's size) and of friction's Newton residual", "", opts->contact.tol, &opts->contact.tol, NULL));
-  PetscCall(PetscOptionsInt("-contact_max_it", "Contact: active-set (or Newton) iterations per frame before it is an error", "", contact_max_it, &contact_max_it, NULL));
-  PetscCall(PetscOptionsReal("-contact_reach", "Contact: vertices within this gap of an obstacle or another body are candidates (0: 5 % of the mesh's size)", "", opts->contact.reach, &opts->contact.reach, NULL));
-  PetscCall(PetscOptionsBool("-contact_monitor", "Contact: print one line per iteration (active points, changes, residual)", "", contact_monitor, &contact_monitor, NULL));
-  PetscCall(PetscOptionsReal("-contact_h2_rtol", "Contact on -bem_mat_type h2: GMRES relative tolerance (true residual) of the H2 reference's accurate solves", "", opts->contact.h2_rtol, &opts->contact.h2_rtol, NULL));
-  PetscCall(PetscOptionsReal("-contact_h2_factor_tol", "Contact on -bem_mat_type h2: tolerance of the H2 reference's factorization (the accuracy of its columns)", "", opts->contact.h2_factor_tol, &opts->contact.h2_factor_tol, NULL));
-  PetscOptionsEnd();
-  opts->scene.monitor      = monitor == PETSC_TRUE;
-  opts->scene.keep_partial = keep_partial == PETSC_TRUE;
-  opts->contact.monitor = contact_monitor == PETSC_TRUE;
-  PetscCheck(opts->contact.tol > 0 && opts->contact.tol < 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-contact_tol must lie in (0, 1)");
-  PetscCheck(contact_max_it >= 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-contact_max_it must be at least 1");
-  PetscCheck(opts->contact.reach >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-contact_reach must be >= 0 (0: automatic)");
-  opts->contact.max_it = (int)contact_max_it;
-  PetscCheck(opts->contact.h2_rtol > 0 && opts->contact.h2_rtol < 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-contact_h2_rtol must lie in (0, 1)");
-  PetscCheck(opts->contact.h2_factor_tol > 0 && opts->contact.h2_factor_tol < 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-contact_h2_factor_tol must lie in (0, 1)");
-  {
-    const std::optional<SceneStrategy> st = parse_scene_strategy(strategy);
-    PetscCheck(st, comm, PETSC_ERR_ARG_UNKNOWN_TYPE, "-scene_strategy %s is not available; use auto, solve, update, refactor or krylov", strategy.c_str());
-    opts->scene.strategy = *st;
-  }
-  PetscCheck(refresh >= 1 && refresh <= 1000000, comm, PETSC_ERR_ARG_OUTOFRANGE, "-scene_refresh must lie in [1, 1000000]");
-  opts->scene.refresh_every = (int)refresh;
-  PetscCheck(single_from >= -1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-scene_single_from must be -1 (never) or a number of switched unknowns");
-  opts->scene.single_from = single_from < 0 ? INT_MAX : (int)single_from;
-  PetscCheck(single_fields_from >= -1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-scene_single_fields_from must be -1 (never) or a number of switched unknowns");
-  opts->scene.single_fields_from = single_fields_from < 0 ? INT_MAX : (int)single_fields_from;
-  PetscCheck(opts->scene.krylov_rtol > 0 && opts->scene.krylov_rtol < 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-scene_krylov_rtol must lie in (0, 1)");
-  if (!mesh.empty()) opts->overrides.mesh = mesh;
-  if (!output.empty()) opts->overrides.output = output;
-  if (has_E) opts->overrides.E = E;
-  if (has_nu) opts->overrides.nu = nu;
-  opts->overrides.feature_angle_deg = feature_angle;
-  const std::optional<OperatorType> type = parse_operator_type(mat_type);
-  PetscCheck(type || mat_type == "auto", comm, PETSC_ERR_ARG_UNKNOWN_TYPE, "-bem_mat_type %s is not available; use auto, dense, h2 or hss", mat_type.c_str());
-  opts->operator_type = type;
-  /* auto reads (and checks) the options of both compressed formats: whichever it picks uses them */
-  if (!type || *type == OperatorType::Hss || opts->help) {
-    HssOptions hss;
-    hss.rel_tol = 1e-8;
-    PetscCall(HssbemHssOptionsFromDatabase(comm, NULL, &hss));
-  }
-  if (!type || *type == OperatorType::H2 || opts->help) {
-    H2Options h2;
-    PetscCall(HssbemH2OptionsFromDatabase(comm, NULL, &h2));
-  }
-  PetscCheck(quad.far_ratio == 0 || (type && !is_compressed(*type)), comm, PETSC_ERR_ARG_INCOMP,
-             "-mat_bem_far_ratio must be 0 with -bem_mat_type %s: the 3-point far rule breaks the smooth far field the compression relies on (use -bem_mat_type dense)", mat_type.c_str());
-  PetscCheck(quad.duffy_order >= 2 && quad.duffy_order <= 64, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_bem_quad_order must lie in [2, 64]");
-  PetscCheck(quad.near_ratio > 0 && quad.near_ratio <= 100 && (quad.far_ratio == 0 || (quad.far_ratio >= quad.near_ratio && quad.far_ratio <= 1e6)), comm, PETSC_ERR_ARG_OUTOFRANGE,
-             "need -mat_bem_near_ratio in (0, 100] and -mat_bem_far_ratio either 0 (off) or in [-mat_bem_near_ratio, 1e6]");
-  PetscCheck(quad.max_depth >= 0 && quad.max_depth <= 20, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_bem_max_depth must lie in [0, 20]");
-  PetscCheck(feature_angle > 0 && feature_angle < 180, comm, PETSC_ERR_ARG_OUTOFRANGE, "-bem_feature_angle must lie in (0, 180)");
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
-
 /// Options that PETSc reads only at PetscFinalize() or that steer the run itself, and those of
-/// a scene's GMRES (-scene_ksp_*).
+/// the GMRES a scene's krylov strategy and an H² reference's accurate solves create when they
+/// need one (-scene_ksp_*, -contact_h2_ksp_*).
 bool is_late_option(const char *name)
 {
   static const char *late[] = {"log_view", "options_left", "help", "malloc_dump", "malloc_debug", "memory_view", "log_view_memory", "log_trace", "info", "malloc", "checkstack", "objects_dump", "fp_trap", "options_view", "history"};
   for (const char *k : late)
     if (!std::strcmp(name, k)) return true;
-  return !std::strncmp(name, "scene_ksp_", 10); /* a scene's GMRES reads them only if a frame takes the krylov strategy */
+  return !std::strncmp(name, "scene_ksp_", 10) || !std::strncmp(name, "contact_h2_ksp_", 15);
 }
 
 /// Options that PETSc reads only when the preconditioner is set up, inside KSPSolve(): those of
@@ -203,33 +73,66 @@ PetscErrorCode CheckUnusedOptions_Private(MPI_Comm comm, bool before_solve)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-} // namespace
-
-AppOptions read_app_options(MPI_Comm comm)
+/// The value given for `name`, or its default.
+const OptionValue &given_or_default(const OptionValues &given, const char *name, OptionValue &fallback)
 {
-  AppOptions opts;
-  HssbemCallThrow(ProcessOptions_Private(comm, &opts));
-  HssbemCallThrow(InteriorOptionsFromDatabase_Private(comm, &opts.interior));
-  return opts;
+  const auto it = given.find(name);
+  if (it != given.end()) return it->second;
+  fallback = OptionValue::default_of(*find_option(name));
+  return fallback;
 }
 
-OperatorType choose_operator(long long unknowns, const MachineLimits &limits)
+} // namespace
+
+DriverOptions read_driver_options(MPI_Comm comm)
 {
-  if (unknowns < k_auto_dense_max_unknowns && size_refusal(OperatorType::Dense, unknowns, SizeOptions{}, limits).empty()) return OperatorType::Dense;
-  return OperatorType::H2;
+  OptionValues given;
+  HssbemCallThrow(HssbemOptionsGetValues(comm, NULL, OptionReader::Driver, kEvery, &given));
+  HssbemCallThrow(HssbemOptionsGetValues(comm, NULL, OptionReader::System, kEvery, &given));
+  DriverOptions o;
+  o.session = session_options(given);
+  OptionValue d;
+  o.problem = given_or_default(given, "problem", d).text;
+  if (given.count("mesh")) o.overrides.mesh = given.at("mesh").text;
+  if (given.count("o")) o.overrides.output = given.at("o").text;
+  if (given.count("E")) o.overrides.E = given.at("E").number;
+  if (given.count("nu")) o.overrides.nu = given.at("nu").number;
+  o.overrides.feature_angle_deg = given_or_default(given, "bem_feature_angle", d).number;
+  o.scene_monitor = given_or_default(given, "scene_monitor", d).number != 0;
+  o.scene_keep_partial = given_or_default(given, "scene_keep_partial", d).number != 0;
+  o.contact_monitor = given_or_default(given, "contact_monitor", d).number != 0;
+  o.help = given_or_default(given, "help", d).number != 0;
+  return o;
+}
+
+void print_help(MPI_Comm comm, unsigned jobs)
+{
+  const std::string text = "hssbem's options (" + (jobs == kEvery ? std::string("every job") : "this problem's job: " + option_jobs_text(jobs)) +
+                           "; the default in <>, the values it takes in []):\n" + option_help(jobs);
+  HssbemCallThrow(PetscPrintf(comm, "%s", text.c_str()));
+}
+
+void print_version(MPI_Comm comm)
+{
+  char petsc[128], mpi[MPI_MAX_LIBRARY_VERSION_STRING];
+  int  len = 0;
+  unsigned h5_major = 0, h5_minor = 0, h5_release = 0;
+  HssbemCallThrow(PetscGetVersion(petsc, sizeof(petsc)));
+  HssbemCallMPIThrow(MPI_Get_library_version(mpi, &len));
+  std::string mpi_line(mpi, static_cast<std::size_t>(len));
+  mpi_line = mpi_line.substr(0, mpi_line.find_first_of("\n,"));
+  if (H5get_libversion(&h5_major, &h5_minor, &h5_release) < 0) throw std::runtime_error("HDF5 does not say its version");
+  HssbemCallThrow(PetscPrintf(comm, "hssbem %s (git %s, %s build)\n%s\nMPI: %s\nHDF5 %u.%u.%u\n", HSSBEM_VERSION, HSSBEM_GIT_REVISION, HSSBEM_BUILD_TYPE, petsc,
+                              mpi_line.c_str(), h5_major, h5_minor, h5_release));
 }
 
 double read_error_timeout()
 {
-  PetscReal seconds = k_default_error_timeout;
-  HssbemCallThrow(PetscOptionsGetReal(NULL, NULL, "-hssbem_error_timeout", &seconds, NULL));
-  if (!(seconds > 0 && seconds <= k_max_error_timeout)) { /* NaN fails too */
-    char text[160];
-    std::snprintf(text, sizeof(text), "option -hssbem_error_timeout %g: the time-out must be positive and finite, at most %g seconds (default %g)", (double)seconds, k_max_error_timeout,
-                  k_default_error_timeout);
-    throw std::invalid_argument(text);
-  }
-  return seconds;
+  const OptionRow *row = find_option("hssbem_error_timeout");
+  OptionValue      v   = OptionValue::default_of(*row);
+  PetscBool        set;
+  HssbemCallThrow(HssbemOptionsGetValue(PETSC_COMM_SELF, NULL, *row, &v, &set));
+  return v.number;
 }
 
 void check_unused_options(MPI_Comm comm, bool before_solve) { HssbemCallThrow(CheckUnusedOptions_Private(comm, before_solve)); }

@@ -9,8 +9,9 @@ static const char help[] = "hssbem: 3D linear elastostatics by the boundary elem
 
 int main(int argc, char **argv)
 {
+  const bool version = hssbem::take_version_option(&argc, argv);
   PetscCall(PetscInitialize(&argc, &argv, NULL, help));
-  const int status = hssbem::driver_main(PETSC_COMM_WORLD);
+  const int status = hssbem::driver_main(PETSC_COMM_WORLD, version);
   PetscCall(PetscFinalize());
   return status;
 }

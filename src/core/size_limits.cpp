@@ -10,9 +10,14 @@ namespace {
 
 // Fitted constants of the model, see need_per_node() and docs/limits.md.
 constexpr double k_hss_digits_power = 1.0;   ///< HSS memory grows as (digits of the tolerance / 8)^p
-constexpr double k_h2_factor_bytes  = 19e3;  ///< PC h2 at 2e-3 (20k unknowns): factors and working blocks per unknown
-constexpr double k_h2_factor_power  = 0.22;  ///< their growth as the tolerance tightens: (2e-3 / tol)^p (measured 1.92x at 1e-4)
-constexpr double k_h2_double_top    = 16.0;  ///< bytes per entry of a double top (the block and its LU)
+constexpr double k_h2_fit_tol       = 1e-5;  ///< the H² tolerance the matrix's memory was fitted at (the measured runs')
+constexpr double k_h2_factor_fit_tol = 2e-3; ///< PC h2's tolerance its factors' memory was fitted at
+constexpr double k_h2_factor_bytes  = 19e3;  ///< PC h2 at k_h2_factor_fit_tol (20k unknowns): factors and working blocks per unknown
+constexpr double k_h2_factor_power  = 0.22;  ///< their growth as the tolerance tightens: (k_h2_factor_fit_tol / tol)^p (measured 1.92x at 1e-4)
+constexpr double k_h2_double_top    = 16.0;  ///< bytes per entry of a double top at the node's peak (its LU and the rows arriving)
+constexpr double k_h2_mixed_top     = 12.0;  ///< of a mixed top on one rank (the double block and the single LU)
+constexpr double k_h2_single_top    = 4.0;   ///< of a single-precision top (its LU)
+constexpr double k_h2_top_vectors   = 32.0;  ///< bytes per unknown of any top: pivots, offsets, the trial's and the solves' vectors
 constexpr double k_h2_top_fill      = 0.8;   ///< the top's size over -pc_h2_top_size (it stops at the first level at or below it: measured about 0.6 and 0.7)
 constexpr double k_h2_double_solver = 2.9;   ///< PC h2 beside a double-precision matrix, over beside a single one (measured at 80k)
 
@@ -66,8 +71,8 @@ double hss_bytes(double n, double tol)
 /// 80k disk organ, 0.74x at 1e-4 on a 20k sphere), and 1.8 times that in double precision.
 double h2_matrix_bytes(double n, const SizeOptions &o)
 {
-  const double tol = o.h2_rel_tol > 0 ? o.h2_rel_tol : 1e-5;
-  return n * 21e3 * std::pow(std::max(n, 4e4) / 4e4, -0.06) * std::pow(1e-5 / tol, 0.16) * (o.single_precision ? 1.0 : 1.8);
+  const double tol = o.h2_rel_tol > 0 ? o.h2_rel_tol : k_h2_fit_tol;
+  return n * 21e3 * std::pow(std::max(n, 4e4) / 4e4, -0.06) * std::pow(k_h2_fit_tol / tol, 0.16) * (o.single_precision ? 1.0 : 1.8);
 }
 
 /// PC h2's factors and working blocks beyond the dense top: k_h2_factor_bytes per unknown at its
@@ -77,7 +82,7 @@ double h2_matrix_bytes(double n, const SizeOptions &o)
 double h2_solver_bytes(double n, const SizeOptions &o)
 {
   const double tol     = std::min(std::max(o.pc_h2_rel_tol, 1e-12), 0.5);
-  const double factors = o.h2_factored ? n * k_h2_factor_bytes * std::pow(std::max(n, 2e4) / 2e4, -0.075) * std::pow(2e-3 / tol, k_h2_factor_power) *
+  const double factors = o.h2_factored ? n * k_h2_factor_bytes * std::pow(std::max(n, 2e4) / 2e4, -0.075) * std::pow(k_h2_factor_fit_tol / tol, k_h2_factor_power) *
                                              (o.single_precision ? 1.0 : k_h2_double_solver)
                                        : 0.0;
   return factors + 8.0 * o.krylov_vectors * n;
@@ -119,12 +124,12 @@ std::string alternative(OperatorType type, long long unknowns, const SizeOptions
   // Another operator: H² at the driver's defaults (single precision, 1e-5, PC h2 on any number of
   // ranks, distributed like the matrix).
   SizeOptions h = o;
-  if (type != OperatorType::H2) h = SizeOptions{}, h.single_precision = true, h.h2_factored = true;
+  if (type != OperatorType::H2) h = SizeOptions{};
   std::string opts = type == OperatorType::H2 ? "" : "-bem_mat_type h2";
   if (type != OperatorType::H2 && why_not(OperatorType::H2, unknowns, h, m).empty()) return opts;
   const auto add = [&](const char *opt) { opts += opts.empty() ? opt : std::string(" ") + opt; };
   if (!h.single_precision) {
-    h.single_precision = true;
+    h.single_precision = true; // the remedy suggested, not an option's default
     add("-mat_h2_single_precision");
     if (why_not(OperatorType::H2, unknowns, h, m).empty()) return opts;
   }
@@ -147,16 +152,32 @@ double estimated_bytes(OperatorType type, long long unknowns, const SizeOptions 
 
 double node_bytes(OperatorType type, long long unknowns, const SizeOptions &o, const MachineLimits &m) { return need_per_node(type, unknowns, o, m); }
 
+bool h2_single_panels(double rel_tol, int single_panels) { return single_panels < 0 ? rel_tol >= k_h2_single_panel_tol : single_panels == 1; }
+
+H2TopKind h2_top_kind(long long top_unknowns, bool single_panels, long long single_top_from, bool spread_top, int ranks)
+{
+  if (single_top_from <= 0 || top_unknowns < single_top_from) return H2TopKind::Double;
+  if (!single_panels) return H2TopKind::Mixed;
+  return spread_top && ranks > 1 ? H2TopKind::Spread : H2TopKind::Single;
+}
+
+double h2_top_bytes(H2TopKind kind, long long top_unknowns, const MachineLimits &m)
+{
+  const double n = static_cast<double>(top_unknowns), n2 = n * n, vectors = k_h2_top_vectors * n;
+  switch (kind) {
+  case H2TopKind::Double: return k_h2_double_top * n2 + vectors;
+  case H2TopKind::Mixed: return (m.ranks > 1 ? k_h2_double_top : k_h2_mixed_top) * n2 + vectors;
+  case H2TopKind::Single: return k_h2_single_top * n2 + vectors;
+  case H2TopKind::Spread: return (k_h2_single_top * n2 + vectors) * m.ranks_per_node / m.ranks;
+  }
+  return 0.0;
+}
+
 double h2_top_bytes(long long unknowns, const SizeOptions &o, const MachineLimits &m)
 {
   if (!o.h2_factored) return 0.0;
-  const double top          = k_h2_top_fill * static_cast<double>(std::min(std::max(o.pc_h2_top_size, 0LL), unknowns));
-  const bool   single_panels = o.pc_h2_rel_tol >= 1e-5;
-  const bool   reduced       = o.pc_h2_mixed_top > 0 && top >= static_cast<double>(o.pc_h2_mixed_top);
-  if (!reduced) return k_h2_double_top * top * top;        // the double LU
-  if (!single_panels) return (m.ranks > 1 ? k_h2_double_top : 12.0) * top * top; // the double block and its single LU (several ranks: and the rows arriving)
-  if (o.pc_h2_spread_top && m.ranks > 1) return 4.0 * top * top * m.ranks_per_node / m.ranks;
-  return 4.0 * top * top;                                  // the single LU alone
+  const auto top = static_cast<long long>(k_h2_top_fill * static_cast<double>(std::min(std::max(o.pc_h2_top_size, 0LL), unknowns)));
+  return h2_top_bytes(h2_top_kind(top, h2_single_panels(o.pc_h2_rel_tol, -1), o.pc_h2_mixed_top, o.pc_h2_spread_top, m.ranks), top, m);
 }
 
 std::string size_refusal(OperatorType type, long long unknowns, const SizeOptions &o, const MachineLimits &m)

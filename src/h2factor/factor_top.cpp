@@ -7,6 +7,7 @@
 #include "hssbem/core/allocator.hpp"
 #include "hssbem/core/fault.hpp"
 #include "hssbem/core/phase.hpp"
+#include "hssbem/core/size_limits.hpp"
 #include "hssbem/core/timer.hpp"
 
 #include <algorithm>
@@ -17,10 +18,6 @@
 namespace hssbem {
 
 namespace {
-
-/// Whether the top's LU runs in single precision (given single panels: SpreadTop alone, a third
-/// of the mixed LU's memory; else TopBlock's mixed LU): when the top is large enough.
-bool top_in_single(double n, const H2FactorOptions &o) { return o.single_top_from > 0 && n >= o.single_top_from; }
 
 /// The trial solve's bound for a single-precision top: the factorization's own tolerance (at
 /// most 1e-3, so that the top never adds more than the steps).
@@ -54,9 +51,11 @@ void H2Factorization::factor_top(std::optional<h2f::Frontier> &front, bool singl
   double n = static_cast<double>(front->active_total());
   comm.sum(&n, 1);
   // Single precision (single panels and a large top): SpreadTop, over every rank (spread) or on
-  // rank 0 alone; else TopBlock on rank 0. The other ranks' rows go where the top is.
-  const bool single = single_store && top_in_single(n, m_options);
-  f.spread = single && P > 1 && m_options.spread_top;
+  // rank 0 alone; else TopBlock on rank 0 (its LU mixed from single_top_from on). The other
+  // ranks' rows go where the top is. The size model counts by the same rule (h2_top_kind).
+  const H2TopKind kind = h2_top_kind(static_cast<long long>(n), single_store, m_options.single_top_from, m_options.spread_top, P);
+  const bool single = kind == H2TopKind::Single || kind == H2TopKind::Spread;
+  f.spread = kind == H2TopKind::Spread;
   return_free_memory(); // what the levels freed, before the top is allocated
   std::vector<float> local;
   DenseMatrix block; // the double top: all its columns on rank 0
@@ -100,19 +99,5 @@ void H2Factorization::factor_top(std::optional<h2f::Frontier> &front, bool singl
   m_stats.top_bytes = f.top ? f.top->bytes() : 0;
   m_stats.workspace_bytes = std::max(front_peak, front_left + m_stats.top_bytes);
 }
-
-double h2_top_peak_bytes(const H2FactorOptions &o, long long unknowns, long long top_unknowns, int ranks)
-{
-  const double n2 = static_cast<double>(top_unknowns) * static_cast<double>(top_unknowns);
-  // As the factorization decides (single_store): panels in single precision, and levels below the top.
-  const bool single_panels = (o.single_panels < 0 ? o.rel_tol >= 1e-5 : o.single_panels == 1) && unknowns > o.top_size;
-  const bool reduced = top_in_single(static_cast<double>(top_unknowns), o);
-  const double vectors = 32.0 * static_cast<double>(top_unknowns); // pivots, offsets, the trial's and the solves' vectors
-  if (!reduced || !single_panels) return (ranks > 1 ? 16 : reduced ? 12 : 8) * n2 + vectors;
-  if (ranks > 1 && o.spread_top) return 12 * n2 / ranks + vectors;
-  return 8 * n2 + vectors;
-}
-
-long long h2_top_unknowns_from_options(const H2FactorOptions &o, long long unknowns) { return unknowns <= o.top_size ? unknowns : 0; }
 
 } // namespace hssbem

@@ -8,6 +8,7 @@
 #include "hssbem/compress/pattern_columns.hpp"
 #include "hssbem/core/fault.hpp"
 #include "hssbem/core/phase.hpp"
+#include "hssbem/core/size_limits.hpp"
 #include "hssbem/core/timer.hpp"
 #include "hssbem/core/tree_ownership.hpp"
 
@@ -154,7 +155,7 @@ const FarFieldSketch &H2Factorization::prepare(H2FactorCache &cache, const Syste
     sketch = &cache.sketch(p, &m_stats.time_sketch); // collective
   }
   m_stats.sketch_columns = p;
-  m_stats.single_panels = m_options.single_panels < 0 ? m_options.rel_tol >= 1e-5 : m_options.single_panels == 1;
+  m_stats.single_panels = h2_single_panels(m_options.rel_tol, m_options.single_panels);
   collectively(*m_comm, [&] {
     fault_point("H2FSubtree"); // each rank's elimination of its part starts
     m_f->pattern = make_pattern(m_K, sel, rigid_modes);

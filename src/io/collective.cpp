@@ -159,6 +159,9 @@ ResultMetadata broadcast_metadata(MPI_Comm comm, const ResultData &d)
     p.map(d.attributes_str);
     p.map(d.timings);
     p.map(d.reactions);
+    p.map(d.options_real);
+    p.map(d.options_int);
+    p.map(d.options_str);
   }
   broadcast_text(comm, 0, p.bytes);
   ResultMetadata m;
@@ -168,6 +171,9 @@ ResultMetadata broadcast_metadata(MPI_Comm comm, const ResultData &d)
   u.map(m.attributes_str);
   u.map(m.timings);
   u.map(m.reactions);
+  u.map(m.options_real);
+  u.map(m.options_int);
+  u.map(m.options_str);
   return m;
 }
 

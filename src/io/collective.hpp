@@ -38,6 +38,9 @@ struct ResultMetadata {
   std::map<std::string, std::string> attributes_str;
   std::map<std::string, double> timings;
   std::map<std::string, Vec3> reactions;
+  std::map<std::string, double> options_real;
+  std::map<std::string, long long> options_int;
+  std::map<std::string, std::string> options_str;
 };
 
 /// Rank 0's metadata of `d`, on every rank of `comm` (collective).

@@ -133,7 +133,7 @@ std::vector<XdmfAttribute> contact_attributes(const std::string &group, std::siz
 
 ResultMetadata metadata_of(const ResultData &d)
 {
-  return {d.attributes_real, d.attributes_int, d.attributes_str, d.timings, d.reactions};
+  return {d.attributes_real, d.attributes_int, d.attributes_str, d.timings, d.reactions, d.options_real, d.options_int, d.options_str};
 }
 
 void write_result_groups(H5Writer &w, const ResultData &d, const ResultMetadata &meta)
@@ -146,6 +146,11 @@ void write_result_groups(H5Writer &w, const ResultData &d, const ResultMetadata 
   if (d.contact.present())
     write_contact(w, "/contact", d.contact);
   write_attributes(w, w.root(), "/", {meta.attributes_real, meta.attributes_int, meta.attributes_str});
+  if (!meta.options_real.empty() || !meta.options_int.empty() || !meta.options_str.empty()) {
+    H5Handle g = w.group("/options");
+    write_attributes(w, g.get(), "/options", {meta.options_real, meta.options_int, meta.options_str});
+    w.end_group(g, "/options");
+  }
 }
 
 void write_timings(H5Writer &w, const std::map<std::string, double> &timings)

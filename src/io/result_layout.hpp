@@ -34,8 +34,8 @@ void validate_result(const std::string &path, const ResultData &d);
 /// The attributes, timings and reactions of `d`.
 ResultMetadata metadata_of(const ResultData &d);
 
-/// /mesh, /fields, /bc and /interior of `d`, /reactions and the root attributes of `meta`; not
-/// /timings.
+/// /mesh, /fields, /bc and /interior of `d`, /reactions, the root attributes and /options of
+/// `meta`; not /timings.
 void write_result_groups(H5Writer &w, const ResultData &d, const ResultMetadata &meta);
 
 /// The group `name` (/contact or /frames/<i>/contact) of a contact's results.

@@ -1,6 +1,8 @@
 /* PC "h2": the H² factorization (strong recursive skeletonization) of the BEM system matrix, as
    a preconditioner for GMRES or, at a tight tolerance, a direct solver (see pc_h2.h). */
 #include "hssbem/petsc/pc_h2.h"
+#include "hssbem/petsc/options.h"
+#include "hssbem/petsc/system.h"
 #include "hssbem/core/timer.hpp"
 #include "hssbem/h2factor/h2_factorization.hpp"
 
@@ -19,8 +21,8 @@ namespace {
 enum class Source { None, Matrix, Compressed };
 
 struct PC_H2 : PC_Compressed {
-  hssbem::H2FactorOptions options;            /* their defaults are the factorization's */
-  PetscInt                estimate_error = 0; /* power iterations of the ‖I − A F⁻¹‖ estimate (0: none) */
+  hssbem::H2FactorOptions options;                                                     /* their defaults are the options' (core/option_table.def) */
+  PetscInt                estimate_error = hssbem::option_default::pc_h2_estimate_error; /* power iterations of the ‖I − A F⁻¹‖ estimate (0: none) */
   /* set up */
   Source                                              source         = Source::None;
   double                                              compressed_tol = 0, inverse_error = -1;
@@ -28,7 +30,7 @@ struct PC_H2 : PC_Compressed {
   std::unique_ptr<hssbem::H2FactorCache>              cache;
   std::unique_ptr<hssbem::H2Factorization>            factors;
 
-  PC_H2() : PC_Compressed("PC h2") { options.rel_tol = HSSBEM_PC_H2_DEFAULT_REL_TOL; }
+  PC_H2() : PC_Compressed("PC h2") {}
   const hssbem::DistributedBemSystem &Factor(const HssbemSystemContext &p, const HssbemLayout &L) override;
   void Solve(const double *b, double *out) const override { factors->solve(b, out); }
   void Drop() override
@@ -55,6 +57,7 @@ void ChooseMatrix_Private(PC_H2 *h2, const HssbemSystemContext &p, const HssbemL
   if (!h2->fresh && h2->dsys && h2->source == Source::Compressed && h2->compressed_tol == h2->options.rel_tol) return;
   h2->cache.reset();
   hssbem::H2Options o = p.type == hssbem::OperatorType::H2 ? p.h2_options : hssbem::H2Options{};
+  if (p.type != hssbem::OperatorType::H2) o.single_precision = false; /* its own tolerance may be a direct solve's (1e-7): single-precision blocks round at 6e-8 */
   o.rel_tol           = h2->options.rel_tol;
   o.pressure_columns  = false; /* the factorization needs H and G only */
   hssbem::Timer timer;
@@ -105,14 +108,14 @@ PetscErrorCode PCSetFromOptions_H2(PC pc, PetscOptionItems *PetscOptionsObject)
   PetscFunctionBegin;
   PetscOptionsHeadBegin(PetscOptionsObject, "H2 factorization options");
   PetscCall(PetscOptionsDeprecated("-pc_h2_mixed_top", "-pc_h2_single_top_from", "hssbem 2026-11", NULL));
-  PetscCall(PetscOptionsReal("-pc_h2_rel_tol", "Relative tolerance of the factorization (of each skeleton)", "PCH2SetRelTol", tol, &tol, NULL));
-  PetscCall(PetscOptionsInt("-pc_h2_leaf_size", "Dof nodes per box at the first level factored (0: the H2 matrix's leaves, below tolerance 1e-5 their parents)", "PCH2SetLeafSize", leaf, &leaf, NULL));
-  PetscCall(PetscOptionsInt("-pc_h2_top_size", "Unknowns factored densely at the top", "PCH2SetTopSize", top, &top, NULL));
-  PetscCall(PetscOptionsBool("-pc_h2_top_when_cheaper", "Factor the rest densely from a level whose eliminations would cost more flops than that", "PCH2SetTopWhenCheaper", cheaper, &cheaper, NULL));
-  PetscCall(PetscOptionsInt("-pc_h2_single_top_from", "From this many unknowns on, the dense top's LU in single precision (refined in double with double panels; 0: always double)", "PCH2SetSingleTopFrom", single, &single, NULL));
-  PetscCall(PetscOptionsBool("-pc_h2_spread_top", "On several ranks, spread a single-precision top's LU over the ranks (ScaLAPACK) instead of factoring it on rank 0", "PCH2SetSpreadTop", spread, &spread, NULL));
-  PetscCall(PetscOptionsInt("-pc_h2_sketch_size", "Random vectors of the far-field sketch (0: from the tolerance)", "PCH2SetSketchSize", sketch, &sketch, NULL));
-  PetscCall(PetscOptionsInt("-pc_h2_estimate_error", "Power iterations of the ||I - A F^-1|| estimate shown by -ksp_view (0: none)", "PCH2SetEstimateError", iterations, &iterations, NULL));
+  PetscCall(HssbemOptionsRealItem(PetscOptionsObject, "pc_h2_rel_tol", "PCH2SetRelTol", &tol));
+  PetscCall(HssbemOptionsIntItem(PetscOptionsObject, "pc_h2_leaf_size", "PCH2SetLeafSize", &leaf));
+  PetscCall(HssbemOptionsIntItem(PetscOptionsObject, "pc_h2_top_size", "PCH2SetTopSize", &top));
+  PetscCall(HssbemOptionsBoolItem(PetscOptionsObject, "pc_h2_top_when_cheaper", "PCH2SetTopWhenCheaper", &cheaper));
+  PetscCall(HssbemOptionsIntItem(PetscOptionsObject, "pc_h2_single_top_from", "PCH2SetSingleTopFrom", &single));
+  PetscCall(HssbemOptionsBoolItem(PetscOptionsObject, "pc_h2_spread_top", "PCH2SetSpreadTop", &spread));
+  PetscCall(HssbemOptionsIntItem(PetscOptionsObject, "pc_h2_sketch_size", "PCH2SetSketchSize", &sketch));
+  PetscCall(HssbemOptionsIntItem(PetscOptionsObject, "pc_h2_estimate_error", "PCH2SetEstimateError", &iterations));
   PetscOptionsHeadEnd();
   PetscCall(PCH2SetRelTol(pc, tol)); /* the setters check the values */
   PetscCall(PCH2SetLeafSize(pc, leaf));
@@ -201,14 +204,17 @@ PetscErrorCode PCView_H2(PC pc, PetscViewer viewer)
   PCH2 - H² factorization of the BEM system matrix by strong recursive skeletonization (hssbem).
 
   Options Database Keys:
-+ -pc_h2_rel_tol <tol>         - relative tolerance of each skeleton (default 2e-3: a preconditioner)
++ -pc_h2_rel_tol <tol>         - relative tolerance of each skeleton (the default: a preconditioner)
 . -pc_h2_leaf_size <n>         - dof nodes per box at the first level factored (0: the H² leaves; below 1e-5 their parents)
-. -pc_h2_top_size <n>          - unknowns factored densely at the top (default 2000)
-. -pc_h2_top_when_cheaper <b>  - also stop at a level whose eliminations would cost more flops than the dense top (default true)
-. -pc_h2_single_top_from <n>   - from this top size on (default 4000), the top's LU in single precision: with single-precision panels (tolerance 1e-5 or looser) alone, else refined in double by every solve (0: never; -pc_h2_mixed_top is its former name)
-. -pc_h2_spread_top <b>        - on several ranks, spread a single-precision top's LU over the ranks, ScaLAPACK (default true; false: on rank 0)
+. -pc_h2_top_size <n>          - unknowns factored densely at the top
+. -pc_h2_top_when_cheaper <b>  - also stop at a level whose eliminations would cost more flops than the dense top
+. -pc_h2_single_top_from <n>   - from this top size on, the top's LU in single precision: with single-precision panels (tolerance 1e-5 or looser) alone, else refined in double by every solve (0: never; -pc_h2_mixed_top is its former name)
+. -pc_h2_spread_top <b>        - on several ranks, spread a single-precision top's LU over the ranks, ScaLAPACK (false: on rank 0)
 . -pc_h2_sketch_size <p>       - random vectors of the far-field sketch (0: from the tolerance, 48 to 320; at most 4096)
 - -pc_h2_estimate_error <k>    - power iterations of the ||I - A F^-1|| estimate in -ksp_view (0: none; at most 1000)
+
+  The defaults and ranges are those of hssbem's table of options (core/option_table.def;
+  hssbem -help lists them).
 
   Notes:
   The factorization is distributed like the matrix, one rank being one part: each rank factors
@@ -246,7 +252,7 @@ PETSC_EXTERN PetscErrorCode PCCreate_H2(PC pc)
 PetscErrorCode PCH2SetRelTol(PC pc, PetscReal tol)
 {
   PetscFunctionBegin;
-  PetscCheck(tol > 0 && tol < 1, PetscObjectComm((PetscObject)pc), PETSC_ERR_ARG_OUTOFRANGE, "-pc_h2_rel_tol: the relative tolerance must lie in (0, 1), got %g", (double)tol);
+  PetscCall(HssbemOptionCheck(PetscObjectComm((PetscObject)pc), "pc_h2_rel_tol", (double)tol));
   PCH2_SET(options.rel_tol, tol);
   PetscFunctionReturn(PETSC_SUCCESS);
 }
@@ -262,7 +268,7 @@ PetscErrorCode PCH2SetRelTol(PC pc, PetscReal tol)
 PetscErrorCode PCH2SetLeafSize(PC pc, PetscInt n)
 {
   PetscFunctionBegin;
-  PetscCheck(n >= 0, PetscObjectComm((PetscObject)pc), PETSC_ERR_ARG_OUTOFRANGE, "-pc_h2_leaf_size: the leaf size must be 0 (the matrix's leaves) or positive");
+  PetscCall(HssbemOptionCheck(PetscObjectComm((PetscObject)pc), "pc_h2_leaf_size", (double)n));
   PCH2_SET(options.leaf_size, (int)n);
   PetscFunctionReturn(PETSC_SUCCESS);
 }
@@ -277,7 +283,7 @@ PetscErrorCode PCH2SetLeafSize(PC pc, PetscInt n)
 PetscErrorCode PCH2SetTopSize(PC pc, PetscInt n)
 {
   PetscFunctionBegin;
-  PetscCheck(n >= 0, PetscObjectComm((PetscObject)pc), PETSC_ERR_ARG_OUTOFRANGE, "-pc_h2_top_size: the top size must be >= 0");
+  PetscCall(HssbemOptionCheck(PetscObjectComm((PetscObject)pc), "pc_h2_top_size", (double)n));
   PCH2_SET(options.top_size, (int)n);
   PetscFunctionReturn(PETSC_SUCCESS);
 }
@@ -340,8 +346,7 @@ PetscErrorCode PCH2SetSpreadTop(PC pc, PetscBool flg)
 PetscErrorCode PCH2SetSketchSize(PC pc, PetscInt n)
 {
   PetscFunctionBegin;
-  PetscCheck(n >= 0 && n <= hssbem::kMaxSketchColumns, PetscObjectComm((PetscObject)pc), PETSC_ERR_ARG_OUTOFRANGE,
-             "-pc_h2_sketch_size: the sketch size must be 0 (from the tolerance: 48 to 320) or at most %d, got %d", hssbem::kMaxSketchColumns, (int)n);
+  PetscCall(HssbemOptionCheck(PetscObjectComm((PetscObject)pc), "pc_h2_sketch_size", (double)n));
   PCH2_SET(options.sketch_columns, (int)n);
   PetscFunctionReturn(PETSC_SUCCESS);
 }
@@ -357,7 +362,53 @@ PetscErrorCode PCH2SetSketchSize(PC pc, PetscInt n)
 PetscErrorCode PCH2SetEstimateError(PC pc, PetscInt n)
 {
   PetscFunctionBegin;
-  PetscCheck(n >= 0 && n <= 1000, PetscObjectComm((PetscObject)pc), PETSC_ERR_ARG_OUTOFRANGE, "-pc_h2_estimate_error: the power iterations must lie in [0, 1000] (5 estimate the norm well), got %d", (int)n);
+  PetscCall(HssbemOptionCheck(PetscObjectComm((PetscObject)pc), "pc_h2_estimate_error", (double)n));
   PCH2_SET(estimate_error, n);
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/*@C
+  HssbemPCH2GetOptionValues - The option values a PC h2 holds (-pc_h2_*), as the table names them;
+  nothing when pc is not a PC h2.
+
+  Not Collective
+
+  Level: developer
+@*/
+PetscErrorCode HssbemPCH2GetOptionValues(PC pc, hssbem::OptionValues *values)
+{
+  PetscBool               is_h2;
+  hssbem::H2FactorOptions o;
+
+  PetscFunctionBegin;
+  PetscCall(HssbemPCH2GetFactorOptions(pc, &o, &is_h2));
+  if (!is_h2) PetscFunctionReturn(PETSC_SUCCESS);
+  PetscCall(HssbemOptionValuePut(values, "pc_h2_rel_tol", o.rel_tol));
+  PetscCall(HssbemOptionValuePut(values, "pc_h2_leaf_size", o.leaf_size));
+  PetscCall(HssbemOptionValuePut(values, "pc_h2_top_size", o.top_size));
+  PetscCall(HssbemOptionValuePut(values, "pc_h2_top_when_cheaper", o.top_when_cheaper));
+  PetscCall(HssbemOptionValuePut(values, "pc_h2_single_top_from", o.single_top_from));
+  PetscCall(HssbemOptionValuePut(values, "pc_h2_spread_top", o.spread_top));
+  PetscCall(HssbemOptionValuePut(values, "pc_h2_sketch_size", o.sketch_columns));
+  PetscCall(HssbemOptionValuePut(values, "pc_h2_estimate_error", (double)PCCompressedData<PC_H2>(pc)->estimate_error));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/*@C
+  HssbemPCH2GetFactorOptions - The factorization options a PC h2 holds (for the size check); *is_h2
+  says whether pc is a PC h2 (else o is left alone).
+
+  Not Collective
+
+  Level: developer
+@*/
+PetscErrorCode HssbemPCH2GetFactorOptions(PC pc, hssbem::H2FactorOptions *o, PetscBool *is_h2)
+{
+  PetscFunctionBegin;
+  *is_h2 = PETSC_FALSE;
+  PetscCall(PCCompressedSet<PC_H2>(pc, PCH2, [&](PC_H2 &h2) {
+    *o     = h2.options;
+    *is_h2 = PETSC_TRUE;
+  }));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

@@ -1,6 +1,8 @@
 /* PC "hss": ULV factorization of the BEM system matrix from an HSS compression, as a direct
    solver (-ksp_type preonly) or a preconditioner at a loose tolerance (see pc_hss.h). */
 #include "hssbem/petsc/pc_hss.h"
+#include "hssbem/petsc/options.h"
+#include "hssbem/petsc/system.h"
 #include "hssbem/core/timer.hpp"
 #include "hssbem/hss/truncate.hpp"
 #include "hssbem/hss/ulv.hpp"
@@ -28,9 +30,9 @@ const char *SourceName(Source s)
 }
 
 struct PC_HSS : PC_Compressed {
-  PetscReal rel_tol   = 0;  /* <= 0: the matrix's tolerance (1e-8 on a dense matrix, 1e-3 on an H² one) */
-  PetscInt  leaf_size = 0;  /* <= 0: the matrix's leaf size (256 on a dense matrix) */
-  PetscInt  max_rank  = -1; /* -1: the matrix's cap (none on a dense matrix) */
+  PetscReal rel_tol   = hssbem::option_default::pc_hss_rel_tol;   /* <= 0: the matrix's tolerance (see CompressionOptions_Private) */
+  PetscInt  leaf_size = hssbem::option_default::pc_hss_leaf_size; /* <= 0: the matrix's leaf size */
+  PetscInt  max_rank  = hssbem::option_default::pc_hss_max_rank;  /* -1: the matrix's cap (none on a dense matrix) */
   /* set up: the compression (every rank its part) and its factors */
   Source                                              source = Source::None;
   hssbem::HssOptions                                  used;
@@ -57,7 +59,8 @@ hssbem::HssOptions CompressionOptions_Private(const PC_HSS *hss, const HssbemSys
 {
   const bool         on_hss = p.type == hssbem::OperatorType::Hss;
   hssbem::HssOptions o      = on_hss ? p.hss_options : hssbem::HssOptions{};
-  if (!on_hss) o.rel_tol = p.type == hssbem::OperatorType::H2 ? 1e-3 : 1e-8; /* on H², a preconditioner for GMRES around the accurate product (docs/hss.md) */
+  /* on a dense matrix -mat_hss_rel_tol's default; on H², a preconditioner for GMRES around the accurate product (docs/hss.md) */
+  if (p.type == hssbem::OperatorType::H2) o.rel_tol = hssbem::option_default::pc_hss_rel_tol_on_h2;
   o.pressure_columns = false; /* the factorization needs H and G only */
   if (hss->rel_tol > 0) o.rel_tol = hss->rel_tol;
   if (hss->leaf_size > 0) o.leaf_size = (int)hss->leaf_size;
@@ -108,9 +111,9 @@ PetscErrorCode PCSetFromOptions_HSS(PC pc, PetscOptionItems *PetscOptionsObject)
 
   PetscFunctionBegin;
   PetscOptionsHeadBegin(PetscOptionsObject, "HSS factorization options");
-  PetscCall(PetscOptionsReal("-pc_hss_rel_tol", "Relative tolerance of the compression factored (0: the matrix's; 1e-8 on a dense matrix, 1e-3 on an H2 one)", "PCHSSSetRelTol", tol, &tol, NULL));
-  PetscCall(PetscOptionsInt("-pc_hss_leaf_size", "Dof nodes per leaf cluster (0: the matrix's; 256 on a dense matrix)", "PCHSSSetLeafSize", leaf, &leaf, NULL));
-  PetscCall(PetscOptionsInt("-pc_hss_max_rank", "Cap on each skeleton (-1: the matrix's; none on a dense matrix)", "PCHSSSetMaxRank", rank, &rank, NULL));
+  PetscCall(HssbemOptionsRealItem(PetscOptionsObject, "pc_hss_rel_tol", "PCHSSSetRelTol", &tol));
+  PetscCall(HssbemOptionsIntItem(PetscOptionsObject, "pc_hss_leaf_size", "PCHSSSetLeafSize", &leaf));
+  PetscCall(HssbemOptionsIntItem(PetscOptionsObject, "pc_hss_max_rank", "PCHSSSetMaxRank", &rank));
   PetscOptionsHeadEnd();
   PetscCall(PCHSSSetRelTol(pc, tol)); /* the setters check the values */
   PetscCall(PCHSSSetLeafSize(pc, leaf));
@@ -211,7 +214,7 @@ PETSC_EXTERN PetscErrorCode PCCreate_HSS(PC pc)
 PetscErrorCode PCHSSSetRelTol(PC pc, PetscReal tol)
 {
   PetscFunctionBegin;
-  PetscCheck(tol >= 0 && tol < 1, PetscObjectComm((PetscObject)pc), PETSC_ERR_ARG_OUTOFRANGE, "-pc_hss_rel_tol: the relative tolerance must lie in [0, 1), got %g", (double)tol);
+  PetscCall(HssbemOptionCheck(PetscObjectComm((PetscObject)pc), "pc_hss_rel_tol", (double)tol));
   PetscCall(PCCompressedSet<PC_HSS>(pc, PCHSS, [&](PC_HSS &h) { h.rel_tol = tol; }));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
@@ -226,7 +229,7 @@ PetscErrorCode PCHSSSetRelTol(PC pc, PetscReal tol)
 PetscErrorCode PCHSSSetLeafSize(PC pc, PetscInt n)
 {
   PetscFunctionBegin;
-  PetscCheck(n >= 0, PetscObjectComm((PetscObject)pc), PETSC_ERR_ARG_OUTOFRANGE, "-pc_hss_leaf_size: the leaf size must be 0 (the matrix's) or positive");
+  PetscCall(HssbemOptionCheck(PetscObjectComm((PetscObject)pc), "pc_hss_leaf_size", (double)n));
   PetscCall(PCCompressedSet<PC_HSS>(pc, PCHSS, [&](PC_HSS &h) { h.leaf_size = n; }));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
@@ -241,7 +244,29 @@ PetscErrorCode PCHSSSetLeafSize(PC pc, PetscInt n)
 PetscErrorCode PCHSSSetMaxRank(PC pc, PetscInt k)
 {
   PetscFunctionBegin;
-  PetscCheck(k == -1 || k > 0, PetscObjectComm((PetscObject)pc), PETSC_ERR_ARG_OUTOFRANGE, "-pc_hss_max_rank: the rank cap must be positive, or -1 for the matrix's");
+  PetscCall(HssbemOptionCheck(PetscObjectComm((PetscObject)pc), "pc_hss_max_rank", (double)k));
   PetscCall(PCCompressedSet<PC_HSS>(pc, PCHSS, [&](PC_HSS &h) { h.max_rank = k; }));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/*@C
+  HssbemPCHSSGetOptionValues - The option values a PC hss holds (-pc_hss_*), as the table names
+  them; nothing when pc is not a PC hss.
+
+  Not Collective
+
+  Level: developer
+@*/
+PetscErrorCode HssbemPCHSSGetOptionValues(PC pc, hssbem::OptionValues *values)
+{
+  PetscBool match;
+
+  PetscFunctionBegin;
+  PetscCall(PetscObjectTypeCompare((PetscObject)pc, PCHSS, &match));
+  if (!match) PetscFunctionReturn(PETSC_SUCCESS);
+  const PC_HSS *hss = PCCompressedData<PC_HSS>(pc);
+  PetscCall(HssbemOptionValuePut(values, "pc_hss_rel_tol", (double)hss->rel_tol));
+  PetscCall(HssbemOptionValuePut(values, "pc_hss_leaf_size", (double)hss->leaf_size));
+  PetscCall(HssbemOptionValuePut(values, "pc_hss_max_rank", (double)hss->max_rank));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

@@ -1,4 +1,5 @@
 #include "hssbem/petsc/log.h"
+#include "hssbem/petsc/options.h"
 #include "hssbem/petsc/pc_h2.h"
 #include "hssbem/petsc/pc_hss.h"
 #include "hssbem/core/fault.hpp"
@@ -50,7 +51,7 @@ static void PhaseHook_Private(hssbem::Phase phase, bool begin)
 
 static PetscBool HssbemPackageInitialized = PETSC_FALSE;
 static bool      ProgressOnTerminal       = false;
-static double    ProgressAfter            = 2;
+static double    ProgressAfter            = hssbem::option_default::hssbem_progress_after;
 
 /* Progress of long work on rank 0's standard error (-hssbem_progress): one updating line on a
    terminal, plain lines otherwise (at most one per phase every 5 s); a phase shorter than
@@ -73,19 +74,21 @@ static void ProgressHook_Private(const char *phase, double done, double seconds)
 static PetscErrorCode ProgressFromOptions_Private(void)
 {
   PetscMPIInt rank;
-  PetscBool   on = isatty(STDERR_FILENO) ? PETSC_TRUE : PETSC_FALSE;
-  PetscReal   after = 2;
+  const hssbem::OptionRow *on_row, *after_row;
+  hssbem::OptionValue      on, after;
+  PetscBool                set;
 
   PetscFunctionBegin;
   PetscCallMPI(MPI_Comm_rank(PETSC_COMM_WORLD, &rank));
-  PetscOptionsBegin(PETSC_COMM_WORLD, NULL, "Progress of long work (hssbem)", NULL);
-  PetscCall(PetscOptionsBool("-hssbem_progress", "Report the progress of long phases on rank 0's standard error (default: when it is a terminal)", NULL, on, &on, NULL));
-  PetscCall(PetscOptionsReal("-hssbem_progress_after", "Seconds a phase runs before -hssbem_progress reports it", NULL, after, &after, NULL));
-  PetscOptionsEnd();
-  PetscCheck(after >= 0 && std::isfinite((double)after), PETSC_COMM_WORLD, PETSC_ERR_ARG_OUTOFRANGE, "-hssbem_progress_after must be non-negative and finite, got %g", (double)after);
-  ProgressAfter      = (double)after;
+  PetscCall(HssbemOptionRow("hssbem_progress", &on_row));
+  PetscCall(HssbemOptionRow("hssbem_progress_after", &after_row));
+  on    = hssbem::OptionValue::of(*on_row, isatty(STDERR_FILENO) ? 1.0 : 0.0); /* the table's default is "a terminal" */
+  after = hssbem::OptionValue::default_of(*after_row);
+  PetscCall(HssbemOptionsGetValue(PETSC_COMM_WORLD, NULL, *on_row, &on, &set));
+  PetscCall(HssbemOptionsGetValue(PETSC_COMM_WORLD, NULL, *after_row, &after, &set));
+  ProgressAfter      = after.number;
   ProgressOnTerminal = isatty(STDERR_FILENO) != 0;
-  hssbem::set_progress_hook(rank == 0 && on ? ProgressHook_Private : nullptr);
+  hssbem::set_progress_hook(rank == 0 && on.number != 0 ? ProgressHook_Private : nullptr);
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

@@ -2,6 +2,7 @@
    format conversion the factorization needs (see system.h). */
 #include "hssbem/petsc/system.h"
 #include "hssbem/petsc/log.h"
+#include "hssbem/petsc/options.h"
 #include "hssbem/petsc/pc_h2.h"
 #include "hssbem/petsc/pc_hss.h"
 
@@ -108,19 +109,22 @@ static PetscErrorCode KSPProgressDestroy_Private(void **ctx)
    solution, whatever the KSP (preonly included: a loose preconditioner applied once is no solve). */
 static PetscErrorCode ResidualMax_Private(MPI_Comm comm, PetscReal *bound)
 {
+  const hssbem::OptionRow *row;
+  hssbem::OptionValue      v;
+  PetscBool                set;
+
   PetscFunctionBegin;
-  *bound = HSSBEM_RESIDUAL_MAX;
-  PetscOptionsBegin(comm, NULL, "The main solve (hssbem)", "KSP");
-  PetscCall(PetscOptionsReal("-hssbem_residual_max", "Largest true relative residual ||b - A x||/||b|| accepted as a solution (any KSP, preonly included)", "HssbemSolveSystem", *bound, bound, NULL));
-  PetscOptionsEnd();
-  PetscCheck(*bound > 0 && std::isfinite((double)*bound), comm, PETSC_ERR_ARG_OUTOFRANGE, "-hssbem_residual_max must be positive and finite, got %g", (double)*bound);
+  PetscCall(HssbemOptionRow("hssbem_residual_max", &row));
+  v = hssbem::OptionValue::default_of(*row);
+  PetscCall(HssbemOptionsGetValue(comm, NULL, *row, &v, &set));
+  *bound = (PetscReal)v.number;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
 /*@C
   HssbemKSPCreate - Creates the main solver (no prefix) with the defaults of the matrix type
-  (-ksp_type preonly with -pc_type hss on the HSS matrix; GMRES(100), right-preconditioned so that
-  -ksp_rtol 1e-8 bounds the true residual, on the H² one, with -pc_type h2 (the H² factorization
+  (-ksp_type preonly with -pc_type hss on the HSS matrix; GMRES, right-preconditioned so that
+  -ksp_rtol bounds the true residual, on the H² one, with -pc_type h2 (the H² factorization
   at its default tolerance, distributed like the matrix: on 2 ranks 22.3 s against 24.9 s with
   Jacobi on an 80k sphere, 6.2-6.3 s against 6.3 s on a 20k disk organ with nu = 0.49, and 6
   iterations against 52-71); -pc_type lu on the dense one) and applies
@@ -139,10 +143,10 @@ PetscErrorCode HssbemKSPCreate(MPI_Comm comm, const char *mat_type, KSP *ksp)
   PetscCall(HssbemOperatorTypeFromName(comm, mat_type, &type));
   const bool h2 = type == hssbem::OperatorType::H2;
   PetscCall(KSPCreate(comm, ksp));
-  PetscCall(KSPSetType(*ksp, h2 ? KSPGMRES : KSPPREONLY));
-  if (h2) {
-    PetscCall(KSPGMRESSetRestart(*ksp, 100));
-    PetscCall(KSPSetTolerances(*ksp, 1e-8, PETSC_DEFAULT, PETSC_DEFAULT, PETSC_DEFAULT));
+  PetscCall(KSPSetType(*ksp, h2 ? std::string(hssbem::option_default::ksp_type).c_str() : KSPPREONLY));
+  if (h2) { /* the table's defaults on the H² operator (core/option_table.def) */
+    PetscCall(KSPGMRESSetRestart(*ksp, hssbem::option_default::ksp_gmres_restart));
+    PetscCall(KSPSetTolerances(*ksp, hssbem::option_default::ksp_rtol, PETSC_DEFAULT, PETSC_DEFAULT, PETSC_DEFAULT));
     PetscCall(KSPSetPCSide(*ksp, PC_RIGHT));
   }
   PetscCall(KSPGetPC(*ksp, &pc));
@@ -161,7 +165,7 @@ PetscErrorCode HssbemKSPCreate(MPI_Comm comm, const char *mat_type, KSP *ksp)
   HssbemSolveSystem - Solves A x = b with a KSP from HssbemKSPCreate(); a dense A is converted in
   place to the format its factorization needs (so no second copy stays alive). A diverged solve
   is an error, and so is one whose true relative residual ||b - A x|| / ||b|| (A's own product)
-  is not finite or exceeds -hssbem_residual_max (default HSSBEM_RESIDUAL_MAX), whatever the KSP:
+  is not finite or exceeds -hssbem_residual_max (default: the table's), whatever the KSP:
   with -ksp_type preonly KSP reports convergence after one application of the PC, however loose.
 
   Options Database Key:
@@ -201,5 +205,71 @@ PetscErrorCode HssbemSolveSystem(KSP ksp, Mat *A, Vec b, Vec x, HssbemSolveInfo 
   PetscCheck(std::isfinite((double)info->residual) && info->residual <= bound, PetscObjectComm((PetscObject)*A), PETSC_ERR_NOT_CONVERGED,
              "the linear solve gave no solution: its true relative residual ||b - A x||/||b|| is %.3g, above -hssbem_residual_max %g (%s + %s, %s after %" PetscInt_FMT " iterations)", (double)info->residual, (double)bound,
              info->ksp_type.c_str(), info->pc_type.c_str(), KSPConvergedReasons[info->reason], info->iterations);
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/*@C
+  HssbemKSPGetSizeOptions - What the size model needs of the solver of a KSP from HssbemKSPCreate()
+  (after KSPSetFromOptions): the Krylov method's vectors and, with PC h2, its options.
+
+  Not Collective
+
+  Level: developer
+@*/
+PetscErrorCode HssbemKSPGetSizeOptions(KSP ksp, hssbem::SizeOptions *o)
+{
+  PC                      pc;
+  PetscBool               preonly, gmres, is_h2;
+  PetscInt                restart = hssbem::option_default::ksp_gmres_restart;
+  hssbem::H2FactorOptions f;
+
+  PetscFunctionBegin;
+  PetscCall(PetscObjectTypeCompare((PetscObject)ksp, KSPPREONLY, &preonly));
+  PetscCall(PetscObjectTypeCompare((PetscObject)ksp, KSPGMRES, &gmres));
+  if (gmres) PetscCall(KSPGMRESGetRestart(ksp, &restart));
+  o->krylov_vectors = preonly ? 0 : (int)restart + 1;
+  PetscCall(KSPGetPC(ksp, &pc));
+  PetscCall(HssbemPCH2GetFactorOptions(pc, &f, &is_h2));
+  o->h2_factored = is_h2 == PETSC_TRUE;
+  if (!is_h2) PetscFunctionReturn(PETSC_SUCCESS);
+  o->pc_h2_rel_tol    = f.rel_tol;
+  o->pc_h2_top_size   = f.top_size;
+  o->pc_h2_mixed_top  = f.single_top_from;
+  o->pc_h2_spread_top = f.spread_top;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/*@C
+  HssbemKSPGetOptionValues - The options a KSP from HssbemKSPCreate() and its PC use, named as in
+  hssbem's table of options.
+
+  Not Collective
+
+  Level: developer
+@*/
+PetscErrorCode HssbemKSPGetOptionValues(KSP ksp, hssbem::OptionValues *values)
+{
+  PC        pc;
+  KSPType   kt;
+  PCType    pt;
+  PetscBool gmres;
+  PetscReal rtol;
+  PetscInt  restart;
+
+  PetscFunctionBegin;
+  PetscCall(KSPGetType(ksp, &kt));
+  PetscCall(KSPGetPC(ksp, &pc));
+  PetscCall(PCGetType(pc, &pt));
+  PetscCallCXX((*values)["ksp_type"] = hssbem::OptionValue::of(*hssbem::find_option("ksp_type"), std::string(kt)));
+  PetscCallCXX((*values)["pc_type"] = hssbem::OptionValue::of(*hssbem::find_option("pc_type"), std::string(pt)));
+  PetscCall(PetscObjectTypeCompare((PetscObject)ksp, KSPGMRES, &gmres));
+  if (gmres) {
+    PetscCall(KSPGetTolerances(ksp, &rtol, NULL, NULL, NULL));
+    PetscCall(KSPGMRESGetRestart(ksp, &restart));
+    PetscCallCXX((*values)["ksp_rtol"] = hssbem::OptionValue::of(*hssbem::find_option("ksp_rtol"), (double)rtol));
+    PetscCallCXX((*values)["ksp_gmres_restart"] = hssbem::OptionValue::of(*hssbem::find_option("ksp_gmres_restart"), (double)restart));
+  }
+  PetscCall(HssbemPCH2GetOptionValues(pc, values));
+  PetscCall(HssbemPCHSSGetOptionValues(pc, values));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

@@ -3,6 +3,8 @@
 #include "hssbem/petsc/system.h"
 #include "hssbem/petsc/dense.h"
 #include "hssbem/petsc/log.h"
+#include "hssbem/petsc/options.h"
+#include "hssbem/petsc/pc_h2.h"
 #include "hssbem/bem/rigid_modes.hpp"
 
 #include "mat_compressed.hpp"
@@ -33,37 +35,19 @@ PetscErrorCode HssbemMatIsCompressed(Mat A, PetscBool *compressed)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* The options every compression of the operator has, -mat_<family>_rel_tol, _leaf_size,
-   _max_rank, _proxy_ratio and _proxy_points (family "hss" or "h2"), inside the caller's
-   PetscOptionsBegin/End. Opts is hssbem::HssOptions or hssbem::H2Options. */
-template <class Opts>
-static PetscErrorCode CompressionOptions_Private(const char *family, Opts *opts, PetscOptionItems *PetscOptionsObject)
+/* The -<prefix>mat_<family>_* options of the table given in the database, onto opts (Opts is
+   hssbem::HssOptions or hssbem::H2Options; `bind` maps each option to its field). */
+template <class Opts, class Bind>
+static PetscErrorCode CompressionOptions_Private(MPI_Comm comm, const char *prefix, const char *family, Opts *opts, Bind &&bind)
 {
-  const std::string key = std::string("-mat_") + family + "_";
-  PetscInt          leaf = opts->leaf_size, rank = opts->max_rank, np = opts->proxy_points;
+  hssbem::OptionValues given;
+  std::string          head;
 
   PetscFunctionBegin;
-  PetscCall(PetscOptionsReal((key + "rel_tol").c_str(), "Relative tolerance of the compression", "HssbemCreateSystem", opts->rel_tol, &opts->rel_tol, NULL));
-  PetscCall(PetscOptionsInt((key + "leaf_size").c_str(), "Dof nodes per leaf cluster", "HssbemCreateSystem", leaf, &leaf, NULL));
-  PetscCall(PetscOptionsInt((key + "max_rank").c_str(), "Cap on each skeleton (-1: none)", "HssbemCreateSystem", rank, &rank, NULL));
-  PetscCall(PetscOptionsReal((key + "proxy_ratio").c_str(), "Proxy sphere radius over cluster radius", "HssbemCreateSystem", opts->proxy_ratio, &opts->proxy_ratio, NULL));
-  PetscCall(PetscOptionsInt((key + "proxy_points").c_str(), "Points per proxy sphere (0: chosen from the tolerance)", "HssbemCreateSystem", np, &np, NULL));
-  opts->leaf_size    = (int)leaf;
-  opts->max_rank     = (int)rank;
-  opts->proxy_points = (int)np;
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
-
-/* The checks of those options. */
-template <class Opts>
-static PetscErrorCode CheckCompressionOptions_Private(MPI_Comm comm, const char *family, const Opts &opts)
-{
-  PetscFunctionBegin;
-  PetscCheck(opts.rel_tol > 0 && opts.rel_tol < 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_%s_rel_tol must lie in (0, 1), got %g", family, (double)opts.rel_tol);
-  PetscCheck(opts.leaf_size >= 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_%s_leaf_size must be at least 1", family);
-  PetscCheck(opts.max_rank == -1 || opts.max_rank > 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_%s_max_rank must be positive, or -1 for no cap", family);
-  PetscCheck(opts.proxy_ratio > 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_%s_proxy_ratio must exceed 1", family);
-  PetscCheck(opts.proxy_points >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_%s_proxy_points must be 0 (automatic) or positive", family);
+  PetscCallCXX(head = std::string("mat_") + family + "_");
+  PetscCall(HssbemOptionsGetValues(comm, prefix, hssbem::OptionReader::System, hssbem::kEvery, &given));
+  for (const auto &[name, v] : given)
+    if (name.rfind(head, 0) == 0) PetscCallCXX(bind(name.substr(head.size()), v.number, *opts));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -77,15 +61,20 @@ static PetscErrorCode CheckCompressionOptions_Private(MPI_Comm comm, const char 
 . -mat_hss_proxy_ratio <r>    - proxy sphere radius over cluster radius
 - -mat_hss_proxy_points <n>   - points per proxy sphere (0: from the tolerance)
 
+  The defaults and ranges are the table's (core/option_table.def).
+
   Level: intermediate
 @*/
 PetscErrorCode HssbemHssOptionsFromDatabase(MPI_Comm comm, const char *prefix, hssbem::HssOptions *opts)
 {
   PetscFunctionBegin;
-  PetscOptionsBegin(comm, prefix, "HSS compression of the BEM operator (-bem_mat_type hss)", "Mat");
-  PetscCall(CompressionOptions_Private("hss", opts, PetscOptionsObject));
-  PetscOptionsEnd();
-  PetscCall(CheckCompressionOptions_Private(comm, "hss", *opts));
+  PetscCall(CompressionOptions_Private(comm, prefix, "hss", opts, [](const std::string &k, double v, hssbem::HssOptions &o) {
+    if (k == "rel_tol") o.rel_tol = v;
+    else if (k == "leaf_size") o.leaf_size = (int)v;
+    else if (k == "max_rank") o.max_rank = (int)v;
+    else if (k == "proxy_ratio") o.proxy_ratio = v;
+    else if (k == "proxy_points") o.proxy_points = (int)v;
+  }));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -101,21 +90,22 @@ PetscErrorCode HssbemHssOptionsFromDatabase(MPI_Comm comm, const char *prefix, h
 . -mat_h2_eta <eta>          - clusters a, b are far when |c_a - c_b| > (1 + eta)(R_a + R_b)
 - -mat_h2_single_precision   - store far and near blocks in single precision (half the memory)
 
+  The defaults and ranges are the table's (core/option_table.def).
+
   Level: intermediate
 @*/
 PetscErrorCode HssbemH2OptionsFromDatabase(MPI_Comm comm, const char *prefix, hssbem::H2Options *opts)
 {
-  PetscBool single = opts->single_precision ? PETSC_TRUE : PETSC_FALSE;
-
   PetscFunctionBegin;
-  PetscOptionsBegin(comm, prefix, "H2 compression of the BEM operator (-bem_mat_type h2)", "Mat");
-  PetscCall(CompressionOptions_Private("h2", opts, PetscOptionsObject));
-  PetscCall(PetscOptionsReal("-mat_h2_eta", "Admissibility: far when |c_a - c_b| > (1 + eta)(R_a + R_b)", "HssbemCreateSystem", opts->eta, &opts->eta, NULL));
-  PetscCall(PetscOptionsBool("-mat_h2_single_precision", "Store far and near blocks in single precision (half the memory)", "HssbemCreateSystem", single, &single, NULL));
-  PetscOptionsEnd();
-  opts->single_precision = single == PETSC_TRUE;
-  PetscCall(CheckCompressionOptions_Private(comm, "h2", *opts));
-  PetscCheck(opts->eta >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-mat_h2_eta must be >= 0");
+  PetscCall(CompressionOptions_Private(comm, prefix, "h2", opts, [](const std::string &k, double v, hssbem::H2Options &o) {
+    if (k == "rel_tol") o.rel_tol = v;
+    else if (k == "leaf_size") o.leaf_size = (int)v;
+    else if (k == "max_rank") o.max_rank = (int)v;
+    else if (k == "proxy_ratio") o.proxy_ratio = v;
+    else if (k == "proxy_points") o.proxy_points = (int)v;
+    else if (k == "eta") o.eta = v;
+    else if (k == "single_precision") o.single_precision = v != 0;
+  }));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -162,19 +152,23 @@ PetscErrorCode HssbemMachineLimits(MPI_Comm comm, hssbem::MachineLimits *limits)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* What else the size model needs of a factored H² system: PC h2's options (read, not listed:
-   PCSetFromOptions_H2 lists and checks them) and the Krylov method's vectors. */
-static PetscErrorCode H2SolverSizeOptions_Private(hssbem::SizeOptions *o)
+/* The solver's part of the size model as the options database sets it, for HssbemCreateSystem()
+   (which has no KSP): the Krylov method, -pc_type h2 and PC h2's options (read, not listed:
+   PCSetFromOptions_H2 lists and checks them). */
+static PetscErrorCode SolverSizeOptions_Private(hssbem::SizeOptions *o)
 {
-  char      ksp[64] = "gmres";
-  PetscInt  restart = 100, top = o->pc_h2_top_size, mixed = o->pc_h2_mixed_top;
+  char      ksp[64] = "", pc[64] = "";
+  PetscInt  restart = o->krylov_vectors - 1, top = o->pc_h2_top_size, mixed = o->pc_h2_mixed_top;
   PetscReal tol = o->pc_h2_rel_tol;
-  PetscBool spread = o->pc_h2_spread_top ? PETSC_TRUE : PETSC_FALSE;
+  PetscBool spread = o->pc_h2_spread_top ? PETSC_TRUE : PETSC_FALSE, set;
 
   PetscFunctionBegin;
+  PetscCall(PetscStrncpy(ksp, std::string(hssbem::option_default::ksp_type).c_str(), sizeof(ksp)));
   PetscCall(PetscOptionsGetString(NULL, NULL, "-ksp_type", ksp, sizeof(ksp), NULL));
   PetscCall(PetscOptionsGetInt(NULL, NULL, "-ksp_gmres_restart", &restart, NULL));
   o->krylov_vectors = std::string(ksp) == KSPPREONLY ? 0 : (int)restart + 1;
+  PetscCall(PetscOptionsGetString(NULL, NULL, "-pc_type", pc, sizeof(pc), &set));
+  o->h2_factored = !set || std::string(pc) == PCH2;
   if (!o->h2_factored) PetscFunctionReturn(PETSC_SUCCESS);
   PetscCall(PetscOptionsGetReal(NULL, NULL, "-pc_h2_rel_tol", &tol, NULL));
   PetscCall(PetscOptionsGetInt(NULL, NULL, "-pc_h2_top_size", &top, NULL));
@@ -188,14 +182,16 @@ static PetscErrorCode H2SolverSizeOptions_Private(hssbem::SizeOptions *o)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* Refuses (on comm) a system of `type` that does not fit this machine, before it is allocated. */
-static PetscErrorCode CheckSize_Private(MPI_Comm comm, hssbem::OperatorType type, PetscInt nnodes, const hssbem::SizeOptions &o)
+/* Refuses (on comm) a system of `type` that does not fit this machine (`given`, or measured),
+   before it is allocated. */
+static PetscErrorCode CheckSize_Private(MPI_Comm comm, hssbem::OperatorType type, PetscInt nnodes, const hssbem::SizeOptions &o, const hssbem::MachineLimits *given)
 {
   hssbem::MachineLimits limits;
   std::string           why;
 
   PetscFunctionBegin;
-  PetscCall(HssbemMachineLimits(comm, &limits));
+  if (given) limits = *given;
+  else PetscCall(HssbemMachineLimits(comm, &limits));
   PetscCallCXX(why = hssbem::size_refusal(type, 3 * (long long)nnodes, o, limits));
   PetscCheck(why.empty(), comm, PETSC_ERR_MEM, "%s", why.c_str());
   PetscFunctionReturn(PETSC_SUCCESS);
@@ -203,7 +199,9 @@ static PetscErrorCode CheckSize_Private(MPI_Comm comm, hssbem::OperatorType type
 
 /*@C
   HssbemCreateSystem - Creates the system matrix A (dense, HSS or H²) and right-hand side b of a
-  boundary-condition pattern; see system.h.
+  boundary-condition pattern; see system.h. Reads the compression's options (-mat_h2_*,
+  -mat_hss_*) and what the size check needs of the solver (-ksp_type, -pc_type, -pc_h2_*) from the
+  options database.
 
   Collective
 
@@ -212,9 +210,29 @@ static PetscErrorCode CheckSize_Private(MPI_Comm comm, hssbem::OperatorType type
 PetscErrorCode HssbemCreateSystem(MPI_Comm comm, const hssbem::BemOperator &op, const hssbem::SystemSelection &sel, const std::vector<double> *rigid_modes, const char *mat_type, Mat *A,
                                   Vec *b)
 {
+  HssbemSystemOptions opts;
+
+  PetscFunctionBegin;
+  PetscCall(HssbemH2OptionsFromDatabase(comm, NULL, &opts.h2));
+  PetscCall(HssbemHssOptionsFromDatabase(comm, NULL, &opts.hss));
+  PetscCall(SolverSizeOptions_Private(&opts.solver));
+  PetscCall(HssbemCreateSystemWithOptions(comm, op, sel, rigid_modes, mat_type, opts, A, b));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/*@C
+  HssbemCreateSystemWithOptions - HssbemCreateSystem() with the options given, typed.
+
+  Collective
+
+  Level: intermediate
+@*/
+PetscErrorCode HssbemCreateSystemWithOptions(MPI_Comm comm, const hssbem::BemOperator &op, const hssbem::SystemSelection &sel, const std::vector<double> *rigid_modes, const char *mat_type,
+                                             const HssbemSystemOptions &opts, Mat *A, Vec *b)
+{
   hssbem::OperatorType type;
   std::unique_ptr<HssbemSystemContext> ctx; /* owned here until A owns it: an error path frees it */
-  hssbem::SizeOptions size_options;
+  hssbem::SizeOptions size_options = opts.solver;
 
   PetscFunctionBegin;
   PetscCall(HssbemOperatorTypeFromName(comm, mat_type, &type));
@@ -226,24 +244,16 @@ PetscErrorCode HssbemCreateSystem(MPI_Comm comm, const hssbem::BemOperator &op, 
   /* a pressure load needs the Gn columns */
   const bool pressure = std::any_of(sel.pressure.begin(), sel.pressure.end(), [](double p) { return !std::isnan(p); });
   if (type == hssbem::OperatorType::H2) {
+    ctx->h2_options                  = opts.h2;
     ctx->h2_options.pressure_columns = pressure;
-    /* The driver's defaults (docs/performance.md, "Choosing the operator"): 1e-5 keeps the H² solution within
-       ~5e-6 of dense LU's, well below the discretisation error of any mesh it pays on, and
-       single-precision (low-rank) blocks halve the memory at that tolerance. */
-    ctx->h2_options.rel_tol          = 1e-5;
-    ctx->h2_options.single_precision = true;
-    PetscCall(HssbemH2OptionsFromDatabase(comm, NULL, &ctx->h2_options));
-    size_options.single_precision = ctx->h2_options.single_precision;
-    size_options.h2_rel_tol       = ctx->h2_options.rel_tol;
-    PetscCall(HssbemH2WillBeFactored(&size_options.h2_factored));
-    PetscCall(H2SolverSizeOptions_Private(&size_options));
+    size_options.single_precision    = ctx->h2_options.single_precision;
+    size_options.h2_rel_tol          = ctx->h2_options.rel_tol;
   } else if (type == hssbem::OperatorType::Hss) {
-    ctx->hss_options.rel_tol          = 1e-8;
+    ctx->hss_options                  = opts.hss;
     ctx->hss_options.pressure_columns = pressure;
-    PetscCall(HssbemHssOptionsFromDatabase(comm, NULL, &ctx->hss_options));
-    size_options.hss_rel_tol = ctx->hss_options.rel_tol;
+    size_options.hss_rel_tol          = ctx->hss_options.rel_tol;
   }
-  PetscCall(CheckSize_Private(comm, type, op.num_nodes(), size_options));
+  PetscCall(CheckSize_Private(comm, type, op.num_nodes(), size_options, opts.limits));
   if (type == hssbem::OperatorType::Dense) PetscCall(HssbemAssembleDense(comm, op, sel, rigid_modes, A, b));
   else PetscCall(HssbemMatCreateCompressed_Private(comm, ctx.get(), A, b));
   PetscCall(HssbemMatComposeSystemContext(*A, ctx.get()));

@@ -101,17 +101,6 @@ PetscErrorCode HssbemOperatorTypeFromName(MPI_Comm comm, const char *mat_type, h
 
 const char *HssbemDefaultPCType(hssbem::OperatorType type) { return type == hssbem::OperatorType::Hss ? PCHSS : type == hssbem::OperatorType::H2 ? PCH2 : PCLU; }
 
-PetscErrorCode HssbemH2WillBeFactored(bool *factored)
-{
-  char      given[64];
-  PetscBool set;
-
-  PetscFunctionBegin;
-  PetscCall(PetscOptionsGetString(NULL, NULL, "-pc_type", given, sizeof(given), &set));
-  *factored = std::string(set ? given : HssbemDefaultPCType(hssbem::OperatorType::H2)) == PCH2;
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
-
 PetscErrorCode HssbemOwnedNodes(MPI_Comm comm, PetscInt nnodes, PetscInt *nstart, PetscInt *nlocal)
 {
   PetscInt n = PETSC_DECIDE, N = nnodes;

@@ -72,10 +72,8 @@ PetscErrorCode HssbemMatGetSystemContext(Mat A, HssbemSystemContext **ctx);
 PetscErrorCode HssbemOperatorTypeFromName(MPI_Comm comm, const char *mat_type, hssbem::OperatorType *type);
 
 /* The main solver's default PC for an operator type (PCHSS, PCH2 for H² on any number of ranks,
-   PCLU for dense), and whether the H² operator will be factored by PC h2 (the -pc_type of the
-   options database, else that default). */
+   PCLU for dense). */
 const char *HssbemDefaultPCType(hssbem::OperatorType type);
-PetscErrorCode HssbemH2WillBeFactored(bool *factored);
 
 /* Dof nodes owned by this rank: a contiguous block [nstart, nstart + nlocal), 3 rows each. */
 PetscErrorCode HssbemOwnedNodes(MPI_Comm comm, PetscInt nnodes, PetscInt *nstart, PetscInt *nlocal);

@@ -123,6 +123,18 @@ bool check_frame_constraints(const ProblemSetup &s, const std::vector<std::array
                         "); every frame of a scene must fix all six rigid motions (pure-traction frames are not supported in scenes)");
 }
 
+ProblemSetup setup_in_memory(const SurfaceMesh &mesh, const Material &material, double feature_angle_deg)
+{
+  ProblemSetup s;
+  s.material = material;
+  s.mesh = std::make_unique<SurfaceMesh>(mesh);
+  s.disc = std::make_unique<Discretization>(*s.mesh, feature_angle_deg);
+  const NodeConditions nc = apply_rules({}, *s.disc, "");
+  s.selection = selection_of(nc);
+  s.vertex_displacement_prescribed = vertex_displacement_prescribed(*s.disc, nc);
+  return s;
+}
+
 ProblemSetup setup_problem(const std::string &problem_file, const ProblemOverrides &o)
 {
   return setup_problem(read_problem(problem_file), o);

@@ -4,7 +4,7 @@
 #include "hssbem/mesh/mesh.hpp"
 #include "hssbem/post/post.hpp"
 #include "hssbem/bem/rigid_modes.hpp"
-#include "hssbem/app/run.hpp"
+#include "hssbem/session/static_session.hpp"
 #include "hssbem/problem/setup.hpp"
 
 #include <gtest/gtest.h>

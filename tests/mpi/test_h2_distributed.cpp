@@ -41,6 +41,7 @@ struct Fixture {
     part = partition_nodes(*setup.disc, comm.size(), &stats);
     MPI_Bcast(part.data(), static_cast<int>(part.size()), MPI_INT, 0, PETSC_COMM_WORLD); // one partition, whatever METIS does per rank
     opts.rel_tol = 1e-6;
+    opts.single_precision = false;
     opts.leaf_size = 16;
     dist = std::make_unique<H2DistributedSystem>(*op, opts, part, comm);
     whole = std::make_unique<H2Matrix>(compress_bem_operator_h2(*op, opts, part, SerialComm()));

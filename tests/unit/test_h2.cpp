@@ -113,6 +113,7 @@ TEST_P(H2Accuracy, MatvecMatchesDenseOperator)
   o.rel_tol = c.tol;
   o.leaf_size = c.leaf;
   o.eta = c.eta;
+  o.single_precision = false;
   o.pressure_columns = true;
   H2Matrix K = compress_bem_operator_h2(*L->op, o);
   const auto Kd = dense_k(*L->op, K.col_block());
@@ -141,6 +142,7 @@ TEST(H2Accuracy, FarBlocksCarryWhatNearBlocksMiss)
   // storing near blocks only.
   auto L = load("sphere_l1.msh");
   H2Options o;
+  o.rel_tol = 1e-6, o.single_precision = false; // a tighter tolerance than the driver's, in double
   o.leaf_size = 32;
   H2Matrix K = compress_bem_operator_h2(*L->op, o);
   const auto Kd = dense_k(*L->op, K.col_block());
@@ -157,6 +159,7 @@ TEST(H2Accuracy, SinglePrecisionBlocksHalveTheMemory)
 {
   auto L = load("sphere_l1.msh");
   H2Options o;
+  o.rel_tol = 1e-6, o.single_precision = false; // a tighter tolerance than the driver's, in double
   o.leaf_size = 16;
   o.eta = 0;
   const H2Matrix Kd = compress_bem_operator_h2(*L->op, o);
@@ -384,6 +387,7 @@ TEST(H2Matrix, BasisAccessorGivesTheBasesTheProductUses)
   auto L = load("sphere_l1.msh");
   for (const bool single : {false, true}) {
     H2Options o;
+    o.rel_tol = 1e-6;
     o.leaf_size = 16;
     o.single_precision = single;
     const H2Matrix K = compress_bem_operator_h2(*L->op, o);
@@ -469,6 +473,7 @@ void check_shape(SurfaceMesh mesh, int leaf, const char *what)
 {
   auto L = load(std::move(mesh));
   H2Options o;
+  o.rel_tol = 1e-6, o.single_precision = false; // a tighter tolerance than the driver's, in double
   o.leaf_size = leaf;
   const H2Matrix K = compress_bem_operator_h2(*L->op, o);
   const double err = matvec_error(K, dense_k(*L->op, K.col_block()), 5);

@@ -48,6 +48,7 @@ H2Matrix compress_parts(const Loaded &L, double rel_tol, int leaf, int parts)
   H2Options o;
   o.rel_tol = rel_tol;
   o.leaf_size = leaf;
+  o.single_precision = false;
   return compress_bem_operator_h2(*L.op, o, partition_nodes(*L.disc, parts), SerialComm());
 }
 

@@ -3,6 +3,7 @@
 #include "hssbem/bem/rigid_modes.hpp"
 #include "hssbem/compress/pattern_columns.hpp"
 #include "hssbem/core/lapack.hpp"
+#include "hssbem/core/size_limits.hpp"
 #include "hssbem/h2/h2_compression.hpp"
 #include "hssbem/h2factor/h2_factorization.hpp"
 #include "hss_test_helpers.hpp"
@@ -40,11 +41,13 @@ std::unique_ptr<Loaded> load(const std::string &name, double nu = 0.3)
   return L;
 }
 
-/// The H² matrix of L's operator at rel_tol with leaves of `leaf` nodes (0: H2Options' default).
+/// The H² matrix of L's operator in double precision at rel_tol (0: 1e-6) with leaves of `leaf`
+/// nodes (0: H2Options' default).
 H2Matrix compress(const Loaded &L, double rel_tol, int leaf)
 {
   H2Options o;
-  if (rel_tol > 0) o.rel_tol = rel_tol;
+  o.rel_tol = rel_tol > 0 ? rel_tol : 1e-6;
+  o.single_precision = false;
   if (leaf > 0) o.leaf_size = leaf;
   return compress_bem_operator_h2(*L.op, o);
 }
@@ -344,11 +347,14 @@ TEST(H2FactorTop, MixedPrecisionTopSolvesLikeTheDoubleLU)
   EXPECT_EQ(mixed.stats().top_size, 3 * n);
   // The double block is kept beside the single-precision LU: 1.5 times the bytes.
   EXPECT_NEAR(static_cast<double>(mixed.stats().top_bytes) / plain.stats().top_bytes, 1.5, 0.01);
-  // The size model's figure for the top (its peak, while it is made) covers what it keeps.
-  const double peak = h2_top_peak_bytes(fo, 3LL * n, mixed.stats().top_size, 1);
-  EXPECT_GE(peak, static_cast<double>(mixed.stats().top_bytes));
-  EXPECT_LE(peak, 1.1 * static_cast<double>(mixed.stats().top_bytes));
-  EXPECT_EQ(h2_top_unknowns_from_options(fo, 3LL * n), 3LL * n);
+  // The size model (core/size_limits.hpp, the one model of the top) takes the kind the
+  // factorization took (the panels are stored in single precision only below a top, and here
+  // everything is the top) and counts what this top keeps: the double block and the single LU.
+  const H2TopKind kind = h2_top_kind(mixed.stats().top_size, mixed.stats().single_panels && 3 * n > fo.top_size, fo.single_top_from, fo.spread_top, 1);
+  EXPECT_EQ(kind, H2TopKind::Mixed);
+  const double model = h2_top_bytes(kind, mixed.stats().top_size, MachineLimits{});
+  EXPECT_GE(model, static_cast<double>(mixed.stats().top_bytes));
+  EXPECT_LE(model, 1.1 * static_cast<double>(mixed.stats().top_bytes));
   const std::vector<double> b = random_vector(3L * n, 3);
   std::vector<double> x1(b.size()), x2(b.size());
   solve_mesh_order(plain, b.data(), x1.data());
@@ -386,13 +392,16 @@ TEST(H2FactorTop, SinglePanelsTopIsALinearOperatorInAThirdOfTheMemory)
   ASSERT_EQ(single.stats().top_size, plain.stats().top_size);
   ASSERT_GT(single.stats().top_size, 100);
   EXPECT_NEAR(static_cast<double>(single.stats().top_bytes) / plain.stats().top_bytes, 0.5, 0.01);
-  // The size model's figures: the single top's peak, the LU and the rows arriving (8 n²), twice
-  // what it keeps; the double top's on one rank, its LU in place of the block (8 n²).
-  fo.single_top_from = 1;
-  EXPECT_NEAR(h2_top_peak_bytes(fo, 3LL * n, single.stats().top_size, 1) / single.stats().top_bytes, 2.0, 0.05);
-  fo.single_top_from = 0;
-  EXPECT_NEAR(h2_top_peak_bytes(fo, 3LL * n, plain.stats().top_size, 1) / plain.stats().top_bytes, 1.0, 0.05);
-  EXPECT_EQ(h2_top_unknowns_from_options(fo, 3LL * n), 0); // top_size 0: the levels decide
+  // The size model (core/size_limits.hpp, the one model of the top), for the kinds the
+  // factorization took: the single top counts what it keeps (its LU, 4 n²); the double top
+  // twice what it keeps (its LU, 8 n², and the rows arriving beside the block, which the
+  // measured peaks hold: docs/limits.md).
+  const H2TopKind single_kind = h2_top_kind(single.stats().top_size, single.stats().single_panels, 1, fo.spread_top, 1);
+  const H2TopKind plain_kind = h2_top_kind(plain.stats().top_size, plain.stats().single_panels, 0, fo.spread_top, 1);
+  EXPECT_EQ(single_kind, H2TopKind::Single);
+  EXPECT_EQ(plain_kind, H2TopKind::Double);
+  EXPECT_NEAR(h2_top_bytes(single_kind, single.stats().top_size, MachineLimits{}) / single.stats().top_bytes, 1.0, 0.05);
+  EXPECT_NEAR(h2_top_bytes(plain_kind, plain.stats().top_size, MachineLimits{}) / plain.stats().top_bytes, 2.0, 0.05);
   EXPECT_LT(single.top_trial(), fo.rel_tol);
   const std::vector<double> b1 = random_vector(3L * n, 3), b2 = random_vector(3L * n, 4);
   std::vector<double> b3(b1.size()), x1(b1.size()), x2(b1.size()), x3(b1.size()), xp(b1.size()), sum(b1.size());

@@ -8,6 +8,7 @@
 
 #include "hssbem/contact/contact_engine.hpp"
 #include "hssbem/reference/composite_reference.hpp"
+#include "hssbem/petsc/krylov.h"
 #include "hssbem/reference/h2_reference.hpp"
 
 #include <gtest/gtest.h>
@@ -170,7 +171,7 @@ TEST(ContactBodies, H2ReferencePerBodyAgreesWithDense)
   H2ReferenceOptions ho;
   ho.compression.rel_tol = 1e-5, ho.compression.single_precision = true, ho.compression.leaf_size = 32; // several levels on a small body
   const CompositeReference h2(*c.op, node_bodies(*c.disc), c.pattern, {}, [&](const BemOperator &op, std::vector<char> p, std::vector<char>, int) {
-    return std::make_unique<H2Reference>(op, std::move(p), ho);
+    return std::make_unique<H2Reference>(op, std::move(p), ho, HssbemH2ReferenceKrylovCreate());
   });
   EXPECT_FALSE(h2.exact_columns());
   ContactFrameReport rd, rh;

@@ -4,6 +4,7 @@
 #include "solve_helpers.hpp"
 
 #include "hssbem/contact/contact_engine.hpp"
+#include "hssbem/petsc/krylov.h"
 #include "hssbem/reference/h2_reference.hpp"
 
 #include <gtest/gtest.h>
@@ -55,7 +56,7 @@ struct References {
     H2ReferenceOptions ho;
     ho.compression.rel_tol = 1e-5, ho.compression.single_precision = true;
     if (leaf_size > 0) ho.compression.leaf_size = leaf_size;
-    h2 = std::make_unique<H2Reference>(*op, base.unknown_pattern(), ho);
+    h2 = std::make_unique<H2Reference>(*op, base.unknown_pattern(), ho, HssbemH2ReferenceKrylovCreate());
   }
 };
 

@@ -14,11 +14,16 @@
 
 namespace hssbem {
 
-/// Run the driver on comm and return the exit status (0, or 1 after an error). Errors are made
-/// collective where they arise (run_collectively, HssbemGuard); as a last resort, a rank whose
-/// error the other ranks do not join within -hssbem_error_timeout seconds (default 10: they
-/// are stuck in a collective call it left) prints its message and calls MPI_Abort.
-int driver_main(MPI_Comm comm);
+/// Removes -version and --version from the command line before PetscInitialize() sees them (it
+/// would print PETSc's banner for -version and go on) and says whether one was there.
+bool take_version_option(int *argc, char **argv);
+
+/// Run the driver on comm and return the exit status (0, or 1 after an error); with `version`,
+/// print the versions instead (print_version()). Errors are made collective where they arise
+/// (run_collectively, HssbemGuard); as a last resort, a rank whose error the other ranks do not
+/// join within -hssbem_error_timeout seconds (they are stuck in a collective call it left) prints
+/// its message and calls MPI_Abort.
+int driver_main(MPI_Comm comm, bool version = false);
 
 /// `message` with the option at fault named, when it is PETSc's complaint about a value it
 /// cannot parse ("Input string abc has no numeric value" does not say which option had it).

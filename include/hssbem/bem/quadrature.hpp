@@ -12,6 +12,7 @@
 
 #include "hssbem/bem/kelvin.hpp"
 #include "hssbem/core/geometry.hpp"
+#include "hssbem/core/option_table.hpp"
 
 #include <array>
 #include <vector>
@@ -22,13 +23,13 @@ struct PointList; // quadrature.cpp
 
 /// Quadrature settings (options -mat_bem_*).
 struct QuadratureOptions {
-  int duffy_order = 8;      ///< Gauss-Legendre points per direction on singular triangles
-  double near_ratio = 3.0;  ///< subdivide while distance/diameter is below this
+  int duffy_order = option_default::mat_bem_quad_order;   ///< Gauss-Legendre points per direction on singular triangles
+  double near_ratio = option_default::mat_bem_near_ratio; ///< subdivide while distance/diameter is below this
   /// 3-point rule beyond this distance/diameter; 0 (the default): never. The HSS path needs 0:
   /// with one rule everywhere beyond near_ratio, each column of the discrete operator is a fixed
   /// sum of point sources outside its near zone, which proxy surfaces capture to any tolerance.
-  double far_ratio = 0.0;
-  int max_depth = 10;       ///< subdivision levels for nearly singular triangles
+  double far_ratio = option_default::mat_bem_far_ratio;
+  int max_depth = option_default::mat_bem_max_depth; ///< subdivision levels for nearly singular triangles
 };
 
 /// Kernel constants of one material.

@@ -36,7 +36,7 @@ namespace hssbem {
 struct SkeletonizerOptions {
   double rel_tol = 1e-6;     ///< relative tolerance of each ID
   int max_rank = -1;         ///< cap on each skeleton; negative: none
-  double proxy_ratio = 2.0;  ///< proxy sphere radius / cluster radius (> 1)
+  double proxy_ratio = option_default::mat_h2_proxy_ratio; ///< proxy sphere radius / cluster radius (> 1; both formats' default)
   int proxy_points = 64;     ///< points on each proxy sphere
   /// Keep every row (column) whose rigid-body term couples it to a column (row) outside τ in τ's
   /// skeleton, so that the term can be added to a skeleton coupling (HSS). Without it (H²) such

@@ -25,6 +25,7 @@
 #include "hssbem/bem/discretization.hpp"
 #include "hssbem/contact/bodies.hpp"
 #include "hssbem/contact/obstacle.hpp"
+#include "hssbem/core/option_table.hpp"
 #include "hssbem/reference/reference.hpp"
 
 #include <cstdint>
@@ -53,9 +54,9 @@ struct ContactIteration {
 struct ContactOptions {
   /// Relative tolerance: a free point joins the active set once it penetrates by more than tol
   /// times the mesh's size; friction's Newton stops at max |Φ| ≤ tol × the traction scale.
-  double tol = 1e-10;
-  int max_it = 50;             ///< iterations per frame before it is an error
-  double reach = 0;            ///< candidates: vertices within this gap (0: 5 % of the mesh's bounding-box diagonal)
+  double tol = option_default::contact_tol;
+  int max_it = option_default::contact_max_it; ///< iterations per frame before it is an error
+  double reach = option_default::contact_reach; ///< candidates: vertices within this gap (0: 5 % of the mesh's bounding-box diagonal)
   bool warm_start = true;      ///< start from the previous frame's active set (and tractions)
   /// Frictionless frames: the fields' product with W's loaded columns in single precision (half
   /// the memory traffic); the contact's share of the fields then carries relative errors of

@@ -27,6 +27,7 @@
 #pragma once
 
 #include "hssbem/core/geometry.hpp"
+#include "hssbem/core/option_table.hpp"
 
 #include <vector>
 
@@ -34,7 +35,7 @@ namespace hssbem {
 
 /// Parameters of the cluster tree (a plain struct, filled by the PETSc layer).
 struct ClusterTreeOptions {
-  int leaf_size = 64; ///< a cluster with at most this many points is a leaf (>= 1)
+  int leaf_size = option_default::mat_h2_leaf_size; ///< a cluster with at most this many points is a leaf (>= 1; the compressions set theirs)
   /// Refine each split: its axis, starting from the principal axis, moves towards the axis through
   /// the halves' centroids while that lowers their inertia (two-means with equal halves), and its
   /// cut, at the median, moves to a gap within a quarter of the points of it where that lowers the

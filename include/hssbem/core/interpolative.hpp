@@ -37,7 +37,7 @@ namespace hssbem {
 
 /// Accuracy controls of an ID.
 struct IdOptions {
-  double rel_tol = 1e-8; ///< keep pivots with |R_ii| > rel_tol·|R_11|; must be ≥ 0
+  double rel_tol = 1e-8; ///< keep pivots with |R_ii| > rel_tol·|R_11|; must be ≥ 0 (the ID's own, not an option's default)
   int max_rank = -1;     ///< cap on k; negative: no cap
   /// Take the pivots from a pivoted Cholesky factorization of AᵀA instead of a pivoted QR of A
   /// when rel_tol ≥ gram_min_tol: the same greedy pivots and stopping rule (the Cholesky factor is

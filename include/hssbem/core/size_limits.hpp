@@ -6,6 +6,7 @@
 #pragma once
 
 #include "hssbem/core/operator_type.hpp"
+#include "hssbem/core/option_table.hpp"
 
 #include <string>
 
@@ -19,17 +20,18 @@ struct MachineLimits {
   long long index_max = 2147483647; ///< largest index of the linear-algebra library (PetscInt)
 };
 
-/// What else than its type and size decides an operator's memory (with its default solver).
+/// What else than its type and size decides an operator's memory (with its default solver); the
+/// defaults are the options' (core/option_table.def).
 struct SizeOptions {
-  bool   single_precision = false; ///< H²: single-precision blocks
-  double h2_rel_tol = 1e-5;        ///< H²: the compression's tolerance
-  bool   h2_factored = false;      ///< H²: PC h2 factors it (GMRES + PC h2, or a direct solve)
-  double pc_h2_rel_tol = 2e-3;     ///< PC h2: the factorization's tolerance (-pc_h2_rel_tol)
-  long long pc_h2_top_size = 2000; ///< PC h2: unknowns left for the dense top (-pc_h2_top_size)
-  long long pc_h2_mixed_top = 4000; ///< PC h2: top size from which its LU is in single precision (-pc_h2_mixed_top; ≤ 0: never)
-  bool   pc_h2_spread_top = true;  ///< PC h2: a single-precision top spread over the ranks (-pc_h2_spread_top)
-  int    krylov_vectors = 101;     ///< H²: vectors of the Krylov method (GMRES(100): 101; preonly: 0)
-  double hss_rel_tol = 1e-8;       ///< HSS: the compression's tolerance (its ULV factors follow it)
+  bool   single_precision = option_default::mat_h2_single_precision; ///< H²: single-precision blocks
+  double h2_rel_tol = option_default::mat_h2_rel_tol;                ///< H²: the compression's tolerance
+  bool   h2_factored = option_default::pc_type == "h2";              ///< H²: PC h2 factors it (GMRES + PC h2, or a direct solve)
+  double pc_h2_rel_tol = option_default::pc_h2_rel_tol;              ///< PC h2: the factorization's tolerance (-pc_h2_rel_tol)
+  long long pc_h2_top_size = option_default::pc_h2_top_size;         ///< PC h2: unknowns left for the dense top (-pc_h2_top_size)
+  long long pc_h2_mixed_top = option_default::pc_h2_single_top_from; ///< PC h2: top size from which its LU is in single precision (-pc_h2_single_top_from; ≤ 0: never)
+  bool   pc_h2_spread_top = option_default::pc_h2_spread_top;        ///< PC h2: a single-precision top spread over the ranks (-pc_h2_spread_top)
+  int    krylov_vectors = option_default::ksp_gmres_restart + 1;     ///< H²: vectors of the Krylov method (GMRES(restart): restart + 1; preonly: 0)
+  double hss_rel_tol = option_default::mat_hss_rel_tol;              ///< HSS: the compression's tolerance (its ULV factors follow it)
 };
 
 /// Bytes one rank alone needs at its peak for `unknowns` unknowns with the operator `type` and
@@ -44,8 +46,33 @@ double estimated_bytes(OperatorType type, long long unknowns, const SizeOptions 
 /// docs/limits.md.
 double node_bytes(OperatorType type, long long unknowns, const SizeOptions &o, const MachineLimits &m);
 
-/// PC h2's dense top: bytes on the node that holds it (rank 0's; a spread top's share per rank
-/// times the node's ranks), for a top of at most o.pc_h2_top_size unknowns.
+/// The H² factorization keeps its elimination panels in single precision when asked (1), never
+/// (0), or by default (-1) at a tolerance of k_h2_single_panel_tol or looser, where single
+/// precision's rounding stays below the tolerance. The factorization decides by this, and so
+/// does the size model.
+inline constexpr double k_h2_single_panel_tol = 1e-5;
+bool h2_single_panels(double rel_tol, int single_panels);
+
+/// How PC h2 factors its dense top: a double LU on rank 0 (Double); from single_top_from
+/// unknowns on, with double panels a single-precision LU refined in double beside the block
+/// (Mixed), with single panels a single-precision LU alone (Single), spread over the ranks when
+/// there are several and spread_top (Spread). The one rule the factorization (h2factor/
+/// factor_top.cpp) follows and the size model counts by.
+enum class H2TopKind { Double, Mixed, Single, Spread };
+H2TopKind h2_top_kind(long long top_unknowns, bool single_panels, long long single_top_from, bool spread_top, int ranks);
+
+/// The one model of PC h2's dense top's memory: the bytes a top of `kind` and `top_unknowns`
+/// unknowns adds to the peak of the node that holds it (rank 0's; a spread top's share per rank
+/// times the node's ranks), fitted to the measured peaks (docs/limits.md). Per entry: a double
+/// top 16 bytes (its LU, 8, and as much again: the top's rows arriving beside the block, which
+/// the measured peaks hold), a mixed one 12 on one rank (the double block and the single LU) and
+/// 16 on several, a single one 4 (its LU), a spread one 4 divided over the ranks; and 32 bytes
+/// per unknown (pivots, offsets, the trial's and the solves' vectors).
+double h2_top_bytes(H2TopKind kind, long long top_unknowns, const MachineLimits &m);
+
+/// PC h2's dense top for the size check, from the options: about k_h2_top_fill (0.8) times
+/// o.pc_h2_top_size unknowns (the factorization stops at the first level at or below it), of
+/// the kind h2_top_kind() gives; 0 without PC h2.
 double h2_top_bytes(long long unknowns, const SizeOptions &o, const MachineLimits &m);
 
 /// Why `type` cannot take `unknowns` unknowns on this machine: its entries or a rank's block

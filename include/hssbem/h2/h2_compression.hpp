@@ -18,22 +18,24 @@
 #pragma once
 
 #include "hssbem/bem/bem_operator.hpp"
+#include "hssbem/core/option_table.hpp"
 #include "hssbem/core/rank_comm.hpp"
 #include "hssbem/h2/h2_matrix.hpp"
 
 namespace hssbem {
 
+/// Parameters of the H² compression; the defaults are the options' (-mat_h2_*, core/option_table.def).
 struct H2Options {
-  double rel_tol = 1e-6;      ///< relative tolerance of each interpolative decomposition
-  int max_rank = -1;          ///< cap on each skeleton; negative: none
-  int leaf_size = 64;         ///< dof nodes per leaf cluster (at most)
-  double eta = 0.0;           ///< far when |c_a − c_b| > (1 + eta)(R_a + R_b); 0: the clusters' spheres are disjoint
-  double proxy_ratio = 2.0;   ///< proxy sphere radius / cluster radius (> 1)
-  int proxy_points = 0;       ///< points on each proxy sphere; 0: default_proxy_points(rel_tol)
+  double rel_tol = option_default::mat_h2_rel_tol;         ///< relative tolerance of each interpolative decomposition
+  int max_rank = option_default::mat_h2_max_rank;          ///< cap on each skeleton; negative: none
+  int leaf_size = option_default::mat_h2_leaf_size;        ///< dof nodes per leaf cluster (at most)
+  double eta = option_default::mat_h2_eta;                 ///< far when |c_a − c_b| > (1 + eta)(R_a + R_b); 0: the clusters' spheres are disjoint
+  double proxy_ratio = option_default::mat_h2_proxy_ratio; ///< proxy sphere radius / cluster radius (> 1)
+  int proxy_points = option_default::mat_h2_proxy_points;  ///< points on each proxy sphere; 0: default_proxy_points(rel_tol)
   bool pressure_columns = false; ///< also compress Gn (slot 6), for pressure loads
   /// Store far and near blocks in single precision (half the memory; each entry rounds to a
   /// relative 6e-8, harmless for rel_tol ≥ 1e-6). Bases stay in double.
-  bool single_precision = false;
+  bool single_precision = option_default::mat_h2_single_precision;
   /// With single_precision: store each far block in low-rank form (an ID at rel_tol / 5, the
   /// skeleton side's entries and the interpolation weights in single precision, no unit rows;
   /// H2Block) when that takes less memory. With either low-rank form the skeletons' IDs run at

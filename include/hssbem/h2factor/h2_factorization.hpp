@@ -7,6 +7,7 @@
 #pragma once
 
 #include "hssbem/bem/bem_operator.hpp"
+#include "hssbem/core/option_table.hpp"
 #include "hssbem/core/rank_comm.hpp"
 #include "hssbem/h2/h2_distributed.hpp"
 #include "hssbem/h2/h2_matrix.hpp"
@@ -25,21 +26,21 @@ namespace h2f {
 class Frontier;
 }
 
-/// Parameters of the factorization (filled from -pc_h2_* options by the PETSc layer).
+/// Parameters of the factorization; the defaults are the options' (-pc_h2_*, core/option_table.def).
 struct H2FactorOptions {
-  double rel_tol = 2e-3;   ///< relative tolerance of each skeleton (joint row/column ID)
-  int leaf_size = 0;       ///< dof nodes per box at the first level factored (≥ the H² leaves); 0: the H² leaves
-  int sketch_columns = 0;  ///< random vectors of the far-field sketch; 0: chosen from rel_tol
-  int top_size = 2000;     ///< factor the rest densely once at most this many unknowns remain
-  int single_panels = -1;  ///< elimination panels and the working blocks at rest in single precision: 1, 0, or -1 (when rel_tol ≥ 1e-5)
+  double rel_tol = option_default::pc_h2_rel_tol;        ///< relative tolerance of each skeleton (joint row/column ID)
+  int leaf_size = option_default::pc_h2_leaf_size;       ///< dof nodes per box at the first level factored (≥ the H² leaves); 0: the H² leaves
+  int sketch_columns = option_default::pc_h2_sketch_size; ///< random vectors of the far-field sketch; 0: chosen from rel_tol
+  int top_size = option_default::pc_h2_top_size;         ///< factor the rest densely once at most this many unknowns remain
+  int single_panels = -1;  ///< elimination panels and the working blocks at rest in single precision: 1, 0, or -1 (h2_single_panels(): when rel_tol ≥ 1e-5)
   /// From this many unknowns on, the dense top's LU is in single precision: refined in double by
   /// every solve with double panels, alone with single panels (its accuracy checked by a trial
   /// solve). ≤ 0: always double.
-  int single_top_from = 4000;
+  int single_top_from = option_default::pc_h2_single_top_from;
   /// Stop at a level whose eliminations would cost more flops than factoring everything left
   /// densely (an upper bound of the level's Schur complements against the top's LU); false: go
   /// on while a level has a far field and more than top_size unknowns remain.
-  bool top_when_cheaper = true;
+  bool top_when_cheaper = option_default::pc_h2_top_when_cheaper;
   /// On one rank, on a tree with parts (ClusterTree's partition constructor): eliminate each
   /// part's subtree separately, as several ranks do with one part each (cross blocks between the
   /// parts), the parts simulated on this rank. Ignored on a tree without parts; always so on
@@ -47,7 +48,7 @@ struct H2FactorOptions {
   bool within_parts = false;
   /// On several ranks, a single-precision top (single panels, single_top_from or more unknowns)
   /// is spread over the ranks (ScaLAPACK, blocks of 128 columns); false: factored on rank 0.
-  bool spread_top = true;
+  bool spread_top = option_default::pc_h2_spread_top;
 };
 
 struct H2FactorLevelStats {
@@ -180,21 +181,6 @@ constexpr int kMaxSketchColumns = 4096;
 /// on one rank: F.solve() between ClusterTree::to_cluster_order and to_mesh_order.
 void solve_mesh_order(const H2Factorization &F, const double *b, double *x);
 
-/// For the size model (core/size_limits.hpp, which cannot see this layer: the PETSc face passes
-/// the figure on): the bytes PC h2's dense top of n = `top_unknowns` unknowns (of `unknowns` in
-/// all) takes at its peak on the rank that holds the most of it, with these options on `ranks`
-/// ranks. The options decide its precision and place (H2FactorStats::top_*): in double on rank 0,
-/// 8 n² (the LU in place of the block); mixed (double panels, or everything in the top, and n ≥
-/// single_top_from), 12 n² (the block in double beside the single LU); on several ranks 16 n² for
-/// either, the block and the other ranks' rows as they arrive; single precision alone on rank 0
-/// (single panels), 4 n² and the rows as they arrive, at most 4 n² more; spread over P ranks,
-/// 4 n² / P for the columns and up to twice that in messages, 12 n² / P.
-double h2_top_peak_bytes(const H2FactorOptions &options, long long unknowns, long long top_unknowns, int ranks);
-
-/// The top's unknowns that the options alone decide for a system of `unknowns` unknowns: all of
-/// them when they are at most top_size (everything factored densely), else 0: then the levels
-/// decide when to stop.
-long long h2_top_unknowns_from_options(const H2FactorOptions &options, long long unknowns);
 
 /// ‖I − A F⁻¹‖₂ estimated by power iterations from a random vector (the largest of the ratios
 /// ‖(I − A F⁻¹) v‖ / ‖v‖ met; collective on F's ranks): how far the factorization is from an

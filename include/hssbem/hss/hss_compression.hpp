@@ -24,6 +24,7 @@
 #pragma once
 
 #include "hssbem/bem/bem_operator.hpp"
+#include "hssbem/core/option_table.hpp"
 #include "hssbem/core/rank_comm.hpp"
 #include "hssbem/hss/hss_matrix.hpp"
 
@@ -31,13 +32,13 @@
 
 namespace hssbem {
 
-/// Parameters of the HSS compression (filled from -mat_hss_* options by the PETSc layer).
+/// Parameters of the HSS compression; the defaults are the options' (-mat_hss_*, core/option_table.def).
 struct HssOptions {
-  double rel_tol = 1e-6;      ///< relative tolerance of each interpolative decomposition
-  int max_rank = -1;          ///< cap on each skeleton; negative: none
-  int leaf_size = 256;        ///< dof nodes per leaf cluster (at most); below ~150 nodes the ranks are full at 1e-6
-  double proxy_ratio = 2.0;   ///< proxy sphere radius / cluster radius (> 1)
-  int proxy_points = 0;       ///< points on each proxy sphere; 0: default_proxy_points(rel_tol)
+  double rel_tol = option_default::mat_hss_rel_tol;         ///< relative tolerance of each interpolative decomposition
+  int max_rank = option_default::mat_hss_max_rank;          ///< cap on each skeleton; negative: none
+  int leaf_size = option_default::mat_hss_leaf_size;        ///< dof nodes per leaf cluster (at most); below ~150 nodes the ranks are full at 1e-6
+  double proxy_ratio = option_default::mat_hss_proxy_ratio; ///< proxy sphere radius / cluster radius (> 1)
+  int proxy_points = option_default::mat_hss_proxy_points;  ///< points on each proxy sphere; 0: default_proxy_points(rel_tol)
   bool pressure_columns = false; ///< also compress Gn (slot 6), for pressure loads
 };
 

@@ -43,6 +43,7 @@
 #include "hssbem/post/interior_stress.hpp"
 #include "hssbem/post/near_surface.hpp"
 #include "hssbem/core/cluster_tree.hpp"
+#include "hssbem/core/option_table.hpp"
 #include "hssbem/core/dense_matrix.hpp"
 
 #include <memory>
@@ -51,20 +52,20 @@
 namespace hssbem {
 
 struct InteriorEvaluationOptions {
-  int equivalent_points = 128;    ///< points on each equivalent sphere
+  int equivalent_points = option_default::bem_interior_equivalent_points; ///< points on each equivalent sphere
   double check_factor = 1.25;     ///< points on each check sphere / equivalent_points
   double equivalent_ratio = 1.05; ///< equivalent (sources) or check (targets) sphere radius / cluster radius
   double check_ratio = 2.6;       ///< check (sources) or equivalent (targets) sphere radius / cluster radius
-  int source_leaf = 32;           ///< triangles per source leaf (at most)
-  int target_leaf = 160;          ///< points per target leaf (at most)
+  int source_leaf = option_default::bem_interior_source_leaf; ///< triangles per source leaf (at most)
+  int target_leaf = option_default::bem_interior_target_leaf; ///< points per target leaf (at most)
   /// A second, closer representation of each source leaf for the points near it: inner_points
   /// forces on its equivalent sphere fitted at inner_ratio · R (0 points: none). A point between
   /// inner_ratio · R and check_ratio · R from the leaf's centre (and beyond its triangles' near
   /// zones) takes these instead of the leaf's particles (7 per triangle, each about twice a
   /// force's kernel), for leaves where they are fewer kernels.
-  int inner_points = 192;
+  int inner_points = option_default::bem_interior_inner_points;
   double inner_ratio = 2.2;
-  bool direct = false;            ///< every point against every triangle (the reference; O(points · triangles))
+  bool direct = option_default::bem_interior_direct; ///< every point against every triangle (the reference; O(points · triangles))
 };
 
 /// Work and time of one evaluation (this rank's share).

@@ -79,6 +79,9 @@ struct ResultData {
   std::map<std::string, long long> attributes_int;  ///< root attributes (iterations, ranks, ...)
   std::map<std::string, std::string> attributes_str;///< root attributes (solver, version, ...)
   std::map<std::string, double> timings;            ///< /timings attributes, seconds per phase
+  std::map<std::string, double> options_real;       ///< /options attributes: the options the run used, named without the dash
+  std::map<std::string, long long> options_int;     ///< (integers, and booleans as 0 or 1)
+  std::map<std::string, std::string> options_str;   ///< (names and texts)
   std::vector<std::string> input_files;             ///< not written: the run's inputs, which the result may not replace
   ContactData contact;                              ///< /contact, when present (the same on every rank)
 };

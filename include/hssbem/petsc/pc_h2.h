@@ -5,14 +5,16 @@
 #pragma once
 
 #include "hssbem/petsc/compat.h"
+#include "hssbem/core/option_table.hpp"
 
 #include <petscpc.h>
 
 #define PCH2 "h2"
 
-/* The PC's default factorization tolerance: a preconditioner for GMRES around the H² product
-   (chosen by measurement, see docs/h2-factorization.md). */
-#define HSSBEM_PC_H2_DEFAULT_REL_TOL 2e-3
+/* The PC's default factorization tolerance (-pc_h2_rel_tol's, core/option_table.def): a
+   preconditioner for GMRES around the H² product (chosen by measurement, see
+   docs/h2-factorization.md). */
+#define HSSBEM_PC_H2_DEFAULT_REL_TOL (hssbem::option_default::pc_h2_rel_tol)
 
 PETSC_EXTERN PetscErrorCode PCCreate_H2(PC);
 

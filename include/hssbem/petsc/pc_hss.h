@@ -13,7 +13,8 @@
 PETSC_EXTERN PetscErrorCode PCCreate_HSS(PC);
 
 /* Setters for the options (before PCSetUp); rel_tol 0, leaf size 0 and max rank -1 mean "the
-   matrix's" (on a dense matrix: 1e-8, 256 and no cap; on an H² matrix: 1e-3, 256 and no cap). */
+   matrix's" (on a dense matrix: the -mat_hss_* defaults and no cap; on an H² matrix the same, at
+   the tolerance option_default::pc_hss_rel_tol_on_h2: core/option_table.def). */
 PETSC_EXTERN PetscErrorCode PCHSSSetRelTol(PC, PetscReal);
 PETSC_EXTERN PetscErrorCode PCHSSSetLeafSize(PC, PetscInt);
 PETSC_EXTERN PetscErrorCode PCHSSSetMaxRank(PC, PetscInt);

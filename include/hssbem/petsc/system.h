@@ -6,8 +6,10 @@
 #include "hssbem/petsc/compat.h"
 
 #include "hssbem/bem/bem_operator.hpp"
+#include "hssbem/core/option_table.hpp"
 #include "hssbem/core/size_limits.hpp"
 #include "hssbem/h2/h2_compression.hpp"
+#include "hssbem/h2factor/h2_factorization.hpp"
 #include "hssbem/hss/hss_compression.hpp"
 
 #include <petscksp.h>
@@ -32,6 +34,20 @@
 PetscErrorCode HssbemCreateSystem(MPI_Comm comm, const hssbem::BemOperator &op, const hssbem::SystemSelection &sel, const std::vector<double> *rigid_modes, const char *mat_type, Mat *A,
                                   Vec *b);
 
+/* What HssbemCreateSystemWithOptions() builds with: the compressions' options and what the size
+   check needs of the solver, typed (HssbemCreateSystem() reads them from the options database). */
+struct HssbemSystemOptions {
+  hssbem::H2Options            h2;               /* the H² operator's compression (pressure_columns follows sel) */
+  hssbem::HssOptions           hss;              /* the HSS operator's */
+  hssbem::SizeOptions          solver;           /* the solver's part of the size model (HssbemKSPGetSizeOptions()); its compression fields follow h2 and hss */
+  const hssbem::MachineLimits *limits = nullptr; /* the machine of the size check (null: HssbemMachineLimits()) */
+};
+
+/* HssbemCreateSystem() with the options given instead of read: the session layer reads the
+   options once and hands them down. */
+PetscErrorCode HssbemCreateSystemWithOptions(MPI_Comm comm, const hssbem::BemOperator &op, const hssbem::SystemSelection &sel, const std::vector<double> *rigid_modes, const char *mat_type,
+                                             const HssbemSystemOptions &opts, Mat *A, Vec *b);
+
 /* The rows of HssbemCreateSystem()'s A, b and solution: mesh order (3 per dof node, nodes split in
    contiguous blocks) for the dense system and the compressed ones on one rank; on several ranks
    the H² and HSS systems are distributed by a METIS partition of the surface and their rows are
@@ -48,11 +64,13 @@ PetscErrorCode HssbemVecFromMeshOrder(Mat A, Vec y, Vec x);
 PetscErrorCode HssbemMachineLimits(MPI_Comm comm, hssbem::MachineLimits *limits);
 
 /* Read -<prefix>mat_hss_rel_tol, _leaf_size, _max_rank, _proxy_ratio, _proxy_points into opts
-   (which holds the defaults on entry) and check them. */
+   (which holds the values to keep where none is given) and check them against the table of
+   options (core/option_table.def). */
 PetscErrorCode HssbemHssOptionsFromDatabase(MPI_Comm comm, const char *prefix, hssbem::HssOptions *opts);
 
-/* Read -<prefix>mat_h2_rel_tol, _leaf_size, _eta, _max_rank, _proxy_ratio, _proxy_points into
-   opts (which holds the defaults on entry) and check them. */
+/* Read -<prefix>mat_h2_rel_tol, _leaf_size, _eta, _max_rank, _proxy_ratio, _proxy_points,
+   _single_precision into opts (which holds the values to keep where none is given) and check them
+   against the table of options. */
 PetscErrorCode HssbemH2OptionsFromDatabase(MPI_Comm comm, const char *prefix, hssbem::H2Options *opts);
 
 /* PETSC_TRUE when A is a compressed MatShell (HSS or H²) of HssbemCreateSystem(): no entries. */
@@ -67,14 +85,30 @@ struct HssbemSolveInfo {
 };
 
 /* The main KSP (no prefix) with the defaults of the matrix type, then the options database:
-   preonly + PC hss (a direct HSS solve) for HSSBEM_MAT_HSS, GMRES(100) right-preconditioned by
-   PC h2 at -ksp_rtol 1e-8 for HSSBEM_MAT_H2, preonly + LU for HSSBEM_MAT_DENSE. */
+   preonly + PC hss (a direct HSS solve) for HSSBEM_MAT_HSS, GMRES right-preconditioned by PC h2
+   for HSSBEM_MAT_H2 (restart and tolerance: the table's -ksp_gmres_restart and -ksp_rtol),
+   preonly + LU for HSSBEM_MAT_DENSE. */
 PetscErrorCode HssbemKSPCreate(MPI_Comm comm, const char *mat_type, KSP *ksp);
 
+/* What the size model needs of that KSP's solver: the Krylov method's vectors (GMRES: restart +
+   1; preonly: 0) and, when its PC is h2, that the matrix is factored and PC h2's options. */
+PetscErrorCode HssbemKSPGetSizeOptions(KSP ksp, hssbem::SizeOptions *o);
+
+/* The options that KSP and its PC use, named as in the table of options: ksp_type, pc_type, and
+   ksp_rtol and ksp_gmres_restart with GMRES, -pc_h2_* with PC h2, -pc_hss_* with PC hss. */
+PetscErrorCode HssbemKSPGetOptionValues(KSP ksp, hssbem::OptionValues *values);
+
+/* The options a PC h2 (a PC hss) holds, named as in the table; nothing for another PC. */
+PetscErrorCode HssbemPCH2GetOptionValues(PC pc, hssbem::OptionValues *values);
+PetscErrorCode HssbemPCHSSGetOptionValues(PC pc, hssbem::OptionValues *values);
+/* A PC h2's factorization options (*is_h2: pc is one; else o is left alone). */
+PetscErrorCode HssbemPCH2GetFactorOptions(PC pc, hssbem::H2FactorOptions *o, PetscBool *is_h2);
+
 /* The largest true relative residual ||b - A x|| / ||b|| that HssbemSolveSystem() accepts as a
-   solution by default (-hssbem_residual_max): the default solvers reach 1e-8 (GMRES, dense LU
-   far below), a direct H² or HSS solve about its tolerance. */
-#define HSSBEM_RESIDUAL_MAX 1e-4
+   solution by default (-hssbem_residual_max's default, core/option_table.def): the default
+   solvers reach far below (GMRES to -ksp_rtol, dense LU), a direct H² or HSS solve about its
+   tolerance. */
+#define HSSBEM_RESIDUAL_MAX (hssbem::option_default::hssbem_residual_max)
 
 /* Solve A x = b with that KSP. A dense A is converted in place when its factorization needs
    another format (ScaLAPACK for parallel LU, AIJ for MUMPS). A diverged solve is an error, and so

@@ -17,6 +17,7 @@
 
 #include "hssbem/bem/bem_operator.hpp"
 #include "hssbem/bem/discretization.hpp"
+#include "hssbem/core/option_table.hpp"
 #include "hssbem/post/stress_kernels.hpp"
 
 #include <array>
@@ -28,8 +29,8 @@ struct NodalSolution; // post.hpp
 
 /// Quadrature of the interior identities (options -bem_interior_*).
 struct InteriorQuadrature {
-  double near_ratio = 2.0; ///< split a triangle while the point is closer than this many diameters to its centroid
-  int max_depth = 12;      ///< levels of 1:4 splits at most
+  double near_ratio = option_default::bem_interior_near_ratio; ///< split a triangle while the point is closer than this many diameters to its centroid
+  int max_depth = option_default::bem_interior_max_depth;      ///< levels of 1:4 splits at most
 };
 
 /// The 7-point rule's points of all triangles (7 consecutive per triangle), structure of arrays:

@@ -18,6 +18,7 @@
 /// A point within `on_surface` × the surface's size of the surface takes the surface value.
 #pragma once
 
+#include "hssbem/core/option_table.hpp"
 #include "hssbem/post/stress_kernels.hpp"
 #include "hssbem/mesh/surface_locator.hpp"
 
@@ -27,7 +28,7 @@
 namespace hssbem {
 
 struct InteriorPlanOptions {
-  double band = 1.0;        ///< depth of the band, in element sizes; 0: no band (every inside point integrated)
+  double band = option_default::bem_interior_band; ///< depth of the band, in element sizes; 0: no band (every inside point integrated)
   double on_surface = 1e-9; ///< points closer than this × the surface's size are on it
   /// Look for the nearest surface point first within band × the 90th percentile of the
   /// triangles' longest edges, and beyond it only among the longer triangles: the same plan as

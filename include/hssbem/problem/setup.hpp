@@ -4,6 +4,7 @@
 #pragma once
 
 #include "hssbem/bem/bem_operator.hpp"
+#include "hssbem/core/option_table.hpp"
 #include "hssbem/problem/problem.hpp"
 
 #include <memory>
@@ -17,7 +18,7 @@ namespace hssbem {
 struct ProblemOverrides {
   std::optional<std::string> mesh, output;
   std::optional<double> E, nu;
-  double feature_angle_deg = 40.0;
+  double feature_angle_deg = option_default::bem_feature_angle;
 };
 
 struct ProblemSetup {
@@ -46,6 +47,12 @@ ProblemSetup setup_problem(const std::string &problem_file, const ProblemOverrid
 
 /// Same, from a parsed specification (tests build one in code).
 ProblemSetup setup_problem(ProblemSpec spec, const ProblemOverrides &overrides);
+
+/// A problem made in memory (a simulator's surface: the library's Scene and ContactScene): a
+/// copy of `mesh` (a valid closed surface, oriented outward: validate_and_orient()), its dof nodes
+/// and the material; no file, no rules (the selection leaves every unknown traction-free: a
+/// session takes its conditions separately).
+ProblemSetup setup_in_memory(const SurfaceMesh &mesh, const Material &material, double feature_angle_deg = option_default::bem_feature_angle);
 
 /// A scene (spec.frames not empty) or a contact problem (spec.contact.present, whose bodies are
 /// checked one by one by the contact set-up) skips the base problem's constraint check in setup_problem;

@@ -41,6 +41,8 @@
 #pragma once
 
 #include "hssbem/bem/bem_operator.hpp"
+#include "hssbem/core/krylov.hpp"
+#include "hssbem/core/option_table.hpp"
 #include "hssbem/reference/capacitance.hpp"
 #include "hssbem/reference/reference.hpp"
 
@@ -66,21 +68,21 @@ struct SceneOptions {
   SceneStrategy strategy = SceneStrategy::Auto; ///< forced strategy, or auto
   bool with_pressure = false;  ///< some frame has pressure loads: compute W_p = A₀⁻¹ Gn at set-up
   bool keep_operator = true;   ///< keep H and G (needed by refactor, krylov and residual())
-  int refresh_every = 32;      ///< incremental capacitance updates before a rebuild from scratch
+  int refresh_every = option_default::scene_refresh; ///< incremental capacitance updates before a rebuild from scratch
   /// Switched sets of at least this size keep the capacitance inverse in single precision,
   /// refined in double per solve (capacitance.hpp); INT_MAX: always double.
-  int single_from = 1024;
+  int single_from = option_default::scene_single_from;
   /// Switched sets of at least this size take the fields' product x −= W(:, J) s from a copy of
   /// W(:, J) in single precision (half the bytes; the switched unknowns x(J) = s stay refined in
   /// double, the other unknowns carry W's single-precision rounding, ~1e-7 relative); INT_MAX:
   /// always double.
-  int single_fields_from = 1024;
+  int single_fields_from = option_default::scene_single_fields_from;
   /// Per unknown (3 · node + component), 1 where some frame may switch it (prescribe the other
   /// quantity than the reference pattern) or give it a non-zero known value: W is computed and
   /// kept for those columns only (2 N² flops and 8 N bytes per candidate, instead of every
   /// column), and a frame that switches or loads another unknown is refused. Empty: every unknown.
   std::vector<char> candidates;
-  double krylov_rtol = 1e-10;  ///< GMRES relative tolerance (true residual) of the krylov strategy
+  double krylov_rtol = option_default::scene_krylov_rtol; ///< GMRES relative tolerance (true residual) of the krylov strategy
   int krylov_max_it = 200;     ///< and its iteration limit (reaching it is an error)
 };
 
@@ -98,16 +100,6 @@ struct SceneFrameReport {
   double update_seconds = 0, capacitance_seconds = 0, fields_seconds = 0;
   double seconds = 0;       ///< wall time of the frame (update and solve)
   double predicted = 0;     ///< the cost model's seconds for the strategy taken
-};
-
-/// A Krylov solve for the krylov strategy (the PETSc layer provides one, see scene_krylov.hpp):
-/// solve A x = b with x holding the initial guess on entry, apply_A(in, out) the operator and
-/// apply_M(in, out) the preconditioner (an approximate inverse); returns the iterations.
-/// Throws on divergence.
-struct KrylovSolver {
-  virtual ~KrylovSolver() = default;
-  virtual long long solve(int n, const std::function<void(const double *, double *)> &apply_A, const std::function<void(const double *, double *)> &apply_M,
-                          const double *b, double *x, double rtol, int max_it) = 0;
 };
 
 /// Marks in `candidates` (3 per node; sized here when empty) the unknowns that `frame` switches

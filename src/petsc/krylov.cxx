@@ -1,5 +1,5 @@
-/* GMRES for a scene's krylov strategy (see scene_krylov.h). */
-#include "hssbem/petsc/scene_krylov.h"
+/* PETSc's GMRES behind hssbem::KrylovSolver (see krylov.h). */
+#include "hssbem/petsc/krylov.h"
 
 #include <petscksp.h>
 
@@ -47,7 +47,13 @@ PetscErrorCode PCApply_SceneKrylov(PC pc, Vec x, Vec y)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-PetscErrorCode Solve_Private(int n, Callbacks *cb, const double *b, double *x, double rtol, int max_it, PetscInt *its, KSPConvergedReason *reason)
+/* What a solve is set up with. */
+struct Setup {
+  std::string prefix;
+  int         restart;
+};
+
+PetscErrorCode Solve_Private(const Setup &setup, int n, Callbacks *cb, const double *b, double *x, double rtol, int max_it, PetscInt *its, KSPConvergedReason *reason)
 {
   Mat A;
   KSP ksp;
@@ -60,9 +66,9 @@ PetscErrorCode Solve_Private(int n, Callbacks *cb, const double *b, double *x, d
   PetscCall(VecCreateSeqWithArray(PETSC_COMM_SELF, 1, n, b, &vb));
   PetscCall(VecCreateSeqWithArray(PETSC_COMM_SELF, 1, n, x, &vx));
   PetscCall(KSPCreate(PETSC_COMM_SELF, &ksp));
-  PetscCall(KSPSetOptionsPrefix(ksp, "scene_"));
+  PetscCall(KSPSetOptionsPrefix(ksp, setup.prefix.c_str()));
   PetscCall(KSPSetType(ksp, KSPGMRES));
-  PetscCall(KSPGMRESSetRestart(ksp, 100));
+  PetscCall(KSPGMRESSetRestart(ksp, setup.restart));
   PetscCall(KSPSetPCSide(ksp, PC_RIGHT));
   PetscCall(KSPSetTolerances(ksp, rtol, PETSC_DEFAULT, PETSC_DEFAULT, max_it));
   PetscCall(KSPSetInitialGuessNonzero(ksp, PETSC_TRUE));
@@ -84,26 +90,41 @@ PetscErrorCode Solve_Private(int n, Callbacks *cb, const double *b, double *x, d
 
 class PetscGmres : public hssbem::KrylovSolver {
 public:
+  PetscGmres(const char *prefix, int restart, const char *what) : m_setup{prefix ? prefix : "", restart}, m_what(what) {}
   long long solve(int n, const std::function<void(const double *, double *)> &apply_A, const std::function<void(const double *, double *)> &apply_M, const double *b,
                   double *x, double rtol, int max_it) override
   {
     Callbacks          cb{&apply_A, &apply_M};
     PetscInt           its    = 0;
     KSPConvergedReason reason = KSP_CONVERGED_ITERATING;
-    const PetscErrorCode ierr = Solve_Private(n, &cb, b, x, rtol, max_it, &its, &reason);
+    const PetscErrorCode ierr = Solve_Private(m_setup, n, &cb, b, x, rtol, max_it, &its, &reason);
     if (ierr) {
       const char *text = nullptr;
       PetscErrorMessage(ierr, &text, NULL);
-      throw std::runtime_error(std::string("scene frame: GMRES failed: ") + (text ? text : "PETSc error"));
+      throw std::runtime_error(m_what + ": GMRES failed: " + (text ? text : "PETSc error"));
     }
-    if (reason < 0) throw std::runtime_error(std::string("scene frame: GMRES did not converge: ") + KSPConvergedReasons[reason] + " after " + std::to_string(its) + " iterations");
+    if (reason < 0) throw std::runtime_error(m_what + ": GMRES did not converge: " + KSPConvergedReasons[reason] + " after " + std::to_string(its) + " iterations");
     return its;
   }
+
+private:
+  Setup       m_setup;
+  std::string m_what;
 };
 
 } // namespace
 
+std::unique_ptr<hssbem::KrylovSolver> HssbemKrylovCreate(const char *prefix, int restart, const char *what)
+{
+  return std::make_unique<PetscGmres>(prefix, restart, what);
+}
+
 std::unique_ptr<hssbem::KrylovSolver> HssbemSceneKrylovCreate(void)
 {
-  return std::make_unique<PetscGmres>();
+  return HssbemKrylovCreate("scene_", HSSBEM_SCENE_KRYLOV_RESTART, "scene frame");
+}
+
+std::unique_ptr<hssbem::KrylovSolver> HssbemH2ReferenceKrylovCreate(void)
+{
+  return HssbemKrylovCreate("contact_h2_", HSSBEM_H2_REFERENCE_KRYLOV_RESTART, "H2 reference");
 }

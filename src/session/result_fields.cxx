@@ -1,7 +1,7 @@
-// The stress in a result file: surface fields, interior points and grids (see stress_post.hpp).
-#include "stress_post.hpp"
+// The one builder of a solution's fields (see result_fields.hpp).
+#include "hssbem/session/result_fields.hpp"
 
-#include "hssbem/app/petsc_call.hpp"
+#include "hssbem/session/petsc_call.hpp"
 #include "hssbem/post/interior_stress.hpp"
 #include "hssbem/post/near_surface.hpp"
 #include "hssbem/mesh/surface_locator.hpp"
@@ -71,15 +71,92 @@ void store_fields(const ProblemSpec &spec, const InteriorSetup &is, const std::v
 
 } // namespace
 
-StressFields surface_stress_fields(const ProblemSetup &s, const NodalSolution &sol, std::vector<NodeStress> &nodes, bool corners)
+SurfaceFields surface_fields(const ProblemSetup &s, const NodalSolution &sol, const std::vector<std::array<bool, 3>> &prescribed, unsigned parts,
+                             std::map<std::string, double> *seconds)
 {
-  nodes = node_stresses(*s.disc, s.material, sol.u, sol.t);
-  StressFields f;
-  f.stress = vertex_stress(*s.disc, nodes);
-  f.von_mises = von_mises_of(f.stress);
-  f.principal = principal_of(f.stress);
-  if (corners) f.corner = corner_stress(*s.disc, nodes);
+  const Discretization &disc = *s.disc;
+  SurfaceFields f;
+  if (parts & kMotion) {
+    f.displacement = vertex_average(disc, sol.u);
+    f.traction = vertex_average(disc, sol.t);
+  }
+  if (parts & kPrescribed) f.displacement_prescribed = prescribed;
+  if (parts & kWhole) {
+    f.traction_corner = corner_values(disc, sol.t);
+    f.reactions = reactions(disc, sol.t);
+  }
+  if (!(parts & kStress)) return f;
+  const Timer timer;
+  const EventScope event(BEM_Stress);
+  f.nodes = node_stresses(disc, s.material, sol.u, sol.t);
+  f.stress.stress = vertex_stress(disc, f.nodes);
+  f.stress.von_mises = von_mises_of(f.stress.stress);
+  f.stress.principal = principal_of(f.stress.stress);
+  if (parts & kWhole) f.stress.corner = corner_stress(disc, f.nodes);
+  if (seconds) (*seconds)["stress"] += timer.seconds();
   return f;
+}
+
+void put_fields(SurfaceFields &&f, ResultData &r)
+{
+  r.displacement = std::move(f.displacement);
+  r.traction = std::move(f.traction);
+  r.traction_corner = std::move(f.traction_corner);
+  r.displacement_prescribed = std::move(f.displacement_prescribed);
+  r.reactions = std::move(f.reactions);
+  r.stress = std::move(f.stress);
+}
+
+void put_fields(SurfaceFields &&f, FrameData &frame)
+{
+  frame.displacement = std::move(f.displacement);
+  frame.traction = std::move(f.traction);
+  frame.displacement_prescribed = std::move(f.displacement_prescribed);
+  frame.stress = std::move(f.stress);
+}
+
+ResultData result_base(const ProblemSetup &s, int ranks)
+{
+  ResultData r;
+  r.vertices = s.mesh->vertices;
+  r.triangles = s.mesh->triangles;
+  r.triangle_region = s.mesh->triangle_region;
+  r.sharp_vertex.resize(s.mesh->vertices.size());
+  for (int v = 0; v < s.mesh->num_vertices(); ++v) r.sharp_vertex[v] = s.disc->node_count(v) > 1;
+  r.attributes_real = {{"E", s.material.E}, {"nu", s.material.nu}, {"lambda", s.material.lambda()}, {"mu", s.material.mu()}, {"feature_angle_deg", s.disc->feature_angle_deg()}};
+  r.attributes_int = {{"ranks", ranks}, {"num_dofs", 3 * s.disc->num_nodes()}, {"num_nodes", s.disc->num_nodes()}, {"num_sharp_vertices", s.disc->num_sharp_vertices()}};
+  char petsc_version[128];
+  HssbemCallThrow(PetscGetVersion(petsc_version, sizeof(petsc_version)));
+  r.attributes_str = {{"version", HSSBEM_VERSION}, {"petsc_version", petsc_version}, {"problem_file", s.spec.file}, {"mesh_file", s.spec.mesh_path}};
+  r.input_files = s.input_files;
+  return r;
+}
+
+void put_options(const OptionValues &values, ResultData &r)
+{
+  for (const auto &[name, v] : values) {
+    switch (v.kind) {
+    case OptionKind::Real: r.options_real[name] = v.number; break;
+    case OptionKind::Int:
+    case OptionKind::Bool: r.options_int[name] = static_cast<long long>(v.number); break;
+    case OptionKind::Text:
+    case OptionKind::Choice: r.options_str[name] = v.text; break;
+    }
+  }
+}
+
+ContactData contact_data(const ContactEngine &engine, const ContactSolution &sol, const ContactFrameReport &rep, bool bodies)
+{
+  ContactData c;
+  c.pressure = sol.pressure;
+  c.gap = sol.gap;
+  c.status = sol.status;
+  for (int o = 0; o < engine.num_obstacles(); ++o) c.forces[engine.obstacle_name(o)] = sol.obstacle_force[o];
+  if (bodies)
+    for (int b = 0; b < engine.bodies().count; ++b) c.forces["body_" + std::to_string(b)] = sol.body_force[b];
+  c.iterations = rep.iterations;
+  c.active_vertices = rep.active_vertices;
+  return c;
 }
 
 void check_interior_points(const ProblemSetup &s)
@@ -129,49 +206,6 @@ void interior_fields(MPI_Comm comm, const ProblemSetup &s, const NodalSolution &
     store_fields(s.spec, is, is.plan->finish(values, corner_u, corner_stress(*s.disc, nodes)), r);
   });
   seconds["interior"] += timer.seconds();
-}
-
-/* Reads the -bem_interior_* options into o.
-
-  Options Database Keys:
-+ -bem_interior_band <h>              - points closer to the surface than this many element sizes are interpolated between the surface and two points at that depth (0: integrated where they are)
-. -bem_interior_near_ratio <r>        - split a triangle while the point is closer than r of its diameters
-. -bem_interior_max_depth <n>         - levels of splits at most
-. -bem_interior_equivalent_points <n> - points per equivalent sphere of the fast evaluation
-. -bem_interior_inner_points <n>      - points of each source leaf's inner forces, used near the leaf instead of its particles (0: none)
-. -bem_interior_source_leaf <n>       - triangles per source leaf
-. -bem_interior_target_leaf <n>       - points per target leaf
-- -bem_interior_direct                - every point against every triangle (no fast evaluation; the reference)
-*/
-PetscErrorCode InteriorOptionsFromDatabase_Private(MPI_Comm comm, InteriorRunOptions *o)
-{
-  PetscBool direct = o->fast.direct ? PETSC_TRUE : PETSC_FALSE;
-  PetscInt  depth = o->quad.max_depth, pe = o->fast.equivalent_points, ip = o->fast.inner_points, sl = o->fast.source_leaf, tl = o->fast.target_leaf;
-
-  PetscFunctionBegin;
-  PetscOptionsBegin(comm, NULL, "hssbem: displacement and stress inside the body (interior points and grids)", "hssbem");
-  PetscCall(PetscOptionsReal("-bem_interior_band", "Points closer to the surface than this many element sizes are interpolated along the normal (0: integrated where they are)", "", o->plan.band, &o->plan.band, NULL));
-  PetscCall(PetscOptionsReal("-bem_interior_near_ratio", "Split a triangle while the point is closer than this many of its diameters", "", o->quad.near_ratio, &o->quad.near_ratio, NULL));
-  PetscCall(PetscOptionsInt("-bem_interior_max_depth", "Levels of 1:4 splits at most", "", depth, &depth, NULL));
-  PetscCall(PetscOptionsInt("-bem_interior_equivalent_points", "Points on each equivalent sphere of the fast evaluation", "", pe, &pe, NULL));
-  PetscCall(PetscOptionsInt("-bem_interior_inner_points", "Points of each source leaf's inner forces, taken near the leaf instead of its particles (0: none)", "", ip, &ip, NULL));
-  PetscCall(PetscOptionsInt("-bem_interior_source_leaf", "Triangles per source leaf of the fast evaluation", "", sl, &sl, NULL));
-  PetscCall(PetscOptionsInt("-bem_interior_target_leaf", "Points per target leaf of the fast evaluation", "", tl, &tl, NULL));
-  PetscCall(PetscOptionsBool("-bem_interior_direct", "Every point against every triangle (the reference; no fast evaluation)", "", direct, &direct, NULL));
-  PetscOptionsEnd();
-  PetscCheck(o->plan.band >= 0 && o->plan.band <= 10, comm, PETSC_ERR_ARG_OUTOFRANGE, "-bem_interior_band must lie in [0, 10]");
-  PetscCheck(o->quad.near_ratio >= 1 && o->quad.near_ratio <= 20, comm, PETSC_ERR_ARG_OUTOFRANGE, "-bem_interior_near_ratio must lie in [1, 20]");
-  PetscCheck(depth >= 0 && depth <= 20, comm, PETSC_ERR_ARG_OUTOFRANGE, "-bem_interior_max_depth must lie in [0, 20]");
-  PetscCheck(pe >= 16 && pe <= 2000, comm, PETSC_ERR_ARG_OUTOFRANGE, "-bem_interior_equivalent_points must lie in [16, 2000]");
-  PetscCheck(ip == 0 || (ip >= 16 && ip <= 2000), comm, PETSC_ERR_ARG_OUTOFRANGE, "-bem_interior_inner_points must be 0 or lie in [16, 2000]");
-  PetscCheck(sl >= 1 && tl >= 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-bem_interior_source_leaf and -bem_interior_target_leaf must be at least 1");
-  o->quad.max_depth = (int)depth;
-  o->fast.equivalent_points = (int)pe;
-  o->fast.inner_points = (int)ip;
-  o->fast.source_leaf = (int)sl;
-  o->fast.target_leaf = (int)tl;
-  o->fast.direct = direct == PETSC_TRUE;
-  PetscFunctionReturn(PETSC_SUCCESS);
 }
 
 } // namespace hssbem

@@ -1,5 +1,5 @@
 // PETSc error codes as C++ exceptions (see petsc_call.hpp).
-#include "hssbem/app/petsc_call.hpp"
+#include "hssbem/session/petsc_call.hpp"
 #include "hssbem/petsc/errors.h"
 
 #include <new>

@@ -1,7 +1,9 @@
-// The simulator API of scene.hpp over the dense scene engine.
-#include "hssbem/scene/scene.hpp"
+// The simulator API of scene.hpp: a face of the scene session.
+#include "hssbem/session/scene.hpp"
 
+#include "hssbem/petsc/system.h"
 #include "hssbem/post/post.hpp"
+#include "hssbem/session/petsc_call.hpp"
 
 #include <stdexcept>
 
@@ -26,50 +28,52 @@ SystemSelection node_selection(const Discretization &disc, const Scene::Pattern 
 
 Scene::Scene(const SurfaceMesh &mesh, const Material &material, const Pattern &reference, const SceneOptions &options, std::unique_ptr<KrylovSolver> krylov,
              double feature_angle_deg, const std::vector<char> &candidate_vertices)
-    : m_mesh(mesh)
 {
   if (reference.size() != mesh.vertices.size()) throw std::invalid_argument("Scene: the reference pattern needs one entry per vertex");
   if (options.with_pressure) throw std::invalid_argument("Scene: pressure loads are not part of the Scene API (give tractions)");
   if (!options.candidates.empty()) throw std::invalid_argument("Scene: give the candidates per vertex (candidate_vertices), not per unknown");
   if (!candidate_vertices.empty() && candidate_vertices.size() != mesh.vertices.size()) throw std::invalid_argument("Scene: candidate_vertices needs one entry per vertex");
-  m_disc = std::make_unique<Discretization>(m_mesh, feature_angle_deg);
-  m_op = std::make_unique<BemOperator>(*m_disc, material);
-  SceneOptions opt = options;
+  m_problem = std::make_shared<SessionProblem>(std::make_shared<ProblemSetup>(setup_in_memory(mesh, material, feature_angle_deg)), QuadratureOptions{});
+  const Discretization &disc = m_problem->disc();
+  SceneReference ref{node_selection(disc, reference, {}), "the reference pattern", {}, false};
   if (!candidate_vertices.empty()) {
-    opt.candidates.resize(3 * static_cast<std::size_t>(m_disc->num_nodes()));
-    for (int n = 0; n < m_disc->num_nodes(); ++n)
-      for (int a = 0; a < 3; ++a) opt.candidates[3 * n + a] = candidate_vertices[m_disc->node(n).vertex] ? 1 : 0;
+    ref.candidates.resize(3 * static_cast<std::size_t>(disc.num_nodes()));
+    for (int n = 0; n < disc.num_nodes(); ++n)
+      for (int a = 0; a < 3; ++a) ref.candidates[3 * n + a] = candidate_vertices[disc.node(n).vertex] ? 1 : 0;
   }
-  m_scene = std::make_unique<DenseScene>(*m_op, node_selection(*m_disc, reference, {}), opt, std::move(krylov));
+  SessionOptions so;
+  so.scene = options;
+  MachineLimits limits;
+  HssbemCallThrow(HssbemMachineLimits(PETSC_COMM_SELF, &limits));
+  m_session = std::make_unique<SceneSession>(m_problem, std::move(ref), so, limits, std::move(krylov));
+  m_session->set_up();
   m_pattern = reference;
   m_values.assign(mesh.vertices.size(), Vec3{0, 0, 0});
-  m_area = node_areas(*m_disc);
+  m_area = node_areas(disc);
 }
 
 Scene::~Scene() = default;
 
 void Scene::set_pattern(const Pattern &displacement_prescribed)
 {
-  if (displacement_prescribed.size() != m_mesh.vertices.size()) throw std::invalid_argument("Scene::set_pattern: one entry per vertex expected");
+  if (displacement_prescribed.size() != m_problem->mesh().vertices.size()) throw std::invalid_argument("Scene::set_pattern: one entry per vertex expected");
   m_pattern = displacement_prescribed;
 }
 
 void Scene::set_values(const std::vector<Vec3> &values)
 {
-  if (values.size() != m_mesh.vertices.size()) throw std::invalid_argument("Scene::set_values: one value per vertex expected");
+  if (values.size() != m_problem->mesh().vertices.size()) throw std::invalid_argument("Scene::set_values: one value per vertex expected");
   m_values = values;
 }
 
-SystemSelection Scene::selection() const { return node_selection(*m_disc, m_pattern, m_values); }
+SystemSelection Scene::selection() const { return node_selection(m_problem->disc(), m_pattern, m_values); }
 
 const SceneFrameReport &Scene::solve()
 {
-  const SystemSelection sel = selection();
-  std::vector<double> x;
-  const SceneFrameReport &rep = m_scene->solve(sel, x);
-  const NodalSolution sol = split_unknowns(sel, x);
-  m_u = vertex_average(*m_disc, sol.u);
-  m_t = vertex_average(*m_disc, sol.t);
+  const SceneFrameReport &rep = m_session->step(selection());
+  SurfaceFields f = surface_fields(m_problem->setup(), m_session->solution(), {}, kMotion);
+  m_u = std::move(f.displacement);
+  m_t = std::move(f.traction);
   return rep;
 }
 
@@ -77,14 +81,15 @@ std::vector<Scene::VertexForce> Scene::contact_forces()
 {
   const SystemSelection sel = selection();
   std::vector<double> s;
-  m_scene->solve_switched(sel, s);
-  const std::vector<int> &J = m_scene->switched();
-  std::vector<int> slot(m_mesh.vertices.size(), -1);
+  DenseScene &scene = m_session->engine();
+  scene.solve_switched(sel, s);
+  const std::vector<int> &J = scene.switched();
+  std::vector<int> slot(m_problem->mesh().vertices.size(), -1);
   std::vector<VertexForce> out;
   for (std::size_t p = 0; p < J.size(); ++p) {
     const int node = J[p] / 3, comp = J[p] % 3;
     if (!sel.displacement_known[node][comp]) continue; // a released component: its unknown is a displacement
-    const int v = m_disc->node(node).vertex;
+    const int v = m_problem->disc().node(node).vertex;
     if (slot[v] < 0) slot[v] = static_cast<int>(out.size()), out.push_back({v, Vec3{0, 0, 0}});
     out[slot[v]].force[comp] += s[p] * m_area[node];
   }

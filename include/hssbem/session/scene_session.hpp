@@ -1,0 +1,96 @@
+/// \file scene_session.hpp
+/// A scene, whatever face drives it (the driver's problem file with "frames", the library's
+/// Scene, the Python module): the reference pattern factored once on the dense scene engine
+/// (scene/dense_scene.hpp), W for the unknowns some frame may switch or load, then frame after
+/// frame the engine's strategy, and each frame's fields. On one rank (the driver runs it on
+/// rank 0).
+#pragma once
+
+#include "hssbem/core/size_limits.hpp"
+#include "hssbem/io/hdf5_output.hpp"
+#include "hssbem/scene/dense_scene.hpp"
+#include "hssbem/session/fingerprint.hpp"
+#include "hssbem/session/options.hpp"
+#include "hssbem/session/problem.hpp"
+#include "hssbem/session/result_fields.hpp"
+
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace hssbem {
+
+/// What a scene factors once: the reference pattern (its values unused) and, per unknown, the
+/// candidates (1 where some frame may switch or load it: W is computed for those only; empty:
+/// every unknown).
+struct SceneReference {
+  SystemSelection selection;
+  std::string name;             ///< for messages: "the base rules", "frame 0", "the reference pattern"
+  std::vector<char> candidates;
+  bool pressure = false;        ///< some frame has pressure loads (W_p = A₀⁻¹ Gn)
+  long long count() const;      ///< the candidates (every unknown when none are named)
+};
+
+/// The reference of a problem file's scene: the base rules where they hold the body, else
+/// frame 0's; the candidates: the unknowns that some frame switches or loads.
+SceneReference scene_reference(const ProblemSetup &s);
+
+/// What a scene must pass before anything is allocated (set_up() checks it too; the driver asks
+/// it on every rank first): the dense scene engine (-bem_mat_type dense or auto) and its memory
+/// on this machine. Throws std::runtime_error.
+void check_scene(const SessionProblem &problem, const SceneReference &reference, const SessionOptions &options, const MachineLimits &limits);
+
+class SceneSession {
+public:
+  /// `krylov`: the Krylov solver of the krylov strategy (petsc/scene_krylov.h; null: that
+  /// strategy is refused). Throws for -bem_mat_type hss or h2 (scenes run on the dense engine).
+  SceneSession(std::shared_ptr<const SessionProblem> problem, SceneReference reference, const SessionOptions &options, const MachineLimits &limits,
+               std::unique_ptr<KrylovSolver> krylov = nullptr);
+  ~SceneSession();
+  SceneSession(const SceneSession &) = delete;
+  SceneSession &operator=(const SceneSession &) = delete;
+
+  /// The precomputation: the memory check, then the reference LU and W's candidate columns.
+  void set_up();
+  /// Solves a frame (the problem's dof nodes; its pattern may switch the candidates only);
+  /// solution() then holds it. set_up() first when not done.
+  const SceneFrameReport &step(const SystemSelection &frame);
+  /// Frame i of the problem file; its error is "<file>: frames[i]: <what>" (a solution that is
+  /// not finite included).
+  const SceneFrameReport &step(std::size_t i);
+
+  /// The last frame's solution per dof node, its selection and its report.
+  const NodalSolution &solution() const { return m_sol; }
+  const SystemSelection &selection() const { return m_sel; }
+  const SceneFrameReport &report() const { return m_report; }
+  /// The last frame's fields (`parts`, result_fields.hpp) and attributes, as a result file's frame.
+  FrameData frame_data(unsigned parts = kFrameFields) const;
+  /// The part of the result file that is no frame: the problem, the solver's attributes, the
+  /// options used.
+  ResultData base(int ranks) const;
+
+  DenseScene &engine() { return *m_scene; }
+  const DenseScene &engine() const { return *m_scene; }
+  const SceneReference &reference() const { return m_ref; }
+  const SessionProblem &problem() const { return *m_problem; }
+  /// Seconds per phase ("scene_setup"; a face may add its own).
+  std::map<std::string, double> &timings() { return m_seconds; }
+  OptionValues options_used() const;
+  Fingerprint fingerprint() const;
+
+private:
+  std::shared_ptr<const SessionProblem> m_problem;
+  SceneReference m_ref;
+  SessionOptions m_options;
+  MachineLimits m_limits;
+  std::unique_ptr<KrylovSolver> m_krylov;
+  std::unique_ptr<DenseScene> m_scene;
+  SystemSelection m_sel;
+  std::vector<double> m_x;
+  NodalSolution m_sol;
+  SceneFrameReport m_report;
+  std::map<std::string, double> m_seconds;
+};
+
+} // namespace hssbem
