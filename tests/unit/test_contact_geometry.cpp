@@ -457,6 +457,19 @@ TEST(ContactProblemFile, KeysFramesAndErrors)
   EXPECT_NE(error(R"("contact": {"obstacles": [)" + plane + R"(]}, "frames": [{"boundary": []}, {"obstacles": {"b": {"translate": [0, 0, 1]}}}]})")
                 .find("frames[1].obstacles: no obstacle named 'b' (known: a)"),
             std::string::npos);
+  // Names that cannot name the result's datasets, or that clash with a body's force.
+  auto named = [](const std::string &name) { return R"({"name": )" + name + R"(, "plane": {"point": [0, 0, 0], "normal": [0, 0, 1]}})"; };
+  EXPECT_NE(error(R"("contact": {"obstacles": [)" + named(R"("a/b")") + "]}}").find("p.json: contact.obstacles[0].name: the name \"a/b\" cannot name the result's datasets"),
+            std::string::npos);
+  EXPECT_NE(error(R"("contact": {"obstacles": [)" + named(R"(".")") + "]}}").find("contact.obstacles[0].name: the name '.' cannot name"), std::string::npos);
+  const std::string tab = error(R"("contact": {"obstacles": [)" + named(R"("tab\tle")") + "]}}");
+  EXPECT_NE(tab.find("the name \"tab\\tle\" cannot name the result's datasets (/contact/forces/<name>, /obstacles/<name>): it holds a control character"), std::string::npos) << tab;
+  EXPECT_NE(error(R"("contact": {"obstacles": [)" + named(R"("")") + "]}}").find("contact.obstacles[0].name: expected a non-empty string"), std::string::npos);
+  EXPECT_NE(error(R"("contact": {"bodies": true, "obstacles": [)" + plane + "," + named(R"("body_12")") + "]}}")
+                .find("contact.obstacles[1].name: the name 'body_12' is that of a body's force in the result"),
+            std::string::npos);
+  EXPECT_EQ(error(R"("contact": {"obstacles": [)" + named(R"("body_12")") + "]}}"), "no error");       // no bodies' forces without "bodies"
+  EXPECT_EQ(error(R"("contact": {"bodies": true, "obstacles": [)" + named(R"("body_x")") + "]}}"), "no error");
   EXPECT_NE(error(R"("contact": {"obstacles": [{"name": "a", "plane": {"point": [0, 0, 0], "normal": [0, 0, 1]}, "sphere": {"center": [0, 0, 0], "radius": 1}}]}})")
                 .find("has more than one of 'plane', 'sphere', 'mesh'"),
             std::string::npos);
