@@ -50,7 +50,8 @@ SurfaceMesh parse_mesh(const std::string &bytes, const std::string &name);
 /// Validate topology and fix orientation: closed (every edge in exactly two triangles),
 /// manifold (edges and vertex fans), no degenerate or duplicate triangles, consistent orientation
 /// in each connected component, no surface passing through itself or another (find_intersection()
-/// of bem/surface_intersection.hpp: the two triangles are named), outward normals (a component nested inside another is a cavity and
+/// of bem/surface_intersection.hpp: the two triangles are named; nest_surfaces(): surfaces that
+/// cross along edges or at vertices, or coincide), outward normals (a component wholly inside another is a cavity and
 /// gets normals pointing into it, i.e. out of the solid). Components oriented inward are flipped
 /// and a notice is appended to `notices`. Vertices used by no triangle are allowed and reported.
 /// Throws MeshError naming the edge, vertex or triangle at fault.
