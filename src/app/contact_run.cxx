@@ -403,7 +403,7 @@ void run_contact(MPI_Comm comm, const ProblemSetup &s, const BemOperator &op, st
     if (rank != 0) return;
     const NodeConditions base = apply_rules(s.spec.rules, *s.disc, s.spec.file);
     const std::vector<NodeConditions> frames = frames_of(s, base);
-    ContactRun run{s, op, o, interior, size, seconds, on_h2 ? &h2 : nullptr, body_h2, nullptr, nullptr};
+    ContactRun run{s, op, o, interior, size, seconds, on_h2 ? &h2 : nullptr, body_h2, nullptr, nullptr, nullptr};
     run.set_up(base, frames);
     if (s.spec.frames.empty()) run.single(frames[0]);
     else run.scene(frames);

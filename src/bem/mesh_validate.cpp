@@ -4,6 +4,8 @@
 #include "hssbem/bem/mesh.hpp"
 #include "hssbem/bem/surface_intersection.hpp"
 
+#include "bounding_box.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -49,23 +51,7 @@ struct TripleHash {
   }
 };
 
-/// Axis-aligned bounding box.
-struct Box {
-  Vec3 lo{std::numeric_limits<double>::max(), std::numeric_limits<double>::max(),
-          std::numeric_limits<double>::max()};
-  Vec3 hi{-std::numeric_limits<double>::max(), -std::numeric_limits<double>::max(),
-          -std::numeric_limits<double>::max()};
-
-  void add(const Vec3 &x)
-  {
-    for (std::size_t i = 0; i < 3; ++i) {
-      lo[i] = std::min(lo[i], x[i]);
-      hi[i] = std::max(hi[i], x[i]);
-    }
-  }
-  double diagonal() const { return norm(hi - lo); }
-  Vec3 center() const { return 0.5 * (lo + hi); }
-};
+using detail::Box;
 
 std::string triple(const std::array<int, 3> &t)
 {
@@ -84,12 +70,7 @@ public:
 
   void run()
   {
-    check_indices();
-    check_scale();
-    check_degenerate();
-    check_duplicates();
-    build_edges();
-    check_non_manifold_edges();
+    check_triangles_and_edges();
     check_open_edges();
     check_vertex_fans();
     check_orientation();
@@ -103,12 +84,7 @@ public:
   /// The checks of a surface that need not be closed; returns whether it is.
   bool run_open()
   {
-    check_indices();
-    check_scale();
-    check_degenerate();
-    check_duplicates();
-    build_edges();
-    check_non_manifold_edges();
+    check_triangles_and_edges();
     check_orientation();
     find_components();
     check_intersections();
@@ -116,6 +92,17 @@ public:
   }
 
 private:
+  /// The checks every surface takes, closed or not, up to its edges (none of more than two triangles).
+  void check_triangles_and_edges()
+  {
+    check_indices();
+    check_scale();
+    check_degenerate();
+    check_duplicates();
+    build_edges();
+    check_non_manifold_edges();
+  }
+
   [[noreturn]] void fail(const std::string &what) const
   {
     throw MeshError("mesh '" + m_mesh.source + "': " + what);

@@ -5,6 +5,8 @@
 #include "hssbem/bem/surface_intersection.hpp"
 #include "hssbem/bem/surface_locator.hpp"
 
+#include "bounding_box.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <memory>
@@ -13,31 +15,13 @@ namespace hssbem {
 
 namespace {
 
-struct Bounds {
-  Vec3 lo{HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi{-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
-  void add(const Vec3 &x)
-  {
-    for (int i = 0; i < 3; ++i) lo[i] = std::min(lo[i], x[i]), hi[i] = std::max(hi[i], x[i]);
-  }
-  bool contains(const Vec3 &x, double pad) const
-  {
-    for (int i = 0; i < 3; ++i)
-      if (x[i] < lo[i] - pad || x[i] > hi[i] + pad) return false;
-    return true;
-  }
-  bool meets(const Bounds &b, double pad) const
-  {
-    for (int i = 0; i < 3; ++i)
-      if (b.lo[i] > hi[i] + pad || b.hi[i] < lo[i] - pad) return false;
-    return true;
-  }
-};
+using detail::Box;
 
 /// One surface: its triangles, vertices, box, and (built when another surface's box meets it)
 /// its locator over its own sub-mesh.
 struct Surface {
   std::vector<int> triangles, vertices;
-  Bounds box;
+  Box box;
   SurfaceMesh own;
   std::unique_ptr<SurfaceLocator> locator;
 
@@ -65,7 +49,7 @@ std::vector<Surface> surfaces_of(const SurfaceMesh &mesh, const std::vector<int>
 
 enum class Side { on, inside, outside };
 
-Side side_of(const Vec3 &x, const SurfaceLocator &other, const Bounds &box, double eps)
+Side side_of(const Vec3 &x, const SurfaceLocator &other, const Box &box, double eps)
 {
   if (!box.contains(x, eps)) return Side::outside;
   if (other.nearest(x, eps).triangle >= 0) return Side::on;
@@ -104,14 +88,14 @@ Placement place(const SurfaceMesh &mesh, const Surface &a, Surface &b, double ep
 SurfaceNesting nest_surfaces(const SurfaceMesh &mesh, const std::vector<int> &surface_of, int count, const IntersectionOptions &o)
 {
   std::vector<Surface> s = surfaces_of(mesh, surface_of, count);
-  Bounds all;
-  for (const Surface &f : s) all.add(f.box.lo), all.add(f.box.hi);
-  const double eps = count > 0 ? o.tolerance * norm(all.hi - all.lo) : 0.0;
+  Box all;
+  for (const Surface &f : s) all.add(f.box);
+  const double eps = o.tolerance * all.diagonal();
   SurfaceNesting out;
   out.inside.assign(count, std::vector<char>(count, 0));
   for (int a = 0; a < count; ++a)
     for (int b = 0; b < count; ++b) {
-      if (a == b || !s[a].box.meets(s[b].box, eps)) continue;
+      if (a == b || !s[a].box.overlaps(s[b].box, eps)) continue;
       const Placement p = place(mesh, s[a], s[b], eps);
       out.inside[a][b] = p.any_inside() && !p.any_outside();
       if (out.crossing) continue;

@@ -7,11 +7,11 @@
 #include "hssbem/bem/surface_intersection.hpp"
 
 #include "bem/triangle_crossing.hpp"
+#include "test_shapes.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <map>
 #include <random>
 
 using namespace hssbem;
@@ -67,38 +67,11 @@ SurfaceMesh uv_sphere(int n, double radius = 1.0, Vec3 centre = {0, 0, 0})
   return m;
 }
 
-/// The cube origin + [0, size]^3 with n x n squares per face, outward; each square split along
-/// the diagonal from its first corner, or (`diamond`) alternately, so that the diagonals of a face
-/// of n = 2 form the square inscribed in it (the "diamond" through its edges' midpoints).
+/// The cube origin + [0, size]^3 with n x n squares per face (unit_cube of test_shapes.hpp).
 SurfaceMesh grid_cube(int n, double size = 1.0, Vec3 origin = {0, 0, 0}, bool diamond = false)
 {
-  SurfaceMesh m;
-  std::map<std::array<int, 3>, int> index;
-  auto vertex = [&](std::array<int, 3> k) {
-    const auto [it, added] = index.emplace(k, m.num_vertices());
-    if (added) m.vertices.push_back(origin + (size / n) * Vec3{double(k[0]), double(k[1]), double(k[2])});
-    return it->second;
-  };
-  for (int a = 0; a < 3; ++a)
-    for (int side : {0, n}) {
-      const int u = (a + 1) % 3, v = (a + 2) % 3; // e_u x e_v = e_a: outward on the side n
-      for (int p = 0; p < n; ++p)
-        for (int q = 0; q < n; ++q) {
-          auto at = [&](int i, int j) {
-            std::array<int, 3> k{};
-            k[a] = side, k[u] = i, k[v] = j;
-            return vertex(k);
-          };
-          const int c00 = at(p, q), c10 = at(p + 1, q), c11 = at(p + 1, q + 1), c01 = at(p, q + 1);
-          std::array<std::array<int, 3>, 2> two{{{c00, c10, c11}, {c00, c11, c01}}};
-          if (diamond && (p + q) % 2 == 0) two = {{{c00, c10, c01}, {c10, c11, c01}}};
-          for (auto t : two) {
-            if (side == 0) std::swap(t[1], t[2]);
-            m.triangles.push_back(t);
-          }
-        }
-    }
-  m.triangle_region.assign(m.triangles.size(), -1);
+  SurfaceMesh m = test::unit_cube(n, diamond);
+  for (Vec3 &v : m.vertices) v = origin + size * v;
   m.source = "grid cube";
   return m;
 }

@@ -2,17 +2,13 @@
 // block gives the same force however the box is triangulated (the signed distance by
 // pseudo-normals: the vertices on the edge take its bisector, not one face's normal), and a plate
 // beside the body, not over it, touches nothing (no contact past an open mesh's boundary).
-#include "solve_helpers.hpp"
-
-#include "hssbem/contact/contact_engine.hpp"
-#include "hssbem/scene/reference.hpp"
+#include "contact_case.hpp"
+#include "test_shapes.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
-#include <map>
-#include <memory>
 
 using namespace hssbem;
 using namespace hssbem::test;
@@ -23,56 +19,11 @@ using Kind = BoundaryRule::Kind;
 constexpr double k_nan = std::numeric_limits<double>::quiet_NaN();
 constexpr double E = 1000, nu = 0.3;
 
-/// A contact problem on the dense reference of its base rules.
-struct Case {
-  ProblemSetup s;
-  std::unique_ptr<BemOperator> op;
-  NodeConditions base;
-  std::unique_ptr<DenseReference> ref;
-  std::unique_ptr<ContactEngine> engine;
-  ContactSolution sol;
-  ContactFrameReport rep;
-
-  Case(ProblemSpec spec, std::vector<Obstacle> obstacles)
-  {
-    spec.contact.present = true;
-    s = setup_problem(std::move(spec), ProblemOverrides{});
-    op = std::make_unique<BemOperator>(*s.disc, s.material);
-    base = apply_rules(s.spec.rules, *s.disc, s.spec.file);
-    ref = std::make_unique<DenseReference>(*op, base.unknown_pattern());
-    engine = std::make_unique<ContactEngine>(*s.disc, *ref, std::move(obstacles), ContactSettings{});
-    rep = engine->solve(selection_of(base), std::vector<Vec3>(engine->num_obstacles(), Vec3{0, 0, 0}), sol);
-  }
-};
-
 /// The box [-h, h] x [-l, l] x [-h, h] with n x n squares a face, outward.
 SurfaceMesh grid_box(int n, double h, double l)
 {
-  SurfaceMesh m;
-  std::map<std::array<int, 3>, int> index;
-  const Vec3 half{h, l, h};
-  auto vertex = [&](std::array<int, 3> k) {
-    const auto [it, added] = index.emplace(k, m.num_vertices());
-    if (added) m.vertices.push_back({half[0] * (2.0 * k[0] / n - 1), half[1] * (2.0 * k[1] / n - 1), half[2] * (2.0 * k[2] / n - 1)});
-    return it->second;
-  };
-  for (int a = 0; a < 3; ++a)
-    for (int side : {0, n}) {
-      const int u = (a + 1) % 3, v = (a + 2) % 3;
-      for (int p = 0; p < n; ++p)
-        for (int q = 0; q < n; ++q) {
-          auto at = [&](int i, int j) {
-            std::array<int, 3> k{};
-            k[a] = side, k[u] = i, k[v] = j;
-            return vertex(k);
-          };
-          for (std::array<int, 3> t : {std::array<int, 3>{at(p, q), at(p + 1, q), at(p + 1, q + 1)}, std::array<int, 3>{at(p, q), at(p + 1, q + 1), at(p, q + 1)}}) {
-            if (side == 0) std::swap(t[1], t[2]);
-            m.triangles.push_back(t);
-          }
-        }
-    }
-  m.triangle_region.assign(m.triangles.size(), -1);
+  SurfaceMesh m = unit_cube(n);
+  for (Vec3 &v : m.vertices) v = {h * (2 * v[0] - 1), l * (2 * v[1] - 1), h * (2 * v[2] - 1)};
   return m;
 }
 
@@ -92,7 +43,8 @@ TEST(ContactObstacles, ABoxPressedWithItsEdgeGivesTheSameForceHoweverItIsMeshed)
     for (Vec3 &v : box.vertices) v = place.apply(v);
     ProblemSpec spec = spec_for("cube_l1.msh", E, nu);
     spec.rules = {rule(Kind::Displacement, region("z0"), {{0, 0, delta}})};
-    Case c(spec, {Obstacle::mesh("box", box)});
+    ContactCase c(spec, {Obstacle::mesh("box", box)});
+    c.solve({{0, 0, 0}});
     const SurfaceMesh &m = c.s.disc->mesh();
     int under = 0;
     for (int v = 0; v < m.num_vertices(); ++v) {
@@ -128,7 +80,8 @@ TEST(ContactObstacles, APlateBesideTheBodyTouchesNothing)
   ProblemSpec spec = spec_for("cube_l0.msh", E, nu);
   spec.rules = {rule(Kind::Displacement, region("z1"), {{k_nan, k_nan, -delta}}), rule(Kind::Displacement, region("x0"), {{0, k_nan, k_nan}}),
                 rule(Kind::Displacement, region("y0"), {{k_nan, 0, k_nan}})};
-  Case c(spec, {Obstacle::mesh("plate", plate)});
+  ContactCase c(spec, {Obstacle::mesh("plate", plate)});
+  c.solve({{0, 0, 0}});
   double t = 0, u = 0;
   for (std::size_t i = 0; i < c.sol.t.size(); ++i) t = std::max(t, norm(c.sol.t[i])), u = std::max(u, norm(c.sol.u[i] - Vec3{0, 0, -delta}));
   std::printf("a plate beside the cube: %lld candidates, %lld touching, max |t| %.2e (E delta = %.0f), max |u - rigid| %.2e\n", c.rep.candidates, c.rep.active_vertices, t,
