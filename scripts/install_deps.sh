@@ -17,6 +17,7 @@ packages=(
   gmsh python3-gmsh                         # mesh generation (scripts/gen_meshes.py)
   python3-matplotlib                        # scripts/render.py (Agg PNGs; brings python3-pil for GIFs)
   python3-jsonschema                        # the problem file's schema (scripts/problem_schema.py, ctest problem_schema)
+  python3-meshio                            # the CLI tests read the XDMF sidecar as another reader would
 )
 
 echo "install_deps: apt-get install ${#packages[@]} packages"

@@ -1,7 +1,8 @@
 // Contact problems in the driver: a problem file with "contact", solved once or frame by frame by
 // the contact engine (contact/contact_engine.hpp) on the dense reference factorization or, with
-// -bem_mat_type h2 (or auto where dense does not fit), the H² one (scene/h2_reference.hpp), on rank 0.
+// -bem_mat_type h2 (or auto where dense does not fit), the H² one (reference/h2_reference.hpp), on rank 0.
 #include "hssbem/app/run.hpp"
+#include "contact_obstacles.hpp"
 #include "result_base.hpp"
 #include "stress_post.hpp"
 
@@ -169,6 +170,7 @@ struct ContactRun {
   std::vector<char> body_h2;         ///< per body: its reference is the H² one (else dense)
   std::unique_ptr<ReferenceFactorization> reference;
   std::unique_ptr<ContactEngine> engine;
+  std::unique_ptr<ContactObstacles> drawn; ///< the obstacles' checks, notes and surfaces
   long long frame = 0;
 
   std::unique_ptr<ReferenceFactorization> body_reference(const BemOperator &body_op, std::vector<char> pattern, std::vector<char> kept, bool pressure, int body) const;
@@ -233,8 +235,10 @@ void ContactRun::set_up(const NodeConditions &base, const std::vector<NodeCondit
   const Progress progress("contact set-up"); // reported when it ends (the reference LU and the engine's columns)
   std::vector<Obstacle> obstacles = obstacles_of(s);
   const ContactSettings settings = settings_of(s);
+  drawn = std::make_unique<ContactObstacles>(s, obstacles, settings.candidate, o.reach, o.depth);
+  drawn->check_facing(poses_of(placements_of(s.spec)));
   ContactOptions opt;
-  opt.tol = o.tol, opt.max_it = o.max_it, opt.reach = o.reach;
+  opt.tol = o.tol, opt.max_it = o.max_it, opt.reach = o.reach, opt.depth = o.depth;
   if (o.monitor)
     opt.monitor = [this](const ContactIteration &it) {
       HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF, "hssbem: contact: frame %lld iteration %d: %lld touching, %lld changed, residual %.3e\n", frame, it.iteration, it.active, it.changed, it.residual));
@@ -256,6 +260,8 @@ void ContactRun::set_up(const NodeConditions &base, const std::vector<NodeCondit
 void ContactRun::single(const NodeConditions &nc)
 {
   ContactSolution sol;
+  const std::vector<Pose> poses = poses_of(placements_of(s.spec))[0];
+  drawn->note_depth(0, poses);
   const ContactFrameReport rep = engine->solve(selection_of(nc), placements_of(s.spec)[0], sol);
   seconds["contact_solve"] += rep.seconds;
   check_finite(sol, -1);
@@ -287,6 +293,7 @@ void ContactRun::single(const NodeConditions &nc)
   }
   interior_fields(PETSC_COMM_SELF, s, nodal, nodes, interior, r, seconds); // the contact run is rank 0's
   r.contact = contact_data(*engine, sol, rep, s.spec.contact.bodies);
+  r.obstacles = drawn->surfaces(poses);
   r.timings = seconds;
   const EventScope event(BEM_Output);
   write_result(s.output, r);
@@ -300,15 +307,18 @@ void ContactRun::scene(const std::vector<NodeConditions> &frames)
     ResultData base = result_base(s, size);
     base.attributes_str["solver"] = "contact";
     base.attributes_str["mat_type"] = mat_type_of(body_h2);
+    base.obstacles = drawn->surfaces(std::vector<Pose>(engine->num_obstacles())); // the base position
     writer = std::make_unique<FrameWriter>(s.output, base);
   }
   const std::vector<std::vector<Vec3>> placements = placements_of(s.spec);
+  const std::vector<std::vector<Pose>> poses = poses_of(placements);
   double total = 0, slowest = 0;
   long long iterations = 0;
   { // the progress line ends before the summary
     const Progress progress("contact frames");
     for (frame = 0; frame < static_cast<long long>(frames.size()); ++frame) {
       fault_point("Frame");
+      drawn->note_depth(frame, poses[frame]);
       ContactSolution sol;
       ContactFrameReport rep;
       {
@@ -328,6 +338,7 @@ void ContactRun::scene(const std::vector<NodeConditions> &frames)
       std::vector<NodeStress> nodes;
       f.stress = surface_stress_fields(s, NodalSolution{sol.u, sol.t}, nodes, false);
       f.contact = contact_data(*engine, sol, rep, s.spec.contact.bodies);
+      f.obstacle_vertices = drawn->placed(poses[frame]);
       const EventScope event(BEM_Output);
       writer->append(static_cast<std::size_t>(frame), f);
     }
@@ -392,7 +403,7 @@ void run_contact(MPI_Comm comm, const ProblemSetup &s, const BemOperator &op, st
     if (rank != 0) return;
     const NodeConditions base = apply_rules(s.spec.rules, *s.disc, s.spec.file);
     const std::vector<NodeConditions> frames = frames_of(s, base);
-    ContactRun run{s, op, o, interior, size, seconds, on_h2 ? &h2 : nullptr, body_h2, nullptr, nullptr};
+    ContactRun run{s, op, o, interior, size, seconds, on_h2 ? &h2 : nullptr, body_h2, nullptr, nullptr, nullptr};
     run.set_up(base, frames);
     if (s.spec.frames.empty()) run.single(frames[0]);
     else run.scene(frames);

@@ -9,6 +9,7 @@
 #include "stress_post.hpp"
 
 #include <climits>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <optional>
@@ -57,6 +58,7 @@ PetscErrorCode OptionString_Private(const char *key, const char *text, std::stri
 . -contact_tol <r>            - contact: relative tolerance of the gaps (times the mesh's size) and of friction's Newton residual
 . -contact_max_it <n>         - contact: active-set (or Newton) iterations per frame before it is an error
 . -contact_reach <length>     - contact: vertices within this gap of an obstacle or body are candidates (0: 5 % of the mesh's size)
+. -contact_depth <length>     - contact: a vertex deeper than this behind an open mesh obstacle is not in contact with it (0: the reach)
 . -contact_monitor            - contact: print one line per iteration
 . -contact_h2_rtol <r>        - contact on -bem_mat_type h2: GMRES tolerance (true residual) of the reference's accurate solves
 - -contact_h2_factor_tol <r>  - contact on -bem_mat_type h2: tolerance of the reference's H2 factorization (its columns' accuracy)
@@ -104,6 +106,7 @@ PetscErrorCode ProcessOptions_Private(MPI_Comm comm, AppOptions *opts)
   PetscCall(PetscOptionsReal("-contact_tol", "Contact: relative tolerance of the gaps (times the mesh's size) and of friction's Newton residual", "", opts->contact.tol, &opts->contact.tol, NULL));
   PetscCall(PetscOptionsInt("-contact_max_it", "Contact: active-set (or Newton) iterations per frame before it is an error", "", contact_max_it, &contact_max_it, NULL));
   PetscCall(PetscOptionsReal("-contact_reach", "Contact: vertices within this gap of an obstacle or another body are candidates (0: 5 % of the mesh's size)", "", opts->contact.reach, &opts->contact.reach, NULL));
+  PetscCall(PetscOptionsReal("-contact_depth", "Contact: a vertex deeper than this behind an open mesh obstacle is not in contact with it (0: the reach)", "", opts->contact.depth, &opts->contact.depth, NULL));
   PetscCall(PetscOptionsBool("-contact_monitor", "Contact: print one line per iteration (active points, changes, residual)", "", contact_monitor, &contact_monitor, NULL));
   PetscCall(PetscOptionsReal("-contact_h2_rtol", "Contact on -bem_mat_type h2: GMRES relative tolerance (true residual) of the H2 reference's accurate solves", "", opts->contact.h2_rtol, &opts->contact.h2_rtol, NULL));
   PetscCall(PetscOptionsReal("-contact_h2_factor_tol", "Contact on -bem_mat_type h2: tolerance of the H2 reference's factorization (the accuracy of its columns)", "", opts->contact.h2_factor_tol, &opts->contact.h2_factor_tol, NULL));
@@ -114,6 +117,7 @@ PetscErrorCode ProcessOptions_Private(MPI_Comm comm, AppOptions *opts)
   PetscCheck(opts->contact.tol > 0 && opts->contact.tol < 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-contact_tol must lie in (0, 1)");
   PetscCheck(contact_max_it >= 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-contact_max_it must be at least 1");
   PetscCheck(opts->contact.reach >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "-contact_reach must be >= 0 (0: automatic)");
+  PetscCheck(opts->contact.depth >= 0 && std::isfinite(opts->contact.depth), comm, PETSC_ERR_ARG_OUTOFRANGE, "-contact_depth must be finite and >= 0 (0: the reach)");
   opts->contact.max_it = (int)contact_max_it;
   PetscCheck(opts->contact.h2_rtol > 0 && opts->contact.h2_rtol < 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-contact_h2_rtol must lie in (0, 1)");
   PetscCheck(opts->contact.h2_factor_tol > 0 && opts->contact.h2_factor_tol < 1, comm, PETSC_ERR_ARG_OUTOFRANGE, "-contact_h2_factor_tol must lie in (0, 1)");

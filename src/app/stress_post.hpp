@@ -1,8 +1,8 @@
 // Private to app/: the stress in a result file. The surface's stress fields (from the traction and
-// the tangential gradient of the displacement, bem/surface_stress.hpp) and, inside the body, the
+// the tangential gradient of the displacement, post/surface_stress.hpp) and, inside the body, the
 // displacement and stress at the problem's interior points and grid (Somigliana's identities,
-// evaluated fast over the ranks: compress/interior_evaluation.hpp, near the surface
-// bem/near_surface.hpp).
+// evaluated fast over the ranks: interior/interior_evaluation.hpp, near the surface
+// post/near_surface.hpp).
 #pragma once
 
 #include "hssbem/app/options.hpp"

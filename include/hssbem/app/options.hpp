@@ -43,6 +43,7 @@ struct ContactRunOptions {
   double tol = 1e-10;   ///< -contact_tol: relative tolerance of the gaps and of friction's Newton residual
   int max_it = 50;      ///< -contact_max_it: iterations per frame before it is an error
   double reach = 0;     ///< -contact_reach: candidates within this gap (0: 5 % of the mesh's size)
+  double depth = 0;     ///< -contact_depth: a vertex deeper than this behind an open mesh obstacle is not in contact with it (0: the reach)
   bool monitor = false; ///< -contact_monitor: one line per iteration
   double h2_rtol = 1e-10;      ///< -contact_h2_rtol: on the H² path, GMRES tolerance (true residual) of the reference's accurate solves
   double h2_factor_tol = 2e-3; ///< -contact_h2_factor_tol: on the H² path, the tolerance of the reference's H² factorization

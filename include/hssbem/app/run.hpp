@@ -46,7 +46,7 @@ void run_scene(MPI_Comm comm, const ProblemSetup &s, const BemOperator &op, std:
 
 /// Solve a contact problem (s.spec.contact.present), once or frame by frame, on rank 0 with the
 /// contact engine (contact/contact_engine.hpp) over the reference factorization of the base
-/// rules — dense, or H² (scene/h2_reference.hpp) with -bem_mat_type h2 or where dense does not
+/// rules — dense, or H² (reference/h2_reference.hpp) with -bem_mat_type h2 or where dense does not
 /// fit (auto; one body only): every body checked to be held, every frame's conditions checked to keep the base
 /// pattern, the columns every frame needs computed in one block, then the frames, written as a
 /// result file with /contact (single solve) or /frames/<i>/contact, the surface stress (and, for

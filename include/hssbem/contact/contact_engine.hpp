@@ -56,6 +56,7 @@ struct ContactOptions {
   double tol = 1e-10;
   int max_it = 50;             ///< iterations per frame before it is an error
   double reach = 0;            ///< candidates: vertices within this gap (0: 5 % of the mesh's bounding-box diagonal)
+  double depth = 0;            ///< a vertex deeper than this behind an open mesh obstacle is not in contact with it (0: the reach; obstacle.hpp)
   bool warm_start = true;      ///< start from the previous frame's active set (and tractions)
   /// Frictionless frames: the fields' product with W's loaded columns in single precision (half
   /// the memory traffic); the contact's share of the fields then carries relative errors of
