@@ -18,7 +18,7 @@
 //               one's top cap (its upper 20 % in z) pushed down, the lower one's bottom cap
 //               clamped, until `target` (default 0.1) of all vertices touch; `candidates` of
 //               each body's vertices (those nearest the other body) are its contact candidates.
-//               The reference is composite (scene/composite_reference.hpp): per body its own
+//               The reference is composite (reference/composite_reference.hpp): per body its own
 //               dense LU and the columns of K₀′ the contact needs.
 // Prints one line of figures per scenario (and "csv," the same as a CSV row).
 #include "bench_support.hpp"

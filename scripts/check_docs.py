@@ -1,18 +1,23 @@
 #!/usr/bin/env python3
-"""Checks that keep the README and docs/ honest (ctest -L quick runs all three).
+"""Checks that keep the README and docs/ honest (ctest -L quick runs each).
 
   scripts/check_docs.py figures   every measured figure README.md states outside its headline
                                   table is the table's or appears verbatim in a docs/ page or a
                                   benchmarks/results/ file (the rule is in CONTRIBUTING.md)
+  scripts/check_docs.py docs-figures
+                                  every measured figure of a docs/ page appears verbatim in a file
+                                  of benchmarks/results/ (a dated log or a CSV), or is a range a–b
+                                  whose two ends appear there with the same unit
   scripts/check_docs.py links     every relative link of the Markdown pages points to a file that
                                   exists, and every #anchor into a Markdown page to a heading of it
-  scripts/check_docs.py all       both, and the headline table (scripts/headline_table.py --check)
+  scripts/check_docs.py all       all three, and the headline table (scripts/headline_table.py --check)
 
 A measured figure is a number (digits, optionally grouped by spaces in threes, a decimal part, a
 range a–b) followed by a unit of time (s, ms, µs, min, h, seconds, minutes), memory (B, kB, MB,
 GB, TB, KiB, MiB, GiB), rate (Hz, kHz, GF/s, GB/s, "… per second"), a share (%), a factor (×
 right after the number), or an iteration count (iterations, its). Fenced code blocks, inline
-code, HTML comments and link targets are not read. Standard library only.
+code, HTML comments and link targets are not read, so a number that is not a measurement (a
+buffer size, a timeout, a limit of a format) is written as code. Standard library only.
 """
 import re
 import sys
@@ -36,6 +41,15 @@ LINKED_PAGES = ["README.md", "CONTRIBUTING.md", "docs/*.md", "benchmarks/README.
 # Where a figure of the README may come from, besides its headline table.
 FIGURE_SOURCES = ["docs/**/*.md", "benchmarks/results/**/*"]
 
+# Where a figure of a docs/ page may come from: the dated logs and their CSVs only.
+PAGE_FIGURE_SOURCES = ["benchmarks/results/**/*"]
+
+# Pages whose figures docs-figures does not check yet, and why. Temporary: docs/contact.md is being
+# rewritten on two branches (the contact engine's and the contact geometry's) while issue 40 puts
+# the rest of docs/ right; the lead settles its figures after those merges and removes this entry.
+# No other page may be listed here.
+FIGURE_EXEMPT_PAGES = {"docs/contact.md": "rewritten on the contact branches; its figures are settled after their merge"}
+
 NUMBER = r"\d{1,3}(?: \d{3})+(?:\.\d+)?|\d+(?:\.\d+)?"
 UNITS = ["seconds", "minutes", "iterations", "its", "min", "ms", "µs", "s", "h",
          "KiB", "MiB", "GiB", "kB", "MB", "GB", "TB", "B", "kHz", "Hz", "GF/s", "GB/s", "%"]
@@ -58,7 +72,7 @@ def prose(text):
     """The text without fenced code, inline code, HTML comments and link targets."""
     text = re.sub(r"^(```|~~~).*?^\1[^\n]*$", " ", text, flags=re.S | re.M)
     text = re.sub(r"<!--.*?-->", " ", text, flags=re.S)
-    text = re.sub(r"`[^`\n]*`", " ", text)
+    text = re.sub(r"`(?:[^`\n]|\n(?![ \t]*\n))*`", " ", text)   # inline code, across a line break too
     text = re.sub(r"\]\([^)\s]*\)", "]", text)
     return text
 
@@ -75,8 +89,8 @@ def occurs(figure, corpus):
     return re.search(pattern, corpus) is not None
 
 
-def source_texts(root):
-    for pattern in FIGURE_SOURCES:
+def source_texts(root, patterns=None):
+    for pattern in patterns or FIGURE_SOURCES:
         for path in sorted(root.glob(pattern)):
             if path.is_file():
                 try:
@@ -97,6 +111,42 @@ def check_figures(root):
     if not missing:
         print(f"README.md: {len(stated)} figures outside the headline table, each found in the "
               "table, docs/ or benchmarks/results/")
+    return not missing
+
+
+RANGE = re.compile(rf"^({NUMBER})\s?[–-]\s?({NUMBER})(\s?\S.*)$")
+
+
+def range_ends_occur(figure, corpus):
+    """A range a–b U whose ends a U and b U both appear in the corpus (each a measurement)."""
+    m = RANGE.match(figure)
+    if not m:
+        return False
+    low, high, unit = m.groups()
+    if "per second" in unit:
+        return False
+    return occurs(low + unit, corpus) and occurs(high + unit, corpus)
+
+
+def check_page_figures(root):
+    """Every measured figure of docs/*.md has a dated log or CSV of benchmarks/results/ behind it."""
+    corpus = "\n".join(text for _, text in source_texts(root, PAGE_FIGURE_SOURCES))
+    missing = checked = 0
+    for page in sorted((root / "docs").glob("*.md")):
+        name = page.relative_to(root).as_posix()
+        if name in FIGURE_EXEMPT_PAGES:
+            print(f"{name}: figures not checked ({FIGURE_EXEMPT_PAGES[name]})")
+            continue
+        stated = sorted(set(figures(page.read_text(encoding="utf-8"))))
+        checked += len(stated)
+        for f in stated:
+            if not occurs(f, corpus) and not range_ends_occur(f, corpus):
+                missing += 1
+                print(f"{name}: the figure '{f}' appears in no file of benchmarks/results/ (quote its log "
+                      "verbatim, or write a figure that is no measurement as code: CONTRIBUTING.md, "
+                      "'Figures and the headline table')")
+    if not missing:
+        print(f"docs/: {checked} figures, each found in benchmarks/results/ (or a range whose ends are)")
     return not missing
 
 
@@ -161,12 +211,14 @@ def check_links(root):
 def main(argv):
     what = argv[1] if len(argv) > 1 else "all"
     root = Path(argv[2]).resolve() if len(argv) > 2 else ROOT
-    if what not in ("figures", "links", "all"):
+    if what not in ("figures", "docs-figures", "links", "all"):
         print(__doc__)
         return 2
     ok = True
     if what in ("figures", "all"):
         ok &= check_figures(root)
+    if what in ("docs-figures", "all"):
+        ok &= check_page_figures(root)
     if what in ("links", "all"):
         ok &= check_links(root)
     if what == "all":

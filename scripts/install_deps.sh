@@ -16,6 +16,8 @@ packages=(
   python3 python3-numpy python3-h5py        # CLI tests, benchmark scripts
   gmsh python3-gmsh                         # mesh generation (scripts/gen_meshes.py)
   python3-matplotlib                        # scripts/render.py (Agg PNGs; brings python3-pil for GIFs)
+  python3-jsonschema                        # the problem file's schema (scripts/problem_schema.py, ctest problem_schema)
+  python3-meshio                            # the CLI tests read the XDMF sidecar as another reader would
 )
 
 echo "install_deps: apt-get install ${#packages[@]} packages"

@@ -4,10 +4,11 @@
 Usage:
     /usr/bin/python3 scripts/render.py result.h5 [-o outdir] [--frames 0,5,10|all] [--gif anim.gif]
                                        [--scale s] [--view elev,azim] [--fps n] [--size WxH]
-                                       [--field NAME]
+                                       [--field NAME] [--no-obstacles]
 
 The surface is /mesh/vertices + scale * displacement over /mesh/triangles, each triangle coloured
-by the mean of its corners' values: |u| by default, or the per-vertex dataset given by --field
+by the mean of its corners' values: |u| by default, the contact pressure where the body touches in
+a contact result (the rest of the body a light neutral colour), or the per-vertex dataset given by --field
 NAME (e.g. von_mises, or pressure in a contact result). NAME is looked up as /fields/NAME, then
 /contact/NAME; in a result with frames as /frames/<i>/NAME, then /frames/<i>/contact/NAME; a NAME
 with a slash is a path as given. A dataset with several columns per vertex (a vector, the Voigt
@@ -17,6 +18,12 @@ columns x, y, z, and for principal_stress 1, 2, 3 (largest first: principal_stre
 e.g. displacement:z; NaN values (vertices without one) count as 0. The
 colour scale and the axes are the same for every frame (taken over all frames of the file), so
 pictures of one file can be compared and put in sequence.
+
+The rigid obstacles of a contact result (/obstacles/<name>: a plane's patch, a sphere, a mesh)
+are drawn translucent grey where the frame places them (/frames/<i>/obstacles/<name>/vertices),
+clipped to the picture's box (the bodies' box, widened to take the instruments in but never
+beyond half the body's size on each side); --no-obstacles leaves them out. The body and the
+obstacles are one set of polygons, sorted back to front together.
 
 A result with frames (/frames/<i>/displacement, i = 0, 1, ...) gives outdir/frame_0000.png, ...
 (the number is the frame index), titled with the frame index and the frame's `strategy` and
@@ -32,6 +39,7 @@ Errors (missing file, no displacement, a frame that does not exist) print one li
 import argparse
 import os
 import sys
+import textwrap
 
 import numpy as np
 
@@ -50,6 +58,8 @@ PROG = "render.py"
 # The default scale makes the largest displacement this fraction of the body's size.
 DEFAULT_SCALE_FRACTION = 0.10
 DPI = 100
+TITLE_CHAR_PIXELS = 10  # a wide character of the title's font (12 points at DPI): where lines wrap
+DEFAULT_SIZE = (960, 720)  # pixels: the title, the colour bar and the axes' labels all fit
 COLORMAP = "viridis"
 
 
@@ -68,6 +78,8 @@ class Frame:
         self.seconds = seconds
         self.colour = np.nan_to_num(np.linalg.norm(displacement, axis=1))
         self.field = None  # the dataset that colours it; None: |u|
+        self.touching = None  # contact pressure: per vertex, where the colour applies (else neutral)
+        self.obstacles = []  # (vertices, triangles) of each rigid obstacle, placed for this frame
 
     def file_name(self):
         """The PNG name of this frame in the output directory."""
@@ -226,8 +238,47 @@ def read_field(h5, name, index, nv):
     return found[0], np.nan_to_num(data)
 
 
-def load_result(path, wanted, field=None):
-    """(vertices, triangles, frames) of result file `path`, coloured by `field` if given."""
+def obstacle_names(h5):
+    """The obstacles' names under /obstacles, with their shapes ("plane", "sphere", "mesh")."""
+    if "/obstacles" not in h5:
+        return []
+    return [(name, read_attribute(h5["/obstacles/%s" % name], "shape") or "mesh")
+            for name in sorted(h5["/obstacles"])]
+
+
+def read_obstacles(h5, index):
+    """Each obstacle's (vertices, triangles, shape) as frame `index` (None: no frames) places
+    it: /frames/<index>/obstacles/<name>/vertices, else /obstacles/<name>/vertices."""
+    out = []
+    for name, shape in obstacle_names(h5):
+        base = "/obstacles/%s" % name
+        triangles = np.asarray(h5[base + "/triangles"], dtype=np.int64)
+        placed = "/frames/%d/obstacles/%s/vertices" % (index, name) if index is not None else None
+        vertices = np.asarray(h5[placed if placed and placed in h5 else base + "/vertices"],
+                              dtype=float)
+        if triangles.size and (triangles.min() < 0 or triangles.max() >= len(vertices)):
+            raise RenderError("%s: %s/triangles has a vertex index out of range"
+                              % (h5.filename, base))
+        out.append((vertices, triangles, shape))
+    return out
+
+
+def colour_by_pressure(h5, frame, nv):
+    """A contact result drawn without --field: the contact pressure where the body touches."""
+    path = "/contact/pressure" if frame.index is None else \
+        "/frames/%d/contact/pressure" % frame.index
+    if path not in h5:
+        return
+    pressure = np.nan_to_num(np.asarray(h5[path], dtype=float))
+    if pressure.shape != (nv,):
+        raise RenderError("%s: %s has shape %s, expected (%d,)"
+                          % (h5.filename, path, pressure.shape, nv))
+    frame.colour, frame.touching = pressure, pressure > 0
+
+
+def load_result(path, wanted, field=None, obstacles=True):
+    """(vertices, triangles, frames) of result file `path`, coloured by `field` if given (else by
+    the contact pressure where the body touches, in a contact result), with the obstacles."""
     if not os.path.isfile(path):
         raise RenderError("%s: no such file" % path)
     try:
@@ -237,9 +288,13 @@ def load_result(path, wanted, field=None):
     with h5:
         vertices, triangles = read_mesh(h5)
         frames = read_frames(h5, len(vertices), wanted)
-        if field is not None:
-            for frame in frames:
+        for frame in frames:
+            if field is not None:
                 frame.field, frame.colour = read_field(h5, field, frame.index, len(vertices))
+            else:
+                colour_by_pressure(h5, frame, len(vertices))
+            if obstacles:
+                frame.obstacles = read_obstacles(h5, frame.index)
         return vertices, triangles, frames
 
 
@@ -272,11 +327,45 @@ def deformed(vertices, frame, scale):
 
 
 def axis_limits(vertices, frames, scale):
-    """(lo, hi) over the deformed surfaces of all frames, so the camera never moves."""
+    """(lo, hi) over the deformed surfaces of all frames, so the camera never moves; widened to
+    take in the obstacles but planes (a sphere, an instrument's mesh), by half the body's size
+    on each side at most."""
     points = np.vstack([deformed(vertices, f, scale) for f in frames])
     lo, hi = points.min(axis=0), points.max(axis=0)
+    size = float(np.max(hi - lo))
+    solids = [v for f in frames for v, _, shape in f.obstacles if shape != "plane" and len(v)]
+    if solids:
+        around = np.vstack(solids)
+        lo = np.maximum(np.minimum(lo, around.min(axis=0)), lo - 0.5 * size)
+        hi = np.minimum(np.maximum(hi, around.max(axis=0)), hi + 0.5 * size)
     pad = 0.02 * float(np.max(hi - lo))
     return lo - pad, hi + pad
+
+
+def clip_polygon(polygon, lo, hi):
+    """The part of a planar polygon (k x 3) inside the box [lo, hi] (Sutherland-Hodgman, one
+    face of the box at a time); None when nothing is left."""
+    points = list(polygon)
+    for axis in range(3):
+        for bound, inside in ((lo[axis], lambda p, a=axis, b=lo[axis]: p[a] >= b),
+                              (hi[axis], lambda p, a=axis, b=hi[axis]: p[a] <= b)):
+            out = []
+            for k, p in enumerate(points):
+                q = points[k - 1]
+                if inside(p) != inside(q):
+                    t = (bound - q[axis]) / (p[axis] - q[axis])
+                    out.append(q + t * (p - q))
+                if inside(p):
+                    out.append(p)
+            points = out
+            if len(points) < 3:
+                return None
+    return np.array(points)
+
+
+OBSTACLE_FACE = (0.55, 0.55, 0.55, 0.28)  # translucent grey
+OBSTACLE_EDGE = (0.3, 0.3, 0.3, 0.12)
+NEUTRAL = (0.86, 0.84, 0.80, 1.0)  # the body where it does not touch (coloured by pressure)
 
 
 class Renderer:
@@ -285,6 +374,7 @@ class Renderer:
     def __init__(self, vertices, triangles, limits, vrange, view, size, label="|u|"):
         self.vertices = vertices
         self.triangles = triangles
+        self.limits = limits
         vmin, vmax = vrange
         self.norm = matplotlib.colors.Normalize(vmin=vmin, vmax=vmax if vmax > vmin else vmin + 1.0)
         self.cmap = plt.get_cmap(COLORMAP)
@@ -293,7 +383,8 @@ class Renderer:
         self.surface = None
         self.set_up_axes(limits, view)
         mappable = matplotlib.cm.ScalarMappable(norm=self.norm, cmap=self.cmap)
-        self.figure.colorbar(mappable, ax=self.axes, shrink=0.7, pad=0.1, label=label)
+        self.figure.subplots_adjust(left=0.0, right=0.97, bottom=0.03, top=0.95)
+        self.figure.colorbar(mappable, ax=self.axes, shrink=0.6, pad=0.1, label=label)
 
     def set_up_axes(self, limits, view):
         """Fixed limits, equal scale along x, y, z, and the camera direction."""
@@ -307,17 +398,39 @@ class Renderer:
         self.axes.set_zlabel("z")
         self.axes.view_init(elev=view[0], azim=view[1])
 
+    def body_faces(self, frame):
+        """The body's face colours: the colour map of the mean of each triangle's corners; in a
+        picture of the contact pressure, the neutral colour where no corner touches."""
+        faces = self.cmap(self.norm(frame.colour[self.triangles].mean(axis=1)))
+        if frame.touching is not None:
+            faces[~frame.touching[self.triangles].any(axis=1)] = NEUTRAL
+        return faces
+
+    def obstacle_polygons(self, frame):
+        """The obstacles' triangles clipped to the picture's box."""
+        lo, hi = self.limits
+        polygons = []
+        for vertices, triangles, _ in frame.obstacles:
+            for triangle in vertices[triangles]:
+                clipped = clip_polygon(triangle, lo, hi)
+                if clipped is not None:
+                    polygons.append(clipped)
+        return polygons
+
     def draw(self, frame, scale):
-        """Put this frame's deformed surface in the figure."""
+        """Put this frame's deformed surface and its obstacles in the figure: one collection, so
+        that their polygons are sorted back to front together."""
         points = deformed(self.vertices, frame, scale)
-        colour = frame.colour[self.triangles].mean(axis=1)
+        obstacles = self.obstacle_polygons(frame)
+        faces = list(self.body_faces(frame)) + [OBSTACLE_FACE] * len(obstacles)
+        edges = [(0, 0, 0, 0.25)] * len(self.triangles) + [OBSTACLE_EDGE] * len(obstacles)
         if self.surface is not None:
             self.surface.remove()
-        self.surface = Poly3DCollection(points[self.triangles],
-                                        facecolors=self.cmap(self.norm(colour)),
-                                        edgecolors=(0, 0, 0, 0.25), linewidths=0.2)
+        self.surface = Poly3DCollection(list(points[self.triangles]) + obstacles,
+                                        facecolors=faces, edgecolors=edges, linewidths=0.2)
         self.axes.add_collection3d(self.surface)
-        self.axes.set_title("%s (displacement x %.3g)" % (frame.title(), scale))
+        title = "%s (displacement x %.3g)" % (frame.title(), scale)
+        self.figure.suptitle(textwrap.fill(title, max(20, int(self.figure.bbox.width / TITLE_CHAR_PIXELS))))
 
     def close(self):
         plt.close(self.figure)
@@ -332,7 +445,8 @@ def render(vertices, triangles, frames, args):
               % (PROG, scale, largest, round(100 * DEFAULT_SCALE_FRACTION), body_size(vertices)))
     vmin = min(0.0, min(float(f.colour.min()) for f in frames))
     vmax = max(float(f.colour.max()) for f in frames)
-    label = "|u|" if args.field is None else args.field
+    label = args.field if args.field is not None else \
+        "contact pressure" if frames[0].touching is not None else "|u|"
     renderer = Renderer(vertices, triangles, axis_limits(vertices, frames, scale), (vmin, vmax),
                         args.view, args.size, label)
     try:
@@ -429,8 +543,10 @@ def make_parser():
                         "(default 25,-60)")
     parser.add_argument("--fps", type=positive(float), default=8.0,
                         help="GIF frames per second (default 8)")
-    parser.add_argument("--size", type=parse_size, default=(800, 600),
-                        help="picture size in pixels, WxH (default 800x600)")
+    parser.add_argument("--size", type=parse_size, default=DEFAULT_SIZE,
+                        help="picture size in pixels, WxH (default %dx%d)" % DEFAULT_SIZE)
+    parser.add_argument("--no-obstacles", action="store_true",
+                        help="leave out the rigid obstacles of a contact result")
     parser.add_argument("--field", metavar="NAME",
                         help="colour by this per-vertex dataset instead of |u|: /fields/NAME, "
                         "else /contact/NAME (with frames /frames/<i>/NAME, else "
@@ -447,7 +563,8 @@ def main(argv=None):
     if args.outdir is None:
         args.outdir = os.path.splitext(args.result)[0] + "_render"
     try:
-        vertices, triangles, frames = load_result(args.result, args.frames, args.field)
+        vertices, triangles, frames = load_result(args.result, args.frames, args.field,
+                                                  not args.no_obstacles)
         paths = render(vertices, triangles, frames, args)
     except (RenderError, OSError) as exc:
         print("%s: error: %s" % (PROG, exc), file=sys.stderr)

@@ -1,6 +1,8 @@
-// The bodies of a mesh (bodies.hpp): connected surfaces by shared vertices, nesting by the
-// winding number of one vertex of a surface with respect to each other surface.
+// The bodies of a mesh (bodies.hpp): connected surfaces by shared vertices, nesting by every
+// vertex and triangle centroid of a surface with respect to each other surface (nest_surfaces).
 #include "hssbem/contact/bodies.hpp"
+
+#include "hssbem/mesh/surface_intersection.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -33,35 +35,16 @@ std::vector<int> surfaces_of(const SurfaceMesh &m, int &count)
   return surface;
 }
 
-/// Winding number of p with respect to the triangles of surface s (±1 inside, 0 outside).
-double winding(const SurfaceMesh &m, const std::vector<int> &surface, int s, const Vec3 &p)
-{
-  double total = 0;
-  for (std::size_t t = 0; t < m.triangles.size(); ++t) {
-    if (surface[t] != s) continue;
-    const Vec3 a = m.vertices[m.triangles[t][0]] - p, b = m.vertices[m.triangles[t][1]] - p, c = m.vertices[m.triangles[t][2]] - p;
-    const double la = norm(a), lb = norm(b), lc = norm(c);
-    const double num = dot(a, cross(b, c)), den = la * lb * lc + dot(a, b) * lc + dot(b, c) * la + dot(c, a) * lb;
-    total += 2 * std::atan2(num, den);
-  }
-  return total / (4 * M_PI);
-}
-
 } // namespace
 
 Bodies find_bodies(const SurfaceMesh &m)
 {
   int ns = 0;
   const std::vector<int> surface = surfaces_of(m, ns);
-  std::vector<int> probe(ns, -1); // a vertex of each surface
-  for (std::size_t t = 0; t < m.triangles.size(); ++t)
-    if (probe[surface[t]] < 0) probe[surface[t]] = m.triangles[t][0];
-  // inside[s][r]: surface s lies inside surface r
-  std::vector<std::vector<char>> inside(ns, std::vector<char>(ns, 0));
+  // inside[s][r]: surface s lies inside surface r (all its samples, not one: nest_surfaces)
+  const std::vector<std::vector<char>> inside = nest_surfaces(m, surface, ns).inside;
   std::vector<int> depth(ns, 0);
-  for (int s = 0; s < ns; ++s)
-    for (int r = 0; r < ns; ++r)
-      if (r != s && std::abs(winding(m, surface, r, m.vertices[probe[s]])) > 0.5) inside[s][r] = 1, ++depth[s];
+  for (int s = 0; s < ns; ++s) depth[s] = static_cast<int>(std::count(inside[s].begin(), inside[s].end(), 1));
   // A surface's body: itself at even depth; else the enclosing surface one level up.
   std::vector<int> owner(ns);
   for (int s = 0; s < ns; ++s) {

@@ -50,8 +50,10 @@ std::vector<char> candidates(const Discretization &disc, const std::vector<char>
 Geometry make_geometry(const Discretization &disc, const std::vector<char> &pattern, std::vector<Obstacle> obstacles, const ContactSettings &s, const ContactOptions &o)
 {
   if (!(s.friction >= 0 && std::isfinite(s.friction))) throw std::invalid_argument("contact: the friction coefficient must be finite and >= 0");
-  if (!(o.reach >= 0 && std::isfinite(o.reach)) || !(o.tol > 0 && o.tol < 1) || o.max_it < 1) throw std::invalid_argument("contact: options out of range (reach >= 0, 0 < tol < 1, max_it >= 1)");
+  if (!(o.reach >= 0 && std::isfinite(o.reach)) || !(o.depth >= 0 && std::isfinite(o.depth)) || !(o.tol > 0 && o.tol < 1) || o.max_it < 1)
+    throw std::invalid_argument("contact: options out of range (reach >= 0, depth >= 0, 0 < tol < 1, max_it >= 1)");
   Geometry g;
+  g.reach = o.reach > 0 ? o.reach : 0.05 * mesh_size(disc.mesh());
   g.disc = &disc;
   g.pattern = &pattern;
   g.bodies = find_bodies(disc.mesh());
@@ -60,11 +62,10 @@ Geometry make_geometry(const Discretization &disc, const std::vector<char> &patt
   for (std::size_t i = 0; i < obstacles.size(); ++i) {
     for (std::size_t k = 0; k < i; ++k)
       if (obstacles[k].name == obstacles[i].name) throw std::invalid_argument("contact: two obstacles are named '" + obstacles[i].name + "'");
-    g.obstacles.emplace_back(std::move(obstacles[i]));
+    g.obstacles.emplace_back(std::move(obstacles[i]), o.depth > 0 ? o.depth : g.reach);
   }
   g.friction = s.friction;
   g.bodies_touch = s.bodies;
-  g.reach = o.reach > 0 ? o.reach : 0.05 * mesh_size(disc.mesh());
   if (s.bodies)
     for (int b = 0; b < g.bodies.count; ++b) {
       std::vector<int> tris;

@@ -3,7 +3,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <stdexcept>
+#include <unordered_map>
 
 namespace hssbem {
 
@@ -26,6 +28,19 @@ void check_mesh(const Obstacle &o)
     if (norm(cross(o.vertices[tri[1]] - o.vertices[tri[0]], o.vertices[tri[2]] - o.vertices[tri[0]])) == 0)
       refuse(o, "triangle " + std::to_string(t) + " is degenerate (zero area)");
   }
+}
+
+/// Undirected edge as one key: lower index in the high half.
+std::uint64_t edge_key(int a, int b)
+{
+  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(std::min(a, b))) << 32) | static_cast<std::uint32_t>(std::max(a, b));
+}
+
+/// The angle of triangle (a, b, c) at a.
+double corner_angle(const Vec3 &a, const Vec3 &b, const Vec3 &c)
+{
+  const Vec3 u = b - a, v = c - a;
+  return std::atan2(norm(cross(u, v)), dot(u, v));
 }
 
 } // namespace
@@ -51,10 +66,11 @@ Obstacle Obstacle::mesh(std::string name, const SurfaceMesh &mesh)
   return o;
 }
 
-ObstacleGeometry::ObstacleGeometry(Obstacle o) : m_o(std::move(o))
+ObstacleGeometry::ObstacleGeometry(Obstacle o, double depth) : m_o(std::move(o)), m_depth(depth)
 {
   if (m_o.name.empty()) refuse(m_o, "an obstacle needs a name");
   if (!std::isnan(m_o.friction) && !(m_o.friction >= 0 && std::isfinite(m_o.friction))) refuse(m_o, "the friction coefficient must be finite and >= 0");
+  if (!(depth > 0)) refuse(m_o, "the depth must be > 0");
   switch (m_o.shape) {
   case Obstacle::Shape::Plane:
     if (!finite(m_o.point) || !finite(m_o.normal)) refuse(m_o, "the plane's point and normal must be finite");
@@ -67,14 +83,52 @@ ObstacleGeometry::ObstacleGeometry(Obstacle o) : m_o(std::move(o))
     break;
   case Obstacle::Shape::Mesh:
     check_mesh(m_o);
-    m_bvh = TriangleBvh(m_o.vertices, m_o.triangles);
-    m_tri_normal.resize(m_o.triangles.size());
-    for (std::size_t t = 0; t < m_o.triangles.size(); ++t) {
-      const auto &tri = m_o.triangles[t];
-      m_tri_normal[t] = normalized(cross(m_o.vertices[tri[1]] - m_o.vertices[tri[0]], m_o.vertices[tri[2]] - m_o.vertices[tri[0]]));
+    SurfaceMesh surface;
+    surface.vertices = m_o.vertices, surface.triangles = m_o.triangles, surface.source = m_o.name;
+    try {
+      m_open = !validate_open_surface(surface);
+    } catch (const MeshError &e) {
+      refuse(m_o, e.what());
     }
+    m_bvh = TriangleBvh(m_o.vertices, m_o.triangles);
+    build_pseudo_normals();
     break;
   }
+}
+
+/// The triangles' normals and the pseudo-normals of their edges and vertices (Bærentzen and
+/// Aanæs): an edge's is the sum of its (one or two) triangles' normals, a vertex's the sum of its
+/// triangles' normals weighted by their angles at it; both normalised.
+void ObstacleGeometry::build_pseudo_normals()
+{
+  const std::size_t nt = m_o.triangles.size();
+  m_tri_normal.resize(nt);
+  m_vertex_normal.assign(m_o.vertices.size(), Vec3{0, 0, 0});
+  m_vertex_boundary.assign(m_o.vertices.size(), 0);
+  std::unordered_map<std::uint64_t, std::pair<Vec3, int>> edges; // sum of normals, triangles
+  for (std::size_t t = 0; t < nt; ++t) {
+    const auto &tri = m_o.triangles[t];
+    const Vec3 &a = m_o.vertices[tri[0]], &b = m_o.vertices[tri[1]], &c = m_o.vertices[tri[2]];
+    const Vec3 n = normalized(cross(b - a, c - a));
+    m_tri_normal[t] = n;
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 &p = m_o.vertices[tri[k]], &q = m_o.vertices[tri[(k + 1) % 3]], &r = m_o.vertices[tri[(k + 2) % 3]];
+      m_vertex_normal[tri[k]] = m_vertex_normal[tri[k]] + corner_angle(p, q, r) * n;
+      auto &e = edges[edge_key(tri[k], tri[(k + 1) % 3])];
+      e.first = e.first + n, ++e.second;
+    }
+  }
+  m_edge_normal.resize(nt);
+  m_edge_boundary.resize(nt);
+  for (std::size_t t = 0; t < nt; ++t)
+    for (int k = 0; k < 3; ++k) {
+      const int a = m_o.triangles[t][k], b = m_o.triangles[t][(k + 1) % 3];
+      const auto &e = edges.at(edge_key(a, b));
+      m_edge_normal[t][k] = normalized(e.first);
+      m_edge_boundary[t][k] = e.second == 1;
+      if (e.second == 1) m_vertex_boundary[a] = m_vertex_boundary[b] = 1;
+    }
+  for (Vec3 &n : m_vertex_normal) n = normalized(n);
 }
 
 double ObstacleGeometry::size() const
@@ -174,25 +228,80 @@ bool ObstacleGeometry::base_gap(const Vec3 &y, double reach, ObstacleGap &out) c
   return false;
 }
 
-/// A point behind the mesh (a negative gap) is as far from it as one in front: the search
-/// bound is |reach| either way, and the gap's sign comes from the closest triangle's side.
+/// The closest point of the mesh within `bound` and the pseudo-normal of the feature it lies
+/// on: the triangle's interior, an edge (one barycentric coordinate zero) or a vertex (two).
+bool ObstacleGeometry::mesh_hit(const Vec3 &y, double bound, MeshHit &out) const
+{
+  out.hit = m_bvh.closest(y, bound);
+  const int t = out.hit.triangle;
+  if (t < 0) return false;
+  const auto &bary = out.hit.bary;
+  const int zeros = int(bary[0] == 0) + int(bary[1] == 0) + int(bary[2] == 0);
+  if (out.hit.interior || zeros == 0) {
+    out.pseudo_normal = m_tri_normal[t], out.boundary = false;
+  } else if (zeros == 1) {
+    const int k = bary[2] == 0 ? 0 : bary[0] == 0 ? 1 : 2; // the edge from corner k to k + 1
+    out.pseudo_normal = m_edge_normal[t][k], out.boundary = m_edge_boundary[t][k] != 0;
+  } else {
+    const int v = m_o.triangles[t][bary[0] != 0 ? 0 : bary[1] != 0 ? 1 : 2];
+    out.pseudo_normal = m_vertex_normal[v], out.boundary = m_vertex_boundary[v] != 0;
+  }
+  return true;
+}
+
+/// Searched within max(reach, depth) of y: farther points are neither within reach in front nor
+/// within the depth behind.
 bool ObstacleGeometry::mesh_gap(const Vec3 &y, double reach, ObstacleGap &out) const
 {
-  const TriangleHit h = m_bvh.closest(y);
-  if (h.triangle < 0) return false;
-  const Vec3 &nt = m_tri_normal[h.triangle];
-  const Vec3 d = y - h.point;
-  const double dist = norm(d);
-  out.base_point = h.point;
-  if (h.interior || dist <= 1e-12 * std::max(1.0, size())) {
-    out.normal = nt;
-    out.gap = dot(d, nt);
+  MeshHit m;
+  if (!mesh_hit(y, std::max(reach, depth()), m)) return false;
+  const Vec3 d = y - m.hit.point;
+  const double dist = norm(d), along = dot(d, m.pseudo_normal), touching = 1e-12 * std::max(1.0, size());
+  if (m.boundary && along < 0 && dist > touching) return false; // behind and past an open mesh's edge: beside it
+  out.base_point = m.hit.point;
+  if (m.hit.interior || dist <= touching) {
+    out.normal = m.pseudo_normal;
+    out.gap = along;
   } else {
-    const double side = dot(d, nt) >= 0 ? 1.0 : -1.0;
+    const double side = along >= 0 ? 1.0 : -1.0;
     out.normal = (side / dist) * d;
     out.gap = side * dist;
   }
-  return out.gap <= reach;
+  return out.gap <= reach && out.gap >= -depth();
+}
+
+bool ObstacleGeometry::side(const Vec3 &x, const Pose &pose, double bound, ObstacleSide &out) const
+{
+  const Vec3 y = pose.apply_inverse(x);
+  out.on_boundary = false;
+  if (m_o.shape != Obstacle::Shape::Mesh) {
+    ObstacleGap g;
+    if (!base_gap(y, std::numeric_limits<double>::infinity(), g) || std::abs(g.gap) > bound) return false;
+    out.distance = g.gap;
+    return true;
+  }
+  MeshHit m;
+  if (!mesh_hit(y, bound, m)) return false;
+  const Vec3 d = y - m.hit.point;
+  out.distance = (dot(d, m.pseudo_normal) >= 0 ? 1.0 : -1.0) * norm(d);
+  out.on_boundary = m.boundary;
+  return true;
+}
+
+bool check_obstacle_faces(const ObstacleGeometry &o, const std::vector<Vec3> &x, const Pose &pose, double reach)
+{
+  if (o.obstacle().shape != Obstacle::Shape::Mesh) return false;
+  long long front = 0, behind = 0;
+  for (const Vec3 &p : x) {
+    ObstacleSide s;
+    if (!o.side(p, pose, reach, s) || s.on_boundary) continue;
+    ++(s.distance >= 0 ? front : behind);
+  }
+  if (behind > front)
+    refuse(o.obstacle(), "its triangles face away from the bodies (" + std::to_string(behind) + " of the " + std::to_string(front + behind) +
+                             " body vertices within reach of its faces lie behind them); an obstacle mesh's triangles must face the bodies (right-hand normals toward them): "
+                             "reverse the vertex order of its triangles");
+  return front + behind > 0;
 }
 
 } // namespace hssbem

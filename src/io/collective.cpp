@@ -177,6 +177,18 @@ ResultMetadata broadcast_metadata(MPI_Comm comm, const ResultData &d)
   return m;
 }
 
+namespace {
+
+/// The obstacles' vertices (or triangles) in all.
+std::size_t obstacle_rows(const ResultData &d, bool triangles)
+{
+  std::size_t n = 0;
+  for (const ObstacleSurface &o : d.obstacles) n += triangles ? o.triangles.size() : o.vertices.size();
+  return n;
+}
+
+} // namespace
+
 void check_same_shape(MPI_Comm comm, const std::string &path, const ResultData &d)
 {
   const std::vector<std::pair<const char *, std::size_t>> sizes{
@@ -199,7 +211,10 @@ void check_same_shape(MPI_Comm comm, const std::string &path, const ResultData &
       {"/interior/grid/displacement", d.interior_grid.displacement.size()},
       {"/interior/grid/stress", d.interior_grid.stress.size()},
       {"/interior/grid/von_mises", d.interior_grid.von_mises.size()},
-      {"/interior/grid/inside", d.interior_grid.inside.size()}};
+      {"/interior/grid/inside", d.interior_grid.inside.size()},
+      {"/obstacles", d.obstacles.size()},
+      {"/obstacles/*/vertices", obstacle_rows(d, false)},
+      {"/obstacles/*/triangles", obstacle_rows(d, true)}};
   std::vector<long long> low, high;
   for (const auto &s : sizes)
     low.push_back(static_cast<long long>(s.second)), high.push_back(-low.back());

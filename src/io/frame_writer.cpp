@@ -24,7 +24,7 @@ std::string frame_group(std::size_t i) { return "/frames/" + std::to_string(i); 
 /// Everything is checked before the first byte of the frame is written, so that a refused frame
 /// leaves the file as it was.
 void check_frame(const std::string &path, std::size_t expected, std::size_t i, const FrameData &f,
-                 std::size_t nv)
+                 std::size_t nv, const std::vector<ObstacleSurface> &obstacles)
 {
   if (i != expected)
     fail_output(path, "frame " + std::to_string(i) + " appended after " + std::to_string(expected) +
@@ -38,9 +38,10 @@ void check_frame(const std::string &path, std::size_t expected, std::size_t i, c
   detail::check_finite(path, g + "/traction", f.traction);
   detail::check_stress_sizes(path, g, f.stress, nv, 0); // no stress_corner in frames
   detail::check_contact(path, g + "/contact", f.contact, nv);
+  detail::check_frame_obstacles(path, g, obstacles, f.obstacle_vertices);
 }
 
-void write_frame(H5Writer &w, std::size_t i, const FrameData &f)
+void write_frame(H5Writer &w, std::size_t i, const FrameData &f, const std::vector<ObstacleSurface> &obstacles)
 {
   const std::string name = frame_group(i);
   H5Handle g = w.group(name);
@@ -51,6 +52,7 @@ void write_frame(H5Writer &w, std::size_t i, const FrameData &f)
   detail::write_stress(w, g, name, f.stress);
   if (f.contact.present())
     detail::write_contact(w, name + "/contact", f.contact);
+  detail::write_frame_obstacles(w, name, obstacles, f.obstacle_vertices);
   detail::write_attributes(w, g.get(), name, {f.attributes_real, f.attributes_int, f.attributes_str});
   w.end_group(g, name);
 }
@@ -72,6 +74,8 @@ struct FrameWriter::Impl {
   std::vector<bool> has_mask; ///< one entry per frame appended: displacement_prescribed written
   std::vector<StressFields> stress_shape; ///< per frame: which stress fields it holds (sizes only, no values)
   std::vector<bool> has_contact; ///< one entry per frame appended: contact written
+  std::vector<ObstacleSurface> obstacles; ///< the base's (their surfaces at the base position)
+  std::vector<bool> has_obstacles; ///< one entry per frame appended: its obstacles' places written
   bool broken = false, committed = false;
   // Destroyed in reverse order: the HDF5 file is closed before its temporary name is removed.
   std::optional<detail::FileSetCommit> files;
@@ -82,7 +86,7 @@ struct FrameWriter::Impl {
 FrameWriter::Impl::Impl(const std::string &path_, const ResultData &base)
     : path(path_), mesh_grid(detail::mesh_grid(path_, base)),
       result_grid(detail::result_grid(path_, base)), base_timings(base.timings),
-      num_vertices(base.vertices.size())
+      num_vertices(base.vertices.size()), obstacles(base.obstacles)
 {
   files.emplace(path); // removes the temporary files on error and on SIGINT/SIGTERM/SIGHUP
   h5_tmp = files->add(path);
@@ -125,7 +129,7 @@ std::string FrameWriter::Impl::sidecar() const
     steps[i].name = "frame_" + std::to_string(i);
     steps[i].time = static_cast<double>(i);
   }
-  return detail::xdmf_temporal_document(steps);
+  return detail::xdmf_temporal_document(steps, detail::obstacle_collections(mesh_grid.h5_name, obstacles, has_obstacles));
 }
 
 FrameWriter::FrameWriter(const std::string &path, const ResultData &base)
@@ -145,10 +149,10 @@ FrameWriter::~FrameWriter()
 void FrameWriter::append(std::size_t i, const FrameData &frame)
 {
   H5Writer &w = m_impl->live("append");
-  check_frame(m_impl->path, m_impl->has_mask.size(), i, frame, m_impl->num_vertices);
+  check_frame(m_impl->path, m_impl->has_mask.size(), i, frame, m_impl->num_vertices, m_impl->obstacles);
   const detail::H5ErrorSilencer quiet;
   m_impl->broken = true; // until the frame is whole: a half-written group cannot be retried
-  write_frame(w, i, frame);
+  write_frame(w, i, frame, m_impl->obstacles);
   w.flush();
   m_impl->has_mask.push_back(!frame.displacement_prescribed.empty());
   StressFields shape; // one entry each where the frame has the field: enough for the sidecar
@@ -157,6 +161,7 @@ void FrameWriter::append(std::size_t i, const FrameData &frame)
   if (!frame.stress.principal.empty()) shape.principal.resize(1);
   m_impl->stress_shape.push_back(std::move(shape));
   m_impl->has_contact.push_back(frame.contact.present());
+  m_impl->has_obstacles.push_back(!frame.obstacle_vertices.empty());
   m_impl->broken = false;
 }
 

@@ -120,9 +120,13 @@ void check_contact(const std::string &path, const std::string &group, const Cont
   check_size(path, group + "/pressure", c.pressure.size(), nv, "vertex", true);
   check_size(path, group + "/gap", c.gap.size(), nv, "vertex", true);
   check_size(path, group + "/status", c.status.size(), nv, "vertex", true);
-  for (const auto &entry : c.forces)
-    if (entry.first.empty() || entry.first == "." || entry.first.find('/') != std::string::npos)
+  check_finite(path, group + "/pressure", c.pressure);
+  check_finite(path, group + "/gap", c.gap, nullptr, true); // NaN: no obstacle within reach
+  for (const auto &entry : c.forces) {
+    if (!link_name_ok(entry.first))
       fail_output(path, "obstacle name '" + entry.first + "' cannot name the dataset " + group + "/forces/<name>");
+    check_finite(path, group + "/forces/" + entry.first, std::vector<Vec3>{entry.second});
+  }
 }
 
 std::vector<XdmfAttribute> contact_attributes(const std::string &group, std::size_t nv)
@@ -145,6 +149,7 @@ void write_result_groups(H5Writer &w, const ResultData &d, const ResultMetadata 
   write_interior(w, d);
   if (d.contact.present())
     write_contact(w, "/contact", d.contact);
+  write_obstacles(w, d.obstacles);
   write_attributes(w, w.root(), "/", {meta.attributes_real, meta.attributes_int, meta.attributes_str});
   if (!meta.options_real.empty() || !meta.options_int.empty() || !meta.options_str.empty()) {
     H5Handle g = w.group("/options");
@@ -184,7 +189,8 @@ XdmfGrid mesh_grid(const std::string &path, const ResultData &d)
 
 std::string result_sidecar(const std::string &path, const ResultData &d)
 {
-  return xdmf_document(result_grid(path, d), interior_grid_view(fs::path(path).filename().string(), d.interior_grid));
+  const std::string h5_name = fs::path(path).filename().string();
+  return xdmf_document(result_grid(path, d), interior_grid_view(h5_name, d.interior_grid), obstacle_grids(h5_name, d.obstacles));
 }
 
 XdmfGrid result_grid(const std::string &path, const ResultData &d)
@@ -218,12 +224,9 @@ void check_size(const std::string &path, const std::string &dataset, std::size_t
                           std::to_string(expected) + " (one per " + per + ")");
 }
 
-void check_finite(const std::string &path, const std::string &dataset, const std::vector<Vec3> &rows)
+void fail_not_finite(const std::string &path, const std::string &dataset, std::size_t row, double value)
 {
-  for (std::size_t i = 0; i < rows.size(); ++i)
-    for (double x : rows[i])
-      if (!std::isfinite(x))
-        fail_output(path, dataset + " row " + std::to_string(i) + " holds a non-finite value (" + std::to_string(x) + "); a failed solve is not written");
+  fail_output(path, dataset + " row " + std::to_string(row) + " holds a non-finite value (" + std::to_string(value) + "); a failed solve is not written");
 }
 
 namespace {
@@ -266,10 +269,10 @@ void check_values(const std::string &path, const ResultData &d)
   check_finite(path, "/fields/displacement", d.displacement);
   check_finite(path, "/fields/traction", d.traction);
   for (std::size_t t = 0; t < d.traction_corner.size(); ++t)
-    check_finite(path, "/fields/traction_corner[" + std::to_string(t) + "]", {d.traction_corner[t].begin(), d.traction_corner[t].end()});
+    check_finite(path, "/fields/traction_corner[" + std::to_string(t) + "]", std::vector<Vec3>(d.traction_corner[t].begin(), d.traction_corner[t].end()));
   check_finite(path, "/interior/displacement", d.interior_displacement);
   for (const auto &[region, force] : d.reactions)
-    check_finite(path, "/reactions/" + region, {force});
+    check_finite(path, "/reactions/" + region, std::vector<Vec3>{force});
 }
 
 /// A region name becomes an HDF5 link name, where '/' would nest and "." means the group.
@@ -277,7 +280,7 @@ void check_region_names(const std::string &path, const ResultData &d)
 {
   for (const auto &entry : d.reactions) {
     const std::string &name = entry.first;
-    if (name.empty() || name == "." || name.find('/') != std::string::npos)
+    if (!link_name_ok(name))
       fail_output(path, "region name '" + name + "' cannot name the dataset /reactions/<region>");
   }
 }
@@ -291,6 +294,7 @@ void validate_result(const std::string &path, const ResultData &d)
   check_values(path, d);
   check_region_names(path, d);
   check_contact(path, "/contact", d.contact, d.vertices.size());
+  check_obstacles(path, d.obstacles);
 }
 
 namespace {

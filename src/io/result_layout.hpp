@@ -10,8 +10,10 @@
 
 #include "hssbem/io/hdf5_output.hpp"
 
+#include <cmath>
 #include <map>
 #include <string>
+#include <type_traits>
 
 namespace hssbem::detail {
 
@@ -23,9 +25,30 @@ std::string xdmf_path(const std::string &path);
 void check_size(const std::string &path, const std::string &dataset, std::size_t size,
                 std::size_t expected, const char *per, bool required);
 
-/// Every value of `rows` must be finite (a NaN or an infinity is a failed solve, never written);
-/// throws OutputError naming `path`, `dataset` and the row otherwise.
-void check_finite(const std::string &path, const std::string &dataset, const std::vector<Vec3> &rows);
+/// Throws OutputError naming `path`, `dataset`, the row and the value: a non-finite value in a
+/// result is a failed solve, never written.
+[[noreturn]] void fail_not_finite(const std::string &path, const std::string &dataset, std::size_t row, double value);
+
+/// Every value of `rows` must be finite, in the rows where `only` (if given: one flag per row,
+/// e.g. the interior grid's inside) is not 0; with `allow_nan` a NaN passes (a gap with no
+/// obstacle within reach), an infinity does not.
+template <class Row>
+void check_finite(const std::string &path, const std::string &dataset, const std::vector<Row> &rows, const std::vector<int> *only = nullptr, bool allow_nan = false)
+{
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    if (only && i < only->size() && (*only)[i] == 0) continue;
+    const auto check = [&](double x) {
+      if (!std::isfinite(x) && !(allow_nan && std::isnan(x))) fail_not_finite(path, dataset, i, x);
+    };
+    if constexpr (std::is_arithmetic_v<Row>) check(static_cast<double>(rows[i]));
+    else
+      for (double x : rows[i]) check(x);
+  }
+}
+
+/// An HDF5 link name the layout can use for a user's name (an obstacle's, a region's): not
+/// empty, ".", or "..", no '/', no control character.
+bool link_name_ok(const std::string &name);
 
 /// Refuses inconsistent data (empty mesh, bad indices, incomplete arrays, non-finite values,
 /// unusable region names) before any file is created. Throws OutputError naming `path`.
@@ -44,6 +67,22 @@ void write_contact(H5Writer &w, const std::string &name, const ContactData &c);
 void check_contact(const std::string &path, const std::string &group, const ContactData &c, std::size_t nv);
 /// The sidecar's contact fields (pressure, contact_status) read from `group`.
 std::vector<XdmfAttribute> contact_attributes(const std::string &group, std::size_t nv);
+
+// --- the obstacles' part of the layout (obstacle_output.cpp) -------------------------------
+
+/// /obstacles/<name>/{vertices, triangles} and the attribute shape (nothing when empty).
+void write_obstacles(H5Writer &w, const std::vector<ObstacleSurface> &obstacles);
+/// <frame>/obstacles/<name>/vertices for each obstacle of `base` (nothing when `vertices` is empty).
+void write_frame_obstacles(H5Writer &w, const std::string &frame, const std::vector<ObstacleSurface> &base, const std::vector<std::vector<Vec3>> &vertices);
+/// Usable, distinct names; a surface each, triangles within it, finite vertices.
+void check_obstacles(const std::string &path, const std::vector<ObstacleSurface> &obstacles);
+/// A frame's obstacles: none, or one surface per obstacle of `base` with its vertex count, finite.
+void check_frame_obstacles(const std::string &path, const std::string &frame, const std::vector<ObstacleSurface> &base, const std::vector<std::vector<Vec3>> &vertices);
+/// The sidecar's grid of each obstacle, from /obstacles/<name>.
+std::vector<XdmfGrid> obstacle_grids(const std::string &h5_name, const std::vector<ObstacleSurface> &obstacles);
+/// A scene's sidecar: per obstacle a temporal collection, step i from /frames/<i>/obstacles/<name>
+/// where placed[i], else from /obstacles/<name>.
+std::vector<XdmfCollection> obstacle_collections(const std::string &h5_name, const std::vector<ObstacleSurface> &obstacles, const std::vector<bool> &placed);
 
 /// /timings: one float64 attribute per phase (seconds).
 void write_timings(H5Writer &w, const std::map<std::string, double> &timings);
@@ -72,9 +111,9 @@ void write_interior_stress(H5Writer &w, const H5Handle &g, const ResultData &d);
 /// /interior/grid (x, y, z, displacement, stress, von_mises, inside; origin, spacing and points
 /// as attributes), when there is a grid; /interior must exist.
 void write_interior_grid(H5Writer &w, const InteriorGridData &g);
-/// Each non-empty field of f has one entry per vertex (nv) or triangle (nt).
+/// Each non-empty field of f has one entry per vertex (nv) or triangle (nt), every value finite.
 void check_stress_sizes(const std::string &path, const std::string &group, const StressFields &f, std::size_t nv, std::size_t nt);
-/// One stress per interior point, and a consistent grid.
+/// One stress per interior point, and a consistent grid; finite values (the grid's inside its body).
 void check_interior_stress(const std::string &path, const ResultData &d);
 /// The sidecar's attributes of f in `group`: von_mises, principal_stress and stress_xx ... stress_xy.
 std::vector<XdmfAttribute> stress_attributes(const std::string &group, const StressFields &f, std::size_t nv);

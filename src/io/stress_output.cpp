@@ -1,8 +1,10 @@
 /// \file stress_output.cpp
 /// The stress part of the result layout (see hdf5_output.hpp): the surface's stress fields
 /// (/fields or a frame's group), the interior points' stress and the interior grid, their size
-/// checks and their XDMF view. Stress columns appear in the sidecar as scalars (stress_xx, ...),
-/// each a hyperslab of the Voigt dataset, since XDMF's Tensor6 orders its entries differently.
+/// checks and their XDMF view. The Voigt stress appears in the sidecar as one 6-component
+/// "Matrix" attribute `stress` (xx, yy, zz, yz, xz, xy), the dataset as it is: XDMF's Tensor6
+/// orders its entries differently, and a column taken by a HyperSlab item is more than some
+/// readers take (meshio reads plain HDF items only).
 #include "result_layout.hpp"
 
 #include <cmath>
@@ -10,8 +12,6 @@
 namespace hssbem::detail {
 
 namespace {
-
-const char *const voigt_names[6] = {"stress_xx", "stress_yy", "stress_zz", "stress_yz", "stress_xz", "stress_xy"};
 
 std::vector<double> flat_voigt(const std::vector<Voigt> &v) { return flatten(v); }
 
@@ -84,12 +84,18 @@ void check_stress_sizes(const std::string &path, const std::string &group, const
   check_size(path, group + "/von_mises", f.von_mises.size(), nv, "vertex", false);
   check_size(path, group + "/principal_stress", f.principal.size(), nv, "vertex", false);
   check_size(path, group + "/stress_corner", f.corner.size(), nt, "triangle", false);
+  check_finite(path, group + "/stress", f.stress);
+  check_finite(path, group + "/von_mises", f.von_mises);
+  check_finite(path, group + "/principal_stress", f.principal);
+  for (std::size_t t = 0; t < f.corner.size(); ++t) check_finite(path, group + "/stress_corner[" + std::to_string(t) + "]", std::vector<Voigt>(f.corner[t].begin(), f.corner[t].end()));
 }
 
 void check_interior_stress(const std::string &path, const ResultData &d)
 {
   check_size(path, "/interior/stress", d.interior_stress.size(), d.interior_points.size(), "interior point", false);
   check_size(path, "/interior/von_mises", d.interior_von_mises.size(), d.interior_points.size(), "interior point", false);
+  check_finite(path, "/interior/stress", d.interior_stress);
+  check_finite(path, "/interior/von_mises", d.interior_von_mises);
   const InteriorGridData &g = d.interior_grid;
   if (g.empty())
     return;
@@ -104,6 +110,9 @@ void check_interior_stress(const std::string &path, const ResultData &d)
   for (int flag : g.inside)
     if (flag != 0 && flag != 1)
       fail_output(path, "/interior/grid/inside holds " + std::to_string(flag) + ", expected 0 or 1");
+  check_finite(path, "/interior/grid/displacement", g.displacement, &g.inside); // NaN outside the body
+  check_finite(path, "/interior/grid/stress", g.stress, &g.inside);
+  check_finite(path, "/interior/grid/von_mises", g.von_mises, &g.inside);
 }
 
 std::vector<XdmfAttribute> stress_attributes(const std::string &group, const StressFields &f, std::size_t nv)
@@ -114,8 +123,7 @@ std::vector<XdmfAttribute> stress_attributes(const std::string &group, const Str
   if (!f.principal.empty())
     out.push_back(node_vectors("principal_stress", group + "/principal_stress", nv, XdmfNumber::float64));
   if (!f.stress.empty())
-    for (int c = 0; c < 6; ++c)
-      out.push_back({voigt_names[c], "Scalar", "Node", {group + "/stress", {nv, 6}, XdmfNumber::float64, c}});
+    out.push_back({"stress", "Matrix", "Node", {group + "/stress", {nv, 6}, XdmfNumber::float64}});
   return out;
 }
 
@@ -135,8 +143,7 @@ std::vector<XdmfRectGrid> interior_grid_view(const std::string &h5_name, const I
   if (!g.von_mises.empty())
     r.attributes.push_back({"von_mises", "Scalar", "Node", {name + "/von_mises", dims, XdmfNumber::float64}});
   if (!g.stress.empty())
-    for (int c = 0; c < 6; ++c)
-      r.attributes.push_back({voigt_names[c], "Scalar", "Node", {name + "/stress", with(6), XdmfNumber::float64, c}});
+    r.attributes.push_back({"stress", "Matrix", "Node", {name + "/stress", with(6), XdmfNumber::float64}});
   r.attributes.push_back({"inside", "Scalar", "Node", {name + "/inside", dims, XdmfNumber::int8}});
   return {r};
 }

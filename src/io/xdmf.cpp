@@ -32,21 +32,6 @@ std::string dimensions(const std::vector<std::size_t> &dims)
 void put_data_item(std::ostream &out, const std::string &h5_name, const XdmfDataset &d,
                    const std::string &pad)
 {
-  if (d.column >= 0) { // one column of the last dimension: a HyperSlab of the whole dataset
-    std::vector<std::size_t> start(d.dims.size(), 0), stride(d.dims.size(), 1), count = d.dims;
-    start.back() = static_cast<std::size_t>(d.column);
-    count.back() = 1;
-    XdmfDataset whole = d;
-    whole.column = -1;
-    out << pad << R"(<DataItem ItemType="HyperSlab" Dimensions=")" << dimensions(count) << "\" "
-        << number_type(d.number) << ">\n"
-        << pad << R"(  <DataItem Dimensions="3 )" << d.dims.size() << R"(" Format="XML">)"
-        << dimensions(start) << " " << dimensions(stride) << " " << dimensions(count)
-        << "</DataItem>\n";
-    put_data_item(out, h5_name, whole, pad + "  ");
-    out << pad << "</DataItem>\n";
-    return;
-  }
   out << pad << R"(<DataItem Format="HDF" Dimensions=")" << dimensions(d.dims) << "\" "
       << number_type(d.number) << ">" << xml_escape(h5_name) << ":" << xml_escape(d.path)
       << "</DataItem>\n";
@@ -64,8 +49,8 @@ void put_attribute(std::ostream &out, const std::string &h5_name, const XdmfAttr
 /// A Uniform grid whose <Grid> line is indented by `pad`.
 void put_grid(std::ostream &out, const XdmfGrid &grid, const std::string &pad)
 {
-  const XdmfDataset triangles{"/mesh/triangles", {grid.num_triangles, 3}, XdmfNumber::int32};
-  const XdmfDataset vertices{"/mesh/vertices", {grid.num_vertices, 3}, XdmfNumber::float64};
+  const XdmfDataset triangles{grid.triangles, {grid.num_triangles, 3}, XdmfNumber::int32};
+  const XdmfDataset vertices{grid.vertices, {grid.num_vertices, 3}, XdmfNumber::float64};
   const std::string in = pad + "  ";
   out << pad << "<Grid Name=\"" << xml_escape(grid.name) << "\" GridType=\"Uniform\">\n";
   if (grid.time) // 17 digits: a frame index past 10^6 stays exact
@@ -123,25 +108,39 @@ std::string xml_escape(const std::string &text)
   return out;
 }
 
-std::string xdmf_document(const XdmfGrid &grid, const std::vector<XdmfRectGrid> &rect)
+std::string xdmf_document(const XdmfGrid &grid, const std::vector<XdmfRectGrid> &rect, const std::vector<XdmfGrid> &more)
 {
   std::ostringstream out;
   out << k_head;
   put_grid(out, grid, "    ");
   for (const XdmfRectGrid &r : rect)
     put_rect_grid(out, r, "    ");
+  for (const XdmfGrid &g : more)
+    put_grid(out, g, "    ");
   out << k_tail;
   return out.str();
 }
 
-std::string xdmf_temporal_document(const std::vector<XdmfGrid> &steps)
+namespace {
+
+void put_collection(std::ostream &out, const XdmfCollection &c)
+{
+  out << R"(    <Grid Name=")" << xml_escape(c.name) << R"(" GridType="Collection" CollectionType="Temporal">)" << "\n";
+  for (const XdmfGrid &grid : c.steps)
+    put_grid(out, grid, "      ");
+  out << "    </Grid>\n";
+}
+
+} // namespace
+
+std::string xdmf_temporal_document(const std::vector<XdmfGrid> &steps, const std::vector<XdmfCollection> &before)
 {
   std::ostringstream out;
-  out << k_head
-      << R"(    <Grid Name="frames" GridType="Collection" CollectionType="Temporal">)" << "\n";
-  for (const XdmfGrid &grid : steps)
-    put_grid(out, grid, "      ");
-  out << "    </Grid>\n" << k_tail;
+  out << k_head;
+  for (const XdmfCollection &c : before)
+    put_collection(out, c);
+  put_collection(out, {"frames", steps});
+  out << k_tail;
   return out.str();
 }
 

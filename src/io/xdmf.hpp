@@ -18,10 +18,10 @@ struct XdmfDataset {
   std::string path;                ///< absolute path inside the HDF5 file, e.g. /mesh/vertices
   std::vector<std::size_t> dims;   ///< dataset shape, slowest dimension first
   XdmfNumber number = XdmfNumber::float64;
-  int column = -1;                 ///< ≥ 0: only this column of the last dimension (a HyperSlab)
 };
 
-/// A field shown in ParaView: AttributeType is "Scalar" or "Vector", Center "Node" or "Cell".
+/// A field shown in ParaView: AttributeType is "Scalar", "Vector" or "Matrix" (any number of
+/// components), Center "Node" or "Cell".
 struct XdmfAttribute {
   std::string name;
   std::string attribute_type;
@@ -37,6 +37,14 @@ struct XdmfGrid {
   std::vector<XdmfAttribute> attributes;
   std::string name = "hssbem";  ///< the Grid's Name
   std::optional<double> time;   ///< its Time Value, for a grid in a temporal collection
+  std::string vertices = "/mesh/vertices";   ///< the Geometry's dataset (num_vertices x 3)
+  std::string triangles = "/mesh/triangles"; ///< the Topology's dataset (num_triangles x 3)
+};
+
+/// A temporal collection of grids (one per time step).
+struct XdmfCollection {
+  std::string name;
+  std::vector<XdmfGrid> steps;
 };
 
 /// A rectilinear grid of points (3DRectMesh topology, VXVYVZ geometry: the coordinates along
@@ -50,14 +58,15 @@ struct XdmfRectGrid {
   std::vector<XdmfAttribute> attributes;
 };
 
-/// The XDMF 3 document for `grid`: one Uniform grid, Triangle topology, XYZ geometry; and after
-/// it the rectilinear grids `rect`, if any.
-std::string xdmf_document(const XdmfGrid &grid, const std::vector<XdmfRectGrid> &rect = {});
+/// The XDMF 3 document for `grid`: one Uniform grid, Triangle topology, XYZ geometry; after it
+/// the rectilinear grids `rect` and the triangle grids `more` (obstacles), if any.
+std::string xdmf_document(const XdmfGrid &grid, const std::vector<XdmfRectGrid> &rect = {}, const std::vector<XdmfGrid> &more = {});
 
-/// The XDMF 3 document of a sequence: one Collection grid of CollectionType "Temporal" holding
-/// `steps` (each a Uniform grid as in xdmf_document, with its Time), which ParaView plays as
-/// time steps.
-std::string xdmf_temporal_document(const std::vector<XdmfGrid> &steps);
+/// The XDMF 3 document of a sequence: the collections `before` (obstacles), then one Collection
+/// grid "frames" of CollectionType "Temporal" holding `steps` (each a Uniform grid as in
+/// xdmf_document, with its Time), which ParaView plays as time steps; the body's collection
+/// last, where a reader that takes one collection (meshio's) looks.
+std::string xdmf_temporal_document(const std::vector<XdmfGrid> &steps, const std::vector<XdmfCollection> &before = {});
 
 /// `text` with the five XML special characters replaced by entities.
 std::string xml_escape(const std::string &text);

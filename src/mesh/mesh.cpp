@@ -29,6 +29,26 @@ double SurfaceMesh::triangle_area(int t) const
   return 0.5 * norm(cross(vertices[tri[1]] - a, vertices[tri[2]] - a));
 }
 
+SurfaceMesh sub_mesh(const SurfaceMesh &mesh, const std::vector<int> &triangles, std::vector<int> *vertex_of)
+{
+  SurfaceMesh out;
+  out.source = mesh.source, out.region_tags = mesh.region_tags;
+  std::vector<int> local(mesh.vertices.size(), -1), used;
+  for (int t : triangles) {
+    std::array<int, 3> tri{};
+    for (int c = 0; c < 3; ++c) {
+      int &l = local[mesh.triangles[t][c]];
+      if (l < 0) l = static_cast<int>(used.size()), used.push_back(mesh.triangles[t][c]);
+      tri[c] = l;
+    }
+    out.triangles.push_back(tri);
+    out.triangle_region.push_back(mesh.triangle_region.empty() ? -1 : mesh.triangle_region[t]);
+  }
+  for (int v : used) out.vertices.push_back(mesh.vertices[v]);
+  if (vertex_of) *vertex_of = std::move(used);
+  return out;
+}
+
 namespace {
 
 std::string lower_extension(const std::string &path)

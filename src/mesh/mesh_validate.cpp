@@ -4,6 +4,8 @@
 #include "hssbem/mesh/mesh.hpp"
 #include "hssbem/mesh/surface_intersection.hpp"
 
+#include "bounding_box.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -15,7 +17,6 @@
 namespace hssbem {
 namespace {
 
-constexpr double k_pi = 3.14159265358979323846;
 /// Relative size below which an area (times diag^2) or a volume (times diag^3) counts as zero.
 constexpr double k_degenerate = 1e-12;
 /// The sizes (bounding-box diagonals) a mesh may have: physical bodies from nanometres to planets
@@ -50,41 +51,7 @@ struct TripleHash {
   }
 };
 
-/// Axis-aligned bounding box.
-struct Box {
-  Vec3 lo{std::numeric_limits<double>::max(), std::numeric_limits<double>::max(),
-          std::numeric_limits<double>::max()};
-  Vec3 hi{-std::numeric_limits<double>::max(), -std::numeric_limits<double>::max(),
-          -std::numeric_limits<double>::max()};
-
-  void add(const Vec3 &x)
-  {
-    for (std::size_t i = 0; i < 3; ++i) {
-      lo[i] = std::min(lo[i], x[i]);
-      hi[i] = std::max(hi[i], x[i]);
-    }
-  }
-  bool contains(const Vec3 &x) const
-  {
-    for (std::size_t i = 0; i < 3; ++i)
-      if (x[i] < lo[i] || x[i] > hi[i])
-        return false;
-    return true;
-  }
-  double diagonal() const { return norm(hi - lo); }
-  Vec3 center() const { return 0.5 * (lo + hi); }
-};
-
-/// Solid angle subtended at p by triangle (a, b, c), signed by its orientation
-/// (Van Oosterom and Strackee, 1983).
-double solid_angle(const Vec3 &p, const Vec3 &a, const Vec3 &b, const Vec3 &c)
-{
-  const Vec3 x = a - p, y = b - p, z = c - p;
-  const double lx = norm(x), ly = norm(y), lz = norm(z);
-  const double numerator = dot(x, cross(y, z));
-  const double denominator = lx * ly * lz + dot(x, y) * lz + dot(x, z) * ly + dot(y, z) * lx;
-  return 2.0 * std::atan2(numerator, denominator);
-}
+using detail::Box;
 
 std::string triple(const std::array<int, 3> &t)
 {
@@ -103,22 +70,39 @@ public:
 
   void run()
   {
+    check_triangles_and_edges();
+    check_open_edges();
+    check_vertex_fans();
+    check_orientation();
+    find_components();
+    check_intersections();
+    check_nesting();
+    orient_components();
+    report_unused_vertices();
+  }
+
+  /// The checks of a surface that need not be closed; returns whether it is.
+  bool run_open()
+  {
+    check_triangles_and_edges();
+    check_orientation();
+    find_components();
+    check_intersections();
+    return std::all_of(m_edges.begin(), m_edges.end(), [](const auto &e) { return e.second.count == 2; });
+  }
+
+private:
+  /// The checks every surface takes, closed or not, up to its edges (none of more than two triangles).
+  void check_triangles_and_edges()
+  {
     check_indices();
     check_scale();
     check_degenerate();
     check_duplicates();
     build_edges();
     check_non_manifold_edges();
-    check_open_edges();
-    check_vertex_fans();
-    check_orientation();
-    find_components();
-    check_intersections();
-    orient_components();
-    report_unused_vertices();
   }
 
-private:
   [[noreturn]] void fail(const std::string &what) const
   {
     throw MeshError("mesh '" + m_mesh.source + "': " + what);
@@ -145,10 +129,11 @@ private:
   void check_orientation();
   void find_components();
   void check_intersections();
+  void check_nesting();
+  std::string sample_text(const SurfaceSample &s) const;
   void orient_components();
   double signed_volume(int c, const Vec3 &origin) const;
   int nesting_depth(int c) const;
-  double winding_number(const Vec3 &p, int c) const;
   void report_unused_vertices();
 
   SurfaceMesh &m_mesh;
@@ -159,6 +144,7 @@ private:
   std::vector<std::vector<int>> m_components; ///< triangles of each component
   std::vector<int> m_component_of;            ///< component of each triangle
   std::vector<Box> m_component_box;
+  std::vector<std::vector<char>> m_inside; ///< m_inside[c][d]: component c lies inside component d
 };
 
 void MeshValidator::check_indices()
@@ -340,7 +326,7 @@ void MeshValidator::check_orientation()
     for (int k = 0; k < 3; ++k) {
       const int a = tri[k], b = tri[(k + 1) % 3];
       const EdgeUse &e = edge(a, b);
-      if (e.ascending[0] == e.ascending[1])
+      if (e.count == 2 && e.ascending[0] == e.ascending[1]) // an open edge (count 1) has one use
         fail("inconsistent orientation: triangles " + std::to_string(e.tri[0]) + " and " +
              std::to_string(e.tri[1]) + " both traverse edge " + edge_text(a, b) +
              " in the same direction (reorder the vertices of one of them)");
@@ -369,7 +355,7 @@ void MeshValidator::find_components()
       for (int k = 0; k < 3; ++k) {
         m_component_box[c].add(m_mesh.vertices[tri[k]]);
         const int s = other_triangle(tri[k], tri[(k + 1) % 3], t);
-        if (component[s] < 0) {
+        if (s >= 0 && component[s] < 0) { // s < 0: an open edge (an open surface's)
           component[s] = c;
           stack.push_back(s);
         }
@@ -390,6 +376,28 @@ void MeshValidator::check_intersections()
   if (ca == cb) fail(pair + ": the surface (component " + std::to_string(ca) + ") passes through itself");
   fail(pair + ": the surfaces of components " + std::to_string(ca) + " and " + std::to_string(cb) +
        " pass through each other (two bodies overlap, or a cavity crosses its body's boundary)");
+}
+
+std::string MeshValidator::sample_text(const SurfaceSample &s) const
+{
+  return s.vertex >= 0 ? "vertex " + std::to_string(s.vertex) : "the centroid of triangle " + std::to_string(s.triangle);
+}
+
+/// Surfaces that pass through each other where no two triangles' interiors cross (along edges or
+/// at vertices, when the grids line up) or coincide: refused. Otherwise each component's place
+/// (inside or outside every other) comes from all its samples, so a cavity lies wholly inside
+/// its parent.
+void MeshValidator::check_nesting()
+{
+  SurfaceNesting n = nest_surfaces(m_mesh, m_component_of, static_cast<int>(m_components.size()));
+  if (n.crossing) {
+    const SurfaceCrossing &c = *n.crossing;
+    const std::string a = "component " + std::to_string(c.first), b = "component " + std::to_string(c.second);
+    if (c.coincide) fail("the surfaces of " + a + " and " + b + " coincide (every vertex and triangle centroid of " + a + " lies on " + b + ")");
+    fail("the surfaces of " + a + " and " + b + " pass through each other along triangle edges or at vertices: " + sample_text(c.inside) + " (of " + a + ") lies inside " + b + ", " +
+         sample_text(c.outside) + " outside it (two bodies overlap, or a cavity crosses its body's boundary)");
+  }
+  m_inside = std::move(n.inside);
 }
 
 void MeshValidator::orient_components()
@@ -424,22 +432,7 @@ double MeshValidator::signed_volume(int c, const Vec3 &origin) const
 
 int MeshValidator::nesting_depth(int c) const
 {
-  // Components do not intersect, so any point of c tells whether all of c is inside another.
-  const int t = m_components[c].front();
-  const Vec3 p = (1.0 / 3.0) * (corner(t, 0) + corner(t, 1) + corner(t, 2));
-  int depth = 0;
-  for (int d = 0; d < static_cast<int>(m_components.size()); ++d)
-    if (d != c && m_component_box[d].contains(p) && std::abs(winding_number(p, d)) > 0.5)
-      ++depth;
-  return depth;
-}
-
-double MeshValidator::winding_number(const Vec3 &p, int c) const
-{
-  double total = 0.0;
-  for (int t : m_components[c])
-    total += solid_angle(p, corner(t, 0), corner(t, 1), corner(t, 2));
-  return total / (4.0 * k_pi);
+  return static_cast<int>(std::count(m_inside[c].begin(), m_inside[c].end(), 1));
 }
 
 void MeshValidator::report_unused_vertices()
@@ -458,6 +451,13 @@ void MeshValidator::report_unused_vertices()
 void validate_and_orient(SurfaceMesh &mesh, std::vector<std::string> &notices)
 {
   MeshValidator(mesh, notices).run();
+}
+
+bool validate_open_surface(const SurfaceMesh &mesh)
+{
+  SurfaceMesh copy = mesh; // the validator's interface orients in place; nothing is changed here
+  std::vector<std::string> notices;
+  return MeshValidator(copy, notices).run_open();
 }
 
 } // namespace hssbem

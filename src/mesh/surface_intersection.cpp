@@ -4,6 +4,7 @@
 /// with each triangle's box; candidate pairs go to triangles_cross().
 #include "hssbem/mesh/surface_intersection.hpp"
 
+#include "bounding_box.hpp"
 #include "triangle_crossing.hpp"
 
 #include <algorithm>
@@ -16,22 +17,7 @@ namespace hssbem {
 
 namespace {
 
-struct Box {
-  Vec3 lo{HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi{-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
-
-  void add(const Vec3 &x)
-  {
-    for (int i = 0; i < 3; ++i) lo[i] = std::min(lo[i], x[i]), hi[i] = std::max(hi[i], x[i]);
-  }
-  void add(const Box &b) { add(b.lo), add(b.hi); }
-  bool overlaps(const Box &b) const
-  {
-    for (int i = 0; i < 3; ++i)
-      if (b.lo[i] > hi[i] || b.hi[i] < lo[i]) return false;
-    return true;
-  }
-  double diagonal() const { return lo[0] <= hi[0] ? norm(hi - lo) : 0.0; }
-};
+using detail::Box;
 
 detail::Triangle corners(const SurfaceMesh &m, int t)
 {

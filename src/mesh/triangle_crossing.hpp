@@ -1,6 +1,6 @@
 /// \file triangle_crossing.hpp
 /// Private to surface_intersection.cpp (and its unit test): whether two triangles cross, as
-/// IntersectionOptions defines it (bem/surface_intersection.hpp).
+/// IntersectionOptions defines it (mesh/surface_intersection.hpp).
 #pragma once
 
 #include "hssbem/core/geometry.hpp"

@@ -507,13 +507,27 @@ void read_obstacle_sphere(const json &j, const Where &w, ObstacleSpec &o)
     w.at("radius").fail("the radius must be > 0, got " + j["radius"].dump());
 }
 
+/// An obstacle's name names HDF5 objects (/contact/forces/<name>, /obstacles/<name>): no '/'
+/// (it would nest), not "." or ".." (the group itself, its parent), no control character.
+std::string read_obstacle_name(const json &j, const Where &w)
+{
+  const std::string name = read_string(j, w);
+  if (name == "." || name == "..")
+    w.fail("the name '" + name + "' cannot name the result's datasets (/contact/forces/<name>, /obstacles/<name>)");
+  for (const char c : name)
+    if (c == '/' || static_cast<unsigned char>(c) < 0x20 || c == 0x7f)
+      w.fail(std::string("the name ") + j.dump() + " cannot name the result's datasets (/contact/forces/<name>, /obstacles/<name>): it holds " +
+             (c == '/' ? "'/'" : "a control character"));
+  return name;
+}
+
 ObstacleSpec read_obstacle(const json &j, const Where &w, const std::string &origin)
 {
   check_keys(j, w, {"name", "plane", "sphere", "mesh", "friction"});
   if (!j.contains("name"))
     w.fail("missing 'name' (frames move an obstacle by its name)");
   ObstacleSpec o;
-  o.name = read_string(j["name"], w.at("name"));
+  o.name = read_obstacle_name(j["name"], w.at("name"));
   const int shapes = int(j.contains("plane")) + int(j.contains("sphere")) + int(j.contains("mesh"));
   if (shapes != 1)
     w.fail(std::string(shapes == 0 ? "needs" : "has more than") + " one of 'plane', 'sphere', 'mesh' (give exactly one)");
@@ -544,6 +558,17 @@ std::vector<ObstacleSpec> read_obstacles(const json &j, const Where &w, const st
   return list;
 }
 
+/// With "bodies", /contact/forces/body_<k> holds body k's force: an obstacle of that form of
+/// name would share (and lose) its dataset.
+void check_body_force_names(const ContactSpec &c, const Where &w)
+{
+  for (std::size_t i = 0; i < c.obstacles.size(); ++i) {
+    const std::string &name = c.obstacles[i].name;
+    if (name.size() > 5 && name.compare(0, 5, "body_") == 0 && std::all_of(name.begin() + 5, name.end(), [](char ch) { return ch >= '0' && ch <= '9'; }))
+      w.at("obstacles").at(i).at("name").fail("the name '" + name + "' is that of a body's force in the result (/contact/forces/body_<k>, with \"bodies\": true); rename the obstacle");
+  }
+}
+
 ContactSpec read_contact(const json &j, const Where &w, const std::string &origin)
 {
   check_keys(j, w, {"obstacles", "friction", "bodies", "where"});
@@ -560,6 +585,8 @@ ContactSpec read_contact(const json &j, const Where &w, const std::string &origi
   }
   if (j.contains("where"))
     c.where = read_selector(j["where"], w.at("where"));
+  if (c.bodies)
+    check_body_force_names(c, w);
   return c;
 }
 

@@ -27,24 +27,10 @@ namespace {
 /// Body b's triangles of the whole mesh, in their order, over its own vertices (in theirs).
 SurfaceMesh body_mesh(const Discretization &disc, const std::vector<int> &node_body, int b, std::vector<int> &vertex_of)
 {
-  const SurfaceMesh &m = disc.mesh();
-  SurfaceMesh out;
-  out.source = m.source, out.region_tags = m.region_tags;
-  std::vector<int> local(m.num_vertices(), -1);
-  vertex_of.clear();
-  for (int t = 0; t < m.num_triangles(); ++t) {
-    if (node_body[disc.element_node(t, 0)] != b) continue;
-    std::array<int, 3> tri{};
-    for (int c = 0; c < 3; ++c) {
-      int &l = local[m.triangles[t][c]];
-      if (l < 0) l = static_cast<int>(vertex_of.size()), vertex_of.push_back(m.triangles[t][c]);
-      tri[c] = l;
-    }
-    out.triangles.push_back(tri);
-    out.triangle_region.push_back(m.triangle_region.empty() ? -1 : m.triangle_region[t]);
-  }
-  for (int v : vertex_of) out.vertices.push_back(m.vertices[v]);
-  return out;
+  std::vector<int> triangles;
+  for (int t = 0; t < disc.mesh().num_triangles(); ++t)
+    if (node_body[disc.element_node(t, 0)] == b) triangles.push_back(t);
+  return sub_mesh(disc.mesh(), triangles, &vertex_of);
 }
 
 /// The whole mesh's dof node of each of the body's own: the node of the same vertex whose

@@ -197,6 +197,9 @@ void ContactSession::set_up()
   const Timer timer;
   const Progress progress("contact set-up"); // reported when it ends (the reference and the engine's columns)
   const Discretization &disc = m_problem->disc();
+  m_drawn = std::make_unique<ContactObstacles>(m_problem->setup(), m_job.obstacles, vertex_displacement_prescribed(disc, m_job.base), m_job.settings.candidate,
+                                               m_options.contact.reach, m_options.contact.depth);
+  m_drawn->check_facing(m_job.placements.empty() ? std::vector<std::vector<Pose>>{std::vector<Pose>(m_job.obstacles.size())} : poses_of(m_job.placements));
   try {
     check_bodies_held(disc, m_job.base.displacement_prescribed, m_job.obstacles, m_job.settings, m_options.contact);
   } catch (const ConstraintError &e) {
@@ -230,6 +233,7 @@ const ContactFrameReport &ContactSession::solve(const SystemSelection &values, c
 {
   set_up();
   m_values = values;
+  m_offsets = offsets;
   {
     const EventScope event(SCN_Frame);
     m_report = m_engine->solve(m_values, offsets, m_sol);
@@ -259,6 +263,7 @@ FrameData ContactSession::frame_data(unsigned parts) const
   f.attributes_real = {{"seconds", m_report.seconds}};
   f.attributes_int = {{"iterations", m_report.iterations}, {"active_vertices", m_report.active_vertices}};
   f.contact = contact_data(*m_engine, m_sol, m_report, m_job.settings.bodies);
+  f.obstacle_vertices = m_drawn->placed(poses_of({m_offsets})[0]);
   return f;
 }
 
@@ -267,6 +272,7 @@ ResultData ContactSession::base(int ranks) const
   ResultData r = result_base(m_problem->setup(), ranks);
   r.attributes_str["solver"] = "contact";
   r.attributes_str["mat_type"] = mat_type();
+  r.obstacles = m_drawn->surfaces(std::vector<Pose>(m_job.obstacles.size())); // the base position
   put_options(options_used(), r);
   return r;
 }
@@ -283,6 +289,7 @@ ResultData ContactSession::result(int ranks)
   put_fields(std::move(f), r);
   interior_fields(PETSC_COMM_SELF, s, nodal, nodes, m_options.interior, r, m_seconds); // the contact run is one rank's
   r.contact = contact_data(*m_engine, m_sol, m_report, m_job.settings.bodies);
+  r.obstacles = m_drawn->surfaces(poses_of({m_offsets})[0]);
   m_seconds["contact_solve"] += m_report.seconds;
   r.timings = m_seconds;
   return r;

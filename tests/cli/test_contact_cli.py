@@ -15,13 +15,14 @@ same obstacle positions, and the same file from 1 and 2 ranks.
 import argparse
 import json
 import os
+import re
 import shutil
 import sys
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import test_cli  # noqa: E402
-from test_cli import CliTestCase, TIMEOUT_RUN  # noqa: E402
+from test_cli import CliTestCase, TIMEOUT_RUN, off_text  # noqa: E402
 
 NAN = None  # JSON null: a component left as it was
 
@@ -98,6 +99,36 @@ class ContactErrorTests(ContactCase):
     def test_bad_contact_option(self):
         self.cube_contact({"obstacles": [TABLE]})
         self.assertFailsCleanly(self.run_problem("problem.json", "-contact_tol", "2"), r"-contact_tol must lie in \(0, 1\)")
+
+    def fails_on_one_and_two_ranks(self, *patterns):
+        for np_ in (1, 2):
+            r = self.run_problem(np=np_)
+            self.assertFailsCleanly(r, *patterns)
+            self.assertEqual(len(re.findall(r"hssbem: error: ", r.output)), 1, "one error line\n" + r.describe())
+
+    def test_obstacle_named_like_a_bodys_force(self):
+        # With "bodies", /contact/forces/body_<k> is body k's: an obstacle of that name used to
+        # lose its force there. Refused while the file is read.
+        self.cube_contact({"bodies": True, "obstacles": [dict(TABLE, name="body_0")]})
+        self.fails_on_one_and_two_ranks(r"problem\.json: contact\.obstacles\[0\]\.name: the name 'body_0' is that of a body's force in the result")
+
+    def test_obstacle_name_that_cannot_name_a_dataset(self):
+        # Used to be refused only when the result was written, after the whole solve.
+        self.cube_contact({"obstacles": [dict(TABLE, name="tool/tip")]})
+        self.fails_on_one_and_two_ranks(r"problem\.json: contact\.obstacles\[0\]\.name: the name \"tool/tip\" cannot name the result's datasets .*it holds '/'")
+
+    def test_obstacle_mesh_facing_away(self):
+        # A plate 0.01 under the cube whose triangles face down, away from it: refused (not
+        # flipped: which side of a sheet is solid is the file's to say).
+        self.write("wall.off", off_text([(-1, -1, -0.01), (2, -1, -0.01), (2, 2, -0.01), (-1, 2, -0.01)], [(0, 2, 1), (0, 3, 2)]))
+        self.cube_contact({"obstacles": [{"name": "wall", "mesh": "wall.off"}]})
+        self.fails_on_one_and_two_ranks(r"problem\.json: contact\.obstacles\[0\] \(.*wall\.off\): obstacle 'wall': its triangles face away from the bodies "
+                                        r"\(25 of the 25 body vertices within reach of its faces lie behind them\).*reverse the vertex order")
+
+    def test_obstacle_mesh_inconsistently_oriented(self):
+        self.write("wall.off", off_text([(-1, -1, -0.01), (2, -1, -0.01), (2, 2, -0.01), (-1, 2, -0.01)], [(0, 1, 2), (0, 3, 2)]))
+        self.cube_contact({"obstacles": [{"name": "wall", "mesh": "wall.off"}]})
+        self.assertFailsCleanly(self.run_problem(), r"contact\.obstacles\[0\].*wall\.off.*inconsistent orientation: triangles 0 and 1")
 
     def test_too_few_iterations(self):
         # The cube on the table takes two active-set iterations (the bottom edges' side nodes let go).
@@ -238,6 +269,62 @@ class ContactRunTests(ContactCase):
         self.assertEqual(attrs["solver"], "contact")
         self.assertEqual(attrs["mat_type"], mat_type)
         self.assertGreaterEqual(int(contact["iterations"]), 1)
+
+    def test_obstacles_in_the_result_and_the_sidecar(self):
+        # The table's patch, the tool's sphere and a wall mesh are written per frame, placed as the
+        # frame places them; the sidecar shows them beside the body and stays readable by meshio
+        # (which takes the last temporal collection: the body's).
+        import h5py
+        import meshio
+        import numpy as np
+        self.write("wall.off", off_text([(1.02, -1, -1), (1.02, 2, -1), (1.02, 2, 2), (1.02, -1, 2)], [(0, 2, 1), (0, 3, 2)]))  # facing -x, the cube
+        tool = {"name": "tool", "sphere": {"center": [0.5, 0.5, 1.35], "radius": 0.3}}
+        moves = [[0, 0, -0.06], [0.1, 0, -0.06]]
+        self.cube_contact({"obstacles": [TABLE, tool, {"name": "wall", "mesh": "wall.off"}]},
+                          boundary=[{"where": {"region": "z0"}, "displacement": [0, 0, 0]}],
+                          frames=[{"obstacles": {"tool": {"translate": m}}} for m in moves])
+        r = self.run_problem(timeout=TIMEOUT_RUN)
+        self.assertSucceeds(r, self.out)
+        with h5py.File(self.out, "r") as f:
+            self.assertEqual(sorted(f["/obstacles"]), ["table", "tool", "wall"])
+            self.assertEqual(f["/obstacles/tool"].attrs["shape"], "sphere")
+            table, sphere = f["/obstacles/table/vertices"][()], f["/obstacles/tool/vertices"][()]
+            self.assertLess(np.max(np.abs(table[:, 2])), 1e-12)  # in the plane
+            self.assertLess(np.max(np.abs(table[:, :2].mean(axis=0) - 0.5)), 1e-12)  # under the cube
+            self.assertLess(np.max(np.abs(np.linalg.norm(sphere - [0.5, 0.5, 1.35], axis=1) - 0.3)), 1e-12)
+            self.assertEqual(f["/obstacles/wall/triangles"].shape, (2, 3))
+            for i, m in enumerate(moves):
+                np.testing.assert_allclose(f["/frames/%d/obstacles/tool/vertices" % i][()], sphere + m, atol=1e-15)
+                np.testing.assert_array_equal(f["/frames/%d/obstacles/table/vertices" % i][()], table)
+            self.assertGreater(np.max(f["/frames/0/contact/pressure"][()]), 0)
+        with open(self.path("out.xdmf")) as f:
+            xdmf = f.read()
+        self.assertIn('<Grid Name="obstacle tool" GridType="Collection" CollectionType="Temporal">', xdmf)
+        self.assertIn("out.h5:/frames/1/obstacles/tool/vertices", xdmf)
+        with meshio.xdmf.TimeSeriesReader(self.path("out.xdmf")) as reader:
+            points, cells = reader.read_points_cells()
+            self.assertEqual(points.shape, (98, 3))
+            self.assertEqual(reader.num_steps, 2)
+            t, point_data, _ = reader.read_data(1)
+            self.assertEqual(t, 1.0)
+            self.assertEqual(point_data["pressure"].shape, (98,))
+            self.assertEqual(point_data["stress"].shape, (98, 6))
+
+    def test_a_plate_the_cube_lies_behind_is_noted_once(self):
+        # A plate over the cube facing up, away from it: every candidate lies behind it deeper than
+        # the depth (the reach: 0.087). Not in contact with it, and said once, not per frame.
+        import h5py
+        import numpy as np
+        self.write("plate.off", off_text([(-1, -1, 1.2), (2, -1, 1.2), (2, 2, 1.2), (-1, 2, 1.2)], [(0, 1, 2), (0, 2, 3)]))
+        self.cube_contact({"obstacles": [{"name": "plate", "mesh": "plate.off"}]},
+                          frames=[{"obstacles": {"plate": {"translate": [0, 0, -0.01 * k]}}} for k in range(3)])
+        r = self.run_problem(timeout=TIMEOUT_RUN)
+        self.assertSucceeds(r, self.out)
+        notes = re.findall(r"hssbem: contact: note: frame (\d+) starts with (\d+) vertices deeper than 0\.0866 \(-contact_depth\) behind obstacle 'plate': "
+                           r"not in contact with it", r.stdout)
+        self.assertEqual(notes, [("0", "97")], r.describe())  # every candidate: all but the corner held in x, y and z
+        with h5py.File(self.out, "r") as f:
+            self.assertTrue(all(np.all(f["/frames/%d/contact/pressure" % i][()] == 0) for i in range(3)))
 
     def test_same_file_from_one_and_two_ranks(self):
         import numpy as np

@@ -249,6 +249,30 @@ class SceneValidationTests(OneCleanError, CliTestCase):
 # Geometry that is not a body
 
 
+def grid_cube(n, shift=0.0):
+    """The unit cube + shift (along each axis) with n x n squares a face, outward triangles."""
+    index, verts, tris = {}, [], []
+
+    def vertex(k):
+        if k not in index:
+            index[k] = len(verts)
+            verts.append(tuple(shift + c / n for c in k))
+        return index[k]
+    for a in range(3):
+        u, v = (a + 1) % 3, (a + 2) % 3
+        for side in (0, n):
+            for p in range(n):
+                for q in range(n):
+                    def at(i, j):
+                        k = [0, 0, 0]
+                        k[a], k[u], k[v] = side, i, j
+                        return vertex(tuple(k))
+                    c00, c10, c11, c01 = at(p, q), at(p + 1, q), at(p + 1, q + 1), at(p, q + 1)
+                    for t in ((c00, c10, c11), (c00, c11, c01)):
+                        tris.append(t if side == n else (t[0], t[2], t[1]))
+    return verts, tris
+
+
 class GeometryTests(OneCleanError, CliTestCase):
     def run_mesh(self, verts, tris):
         self.write("mesh.off", off_text(verts, tris))
@@ -261,6 +285,16 @@ class GeometryTests(OneCleanError, CliTestCase):
         tris = CUBE_TRIANGLES + [tuple(8 + i for i in t) for t in CUBE_TRIANGLES]
         r = self.run_mesh(CUBE_VERTICES + second, tris)
         self.assertOneCleanError(r, r"mesh.off", r"triangles \d+ \(.*\) and \d+ \(.*\) intersect", r"components 0 and 1")
+
+    def test_cubes_whose_grids_line_up_crossing_along_edges_are_refused(self):
+        # Before: accepted, the second cube taken for a cavity of the first and flipped. Two
+        # cubes of 2 x 2 squares a face, the second shifted by half a side along each axis:
+        # their faces meet only along grid lines, so no two triangles' interiors cross.
+        first, tris = grid_cube(2)
+        second, tris2 = grid_cube(2, shift=0.5)
+        r = self.run_mesh(first + second, tris + [tuple(len(first) + i for i in t) for t in tris2])
+        self.assertOneCleanError(r, r"mesh.off", r"the surfaces of component 0 and component 1 pass through each other along triangle edges or at vertices",
+                                 r"vertex \d+ \(of component 0\) lies inside component 1, vertex \d+ outside it")
 
     def test_a_surface_through_itself_is_refused(self):
         # Before: accepted. The north pole of a sphere pushed out through the south pole.

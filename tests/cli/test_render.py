@@ -95,7 +95,7 @@ class RenderTests(TempDirTest):
     def pictures(self):
         return sorted(os.listdir(self.path("png"))) if os.path.isdir(self.path("png")) else []
 
-    def assertPng(self, name, size=(800, 600)):
+    def assertPng(self, name, size=(960, 720)):
         path = self.path("png", name)
         self.assertGreater(os.path.getsize(path), 1000, path)
         with Image.open(path) as image:
@@ -269,6 +269,85 @@ class RenderTests(TempDirTest):
                               (["--view", "1"], r"--view: expected elev,azim"),
                               (["--scale", "-1"], r"--scale: must be > 0")):
             self.assertFails(self.render("r.h5", *args), pattern, status=2)
+
+    def contact_result(self):
+        """Three frames of the octahedron touching a table (a 2-triangle patch at z = -1.2) and a
+        tool (a triangle) that moves by 0.1 in x per frame; vertex 5 (the bottom) touches."""
+        tool = np.array([[0, 0, 1.5], [1, 0, 1.5], [0, 1, 1.5]])
+        extra = {"/obstacles/table/vertices": np.array([[-2, -2, -1.2], [2, -2, -1.2], [2, 2, -1.2], [-2, 2, -1.2]]),
+                 "/obstacles/table/triangles": np.array([[0, 1, 2], [0, 2, 3]], dtype=np.int32),
+                 "/obstacles/tool/vertices": tool,
+                 "/obstacles/tool/triangles": np.array([[0, 2, 1]], dtype=np.int32)}
+        for i in range(3):
+            extra["/frames/%d/obstacles/tool/vertices" % i] = tool + [0.1 * i, 0, 0]
+            extra["/frames/%d/contact/pressure" % i] = np.array([0, 0, 0, 0, 0, 10.0 * (i + 1)])
+        write_result(self.path("c.h5"), extra=extra)
+        with h5py.File(self.path("c.h5"), "a") as f:
+            f["/obstacles/table"].attrs["shape"] = "plane"
+            f["/obstacles/tool"].attrs["shape"] = "mesh"
+
+    def test_obstacles_and_contact_pressure(self):
+        # The obstacles are read where each frame places them; the body is coloured by the
+        # contact pressure where it touches (the triangles at vertex 5) and neutral elsewhere.
+        sys.path.insert(0, SCRIPTS)
+        import render
+        self.contact_result()
+        _, triangles, frames = render.load_result(self.path("c.h5"), None)
+        self.assertEqual([shape for _, _, shape in frames[2].obstacles], ["plane", "mesh"])
+        np.testing.assert_allclose(frames[2].obstacles[1][0][:, 0], [0.2, 1.2, 0.2])
+        np.testing.assert_allclose(frames[0].obstacles[0][0][:, 2], -1.2)
+        self.assertEqual(list(frames[1].touching), [False] * 5 + [True])
+        self.assertEqual(frames[1].colour[5], 20.0)
+        r = self.render("c.h5", "--gif", self.path("c.gif"))
+        self.assertEqual(r.returncode, 0, describe(r))
+        self.assertEqual(len(self.pictures()), 3)
+        self.assertGif(self.path("c.gif"), 3)
+        with Image.open(self.path("png", "frame_0002.png")) as image:
+            pixels = np.asarray(image.convert("RGB")).reshape(-1, 3).astype(int)
+        neutral = np.array([int(255 * c) for c in render.NEUTRAL[:3]])
+        self.assertGreater(np.sum(np.all(np.abs(pixels - neutral) <= 3, axis=1)), 1000)  # the body, not touching
+        _, _, bare = render.load_result(self.path("c.h5"), None, None, obstacles=False)
+        self.assertEqual(bare[0].obstacles, [])
+        r = self.render("c.h5", "--no-obstacles", "--field", "displacement")
+        self.assertEqual(r.returncode, 0, describe(r))
+
+    def test_obstacles_clipped_to_the_picture(self):
+        # A triangle across the box keeps its part inside; one outside is dropped; the limits
+        # take the tool in (a mesh) but not the table's patch (a plane).
+        sys.path.insert(0, SCRIPTS)
+        import render
+        lo, hi = np.zeros(3), np.ones(3)
+        part = render.clip_polygon(np.array([[-1.0, 0.5, 0.5], [2.0, 0.5, 0.5], [0.5, 2.0, 0.5]]), lo, hi)
+        self.assertTrue(np.all(part >= -1e-12) and np.all(part <= 1 + 1e-12))
+        self.assertGreaterEqual(len(part), 3)
+        self.assertIsNone(render.clip_polygon(np.array([[2.0, 2, 2], [3, 2, 2], [2, 3, 2]]), lo, hi))
+        self.contact_result()
+        vertices, _, frames = render.load_result(self.path("c.h5"), None)
+        lo, hi = render.axis_limits(vertices, frames, 1.0)
+        self.assertGreater(hi[2], 1.5)   # the tool at z = 1.5
+        self.assertGreater(lo[2], -1.2)  # the table's patch is clipped, not taken in
+
+    def test_the_title_fits_the_picture(self):
+        # The README's GIF was 420 x 300 with its title cut off: the title is the figure's and
+        # wraps to its width, at the default size and at that small one.
+        sys.path.insert(0, SCRIPTS)
+        import render
+        self.contact_result()
+        vertices, triangles, frames = render.load_result(self.path("c.h5"), None)
+        frames[0].strategy = "a long strategy name that would not fit a small picture on one line"
+        for size in (render.DEFAULT_SIZE, (420, 300)):
+            renderer = render.Renderer(vertices, triangles, render.axis_limits(vertices, frames, 1.0),
+                                       (0.0, 30.0), (25.0, -60.0), size, "contact pressure")
+            try:
+                renderer.draw(frames[0], 1.0)
+                renderer.figure.canvas.draw()
+                box = renderer.figure._suptitle.get_window_extent()
+                self.assertGreaterEqual(box.x0, 0, size)
+                self.assertLessEqual(box.x1, size[0], size)
+                self.assertLessEqual(box.y1, size[1], size)
+            finally:
+                renderer.close()
+        self.assertGreater(render.DEFAULT_SIZE[0], 420)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -46,8 +46,11 @@ inline SurfaceMesh icosphere(int levels, double r = 1.0, Vec3 centre = {0, 0, 0}
   return m;
 }
 
-/// Unit cube [0,1]^3, each face an n x n grid split into triangles, outward normals.
-inline SurfaceMesh unit_cube(int n)
+/// Unit cube [0,1]^3, each face an n x n grid split into triangles, outward normals. Each square
+/// is split along its diagonal from its first corner, or (`diamond`) along the other one where
+/// its grid indices add up to an even number: for n = 2 the diagonals of a face then form the
+/// square inscribed in it.
+inline SurfaceMesh unit_cube(int n, bool diamond = false)
 {
   SurfaceMesh m;
   std::map<std::array<long, 3>, int> index;
@@ -72,8 +75,13 @@ inline SurfaceMesh unit_cube(int n)
           };
           int q[4] = {at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)};
           if (side == 0) std::swap(q[1], q[3]); // outward: -axis
-          m.triangles.push_back({q[0], q[1], q[2]});
-          m.triangles.push_back({q[0], q[2], q[3]});
+          if (diamond && (i + j) % 2 == 0) {
+            m.triangles.push_back({q[0], q[1], q[3]});
+            m.triangles.push_back({q[1], q[2], q[3]});
+          } else {
+            m.triangles.push_back({q[0], q[1], q[2]});
+            m.triangles.push_back({q[0], q[2], q[3]});
+          }
           m.triangle_region.push_back(2 * axis + side);
           m.triangle_region.push_back(2 * axis + side);
         }

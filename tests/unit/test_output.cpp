@@ -966,8 +966,11 @@ TEST_F(OutputTest, StressAndGridDatasets)
   const std::string x = slurp(xdmf_);
   EXPECT_NE(x.find(R"(<Grid Name="interior_grid" GridType="Uniform">)"), std::string::npos) << x;
   EXPECT_NE(x.find(R"(<Topology TopologyType="3DRectMesh" Dimensions="2 2 3"/>)"), std::string::npos) << x;
-  EXPECT_NE(x.find(R"(<DataItem Dimensions="3 4" Format="XML">0 0 0 2 1 1 1 1 2 2 3 1</DataItem>)"), std::string::npos) << x; // stress_zz
-  EXPECT_NE(x.find(R"(<DataItem Dimensions="3 2" Format="XML">0 5 1 1 4 1</DataItem>)"), std::string::npos) << x; // surface stress_xy
+  // The Voigt stress as one 6-component attribute, plain HDF items only (what meshio reads).
+  EXPECT_NE(x.find(R"(<Attribute Name="stress" AttributeType="Matrix" Center="Node">)"), std::string::npos) << x;
+  EXPECT_NE(x.find(R"(Dimensions="2 2 3 6" NumberType="Float" Precision="8">out.h5:/interior/grid/stress</DataItem>)"), std::string::npos) << x;
+  EXPECT_NE(x.find(R"(Dimensions="4 6" NumberType="Float" Precision="8">out.h5:/fields/stress</DataItem>)"), std::string::npos) << x;
+  EXPECT_EQ(x.find("HyperSlab"), std::string::npos) << x;
   EXPECT_EQ(occurrences(x, "<DataItem "), occurrences(x, "</DataItem>"));
   EXPECT_EQ(occurrences(x, "<Grid "), occurrences(x, "</Grid>"));
 }
@@ -987,4 +990,160 @@ TEST_F(OutputTest, InconsistentStressIsRejectedBeforeAnyFileIsCreated)
   e.interior_grid.spacing[1] = 0;
   EXPECT_THROW(write_result(h5_, e), OutputError);
   EXPECT_TRUE(listing().empty());
+}
+
+namespace {
+
+/// The tetrahedron with two obstacles: a plane's patch of two triangles and a "tool" mesh.
+ResultData tetrahedron_with_obstacles()
+{
+  ResultData d = tetrahedron();
+  d.obstacles.push_back({"table", "plane", {{-1, -1, -1}, {2, -1, -1}, {2, 2, -1}, {-1, 2, -1}}, {{0, 1, 2}, {0, 2, 3}}});
+  d.obstacles.push_back({"tool", "mesh", {{0, 0, 2}, {1, 0, 2}, {0, 1, 2}}, {{0, 2, 1}}});
+  return d;
+}
+
+std::vector<std::vector<Vec3>> moved(const ResultData &d, double dz)
+{
+  std::vector<std::vector<Vec3>> out;
+  for (const ObstacleSurface &o : d.obstacles) {
+    out.emplace_back();
+    for (const Vec3 &v : o.vertices) out.back().push_back(v + Vec3{0, 0, dz});
+  }
+  return out;
+}
+
+std::string output_error(const std::function<void()> &write)
+{
+  try {
+    write();
+  } catch (const OutputError &e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+} // namespace
+
+TEST_F(OutputTest, ObstaclesAreWrittenAndShownBesideTheBody)
+{
+  const ResultData d = tetrahedron_with_obstacles();
+  write_result(h5_, d);
+  {
+    Id file{H5Fopen(h5_.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose};
+    const auto v = read_dataset<double>(file.id, "/obstacles/table/vertices", H5T_NATIVE_DOUBLE);
+    EXPECT_EQ(v.dims, (std::vector<hsize_t>{4, 3}));
+    EXPECT_EQ(v.values, flat(d.obstacles[0].vertices));
+    const auto t = read_dataset<int>(file.id, "/obstacles/tool/triangles", H5T_NATIVE_INT);
+    EXPECT_EQ(t.dims, (std::vector<hsize_t>{1, 3}));
+    EXPECT_EQ(t.values, (std::vector<int>{0, 2, 1}));
+    Id g{H5Gopen2(file.id, "/obstacles/table", H5P_DEFAULT), H5Gclose};
+    EXPECT_EQ(read_string_attribute(g.id, "shape"), "plane");
+  }
+  const std::string x = slurp(xdmf_);
+  EXPECT_LT(x.find(R"(<Grid Name="hssbem" GridType="Uniform">)"), x.find(R"(<Grid Name="obstacle table" GridType="Uniform">)")) << x; // the body first
+  EXPECT_NE(x.find(R"(<DataItem Format="HDF" Dimensions="2 3" NumberType="Int" Precision="4">out.h5:/obstacles/table/triangles</DataItem>)"), std::string::npos) << x;
+  EXPECT_NE(x.find(R"(<DataItem Format="HDF" Dimensions="3 3" NumberType="Float" Precision="8">out.h5:/obstacles/tool/vertices</DataItem>)"), std::string::npos) << x;
+  EXPECT_EQ(occurrences(x, "<Grid "), occurrences(x, "</Grid>"));
+}
+
+TEST_F(OutputTest, FramesCarryTheObstaclesPlaces)
+{
+  const ResultData base = tetrahedron_with_obstacles();
+  {
+    FrameWriter w(h5_, base);
+    for (int k = 0; k < 3; ++k) {
+      FrameData f = frame(k, false);
+      if (k != 1) f.obstacle_vertices = moved(base, 0.1 * k); // frame 1: none given, the base position shown
+      w.append(static_cast<std::size_t>(k), f);
+    }
+    w.commit({});
+  }
+  Id file{H5Fopen(h5_.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose};
+  EXPECT_EQ(read_dataset<double>(file.id, "/frames/2/obstacles/tool/vertices", H5T_NATIVE_DOUBLE).values, flat(moved(base, 0.2)[1]));
+  EXPECT_FALSE(exists(file.id, "/frames/1/obstacles"));
+  const std::string x = slurp(xdmf_);
+  const auto tool = x.find(R"(<Grid Name="obstacle tool" GridType="Collection" CollectionType="Temporal">)"), frames = x.find(R"(<Grid Name="frames" GridType="Collection")");
+  ASSERT_NE(tool, std::string::npos) << x;
+  EXPECT_LT(tool, frames); // the body's collection last: the one a reader of one collection takes
+  EXPECT_NE(x.find("out.h5:/frames/2/obstacles/tool/vertices"), std::string::npos) << x;
+  EXPECT_NE(x.find("out.h5:/frames/0/obstacles/table/vertices"), std::string::npos) << x;
+  EXPECT_EQ(occurrences(x, "out.h5:/obstacles/tool/vertices"), 1u) << x; // frame 1 shows the base position
+  EXPECT_EQ(occurrences(x, "<Grid "), occurrences(x, "</Grid>"));
+}
+
+TEST_F(OutputTest, ObstaclesThatCannotBeWrittenAreRefused)
+{
+  for (const std::string &name : {std::string("a/b"), std::string("a:b"), std::string("."), std::string(".."), std::string(""), std::string("tab\tle")}) {
+    ResultData d = tetrahedron_with_obstacles();
+    d.obstacles[1].name = name;
+    EXPECT_NE(output_error([&] { write_result(h5_, d); }).find("obstacle name '" + name + "' cannot name the group /obstacles/<name>"), std::string::npos) << name;
+  }
+  ResultData twice = tetrahedron_with_obstacles();
+  twice.obstacles[1].name = "table";
+  EXPECT_NE(output_error([&] { write_result(h5_, twice); }).find("two obstacles are named 'table'"), std::string::npos);
+  ResultData out_of_range = tetrahedron_with_obstacles();
+  out_of_range.obstacles[1].triangles[0][2] = 3;
+  EXPECT_NE(output_error([&] { write_result(h5_, out_of_range); }).find("/obstacles/tool/triangles row 0 refers to vertex 3 of 3"), std::string::npos);
+  ResultData nan = tetrahedron_with_obstacles();
+  nan.obstacles[0].vertices[2][1] = std::nan("");
+  EXPECT_NE(output_error([&] { write_result(h5_, nan); }).find("/obstacles/table/vertices row 2 holds a non-finite value"), std::string::npos);
+  const ResultData base = tetrahedron_with_obstacles();
+  FrameWriter w(h5_, base);
+  FrameData f = frame(0, false);
+  f.obstacle_vertices = moved(base, 0.1);
+  f.obstacle_vertices[1].pop_back();
+  EXPECT_NE(output_error([&] { w.append(0, f); }).find("/frames/0/obstacles/tool/vertices has 2 entries, expected 3"), std::string::npos);
+  f.obstacle_vertices = moved(base, 0.1);
+  f.obstacle_vertices[0][0][0] = HUGE_VAL;
+  EXPECT_NE(output_error([&] { w.append(0, f); }).find("/frames/0/obstacles/table/vertices row 0 holds a non-finite value (inf)"), std::string::npos);
+  EXPECT_EQ(w.num_frames(), 0u); // refused frames leave the file as it was
+}
+
+TEST_F(OutputTest, EveryWrittenFieldIsCheckedFinite)
+{
+  // The stress on the surface and inside, the grid (where it is inside the body), the contact's
+  // fields and forces, and the same in a frame: each names its dataset (and frame); nothing is
+  // written. A NaN where the layout means "none" passes: a gap with no obstacle within reach,
+  // the grid outside the body.
+  const double nan = std::nan("");
+  const std::vector<std::pair<std::string, std::function<void(ResultData &)>>> cases{
+      {"/fields/stress row 1", [&](ResultData &d) { d.stress.stress[1][3] = nan; }},
+      {"/fields/von_mises row 3", [&](ResultData &d) { d.stress.von_mises[3] = HUGE_VAL; }},
+      {"/fields/principal_stress row 0", [&](ResultData &d) { d.stress.principal[0][2] = nan; }},
+      {"/fields/stress_corner[2] row 1", [&](ResultData &d) { d.stress.corner[2][1][0] = nan; }},
+      {"/interior/stress row 1", [&](ResultData &d) { d.interior_stress[1][5] = nan; }},
+      {"/interior/von_mises row 0", [&](ResultData &d) { d.interior_von_mises[0] = nan; }},
+      {"/interior/grid/displacement row 0", [&](ResultData &d) { d.interior_grid.displacement[0][1] = nan; }},
+      {"/interior/grid/stress row 5", [&](ResultData &d) { d.interior_grid.stress[5][0] = nan; }},
+      {"/interior/grid/von_mises row 11", [&](ResultData &d) { d.interior_grid.von_mises[11] = nan; }},
+      {"/contact/pressure row 2", [&](ResultData &d) { d.contact.pressure[2] = nan; }},
+      {"/contact/gap row 1", [&](ResultData &d) { d.contact.gap[1] = -HUGE_VAL; }},
+      {"/contact/forces/tool row 0", [&](ResultData &d) { d.contact.forces["tool"][0] = nan; }}};
+  auto with_contact = [] {
+    ResultData d = tetrahedron_with_stress();
+    d.contact.pressure = {0, 1, 2, 0};
+    d.contact.gap = {std::nan(""), 0, 0, 0.5};
+    d.contact.status = {0, 2, 2, 0};
+    d.contact.forces = {{"tool", Vec3{0, 0, 1}}};
+    d.interior_grid.displacement[2] = {std::nan(""), std::nan(""), std::nan("")}; // outside (inside[2] = 0)
+    d.interior_grid.stress[2][0] = std::nan("");
+    return d;
+  };
+  write_result(h5_, with_contact()); // NaN gaps and NaN outside the grid's body pass
+  fs::remove(h5_), fs::remove(xdmf_);
+  for (const auto &[dataset, spoil] : cases) {
+    ResultData d = with_contact();
+    spoil(d);
+    const std::string e = output_error([&] { write_result(h5_, d); });
+    EXPECT_NE(e.find(dataset + " holds a non-finite value"), std::string::npos) << dataset << ": " << e;
+    EXPECT_TRUE(listing().empty()) << dataset;
+  }
+  FrameWriter w(h5_, tetrahedron());
+  FrameData f = frame(0, false);
+  f.stress.von_mises = {1, 2, nan, 4};
+  EXPECT_NE(output_error([&] { w.append(0, f); }).find("/frames/0/von_mises row 2 holds a non-finite value (nan)"), std::string::npos);
+  f = frame(0, false);
+  f.contact.pressure = {0, 0, HUGE_VAL, 0}, f.contact.gap.assign(4, 0), f.contact.status.assign(4, 0);
+  EXPECT_NE(output_error([&] { w.append(0, f); }).find("/frames/0/contact/pressure row 2 holds a non-finite value (inf)"), std::string::npos);
 }

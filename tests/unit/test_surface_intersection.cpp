@@ -1,5 +1,5 @@
 /// \file test_surface_intersection.cpp
-/// The intersection check (bem/surface_intersection.hpp): the triangle–triangle test on the
+/// The intersection check (mesh/surface_intersection.hpp): the triangle–triangle test on the
 /// cases that decide it (crossing, touching, coplanar), the hierarchy against an all-pairs
 /// search, and the meshes the validator refuses (bodies overlapping, a surface through itself)
 /// or accepts (separate or touching bodies, cavities); and the scale check of the validator.
@@ -7,6 +7,7 @@
 #include "hssbem/mesh/surface_intersection.hpp"
 
 #include "mesh/triangle_crossing.hpp"
+#include "test_shapes.hpp"
 
 #include <gtest/gtest.h>
 
@@ -63,6 +64,15 @@ SurfaceMesh uv_sphere(int n, double radius = 1.0, Vec3 centre = {0, 0, 0})
   }
   m.triangle_region.assign(m.triangles.size(), -1);
   m.source = "sphere";
+  return m;
+}
+
+/// The cube origin + [0, size]^3 with n x n squares per face (unit_cube of test_shapes.hpp).
+SurfaceMesh grid_cube(int n, double size = 1.0, Vec3 origin = {0, 0, 0}, bool diamond = false)
+{
+  SurfaceMesh m = test::unit_cube(n, diamond);
+  for (Vec3 &v : m.vertices) v = origin + size * v;
+  m.source = "grid cube";
   return m;
 }
 
@@ -202,6 +212,57 @@ TEST(MeshValidateIntersections, OverlapAndSelfIntersectionAreRefusedNamingTheTri
   e = validation_error(m);
   EXPECT_NE(e.find("intersect: the surface (component 0) passes through itself"), std::string::npos) << e;
   EXPECT_EQ(validation_error(merge(cube(4.0), cube(1.0, {1, 1, 1}))), ""); // the cavity stays a cavity
+}
+
+TEST(MeshValidateIntersections, SurfacesThatCrossAlongEdgesOrAtVerticesAreRefused)
+{
+  // Along edges: two cubes of 2 x 2 squares a face, the second shifted by half a side along each
+  // axis, so that every line where their faces meet is a grid line of both. No two triangles'
+  // interiors cross (find_intersection finds none); the second cube's corner (0.5, 0.5, 0.5)
+  // lies inside the first, its far corner outside: it used to be taken for a cavity, flipped.
+  const SurfaceMesh edges = merge(grid_cube(2), grid_cube(2, 1.0, {0.5, 0.5, 0.5}));
+  EXPECT_FALSE(find_intersection(edges));
+  std::string e = validation_error(edges);
+  EXPECT_NE(e.find("mesh 'grid cube': the surfaces of component 0 and component 1 pass through each other along triangle edges or at vertices: vertex "), std::string::npos) << e;
+  EXPECT_NE(e.find("(of component 0) lies inside component 1, vertex "), std::string::npos) << e;
+  // At vertices: an octahedron whose equator is the square inscribed in the top face of a cube
+  // (its edges the face's diagonals, its corners the face's vertices), one pole above the face
+  // and one below: the two surfaces meet only along those shared edges and vertices.
+  SurfaceMesh octahedron;
+  octahedron.vertices = {{0.5, 0, 1}, {1, 0.5, 1}, {0.5, 1, 1}, {0, 0.5, 1}, {0.5, 0.5, 1.3}, {0.5, 0.5, 0.7}};
+  for (int k = 0; k < 4; ++k) {
+    octahedron.triangles.push_back({k, (k + 1) % 4, 4});
+    octahedron.triangles.push_back({(k + 1) % 4, k, 5});
+  }
+  const SurfaceMesh vertices = merge(grid_cube(2, 1.0, {0, 0, 0}, true), octahedron);
+  EXPECT_FALSE(find_intersection(vertices));
+  e = validation_error(vertices);
+  EXPECT_NE(e.find("pass through each other along triangle edges or at vertices"), std::string::npos) << e;
+  // Through triangle interiors: still named by the triangles (above); coinciding surfaces (the
+  // same cube twice, facing opposite ways: no triangle pair crosses) are refused too.
+  SurfaceMesh reversed = grid_cube(2);
+  for (auto &t : reversed.triangles) std::swap(t[1], t[2]);
+  e = validation_error(merge(grid_cube(2), reversed));
+  EXPECT_NE(e.find("the surfaces of component 0 and component 1 coincide"), std::string::npos) << e;
+}
+
+TEST(MeshValidateIntersections, TouchingAndNestedSurfacesWhoseGridsLineUpAreAccepted)
+{
+  // Face to face (bodies in contact) with matching grids: the shared face's samples lie on the
+  // other cube and decide nothing; a cavity touching nothing, wholly inside: kept a cavity.
+  EXPECT_EQ(validation_error(merge(grid_cube(2), grid_cube(2, 1.0, {1, 0, 0}))), "");
+  EXPECT_EQ(validation_error(merge(grid_cube(2), grid_cube(2, 0.5, {0.25, 0.25, 1}))), ""); // a smaller cube on the top face
+  SurfaceMesh m = merge(grid_cube(4, 2.0), grid_cube(2, 1.0, {0.5, 0.5, 0.5}));
+  std::vector<std::string> notices;
+  validate_and_orient(m, notices);
+  ASSERT_EQ(notices.size(), 1u);
+  EXPECT_NE(notices[0].find("cavity boundary) was oriented inward; flipped"), std::string::npos) << notices[0];
+  std::vector<int> surface(m.num_triangles(), 0);
+  for (int t = grid_cube(4, 2.0).num_triangles(); t < m.num_triangles(); ++t) surface[t] = 1;
+  const SurfaceNesting n = nest_surfaces(m, surface, 2);
+  EXPECT_FALSE(n.crossing);
+  EXPECT_TRUE(n.inside[1][0]);
+  EXPECT_FALSE(n.inside[0][1]);
 }
 
 TEST(MeshValidateScale, SizeAndDigitsOfTheCoordinates)

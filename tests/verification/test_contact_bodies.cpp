@@ -1,4 +1,4 @@
-// Several bodies on a composite reference (scene/composite_reference.hpp): each body on its own
+// Several bodies on a composite reference (reference/composite_reference.hpp): each body on its own
 // surface, operator and reference. Against the dense reference of the whole mesh with the other
 // bodies' blocks zeroed (DenseReferenceOptions::node_body), which holds the same equations: W's
 // columns, the free response and the contact solution of two stacked cubes agree to round-off;

@@ -1,4 +1,4 @@
-// Contact on the H² reference (scene/h2_reference.hpp) against the dense one: the Hertz
+// Contact on the H² reference (reference/h2_reference.hpp) against the dense one: the Hertz
 // hemisphere on a plane (meshes/hertz_hemisphere.msh, 3.8k unknowns) solved by the contact
 // engine over both; the H² reference's approximate columns corrected by accurate solves.
 #include "solve_helpers.hpp"

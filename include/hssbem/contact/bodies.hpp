@@ -17,8 +17,8 @@ struct Bodies {
 };
 
 /// The bodies of a validated (closed, oriented) mesh, numbered in the order of their lowest
-/// vertex index. A connected surface inside an odd number of others is a cavity: it belongs to
-/// the body whose outer surface immediately contains it.
+/// vertex index. A connected surface inside an odd number of others (all of it: nest_surfaces)
+/// is a cavity: it belongs to the body whose outer surface immediately contains it.
 Bodies find_bodies(const SurfaceMesh &mesh);
 
 /// The body of every dof node, or empty when the mesh is one body: what a reference

@@ -57,6 +57,7 @@ struct ContactOptions {
   double tol = option_default::contact_tol;
   int max_it = option_default::contact_max_it; ///< iterations per frame before it is an error
   double reach = option_default::contact_reach; ///< candidates: vertices within this gap (0: 5 % of the mesh's bounding-box diagonal)
+  double depth = option_default::contact_depth; ///< a vertex deeper than this behind an open mesh obstacle is not in contact with it (0: the reach; obstacle.hpp)
   bool warm_start = true;      ///< start from the previous frame's active set (and tractions)
   /// Frictionless frames: the fields' product with W's loaded columns in single precision (half
   /// the memory traffic); the contact's share of the fields then carries relative errors of

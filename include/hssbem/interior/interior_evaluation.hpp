@@ -1,5 +1,5 @@
 /// \file interior_evaluation.hpp
-/// Displacement and stress of Somigliana's identities (bem/interior_stress.hpp) at many points,
+/// Displacement and stress of Somigliana's identities (post/interior_stress.hpp) at many points,
 /// in O(points + triangles) work: a fast multipole method on two cluster trees, whose far field
 /// goes through proxy spheres (kernel-independent, with equivalent point forces as in Ying, Biros
 /// and Zorin, J. Comput. Phys. 196, 2004).

@@ -57,6 +57,15 @@ struct ContactData {
   bool present() const { return !pressure.empty(); }
 };
 
+/// A rigid obstacle's surface, to draw it beside the bodies (contact/obstacle.hpp:
+/// obstacle_surface): /obstacles/<name>.
+struct ObstacleSurface {
+  std::string name;                          ///< the obstacle's name, an HDF5 link name (no '/' or ':', not "." or "..", no control character)
+  std::string shape;                         ///< attribute `shape` of /obstacles/<name>: "plane" (a patch of it around the bodies), "sphere" (triangulated) or "mesh"
+  std::vector<Vec3> vertices;                ///< /obstacles/<name>/vertices (n x 3): where it is (a single solve) or its base position (a scene)
+  std::vector<std::array<int, 3>> triangles; ///< /obstacles/<name>/triangles (m x 3 int32), facing the bodies
+};
+
 /// Everything a result file holds, all arrays in mesh vertex order (whole on every rank that
 /// writes: see the collective write_result).
 struct ResultData {
@@ -84,6 +93,7 @@ struct ResultData {
   std::map<std::string, std::string> options_str;   ///< (names and texts)
   std::vector<std::string> input_files;             ///< not written: the run's inputs, which the result may not replace
   ContactData contact;                              ///< /contact, when present (the same on every rank)
+  std::vector<ObstacleSurface> obstacles;           ///< /obstacles/<name>/{vertices, triangles}, when present
 };
 
 /// Check that `path` can be written (directory exists and is writable) before any work is done.
@@ -103,8 +113,12 @@ void check_output_path(const std::string &path, const std::vector<std::string> &
 /// Layout: /mesh/{vertices, triangles, triangle_region, sharp_vertex}, /fields/{displacement,
 /// traction, traction_corner}, /bc/displacement_prescribed, /reactions/<region>,
 /// /interior/{points, displacement}, /contact/{pressure, gap, status, forces/<name>} with the
-/// attributes iterations and active_vertices, root attributes, /timings attributes; empty
-/// optional arrays are skipped. The sidecar shows the contact's pressure and status. Arrays that are not empty must have one entry per vertex (triangle).
+/// attributes iterations and active_vertices, /obstacles/<name>/{vertices, triangles} with the
+/// attribute shape, root attributes, /timings attributes; empty optional arrays are skipped.
+/// The sidecar shows the contact's pressure and status, and each obstacle as a grid of its own
+/// after the body's. Arrays that are not empty must have one entry per vertex (triangle), and
+/// every value written must be finite (the contact gap may be NaN: no obstacle within reach;
+/// the interior grid's fields are NaN outside the body).
 /// Throws OutputError; on error no temporary file is left and an existing result is untouched.
 void write_result(const std::string &path, const ResultData &data);
 
@@ -129,6 +143,10 @@ struct FrameData {
   std::map<std::string, long long> attributes_int;          ///< e.g. "iterations"
   std::map<std::string, std::string> attributes_str;        ///< e.g. "strategy"
   ContactData contact;                                      ///< /frames/<i>/contact, when present
+  /// Per obstacle of the base (ResultData::obstacles, in its order), its surface's vertices as
+  /// this frame places it: /frames/<i>/obstacles/<name>/vertices. Empty: not written (the
+  /// sidecar then shows the base position).
+  std::vector<std::vector<Vec3>> obstacle_vertices;
 };
 
 /// A result file written frame by frame: the frames of a scene are streamed into the temporary
@@ -141,6 +159,7 @@ struct FrameData {
 ///   /frames/<i>/traction                nv x 3 float64
 ///   /frames/<i>/displacement_prescribed nv x 3 int8 (0/1), as /bc; only when given
 ///   /frames/<i>/contact/...             as /contact; only when given
+///   /frames/<i>/obstacles/<name>/vertices  n x 3 float64: the base's obstacle <name> as the frame places it; only when given
 ///   attributes of /frames/<i>           FrameData::attributes_* (float64, int64, UTF-8)
 /// /frames exists (maybe empty) from the start; /timings and the root attributes given to
 /// commit() are written at the end.
@@ -148,7 +167,9 @@ struct FrameData {
 /// Sidecar: the frames as one temporal collection (Grid CollectionType="Temporal"), one grid
 /// per frame with Time = its index, the mesh from /mesh and the attributes displacement,
 /// traction (and displacement_prescribed) from /frames/<i>, plus sharp_vertex and
-/// triangle_region. The base /fields are left out of it: ParaView draws every top-level grid of
+/// triangle_region; before it, one temporal collection per obstacle of the base (its surface per
+/// frame), so that a reader that takes one collection (meshio's) takes the body's, the last. The
+/// base /fields are left out of it: ParaView draws every top-level grid of
 /// the domain at every time step, so a static base grid would hide the frames it overlaps; they
 /// stay in the HDF5 file. Committed without any frame, the sidecar is write_result's.
 ///

@@ -34,6 +34,11 @@ struct SurfaceMesh {
   double triangle_area(int t) const;
 };
 
+/// The triangles `triangles` of `mesh` (in that order) over their own vertices, numbered in the
+/// order of first use; `vertex_of`, if given, receives each one's index in `mesh`. Regions and
+/// the source are kept.
+SurfaceMesh sub_mesh(const SurfaceMesh &mesh, const std::vector<int> &triangles, std::vector<int> *vertex_of = nullptr);
+
 /// Read a surface mesh; the format is chosen by extension (.msh, .stl, .off, .obj).
 /// Throws MeshError naming the file (and line) for a missing, unreadable or malformed file.
 SurfaceMesh read_mesh(const std::string &path);
@@ -45,11 +50,21 @@ SurfaceMesh parse_mesh(const std::string &bytes, const std::string &name);
 /// Validate topology and fix orientation: closed (every edge in exactly two triangles),
 /// manifold (edges and vertex fans), no degenerate or duplicate triangles, consistent orientation
 /// in each connected component, no surface passing through itself or another (find_intersection()
-/// of bem/surface_intersection.hpp: the two triangles are named), outward normals (a component nested inside another is a cavity and
+/// of mesh/surface_intersection.hpp: the two triangles are named; nest_surfaces(): surfaces that
+/// cross along edges or at vertices, or coincide), outward normals (a component wholly inside another is a cavity and
 /// gets normals pointing into it, i.e. out of the solid). Components oriented inward are flipped
 /// and a notice is appended to `notices`. Vertices used by no triangle are allowed and reported.
 /// Throws MeshError naming the edge, vertex or triangle at fault.
 void validate_and_orient(SurfaceMesh &mesh, std::vector<std::string> &notices);
+
+/// The checks of a surface that need not be closed (a rigid contact obstacle): those of
+/// validate_and_orient() but closedness, vertex fans, nesting and orientation outward — vertex
+/// indices, scale, degenerate and duplicate triangles, no edge shared by more than two
+/// triangles, a consistent orientation (every edge two triangles share used once in each
+/// direction), no surface passing through itself or another (find_intersection()). Nothing is
+/// changed. Returns whether the surface is closed (every edge in two triangles). Throws MeshError
+/// naming the edge, vertex or triangle at fault.
+bool validate_open_surface(const SurfaceMesh &mesh);
 
 /// Internals shared by the mesh readers (src/bem/mesh*.cpp); not part of the public interface.
 namespace detail {

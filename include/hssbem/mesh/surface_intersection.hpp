@@ -8,6 +8,7 @@
 #include "hssbem/mesh/mesh.hpp"
 
 #include <optional>
+#include <vector>
 
 namespace hssbem {
 
@@ -39,5 +40,40 @@ std::optional<TrianglePair> find_intersection(const SurfaceMesh &mesh, const Int
 /// that intersect, or none: two bodies that overlap. No pair is taken for neighbours here,
 /// even where the meshes share coordinates.
 std::optional<TrianglePair> find_intersection(const SurfaceMesh &a, const SurfaceMesh &b, const IntersectionOptions &o = {});
+
+/// A point of a surface used to place it with respect to another: a vertex, or the centroid of
+/// a triangle (indices into the mesh).
+struct SurfaceSample {
+  int vertex   = -1;
+  int triangle = -1;
+};
+
+/// Two closed surfaces that pass through each other where no two triangles' interiors cross
+/// (along triangle edges or through vertices: meshes whose grids line up), or that coincide.
+struct SurfaceCrossing {
+  int first  = -1;              ///< surfaces (the numbers of `surface_of`)
+  int second = -1;
+  SurfaceSample inside, outside; ///< samples of `first` strictly inside and strictly outside `second`
+  bool coincide = false;         ///< every sample of `first` lies on `second` (inside, outside unset)
+};
+
+/// How the closed surfaces of a mesh lie in one another.
+struct SurfaceNesting {
+  std::vector<std::vector<char>> inside; ///< inside[s][r]: surface s lies inside surface r (never for s = r)
+  std::optional<SurfaceCrossing> crossing; ///< the first pair (lowest s, then r) that crosses or coincides
+};
+
+/// Places every closed surface of `mesh` (`surface_of`: per triangle, its surface 0 .. count − 1;
+/// each surface closed and consistently oriented) with respect to every other, from samples of
+/// it: its vertices and its triangles' centroids. A sample within `o.tolerance` × the mesh's
+/// bounding-box diagonal of the other surface lies on it and decides nothing; the others lie
+/// inside it (|winding number| > 1/2) or outside. A surface lies inside another when some of its
+/// samples do and none lies outside; when both occur the two surfaces cross (`crossing`), and
+/// when all its samples lie on the other they coincide. So a surface taken for a cavity lies
+/// wholly inside its parent (every sample checked), and two surfaces that pass through each
+/// other are caught however they do so: through triangle interiors (find_intersection() names
+/// those triangles first), along edges or at vertices. Cost: O(n log n) for n triangles (a
+/// SurfaceLocator per surface; pairs whose boxes do not meet are outside each other unqueried).
+SurfaceNesting nest_surfaces(const SurfaceMesh &mesh, const std::vector<int> &surface_of, int count, const IntersectionOptions &o = {});
 
 } // namespace hssbem

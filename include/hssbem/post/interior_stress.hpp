@@ -7,7 +7,7 @@
 /// until every piece satisfies that (or `max_depth` is reached) and each piece takes the 7-point
 /// rule. The 7-point rule's points, with the densities folded in, are the triangle's *particles*:
 /// far away, a triangle is seven point sources (a force and a double-layer density each), which is
-/// what a fast evaluation (compress/interior_evaluation.hpp) compresses.
+/// what a fast evaluation (interior/interior_evaluation.hpp) compresses.
 ///
 /// Close to the surface the integrands are nearly singular (1/r² and 1/r³ against a smooth
 /// density, whose integrals cancel to a result ~ r/L times smaller): points closer than a band of

@@ -139,7 +139,7 @@ struct NodeConditions {
   std::vector<double> pressure;
   int num_displacement_prescribed() const;
   /// The boundary-condition pattern per unknown (3 · node + component): 1 where u is known, 0
-  /// where t is (a reference factorization's S₀: scene/reference.hpp).
+  /// where t is (a reference factorization's S₀: reference/reference.hpp).
   std::vector<char> unknown_pattern() const;
 };
 NodeConditions node_conditions(const VertexConditions &vc, const Discretization &disc);

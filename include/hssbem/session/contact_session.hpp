@@ -13,6 +13,7 @@
 #include "hssbem/core/size_limits.hpp"
 #include "hssbem/io/hdf5_output.hpp"
 #include "hssbem/reference/h2_reference.hpp"
+#include "hssbem/session/contact_obstacles.hpp"
 #include "hssbem/session/fingerprint.hpp"
 #include "hssbem/session/options.hpp"
 #include "hssbem/session/problem.hpp"
@@ -75,8 +76,9 @@ public:
   /// "dense", "h2" or "dense,h2".
   std::string mat_type() const;
 
-  /// Every body checked to be held (ConstraintError naming the problem), the references built,
-  /// the engine made and the columns of the frames known ahead computed.
+  /// Every mesh obstacle checked to face the bodies and every body to be held (ProblemError,
+  /// ConstraintError naming the problem), the references built, the engine made and the columns
+  /// of the frames known ahead computed.
   void set_up();
   /// A precomputation made before (a saved one) instead of set_up()'s references: refused with
   /// std::invalid_argument naming what differs when its fingerprint is not this session's.
@@ -108,6 +110,8 @@ public:
 
   ContactEngine &engine() { return *m_engine; }
   const ContactEngine &engine() const { return *m_engine; }
+  /// The obstacles' checks, notes and surfaces (after set_up()).
+  ContactObstacles &obstacles() { return *m_drawn; }
   const ReferenceFactorization &reference() const { return *m_pre->reference; }
   /// Per body, how its reference was built.
   const std::vector<ContactBodyReport> &body_reports() const { return m_bodies; }
@@ -131,7 +135,9 @@ private:
   std::shared_ptr<ContactPrecomputation> m_pre;
   std::vector<ContactBodyReport> m_bodies;
   std::unique_ptr<ContactEngine> m_engine;
+  std::unique_ptr<ContactObstacles> m_drawn;
   SystemSelection m_values;
+  std::vector<Vec3> m_offsets; ///< the last step's obstacle offsets
   ContactSolution m_sol;
   ContactFrameReport m_report;
   std::map<std::string, double> m_seconds;
