@@ -26,7 +26,7 @@ ContactScene::ContactScene(const SurfaceMesh &mesh, const Material &material, co
   DenseReferenceOptions ro;
   ro.node_body = node_bodies(*m_disc);
   m_reference = std::make_unique<DenseReference>(*m_op, pattern, ro);
-  m_offsets.assign(obstacles.size(), Vec3{0, 0, 0});
+  m_poses.assign(obstacles.size(), Pose{});
   m_engine = std::make_unique<ContactEngine>(*m_disc, *m_reference, std::move(obstacles), settings, options);
 }
 
@@ -45,17 +45,25 @@ int ContactScene::obstacle_index(const std::string &name) const
   throw std::invalid_argument("ContactScene: no obstacle named '" + name + "'");
 }
 
-void ContactScene::set_obstacle_offset(const std::string &name, const Vec3 &offset) { m_offsets[obstacle_index(name)] = offset; }
+void ContactScene::set_obstacle_offset(const std::string &name, const Vec3 &offset) { m_poses[obstacle_index(name)] = Pose::translation(offset); }
+
+void ContactScene::set_obstacle_pose(const std::string &name, const Pose &pose) { m_poses[obstacle_index(name)] = pose; }
 
 void ContactScene::set_obstacle_offsets(const std::vector<Vec3> &offsets)
 {
-  if (offsets.size() != m_offsets.size()) throw std::invalid_argument("ContactScene::set_obstacle_offsets: one offset per obstacle expected");
-  m_offsets = offsets;
+  if (offsets.size() != m_poses.size()) throw std::invalid_argument("ContactScene::set_obstacle_offsets: one offset per obstacle expected");
+  for (std::size_t o = 0; o < offsets.size(); ++o) m_poses[o] = Pose::translation(offsets[o]);
+}
+
+void ContactScene::set_obstacle_poses(const std::vector<Pose> &poses)
+{
+  if (poses.size() != m_poses.size()) throw std::invalid_argument("ContactScene::set_obstacle_poses: one pose per obstacle expected");
+  m_poses = poses;
 }
 
 const ContactFrameReport &ContactScene::solve()
 {
-  const ContactFrameReport &rep = m_engine->solve(m_sel, m_offsets, m_sol);
+  const ContactFrameReport &rep = m_engine->solve(m_sel, m_poses, m_sol);
   m_u = vertex_average(*m_disc, m_sol.u);
   m_t = vertex_average(*m_disc, m_sol.t);
   return rep;

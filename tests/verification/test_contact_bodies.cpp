@@ -58,7 +58,7 @@ struct StackedCubes {
   {
     ContactEngine engine(*disc, ref, {}, settings);
     ContactSolution sol;
-    const ContactFrameReport r = engine.solve(sel, {}, sol);
+    const ContactFrameReport r = engine.solve(sel, std::vector<Pose>{}, sol);
     if (rep) *rep = r;
     return sol;
   }

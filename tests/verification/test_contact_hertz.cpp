@@ -218,7 +218,7 @@ TEST(ContactHertz, TwoSpheres)
   opt.reach = 0.05 * R;
   ContactEngine engine(*r->s.disc, composite, {}, bodies, opt);
   ContactSolution sol;
-  const ContactFrameReport rep = engine.solve(selection_of(r->base), {}, sol);
+  const ContactFrameReport rep = engine.solve(selection_of(r->base), std::vector<Pose>{}, sol);
   double dp = 0, pm = 0, du = 0, um = 0;
   for (int v = 0; v < m.num_vertices(); ++v) dp = std::max(dp, std::abs(sol.pressure[v] - r->sol.pressure[v])), pm = std::max(pm, r->sol.pressure[v]);
   for (std::size_t i = 0; i < sol.u.size(); ++i) du = std::max(du, norm(sol.u[i] - r->sol.u[i])), um = std::max(um, norm(r->sol.u[i]));
