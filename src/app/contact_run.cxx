@@ -69,15 +69,24 @@ ContactSettings settings_of(const ProblemSetup &s)
   return c;
 }
 
-/// Per frame (or the single solve), the obstacles' offsets in the engine's order.
-std::vector<std::vector<Vec3>> placements_of(const ProblemSpec &spec)
+/// Per frame (or the single solve), the obstacles' poses in the engine's order: x ↦ R (x − c) + c + t,
+/// c the frame's "about" or the obstacle's default centre.
+std::vector<std::vector<Pose>> placements_of(const ProblemSpec &spec, const std::vector<Obstacle> &obstacles)
 {
   const std::size_t no = spec.contact.obstacles.size();
-  std::vector<std::vector<Vec3>> out(std::max<std::size_t>(1, spec.frames.size()), std::vector<Vec3>(no, Vec3{0, 0, 0}));
+  std::vector<std::vector<Pose>> out(std::max<std::size_t>(1, spec.frames.size()), std::vector<Pose>(no));
   for (std::size_t f = 0; f < spec.frames.size(); ++f)
     for (const auto &[name, offset] : spec.frames[f].obstacles)
-      for (std::size_t o = 0; o < no; ++o)
-        if (spec.contact.obstacles[o].name == name) out[f][o] = offset;
+      for (std::size_t o = 0; o < no; ++o) {
+        if (spec.contact.obstacles[o].name != name) continue;
+        const auto turn = spec.frames[f].turns.find(name);
+        if (turn == spec.frames[f].turns.end()) {
+          out[f][o] = Pose::translation(offset);
+          continue;
+        }
+        const ObstacleTurn &r = turn->second;
+        out[f][o] = Pose::turn(r.axis, r.angle_deg, r.about ? *r.about : ObstacleGeometry(obstacles[o]).default_centre(), offset);
+      }
   return out;
 }
 
@@ -169,6 +178,7 @@ struct ContactRun {
   std::vector<char> body_h2;         ///< per body: its reference is the H² one (else dense)
   std::unique_ptr<ReferenceFactorization> reference;
   std::unique_ptr<ContactEngine> engine;
+  std::vector<std::vector<Pose>> placements; ///< per frame, the obstacles' poses
   long long frame = 0;
 
   std::unique_ptr<ReferenceFactorization> body_reference(const BemOperator &body_op, std::vector<char> pattern, std::vector<char> kept, bool pressure, int body) const;
@@ -245,9 +255,10 @@ void ContactRun::set_up(const NodeConditions &base, const std::vector<NodeCondit
     throw ConstraintError(s.spec.file + ": " + e.what());
   }
   fault_point("ContactSetup");
+  placements = placements_of(s.spec, obstacles);
   make_reference(base, frames, obstacles, settings, opt);
   engine = std::make_unique<ContactEngine>(*s.disc, *reference, std::move(obstacles), settings, opt);
-  engine->prefetch(placements_of(s.spec));
+  engine->prefetch(placements);
   seconds["contact_setup"] += timer.seconds();
   HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF, "hssbem: contact: set up in %.2f s (%d obstacles, %d bodies, reach %.3g; %.0f MB)\n", timer.seconds(), engine->num_obstacles(),
                               engine->bodies().count, engine->reach(), (reference->memory_bytes() + engine->memory_bytes()) / 1e6));
@@ -256,7 +267,7 @@ void ContactRun::set_up(const NodeConditions &base, const std::vector<NodeCondit
 void ContactRun::single(const NodeConditions &nc)
 {
   ContactSolution sol;
-  const ContactFrameReport rep = engine->solve(selection_of(nc), placements_of(s.spec)[0], sol);
+  const ContactFrameReport rep = engine->solve(selection_of(nc), placements[0], sol);
   seconds["contact_solve"] += rep.seconds;
   check_finite(sol, -1);
   HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF, "hssbem: contact: %lld vertices touching (%lld stick, %lld slip) after %lld iterations, %.3f ms\n", rep.active_vertices, rep.stick,
@@ -302,7 +313,6 @@ void ContactRun::scene(const std::vector<NodeConditions> &frames)
     base.attributes_str["mat_type"] = mat_type_of(body_h2);
     writer = std::make_unique<FrameWriter>(s.output, base);
   }
-  const std::vector<std::vector<Vec3>> placements = placements_of(s.spec);
   double total = 0, slowest = 0;
   long long iterations = 0;
   { // the progress line ends before the summary
@@ -392,7 +402,7 @@ void run_contact(MPI_Comm comm, const ProblemSetup &s, const BemOperator &op, st
     if (rank != 0) return;
     const NodeConditions base = apply_rules(s.spec.rules, *s.disc, s.spec.file);
     const std::vector<NodeConditions> frames = frames_of(s, base);
-    ContactRun run{s, op, o, interior, size, seconds, on_h2 ? &h2 : nullptr, body_h2, nullptr, nullptr};
+    ContactRun run{s, op, o, interior, size, seconds, on_h2 ? &h2 : nullptr, body_h2, nullptr, nullptr, {}};
     run.set_up(base, frames);
     if (s.spec.frames.empty()) run.single(frames[0]);
     else run.scene(frames);

@@ -49,6 +49,12 @@ class ContactErrorTests(ContactCase):
         self.assertFailsCleanly(r, r"problem\.json: frames\[1\]\.obstacles: no obstacle named 'tool' \(known: table\)")
         self.assertErrorLine(r)
 
+    def test_zero_rotation_axis(self):
+        self.cube_contact({"obstacles": [TABLE]}, frames=[{"obstacles": {"table": {"rotate": {"axis": [0, 0, 0], "angle": 5}}}}])
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"problem\.json: frames\[0\]\.obstacles\.table\.rotate\.axis: the rotation axis is zero")
+        self.assertErrorLine(r)
+
     def test_duplicate_obstacle_name(self):
         self.cube_contact({"obstacles": [TABLE, TABLE]})
         self.assertFailsCleanly(self.run_problem(), r"contact\.obstacles\[1\]\.name: duplicate obstacle name 'table'")
