@@ -130,11 +130,12 @@ TEST(ContactBodies, CompositeReferenceEqualsTheSeparatedDenseOne)
   EXPECT_GE(rc.active_vertices, 20); // the cubes' facing faces (25 vertices)
   // Round-off: the same integrals, but node_body sums the other body's nearly singular integrals
   // (0.004 h away) into the rigid-body term and takes them out again. Measured: W 2.5e-15, the
-  // free response 2.1e-11 (of its largest entry, a traction), u 3.9e-15, pressure 3.5e-14.
-  EXPECT_LE(dW, 1e-14);
-  EXPECT_LE(dy, 6e-11);
-  EXPECT_LE(du, 1e-14);
-  EXPECT_LE(dp, 1e-13);
+  // free response 2.1e-11 (of its largest entry, a traction), u 3.9e-15, pressure 3.5e-14; the
+  // bounds 10x that, for other machines, BLAS kernels and thread counts.
+  EXPECT_LE(dW, 3e-14);
+  EXPECT_LE(dy, 2e-10);
+  EXPECT_LE(du, 4e-14);
+  EXPECT_LE(dp, 4e-13);
   EXPECT_LT(composite.memory_bytes(), whole.memory_bytes() / 2);
 }
 

@@ -111,7 +111,7 @@ TEST(ContactH2, HertzAgreesWithTheDenseReference)
     worst = std::max(worst, d / s);
   }
   std::printf("H2 factorization: blocked solve against single solves %.1e\n", worst);
-  EXPECT_LE(worst, 1e-14); // measured 2.3e-15
+  EXPECT_LE(worst, 3e-14); // measured 2.3e-15 (round-off, 10x)
 }
 
 TEST(ContactH2, ToolFramesAndFrictionAgreeWithTheDenseReference)
