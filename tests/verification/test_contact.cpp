@@ -438,9 +438,13 @@ TEST(Contact, ContactSceneApiDrivesFrames)
   // The bottom pushed up by 2 delta, the top held: u_z at the bottom is 2 delta (the vertex
   // averages: a bottom edge's side nodes sit 9e-6 higher, measured).
   for (int v : bottom_vertices(mesh)) EXPECT_NEAR(scene.displacement()[v][2], 2 * delta, 3e-5);
-  const std::vector<Vec3> F = scene.haptic_forces({{0, 0, 2.5 * delta}});
+  const std::vector<Vec3> F = scene.haptic_forces(std::vector<Vec3>{{0, 0, 2.5 * delta}});
   EXPECT_NEAR(F[0][2] / previous, 0.75, 1e-10); // the table at 1.5 delta instead of 2 delta: 3/4 of the force
   EXPECT_THROW(scene.set_obstacle_offset("tool", {0, 0, 0}), std::invalid_argument);
+  // A pose: the table turned about its normal through its point (the same plane) and raised.
+  scene.set_obstacle_pose("table", Pose::turn({0, 0, 1}, 30, {0, 0, -delta}, {0, 0, 3 * delta}));
+  EXPECT_NEAR(scene.solve().active_vertices, static_cast<long long>(bottom_vertices(mesh).size()), 0);
+  EXPECT_NEAR(scene.obstacle_forces()[0][2], previous, 1e-10 * previous);
 }
 
 
