@@ -198,11 +198,12 @@ void ContactEngine::prefetch(const std::vector<std::vector<Pose>> &placements)
   auto mark = [&](const std::vector<ContactPoint> &pts) {
     for (int j : contact_detail::loaded_unknowns(pts, m->ref->pattern(), !m->friction)) need[j] = 1;
   };
-  for (const std::vector<Pose> &poses : placements) {
+  const std::vector<ContactPoint> pairs = contact_detail::body_points(m->geo);
+  for (const std::vector<Pose> &poses : placements) { // the followers at sharp vertices load columns too
     if (poses.size() != m->geo.obstacles.size()) throw std::invalid_argument("contact: one pose per obstacle expected");
-    mark(contact_detail::obstacle_points(m->geo, poses, m->forced));
+    mark(contact_detail::merge_points(m->geo, contact_detail::obstacle_points(m->geo, poses, m->forced), pairs));
   }
-  mark(contact_detail::body_points(m->geo));
+  if (placements.empty()) mark(contact_detail::merge_points(m->geo, {}, pairs));
   std::vector<int> js;
   for (std::size_t j = 0; j < need.size(); ++j)
     if (need[j]) js.push_back(static_cast<int>(j));

@@ -231,9 +231,10 @@ private:
 /// every point closed. With O the open points, λ = y + A⁻¹(:, O) r, A⁻¹(O, O) r = −y(O): λ
 /// vanishes on O and O's rows carry the residual r (a normal row's residual is the point's gap).
 /// A leading point whose λ_n < 0 opens with its followers; an open one whose gap is below
-/// −tol_gap closes again; repeated until nothing changes. `inverse_column(row, out)` fills column
-/// `row` of A⁻¹ (k |points| entries). Returns λ (k per point).
+/// −tol_gap closes again; repeated until nothing changes (nothing to do, and no work, when no
+/// leading point pulls). `inverse_columns(rows, out)` fills the columns `rows` of A⁻¹ (k |points|
+/// entries each, one after the other). Returns λ (k per point).
 std::vector<double> open_pulling_points(const Compliance &D, const std::vector<int> &points, int k, const std::vector<double> &y,
-                                        const std::function<void(int, double *)> &inverse_column, double tol_gap);
+                                        const std::function<void(const std::vector<int> &, double *)> &inverse_columns, double tol_gap);
 
 } // namespace hssbem::contact_detail

@@ -647,10 +647,11 @@ void FrictionSolver::haptic(const Compliance &D, const std::vector<Vec3> &wf, do
     for (int k = 0; k < 3; ++k) y[3 * a + k] = ((slip || D.held(m_rows[a], k)) && k > 0) ? 0.0 : -wf[m_rows[a]][k];
   }
   if (m > 0) lapack::getrs('N', m, 1, m_lu.data(), m, m_piv.data(), y.data(), m);
-  const auto column = [&](int row, double *out) {
-    std::fill(out, out + m, 0.0);
-    out[row] = 1;
-    lapack::getrs('N', m, 1, m_lu.data(), m, m_piv.data(), out, m);
+  const auto column = [&](const std::vector<int> &rows, double *out) { // one blocked solve
+    const int nr = static_cast<int>(rows.size());
+    std::fill(out, out + static_cast<std::size_t>(m) * nr, 0.0);
+    for (int j = 0; j < nr; ++j) out[rows[j] + static_cast<std::size_t>(j) * m] = 1;
+    lapack::getrs('N', m, nr, m_lu.data(), m, m_piv.data(), out, m);
   };
   const std::vector<double> l = open_pulling_points(D, m_rows, 3, y, column, tol_gap);
   lambda.assign(D.size(), Vec3{0, 0, 0});

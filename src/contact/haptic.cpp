@@ -26,15 +26,25 @@ std::vector<int> lead_positions(const Compliance &D, const std::vector<int> &poi
 }
 
 /// λ = y + A⁻¹(:, rows) r with A⁻¹(rows, rows) r = −y(rows): λ vanishes on `rows`, whose own
-/// rows of A then carry r (returned in `r`).
-std::vector<double> open_rows(const std::vector<double> &y, const std::vector<int> &rows, const std::function<const std::vector<double> &(int)> &column, std::vector<double> &r)
+/// rows of A then carry r (returned in `r`). `cache` holds the columns of A⁻¹ computed so far (by
+/// row); the missing ones are computed in one call.
+std::vector<double> open_rows(const std::vector<double> &y, const std::vector<int> &rows, const std::function<void(const std::vector<int> &, double *)> &inverse_columns,
+                              std::unordered_map<int, std::vector<double>> &cache, std::vector<double> &r)
 {
   const int q = static_cast<int>(rows.size()), m = static_cast<int>(y.size());
   std::vector<double> lambda = y, Y(static_cast<std::size_t>(q) * q);
   r.assign(q, 0.0);
   if (q == 0) return lambda;
+  std::vector<int> missing;
+  for (int row : rows)
+    if (!cache.count(row)) missing.push_back(row);
+  if (!missing.empty()) {
+    std::vector<double> cols(static_cast<std::size_t>(m) * missing.size());
+    inverse_columns(missing, cols.data());
+    for (std::size_t j = 0; j < missing.size(); ++j) cache[missing[j]].assign(cols.begin() + j * m, cols.begin() + (j + 1) * m);
+  }
   for (int j = 0; j < q; ++j) {
-    const std::vector<double> &c = column(rows[j]);
+    const std::vector<double> &c = cache.at(rows[j]);
     for (int i = 0; i < q; ++i) Y[i + static_cast<std::size_t>(j) * q] = c[rows[i]];
   }
   for (int i = 0; i < q; ++i) r[i] = -y[rows[i]];
@@ -42,7 +52,7 @@ std::vector<double> open_rows(const std::vector<double> &y, const std::vector<in
   if (lapack::getrf(q, Y.data(), q, piv.data()) != 0) throw std::runtime_error("the haptic call's reduced contact system is singular");
   lapack::getrs('N', q, 1, Y.data(), q, piv.data(), r.data(), q);
   for (int j = 0; j < q; ++j) {
-    const std::vector<double> &c = column(rows[j]);
+    const std::vector<double> &c = cache.at(rows[j]);
     for (int p = 0; p < m; ++p) lambda[p] += c[p] * r[j];
   }
   for (int i = 0; i < q; ++i) lambda[rows[i]] = 0;
@@ -52,19 +62,14 @@ std::vector<double> open_rows(const std::vector<double> &y, const std::vector<in
 } // namespace
 
 std::vector<double> open_pulling_points(const Compliance &D, const std::vector<int> &points, int k, const std::vector<double> &y,
-                                        const std::function<void(int, double *)> &inverse_column, double tol_gap)
+                                        const std::function<void(const std::vector<int> &, double *)> &inverse_columns, double tol_gap)
 {
   const int np = static_cast<int>(points.size());
+  bool pulling = false; // the common case (a tool that presses): every point closed, no update
+  for (int a = 0; a < np && !pulling; ++a) pulling = D.point(points[a]).lead < 0 && y[static_cast<std::size_t>(k) * a] < 0;
+  if (!pulling) return y;
   const std::vector<int> lead = lead_positions(D, points);
   std::unordered_map<int, std::vector<double>> cache; // columns of A⁻¹ computed so far
-  const auto column = [&](int row) -> const std::vector<double> & {
-    auto it = cache.find(row);
-    if (it == cache.end()) {
-      it = cache.emplace(row, std::vector<double>(y.size())).first;
-      inverse_column(row, it->second.data());
-    }
-    return it->second;
-  };
   std::vector<char> open(np, 0);
   for (int pass = 0; pass <= np; ++pass) {
     std::vector<int> rows;
@@ -72,7 +77,7 @@ std::vector<double> open_pulling_points(const Compliance &D, const std::vector<i
       if (open[lead[a]])
         for (int i = 0; i < k; ++i) rows.push_back(k * a + i);
     std::vector<double> r;
-    const std::vector<double> lambda = open_rows(y, rows, column, r);
+    const std::vector<double> lambda = open_rows(y, rows, inverse_columns, cache, r);
     std::vector<double> gap(np, 0.0);
     for (std::size_t i = 0; i < rows.size(); ++i)
       if (rows[i] % k == 0) gap[rows[i] / k] = r[i]; // the normal row's residual: the open point's gap

@@ -171,8 +171,9 @@ void NormalSolver::haptic(const Compliance &D, const std::vector<Vec3> &wf, doub
   std::vector<double> y(J.size());
   for (std::size_t p = 0; p < J.size(); ++p) points[p] = m_entries->point_of[J[p]], y[p] = lambda[points[p]][0];
   const int m = static_cast<int>(J.size());
-  const auto column = [&](int q, double *out) {
-    for (int p = 0; p < m; ++p) out[p] = m_cap.inverse_entry(p, q);
+  const auto column = [&](const std::vector<int> &qs, double *out) {
+    for (std::size_t j = 0; j < qs.size(); ++j)
+      for (int p = 0; p < m; ++p) out[p + j * m] = m_cap.inverse_entry(p, qs[j]);
   };
   const std::vector<double> l = open_pulling_points(D, points, 1, y, column, tol_gap);
   for (int p = 0; p < m; ++p) lambda[points[p]][0] = l[p];

@@ -11,14 +11,14 @@
 /// problem, |C| points instead of N unknowns.
 ///
 /// Points are keyed by (dof node, partner): per candidate vertex and obstacle within reach, and
-/// per candidate vertex of a slave body and other body within reach, a point per dof node of the
-/// vertex, so a vertex may touch an obstacle and a body, or two bodies, at once. The node facing
-/// the partner leads: Signorini's and Coulomb's conditions are its; the vertex's other nodes
-/// follow its state (closed: the same gap, stuck: the same slip; their tractions of either sign),
-/// as a displacement rule reaches every node of a vertex. Per node the constraint rows stay
-/// independent: the normals (nearest partner first; an obstacle's normal parallel to a nearer
-/// obstacle's is implied and dropped), then friction tangents in the free directions left (a
-/// roller plane, a second partner's normal take theirs).
+/// per candidate vertex of a slave body and other body within reach, so a vertex may touch an
+/// obstacle and a body, or two bodies, at once. The point at the node facing the partner leads:
+/// Signorini's and Coulomb's conditions are its. The vertex's other dof nodes follow it, as a
+/// displacement rule reaches every node of a vertex: closed with it, their normal rows bound to the
+/// partner (tractions of either sign) and, with friction, their tangential rows tied to the lead's
+/// node. Per vertex the constraint rows stay independent: the normals (nearest partner first; an
+/// obstacle's normal parallel to a nearer obstacle's is implied and dropped), then friction
+/// tangents in the free directions left (a roller plane, a second partner's normal take theirs).
 ///
 /// Gap (small deformations): g = g₀ + n·(u − u_other), g₀ measured along the obstacle's normal at
 /// the point of it closest to the undeformed vertex, at the obstacle's pose. Slip, per frame (a
