@@ -6,6 +6,7 @@
 // roller across a tilted table under sticking friction against the clamped bottom; a turning
 // rough table dragging what sticks. Independent references are static dense solves
 // (DenseReference of another pattern).
+#include "hand_problem.hpp"
 #include "solve_helpers.hpp"
 
 #include "hssbem/contact/contact_engine.hpp"
@@ -450,42 +451,6 @@ TEST(Contact, ContactSceneApiDrivesFrames)
 
 namespace {
 
-/// A cube problem set up by hand on any mesh (the cube turned, say): per dof node, which
-/// components are prescribed and their values; the dense reference of that pattern.
-struct HandCase {
-  SurfaceMesh mesh;
-  std::unique_ptr<Discretization> disc;
-  std::unique_ptr<BemOperator> op;
-  SystemSelection sel;
-  explicit HandCase(SurfaceMesh m) : mesh(std::move(m))
-  {
-    disc = std::make_unique<Discretization>(mesh, 40.0);
-    op = std::make_unique<BemOperator>(*disc, Material{E, nu});
-    sel = SystemSelection{std::vector<std::array<bool, 3>>(disc->num_nodes(), {false, false, false}), std::vector<Vec3>(disc->num_nodes(), Vec3{0, 0, 0}), {}};
-  }
-  /// Prescribes component c of every node of the vertices `where` selects to `value(x)`.
-  void hold(const std::function<bool(int)> &where, int c, const std::function<double(const Vec3 &)> &value)
-  {
-    for (int i = 0; i < disc->num_nodes(); ++i)
-      if (where(disc->node(i).vertex)) sel.displacement_known[i][c] = true, sel.known[i][c] = value(mesh.vertices[disc->node(i).vertex]);
-  }
-  std::vector<char> pattern() const
-  {
-    std::vector<char> p(3 * sel.known.size());
-    for (std::size_t i = 0; i < sel.known.size(); ++i)
-      for (int c = 0; c < 3; ++c) p[3 * i + c] = sel.displacement_known[i][c];
-    return p;
-  }
-  /// The static answer of the hand-set pattern and values.
-  NodalSolution statics() const
-  {
-    const DenseReference ref(*op, pattern());
-    std::vector<double> x;
-    ref.free_response(sel, x);
-    return split_unknowns(sel, x);
-  }
-};
-
 Mat3 turn_about_y(double deg)
 {
   const double a = deg * M_PI / 180, c = std::cos(a), s = std::sin(a);
@@ -536,8 +501,8 @@ TEST(Contact, ARollerAcrossATiltedTableKeepsContactInItsFreeDirections)
   const auto top = [&](int v) { return x0[v][2] > 1 - 1e-12; };
   const auto bottom = [&](int v) { return x0[v][2] < 1e-12; };
   const Vec3 push = times(R, {0, 0, -delta});
-  HandCase contact(mesh), clamped(mesh);
-  for (HandCase *h : {&contact, &clamped})
+  HandProblem contact(mesh, Material{E, nu}), clamped(mesh, Material{E, nu});
+  for (HandProblem *h : {&contact, &clamped})
     for (int c = 0; c < 3; ++c) h->hold(top, c, [&](const Vec3 &) { return push[c]; });
   contact.hold(bottom, 0, [](const Vec3 &) { return 0.0; });
   for (int c = 0; c < 3; ++c) clamped.hold(bottom, c, [](const Vec3 &) { return 0.0; });
