@@ -131,12 +131,12 @@ PointState classify(const ContactPoint &p, const std::array<bool, 3> &held, cons
 }
 
 /// A follower is closed with its lead and open with it: closed, its rows are w = 0 (its normal row
-/// bound to the partner, its tie rows to the anchor's node; tractions of either sign), open λ = 0.
-PointState classify_follower(const std::array<bool, 3> &held, const Vec3 &lambda, const Vec3 &w, double rho, std::int8_t anchor_kind)
+/// bound to the partner, its tie rows to the lead's node; tractions of either sign), open λ = 0.
+PointState classify_follower(const std::array<bool, 3> &held, const Vec3 &lambda, const Vec3 &w, double rho, std::int8_t lead_kind)
 {
   PointState s;
   s.rho = rho;
-  s.kind = anchor_kind ? 1 : 0;
+  s.kind = lead_kind ? 1 : 0;
   s.phi = s.kind ? w : lambda;
   for (int k = 1; k < 3 && s.kind; ++k)
     if (held[k]) s.phi[k] = lambda[k];
