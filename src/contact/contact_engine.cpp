@@ -23,13 +23,7 @@ using contact_detail::Geometry;
 
 namespace {
 
-double mesh_size(const SurfaceMesh &m)
-{
-  Vec3 lo = m.vertices.at(0), hi = lo;
-  for (const Vec3 &v : m.vertices)
-    for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], v[d]), hi[d] = std::max(hi[d], v[d]);
-  return norm(hi - lo);
-}
+double mesh_size(const SurfaceMesh &m) { return Box::of(m.vertices).diagonal(); }
 
 /// The candidates: vertices the settings allow, used by a triangle, not held in all three
 /// components at every dof node.

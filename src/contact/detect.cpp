@@ -290,9 +290,9 @@ std::uint64_t spread(std::uint64_t x)
 std::vector<int> spatial_row_order(const Discretization &disc)
 {
   const int nn = disc.num_nodes();
-  Vec3 lo = disc.node_position(0), hi = lo;
-  for (int i = 0; i < nn; ++i)
-    for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], disc.node_position(i)[d]), hi[d] = std::max(hi[d], disc.node_position(i)[d]);
+  Box box;
+  for (int i = 0; i < nn; ++i) box.add(disc.node_position(i));
+  const Vec3 &lo = box.lo, &hi = box.hi;
   std::vector<std::pair<std::uint64_t, int>> key(nn);
   for (int i = 0; i < nn; ++i) {
     std::uint64_t code = 0;

@@ -45,27 +45,6 @@ double corner_angle(const Vec3 &a, const Vec3 &b, const Vec3 &c)
 
 } // namespace
 
-Obstacle Obstacle::plane(std::string name, const Vec3 &point, const Vec3 &normal)
-{
-  Obstacle o;
-  o.name = std::move(name), o.shape = Shape::Plane, o.point = point, o.normal = normal;
-  return o;
-}
-
-Obstacle Obstacle::sphere(std::string name, const Vec3 &center, double radius)
-{
-  Obstacle o;
-  o.name = std::move(name), o.shape = Shape::Sphere, o.center = center, o.radius = radius;
-  return o;
-}
-
-Obstacle Obstacle::mesh(std::string name, const SurfaceMesh &mesh)
-{
-  Obstacle o;
-  o.name = std::move(name), o.shape = Shape::Mesh, o.vertices = mesh.vertices, o.triangles = mesh.triangles;
-  return o;
-}
-
 ObstacleGeometry::ObstacleGeometry(Obstacle o, double depth) : m_o(std::move(o)), m_depth(depth)
 {
   if (m_o.name.empty()) refuse(m_o, "an obstacle needs a name");
@@ -135,10 +114,7 @@ double ObstacleGeometry::size() const
 {
   if (m_o.shape == Obstacle::Shape::Sphere) return m_o.radius;
   if (m_o.shape == Obstacle::Shape::Plane) return 0;
-  Vec3 lo = m_o.vertices[0], hi = lo;
-  for (const Vec3 &v : m_o.vertices)
-    for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], v[d]), hi[d] = std::max(hi[d], v[d]);
-  return norm(hi - lo);
+  return Box::of(m_o.vertices).diagonal();
 }
 
 Pose Pose::translation(const Vec3 &t)

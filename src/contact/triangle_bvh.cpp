@@ -1,5 +1,5 @@
-// Closest points on triangles (Ericson, Real-Time Collision Detection, 5.1.5) and a small
-// bounding-volume hierarchy over them (triangle_bvh.hpp).
+// A small bounding-volume hierarchy over triangles (triangle_bvh.hpp); the closest point on one
+// triangle is core/geometry.hpp's.
 #include "hssbem/contact/triangle_bvh.hpp"
 
 #include <algorithm>
@@ -13,48 +13,7 @@ namespace {
 
 constexpr int k_leaf = 4; // triangles per leaf
 
-TriangleHit hit_at(const Vec3 &x, const Vec3 &a, const Vec3 &b, const Vec3 &c, double u, double v, double w, bool interior)
-{
-  TriangleHit h;
-  h.bary = {u, v, w};
-  h.point = u * a + v * b + w * c;
-  h.distance = norm(x - h.point);
-  h.interior = interior;
-  return h;
-}
-
 } // namespace
-
-TriangleHit closest_point_on_triangle(const Vec3 &x, const Vec3 &a, const Vec3 &b, const Vec3 &c)
-{
-  const Vec3 ab = b - a, ac = c - a, ap = x - a;
-  const double d1 = dot(ab, ap), d2 = dot(ac, ap);
-  if (d1 <= 0 && d2 <= 0) return hit_at(x, a, b, c, 1, 0, 0, false);
-  const Vec3 bp = x - b;
-  const double d3 = dot(ab, bp), d4 = dot(ac, bp);
-  if (d3 >= 0 && d4 <= d3) return hit_at(x, a, b, c, 0, 1, 0, false);
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) {
-    const double v = d1 / (d1 - d3);
-    return hit_at(x, a, b, c, 1 - v, v, 0, false);
-  }
-  const Vec3 cp = x - c;
-  const double d5 = dot(ab, cp), d6 = dot(ac, cp);
-  if (d6 >= 0 && d5 <= d6) return hit_at(x, a, b, c, 0, 0, 1, false);
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) {
-    const double w = d2 / (d2 - d6);
-    return hit_at(x, a, b, c, 1 - w, 0, w, false);
-  }
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
-    const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-    return hit_at(x, a, b, c, 0, 1 - w, w, false);
-  }
-  const double denom = 1.0 / (va + vb + vc);
-  const double v = vb * denom, w = vc * denom;
-  return hit_at(x, a, b, c, 1 - v - w, v, w, true);
-}
 
 TriangleBvh::TriangleBvh(const std::vector<Vec3> &vertices, const std::vector<std::array<int, 3>> &triangles, const std::vector<int> &subset)
 {
@@ -77,10 +36,10 @@ int TriangleBvh::build(int begin, int end)
 {
   const int self = static_cast<int>(m_nodes.size());
   m_nodes.emplace_back();
-  Vec3 lo = m_corners[begin][0], hi = lo;
+  Box box;
   for (int i = begin; i < end; ++i)
-    for (const Vec3 &p : m_corners[i])
-      for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], p[d]), hi[d] = std::max(hi[d], p[d]);
+    for (const Vec3 &p : m_corners[i]) box.add(p);
+  const Vec3 &lo = box.lo, &hi = box.hi;
   m_nodes[self].lo = lo, m_nodes[self].hi = hi;
   if (end - begin <= k_leaf) {
     m_nodes[self].first = begin, m_nodes[self].count = end - begin;
@@ -133,11 +92,11 @@ TriangleHit TriangleBvh::closest(const Vec3 &x, double max_distance) const
       continue;
     }
     for (int i = n.first; i < n.first + n.count; ++i) {
-      TriangleHit h = closest_point_on_triangle(x, m_corners[i][0], m_corners[i][1], m_corners[i][2]);
-      if (h.distance * h.distance <= bound2 && h.distance < best.distance) {
-        h.triangle = m_tri[i];
-        best = h;
-        bound2 = h.distance * h.distance;
+      const TrianglePoint q = closest_point_on_triangle(x, m_corners[i][0], m_corners[i][1], m_corners[i][2]);
+      const double d = norm(x - q.point);
+      if (d * d <= bound2 && d < best.distance) {
+        best = {m_tri[i], q.point, q.bary, d, q.interior};
+        bound2 = d * d;
       }
     }
   }

@@ -4,7 +4,6 @@
 #include "hssbem/mesh/mesh.hpp"
 #include "hssbem/mesh/surface_intersection.hpp"
 
-#include "bounding_box.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -51,7 +50,6 @@ struct TripleHash {
   }
 };
 
-using detail::Box;
 
 std::string triple(const std::array<int, 3> &t)
 {

@@ -4,7 +4,6 @@
 /// with each triangle's box; candidate pairs go to triangles_cross().
 #include "hssbem/mesh/surface_intersection.hpp"
 
-#include "bounding_box.hpp"
 #include "triangle_crossing.hpp"
 
 #include <algorithm>
@@ -17,7 +16,6 @@ namespace hssbem {
 
 namespace {
 
-using detail::Box;
 
 detail::Triangle corners(const SurfaceMesh &m, int t)
 {

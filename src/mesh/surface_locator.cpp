@@ -42,43 +42,9 @@ ClusterTreeOptions small_leaves()
 
 } // namespace
 
-Vec3 closest_point_on_triangle(const Vec3 &x, const Vec3 &a, const Vec3 &b, const Vec3 &c, Vec3 &bary)
-{
-  // Ericson, Real-Time Collision Detection §5.1.5: the Voronoi regions of corners, edges, face.
-  const Vec3 ab = b - a, ac = c - a, ap = x - a;
-  const double d1 = dot(ab, ap), d2 = dot(ac, ap);
-  if (d1 <= 0 && d2 <= 0) return bary = {1, 0, 0}, a;
-  const Vec3 bp = x - b;
-  const double d3 = dot(ab, bp), d4 = dot(ac, bp);
-  if (d3 >= 0 && d4 <= d3) return bary = {0, 1, 0}, b;
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) {
-    const double v = d1 / (d1 - d3);
-    return bary = {1 - v, v, 0}, a + v * ab;
-  }
-  const Vec3 cp = x - c;
-  const double d5 = dot(ab, cp), d6 = dot(ac, cp);
-  if (d6 >= 0 && d5 <= d6) return bary = {0, 0, 1}, c;
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) {
-    const double w = d2 / (d2 - d6);
-    return bary = {1 - w, 0, w}, a + w * ac;
-  }
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
-    const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-    return bary = {0, 1 - w, w}, b + w * (c - b);
-  }
-  const double denom = 1.0 / (va + vb + vc), v = vb * denom, w = vc * denom;
-  return bary = {1 - v - w, v, w}, a + v * ab + w * ac;
-}
-
 SurfaceLocator::SurfaceLocator(const SurfaceMesh &mesh) : m_mesh(&mesh), m_tree(centroids(mesh), small_leaves())
 {
-  Vec3 lo = mesh.vertices.empty() ? Vec3{} : mesh.vertices[0], hi = lo;
-  for (const auto &v : mesh.vertices)
-    for (int c = 0; c < 3; ++c) lo[c] = std::min(lo[c], v[c]), hi[c] = std::max(hi[c], v[c]);
-  m_size = norm(hi - lo);
+  m_size = Box::of(mesh.vertices).diagonal();
   m_ball.resize(m_tree.num_clusters());
   const std::vector<int> &perm = m_tree.perm();
   for (int k = 0; k < m_tree.num_clusters(); ++k) {
@@ -122,10 +88,9 @@ void SurfaceLocator::nearest_in(int c, const Vec3 &x, Nearest &best) const
     for (int p = cl.begin; p < cl.end; ++p) {
       const int t = m_tree.perm()[p];
       const auto &v = m_mesh->triangles[t];
-      Vec3 bary;
-      const Vec3 q = closest_point_on_triangle(x, m_mesh->vertices[v[0]], m_mesh->vertices[v[1]], m_mesh->vertices[v[2]], bary);
-      const double d = norm(x - q);
-      if (d < best.distance) best = {t, q, bary, d};
+      const TrianglePoint q = closest_point_on_triangle(x, m_mesh->vertices[v[0]], m_mesh->vertices[v[1]], m_mesh->vertices[v[2]]);
+      const double d = norm(x - q.point);
+      if (d < best.distance) best = {t, q.point, q.bary, d};
     }
     return;
   }

@@ -5,7 +5,6 @@
 #include "hssbem/mesh/surface_intersection.hpp"
 #include "hssbem/mesh/surface_locator.hpp"
 
-#include "bounding_box.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -15,7 +14,6 @@ namespace hssbem {
 
 namespace {
 
-using detail::Box;
 
 /// One surface: its triangles, vertices, box, and (built when another surface's box meets it)
 /// its locator over its own sub-mesh.

@@ -39,15 +39,7 @@ struct MeshView {
 /// a box face or sphere should still be selected, so bounds get a slack relative to the mesh size.
 double geometric_tolerance(const SurfaceMesh &mesh)
 {
-  if (mesh.vertices.empty())
-    return 0;
-  Vec3 lo = mesh.vertices.front(), hi = lo;
-  for (const Vec3 &p : mesh.vertices)
-    for (int c = 0; c < 3; ++c) {
-      lo[c] = std::min(lo[c], p[c]);
-      hi[c] = std::max(hi[c], p[c]);
-    }
-  return 1e-10 * norm(hi - lo);
+  return 1e-10 * Box::of(mesh.vertices).diagonal();
 }
 
 MeshView make_view(const SurfaceMesh &mesh)

@@ -500,24 +500,24 @@ double read_friction(const json &j, const Where &w)
   return mu;
 }
 
-void read_plane(const json &j, const Where &w, ObstacleSpec &o)
+void read_plane(const json &j, const Where &w, Obstacle &o)
 {
   check_keys(j, w, {"point", "normal"});
   if (!j.contains("point") || !j.contains("normal"))
     w.fail("expected {\"point\": [x, y, z], \"normal\": [nx, ny, nz]} (the normal points toward the bodies)");
-  o.shape = ObstacleSpec::Shape::Plane;
+  o.shape = Obstacle::Shape::Plane;
   o.point = read_vec3(j["point"], w.at("point"));
   o.normal = read_vec3(j["normal"], w.at("normal"));
   if (norm(o.normal) == 0)
     w.at("normal").fail("the normal is zero");
 }
 
-void read_obstacle_sphere(const json &j, const Where &w, ObstacleSpec &o)
+void read_obstacle_sphere(const json &j, const Where &w, Obstacle &o)
 {
   check_keys(j, w, {"center", "radius"});
   if (!j.contains("center") || !j.contains("radius"))
     w.fail("expected {\"center\": [x, y, z], \"radius\": r}");
-  o.shape = ObstacleSpec::Shape::Sphere;
+  o.shape = Obstacle::Shape::Sphere;
   o.center = read_vec3(j["center"], w.at("center"));
   o.radius = read_number(j["radius"], w.at("radius"));
   if (!(o.radius > 0))
@@ -538,12 +538,12 @@ std::string read_obstacle_name(const json &j, const Where &w)
   return name;
 }
 
-ObstacleSpec read_obstacle(const json &j, const Where &w, const std::string &origin)
+Obstacle read_obstacle(const json &j, const Where &w, const std::string &origin)
 {
   check_keys(j, w, {"name", "plane", "sphere", "mesh", "friction"});
   if (!j.contains("name"))
     w.fail("missing 'name' (frames move an obstacle by its name)");
-  ObstacleSpec o;
+  Obstacle o;
   o.name = read_obstacle_name(j["name"], w.at("name"));
   const int shapes = int(j.contains("plane")) + int(j.contains("sphere")) + int(j.contains("mesh"));
   if (shapes != 1)
@@ -553,7 +553,7 @@ ObstacleSpec read_obstacle(const json &j, const Where &w, const std::string &ori
   else if (j.contains("sphere"))
     read_obstacle_sphere(j["sphere"], w.at("sphere"), o);
   else {
-    o.shape = ObstacleSpec::Shape::Mesh;
+    o.shape = Obstacle::Shape::Mesh;
     o.mesh_path = resolve_mesh_path(read_string(j["mesh"], w.at("mesh")), origin);
   }
   if (j.contains("friction"))
@@ -561,11 +561,11 @@ ObstacleSpec read_obstacle(const json &j, const Where &w, const std::string &ori
   return o;
 }
 
-std::vector<ObstacleSpec> read_obstacles(const json &j, const Where &w, const std::string &origin)
+std::vector<Obstacle> read_obstacles(const json &j, const Where &w, const std::string &origin)
 {
   if (!j.is_array())
     w.fail(std::string("expected a list of obstacles, got ") + j.type_name());
-  std::vector<ObstacleSpec> list;
+  std::vector<Obstacle> list;
   for (std::size_t i = 0; i < j.size(); ++i) {
     list.push_back(read_obstacle(j[i], w.at(i), origin));
     for (std::size_t k = 0; k + 1 < list.size(); ++k)
@@ -611,12 +611,12 @@ ContactSpec read_contact(const json &j, const Where &w, const std::string &origi
 void check_frame_obstacles(const ProblemSpec &spec, const Where &top)
 {
   std::string known;
-  for (const ObstacleSpec &o : spec.contact.obstacles)
+  for (const Obstacle &o : spec.contact.obstacles)
     known += (known.empty() ? "" : ", ") + o.name;
   for (std::size_t f = 0; f < spec.frames.size(); ++f)
     for (const auto &entry : spec.frames[f].obstacles) {
       const std::string &name  = entry.first; // not a structured binding: clang 14 (the fuzzers' compiler) cannot capture one
-      const bool         found = std::any_of(spec.contact.obstacles.begin(), spec.contact.obstacles.end(), [&](const ObstacleSpec &o) { return o.name == name; });
+      const bool         found = std::any_of(spec.contact.obstacles.begin(), spec.contact.obstacles.end(), [&](const Obstacle &o) { return o.name == name; });
       if (!found)
         top.at("frames").at(f).at("obstacles").fail("no obstacle named '" + name + "' (" + (known.empty() ? "the problem has no contact obstacles" : "known: " + known) + ")");
     }

@@ -99,10 +99,12 @@ ProblemSetup setup_problem(ProblemSpec spec, const ProblemOverrides &o)
   s.selection = selection_of(nc);
   s.vertex_displacement_prescribed = vertex_displacement_prescribed(*s.disc, nc);
   for (std::size_t i = 0; i < s.spec.contact.obstacles.size(); ++i) { // an unreadable obstacle mesh ends the run before any work
-    const ObstacleSpec &o = s.spec.contact.obstacles[i];
+    Obstacle &o = s.spec.contact.obstacles[i];
+    if (o.shape != Obstacle::Shape::Mesh) continue;
     try {
-      s.obstacle_meshes.push_back(o.shape == ObstacleSpec::Shape::Mesh ? read_mesh(o.mesh_path) : SurfaceMesh{});
-      if (o.shape == ObstacleSpec::Shape::Mesh) s.input_files.push_back(o.mesh_path); // the result may not replace it either
+      SurfaceMesh m = read_mesh(o.mesh_path);
+      o.vertices = std::move(m.vertices), o.triangles = std::move(m.triangles);
+      s.input_files.push_back(o.mesh_path); // the result may not replace it either
     } catch (const MeshError &e) {
       throw MeshError(s.spec.file + ": contact.obstacles[" + std::to_string(i) + "].mesh: " + e.what());
     }

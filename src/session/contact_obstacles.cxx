@@ -58,10 +58,9 @@ ContactObstacles::ContactObstacles(const ProblemSetup &s, const std::vector<Obst
     m_candidates.push_back(s.mesh->vertices[v]);
     m_candidate_normals.push_back(normals[v]);
   }
-  Vec3 lo = s.mesh->vertices.empty() ? Vec3{} : s.mesh->vertices[0], hi = lo;
-  for (const Vec3 &p : s.mesh->vertices)
-    for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], p[d]), hi[d] = std::max(hi[d], p[d]);
-  m_reach = reach > 0 ? reach : 0.05 * norm(hi - lo); // the engine's default (ContactOptions::reach)
+  const Box box = Box::of(s.mesh->vertices);
+  const Vec3 lo = box.lo, hi = box.hi;
+  m_reach = reach > 0 ? reach : 0.05 * box.diagonal(); // the engine's default (ContactOptions::reach)
   m_depth = depth > 0 ? depth : m_reach;
   for (const Obstacle &o : obstacles) {
     m_geometry.emplace_back(o, m_depth);

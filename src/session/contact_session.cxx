@@ -19,28 +19,16 @@ namespace hssbem {
 
 namespace {
 
-Obstacle obstacle_of(const ObstacleSpec &o, const SurfaceMesh &mesh)
-{
-  Obstacle ob;
-  switch (o.shape) {
-  case ObstacleSpec::Shape::Plane: ob = Obstacle::plane(o.name, o.point, o.normal); break;
-  case ObstacleSpec::Shape::Sphere: ob = Obstacle::sphere(o.name, o.center, o.radius); break;
-  case ObstacleSpec::Shape::Mesh: ob = Obstacle::mesh(o.name, mesh); break;
-  }
-  ob.friction = o.friction;
-  return ob;
-}
-
 /// The obstacles, checked (a degenerate triangle of an obstacle mesh, say) with the file named.
 std::vector<Obstacle> obstacles_of(const ProblemSetup &s)
 {
   std::vector<Obstacle> list;
   for (std::size_t i = 0; i < s.spec.contact.obstacles.size(); ++i) {
-    list.push_back(obstacle_of(s.spec.contact.obstacles[i], s.obstacle_meshes[i]));
+    list.push_back(s.spec.contact.obstacles[i]);
     try {
       const ObstacleGeometry check(list.back());
     } catch (const std::invalid_argument &e) {
-      const std::string where = s.spec.contact.obstacles[i].shape == ObstacleSpec::Shape::Mesh ? " (" + s.spec.contact.obstacles[i].mesh_path + ")" : "";
+      const std::string where = list.back().shape == Obstacle::Shape::Mesh ? " (" + list.back().mesh_path + ")" : "";
       throw ProblemError(s.spec.file + ": contact.obstacles[" + std::to_string(i) + "]" + where + ": " + e.what());
     }
   }

@@ -97,7 +97,7 @@ TEST(ContactGeometry, ClosestPointsMatchBruteForce)
   for (int q = 0; q < 200; ++q) {
     const Vec3 x{u(gen), u(gen), u(gen)};
     double best = INFINITY;
-    for (const auto &t : m.triangles) best = std::min(best, closest_point_on_triangle(x, m.vertices[t[0]], m.vertices[t[1]], m.vertices[t[2]]).distance);
+    for (const auto &t : m.triangles) best = std::min(best, norm(x - closest_point_on_triangle(x, m.vertices[t[0]], m.vertices[t[1]], m.vertices[t[2]]).point));
     const TriangleHit h = bvh.closest(x);
     ASSERT_GE(h.triangle, 0);
     EXPECT_NEAR(h.distance, best, 1e-12);
@@ -453,7 +453,7 @@ TEST(ContactProblemFile, KeysFramesAndErrors)
                                          "dir/p.json");
   ASSERT_TRUE(spec.contact.present);
   ASSERT_EQ(spec.contact.obstacles.size(), 3u);
-  EXPECT_EQ(spec.contact.obstacles[1].shape, ObstacleSpec::Shape::Sphere);
+  EXPECT_EQ(spec.contact.obstacles[1].shape, Obstacle::Shape::Sphere);
   EXPECT_EQ(spec.contact.obstacles[1].friction, 0.5);
   EXPECT_TRUE(std::isnan(spec.contact.obstacles[0].friction));
   EXPECT_EQ(spec.contact.obstacles[2].mesh_path, "dir/wall.off");

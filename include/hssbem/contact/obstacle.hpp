@@ -23,6 +23,7 @@
 #pragma once
 
 #include "hssbem/mesh/mesh.hpp"
+#include "hssbem/mesh/obstacle_shape.hpp"
 #include "hssbem/contact/triangle_bvh.hpp"
 
 #include <cmath>
@@ -31,23 +32,6 @@
 #include <vector>
 
 namespace hssbem {
-
-struct Obstacle {
-  enum class Shape { Plane, Sphere, Mesh };
-  std::string name;
-  Shape shape = Shape::Plane;
-  Vec3 point{}, normal{};                  ///< plane: a point on it, its normal toward the bodies (any length but 0)
-  Vec3 center{};                           ///< sphere: centre and radius (the bodies are outside)
-  double radius = 0;
-  std::vector<Vec3> vertices;              ///< mesh: the triangles' right-hand normals face the bodies
-  std::vector<std::array<int, 3>> triangles;
-  double friction = std::numeric_limits<double>::quiet_NaN(); ///< Coulomb coefficient of this obstacle (NaN: the global one)
-
-  static Obstacle plane(std::string name, const Vec3 &point, const Vec3 &normal);
-  static Obstacle sphere(std::string name, const Vec3 &center, double radius);
-  /// A rigid mesh obstacle from a surface mesh (e.g. read_mesh()); it need not be closed.
-  static Obstacle mesh(std::string name, const SurfaceMesh &mesh);
-};
 
 /// A rigid placement of an obstacle relative to its base position: x ↦ R (x − c) + c + t, R a
 /// rotation (row-major), c the centre of the turn, t the translation. Absolute, not cumulative.

@@ -21,8 +21,6 @@ struct TriangleHit {
   bool interior = false;             ///< the point lies inside the triangle (not on an edge or corner)
 };
 
-/// The closest point of triangle (a, b, c) to x, with its barycentric coordinates.
-TriangleHit closest_point_on_triangle(const Vec3 &x, const Vec3 &a, const Vec3 &b, const Vec3 &c);
 
 class TriangleBvh {
 public:

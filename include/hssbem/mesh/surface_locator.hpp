@@ -61,7 +61,4 @@ private:
   double m_size = 0;
 };
 
-/// The point of triangle (a, b, c) nearest to x, and its barycentric coordinates.
-Vec3 closest_point_on_triangle(const Vec3 &x, const Vec3 &a, const Vec3 &b, const Vec3 &c, Vec3 &bary);
-
 } // namespace hssbem

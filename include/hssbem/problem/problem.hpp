@@ -6,6 +6,7 @@
 #include "hssbem/bem/discretization.hpp"
 #include "hssbem/bem/kelvin.hpp"
 #include "hssbem/mesh/mesh.hpp"
+#include "hssbem/mesh/obstacle_shape.hpp"
 
 #include <limits>
 #include <map>
@@ -64,22 +65,10 @@ struct FrameSpec {
   std::map<std::string, ObstacleTurn> turns;           ///< "obstacles": {"name": {"rotate": {"axis": [..], "angle": deg, "about": [..]}}}
 };
 
-/// A rigid obstacle of "contact.obstacles" as the file gives it (the mesh not yet read).
-struct ObstacleSpec {
-  enum class Shape { Plane, Sphere, Mesh };
-  std::string name;
-  Shape shape = Shape::Plane;
-  Vec3 point{}, normal{};  ///< plane: {"point": [..], "normal": [..]}; the normal points toward the bodies
-  Vec3 center{};           ///< sphere: {"center": [..], "radius": r}
-  double radius = 0;
-  std::string mesh_path;   ///< mesh: path of a triangulated surface, resolved relative to the problem file
-  double friction = std::numeric_limits<double>::quiet_NaN(); ///< "friction" of this obstacle (NaN: the global one)
-};
-
 /// "contact": contact as physics (contact/): rigid obstacles, contact between the mesh's bodies.
 struct ContactSpec {
   bool present = false;                  ///< the problem file has a "contact" object
-  std::vector<ObstacleSpec> obstacles;   ///< "obstacles" (default none)
+  std::vector<Obstacle> obstacles;       ///< "obstacles" (default none; a mesh obstacle's triangles read by the set-up, setup.hpp)
   double friction = 0;                   ///< "friction": Coulomb coefficient of every pair (0: frictionless)
   bool bodies = false;                   ///< "bodies": contact between the mesh's separate bodies too
   std::optional<Selector> where;         ///< "where": candidate vertices (default all)

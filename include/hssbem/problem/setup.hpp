@@ -35,8 +35,6 @@ struct ProblemSetup {
   std::string output;
   /// The files the run reads (the problem file, the mesh): the result may not replace any of them.
   std::vector<std::string> input_files;
-  /// Per obstacle of spec.contact, its mesh as read (mesh obstacles; empty for the others).
-  std::vector<SurfaceMesh> obstacle_meshes;
 };
 
 /// Read, validate and prepare. A scene (frames) is validated whole here, before any frame is
