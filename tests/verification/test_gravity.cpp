@@ -175,11 +175,11 @@ TEST(Gravity, AColumnUnderItsOwnWeightCarriedOnItsBase)
     EXPECT_NEAR(base[2], rho * g * H, 1e-9 * weight_stress);
     EXPECT_NEAR(total[2], rho * g * H, 1e-9 * weight_stress);
     EXPECT_NEAR(std::hypot(total[0], total[1]), 0, 1e-9 * weight_stress);
-    std::printf("column, %d x %d x %d squares: displacement %.3e; largest stress error / (rho g H): surface %.3e (off the edges %.3e), interior %.3e\n", n[l], n[l],
+    PetscPrintf(PETSC_COMM_WORLD, "column, %d x %d x %d squares: displacement %.3e; largest stress error / (rho g H): surface %.3e (off the edges %.3e), interior %.3e\n", n[l], n[l],
                 3 * n[l], disp[l], surface[l], off_edges[l], inside[l]);
   }
   const double order_disp = std::log2(disp[0] / disp[1]), order_surface = std::log2(surface[0] / surface[1]), order_inside = std::log2(inside[0] / inside[1]);
-  std::printf("column: observed order displacement %.2f, surface stress %.2f, interior stress %.2f\n", order_disp, order_surface, order_inside);
+  PetscPrintf(PETSC_COMM_WORLD, "column: observed order displacement %.2f, surface stress %.2f, interior stress %.2f\n", order_disp, order_surface, order_inside);
   EXPECT_LE(inside[1], 1.5e-3); // the 1e-2 inside, with margin over the measured 4.2e-4
   EXPECT_GE(order_inside, 1.6);
   EXPECT_LE(disp[1], 3e-3);
@@ -202,7 +202,7 @@ TEST(Gravity, AClampedColumnsBaseCarriesItsWeight)
   EXPECT_EQ(r.attributes_int.at("pure_traction"), 0);
   const Vec3 weight = rho * H * Vec3{3, 0, -10}, total = r.reactions.at("total");
   const double e = norm(total + weight) / norm(weight);
-  std::printf("clamped column: reaction (%.4f, %.4f, %.4f), weight (%.1f, %.1f, %.1f), relative error %.2e\n", total[0], total[1], total[2], weight[0], weight[1],
+  PetscPrintf(PETSC_COMM_WORLD, "clamped column: reaction (%.4f, %.4f, %.4f), weight (%.1f, %.1f, %.1f), relative error %.2e\n", total[0], total[1], total[2], weight[0], weight[1],
               weight[2], e);
   EXPECT_LE(e, 2e-2);
   EXPECT_NEAR(r.attributes_real.at("density"), rho, 0);
@@ -234,7 +234,7 @@ TEST(Gravity, AScenesFramesTurnTheGravity)
       du = std::max(du, norm(frame.displacement[v] - r.displacement[v])), umax = std::max(umax, norm(r.displacement[v]));
       for (int k = 0; k < 6; ++k) dsig = std::max(dsig, std::abs(frame.stress.stress[v][k] - r.stress.stress[v][k])), smax = std::max(smax, std::abs(r.stress.stress[v][k]));
     }
-    std::printf("scene frame %zu, gravity %s: displacement %.2e, stress %.2e of the static solve's\n", f, gravity[f], du / umax, dsig / smax);
+    PetscPrintf(PETSC_COMM_WORLD, "scene frame %d, gravity %s: displacement %.2e, stress %.2e of the static solve's\n", static_cast<int>(f), gravity[f], du / umax, dsig / smax);
     EXPECT_LE(du, 1e-9 * umax);
     EXPECT_LE(dsig, 1e-9 * smax);
     EXPECT_GT(smax, 0.5 * rho * 10 * H); // the weight's stress is there
