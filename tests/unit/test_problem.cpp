@@ -597,7 +597,7 @@ TEST(Frames, ParseErrorsNameTheFrame)
   expect_frame_error(R"({"boundary": []})", {"problem.json: frames: expected a non-empty list of frames", "got object"});
   expect_frame_error("[]", {"problem.json: frames: expected a non-empty list of frames", "got []"});
   expect_frame_error(R"([{"boundary": []}, [1]])", {"frames[1]: expected an object, got array"});
-  expect_frame_error(R"([{"boundary": [], "time": 0.5}])", {"frames[0]: unknown key 'time' (known: boundary, obstacles)"});
+  expect_frame_error(R"([{"boundary": [], "time": 0.5}])", {"frames[0]: unknown key 'time' (known: boundary, obstacles, gravity)"});
   expect_frame_error(R"([{}])", {"frames[0]: missing 'boundary'"});
   expect_frame_error(R"([{"boundary": {}}])", {"frames[0].boundary: expected a list of rules, got object"});
   expect_frame_error(R"([{"boundary": []}, {"boundary": []}, {"boundary": []},
