@@ -209,6 +209,23 @@ TEST(Gravity, AClampedColumnsBaseCarriesItsWeight)
   EXPECT_NEAR(r.attributes_real.at("gravity_x"), 3, 0);
 }
 
+TEST(Gravity, APressureRuleCarriesTheColumnAsItsTraction)
+{
+  // The base's load as a pressure (−p n with n = −z: p = ρ g H) instead of a traction: a pressure
+  // node's homogeneous load is p − b·r over each flat triangle, the traction's t̄ − t_p at the
+  // nodes; on the flat base both are exact, so the two problems give the same fields (round-off).
+  const std::string dir = temp_dir();
+  const auto t = solved(column_problem(dir, 4, R"(, "gravity": [0, 0, -10], "boundary": [{"where": {"region": "base"}, "traction": [0, 0, 60]}])"));
+  const auto p = solved(column_problem(dir, 4, R"(, "gravity": [0, 0, -10], "boundary": [{"where": {"region": "base"}, "pressure": 60}])"));
+  const ResultData rt = t->result(), rp = p->result();
+  double d = 0;
+  for (std::size_t v = 0; v < rt.vertices.size(); ++v)
+    for (int k = 0; k < 6; ++k) d = std::max(d, std::abs(rt.stress.stress[v][k] - rp.stress.stress[v][k]));
+  PetscPrintf(PETSC_COMM_WORLD, "column carried by a pressure against a traction: stress differs by %.2e of rho g H\n", d / weight_stress);
+  EXPECT_LE(d, 1e-9 * weight_stress);
+  EXPECT_NEAR(rp.reactions.at("base")[2], rho * g * H, 1e-9 * weight_stress);
+}
+
 TEST(Gravity, AScenesFramesTurnTheGravity)
 {
   // The clamped column, the patient turned frame by frame: each frame's fields against a static
