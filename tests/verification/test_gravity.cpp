@@ -258,3 +258,17 @@ TEST(Gravity, AScenesFramesTurnTheGravity)
     EXPECT_NEAR(frame.attributes_real.at("gravity_x"), f == 0 ? -10 : 0, 0);
   }
 }
+
+TEST(Gravity, AContactProblemRefusesItInOneLine)
+{
+  const std::string dir = temp_dir();
+  const std::string file = column_problem(dir, 2, R"(, "gravity": [0, 0, -10], "contact": {"obstacles": [{"name": "table", "plane": {"point": [0, 0, 0], "normal": [0, 0, 1]}}]})");
+  try {
+    setup_problem(file, ProblemOverrides{});
+    ADD_FAILURE() << "a contact problem with gravity was accepted";
+  } catch (const ProblemError &e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find(": gravity: a contact problem does not take gravity yet"), std::string::npos) << what;
+    EXPECT_EQ(what.find('\n'), std::string::npos);
+  }
+}
