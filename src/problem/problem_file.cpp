@@ -429,9 +429,15 @@ Vec3 read_gravity(const json &j, const Where &w)
   return g;
 }
 
-/// Gravity, at the top or in a frame, needs the material's density.
+/// Gravity, at the top or in a frame, needs the material's density, and density × |gravity| must
+/// stay within the values' bound.
 void check_gravity_density(const ProblemSpec &spec, const Where &top)
 {
+  const auto weight_fits = [&](const std::optional<Vec3> &g, const Where &w) { // the body force too stays a value the solve can carry
+    if (g && spec.density) check_magnitude(*spec.density * norm(*g), w);
+  };
+  weight_fits(spec.gravity, top.at("gravity"));
+  for (std::size_t f = 0; f < spec.frames.size(); ++f) weight_fits(spec.frames[f].gravity, top.at("frames").at(f).at("gravity"));
   if (spec.density) return;
   const auto needs = [&](const Where &w) { w.fail("gravity needs the material's 'density' (mass per volume: \"material\": {\"E\": .., \"nu\": .., \"density\": ..})"); };
   if (spec.gravity) needs(top.at("gravity"));

@@ -134,6 +134,7 @@ TEST(ProblemFile, GravityFaultsAreOneLineEach)
   expect_parse_error(R"({"mesh": "m.msh", "material": {"E": 1, "nu": 0.3, "density": 1}, "gravity": [0, 0, 1e999]})", {"finite"});
   expect_parse_error(R"({"mesh": "m.msh", "material": {"E": 1, "nu": 0.3, "density": 1}, "gravity": [0, 0, "down"]})", {"gravity[2]: ", "expected a number"});
   expect_parse_error(R"({"mesh": "m.msh", "material": {"E": 1, "nu": 0.3, "density": 1e31}, "gravity": [0, 0, -9.81]})", {"material.density: ", "exceeds"});
+  expect_parse_error(R"({"mesh": "m.msh", "material": {"E": 1, "nu": 0.3, "density": 1e20}, "frames": [{"gravity": [0, 0, -1e20]}]})", {"frames[0].gravity: ", "exceeds"});
 }
 
 TEST(ProblemFile, InteriorGrid)
