@@ -8,7 +8,9 @@ file's /timings (medians). On a shared machine the CPU seconds are the compariso
   bench_drivers.py --new build/bin/hssbem --old ../base/build/bin/hssbem \\
       --case "disk20k=disk20k.json" --case "scene=scene.json;-scene_strategy;auto" --runs 5 --csv out.csv
 
-A case is NAME=PROBLEM[;ARG;ARG...]: the problem file and extra driver options. Needs h5py.
+A case is NAME=PROBLEM[;ARG;ARG...]: the problem file and extra driver options. PROBLEM may be
+NEW_PROBLEM|OLD_PROBLEM: two problem files, one per side (the same build as --new and --old then
+compares two problems, e.g. with and without gravity). Needs h5py.
 """
 import argparse
 import csv
@@ -45,9 +47,10 @@ def main():
     for case in a.case:
         name, spec = case.split("=", 1)
         problem, *extra = spec.split(";")
+        problems = dict(zip(("new", "old"), problem.split("|") if "|" in problem else (problem, problem)))
         for i in range(a.runs + 1):
             for which, driver in (("new", a.new), ("old", a.old)):
-                wall, cpu, rss, phases = run_once(driver, problem, extra, os.path.join(tmp, which + ".h5"))
+                wall, cpu, rss, phases = run_once(driver, problems[which], extra, os.path.join(tmp, which + ".h5"))
                 if i == 0:
                     continue  # the warm-up
                 rows.append({"case": name, "driver": which, "run": i, "wall_s": wall, "cpu_s": cpu, "max_rss_kb": rss,

@@ -79,6 +79,11 @@ INVALID = [
      "contact.obstacles[0]"),
     ("a sphere obstacle of radius 0", with_(["contact"], {"obstacles": [{"name": "s", "sphere": {"center": [0, 0, 0], "radius": 0}}]}),
      "contact.obstacles[0].sphere.radius"),
+    ("gravity without density", with_(["gravity"], [0, 0, -9.81]), "material", "gravity needs the material's 'density'"),
+    ("a frame's gravity without density", with_(["frames"], [{"gravity": [0, -9.81, 0]}]), "material", "frames[0].gravity: gravity needs"),
+    ("negative density", dict(with_(["material", "density"], -1.0), gravity=[0, 0, -9.81]), "material.density"),
+    ("gravity of two components", dict(with_(["material", "density"], 1000.0), gravity=[0, -9.81]), "gravity"),
+    ("a frame's gravity beyond 1e30", dict(with_(["material", "density"], 1000.0), frames=[{"gravity": [0, 0, -1e31]}]), "frames[0].gravity[2]"),
     ("a placement without translate or rotate", dict(with_(["contact"], {"obstacles": [PLANE]}), frames=[{"obstacles": {"table": {}}}]),
      "frames[0].obstacles.table"),
 ]

@@ -1,5 +1,7 @@
 #include "hssbem/post/post.hpp"
 
+#include "hssbem/bem/rigid_modes.hpp"
+
 #include <cmath>
 #include <limits>
 
@@ -16,6 +18,21 @@ NodalSolution split_unknowns(const SystemSelection &sel, const std::vector<doubl
       s.t[i][c] = sel.displacement_known[i][c] ? unknown : sel.known[i][c];
     }
   return s;
+}
+
+NodalSolution with_particular(NodalSolution h, const Discretization &disc, const UniformBodyForce &force)
+{
+  const ParticularTraces p = particular_traces(disc, force);
+  for (std::size_t i = 0; i < p.u.size(); ++i) h.u[i] = h.u[i] + p.u[i], h.t[i] = h.t[i] + p.t[i];
+  return h;
+}
+
+void remove_whole_rigid_motion(const Discretization &disc, const UniformBodyForce &force, std::vector<Vec3> &u_h)
+{
+  const ParticularTraces p = particular_traces(disc, force);
+  for (std::size_t i = 0; i < p.u.size(); ++i) u_h[i] = u_h[i] + p.u[i];
+  remove_rigid_motion(disc, u_h);
+  for (std::size_t i = 0; i < p.u.size(); ++i) u_h[i] = u_h[i] - p.u[i];
 }
 
 std::vector<Vec3> vertex_average(const Discretization &disc, const std::vector<Vec3> &nodal)

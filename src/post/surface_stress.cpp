@@ -260,6 +260,19 @@ std::vector<NodeStress> node_stresses(const Discretization &disc, const Material
   return out;
 }
 
+std::vector<NodeStress> with_particular(std::vector<NodeStress> nodes, const Discretization &disc, const UniformBodyForce &force)
+{
+  if (force.zero()) return nodes;
+  for (int i = 0; i < disc.num_nodes(); ++i) {
+    const Vec3 &x = disc.node_position(i);
+    const Voigt s = force.stress(x);
+    const Mat3 g = force.gradient(x);
+    for (int k = 0; k < 6; ++k) nodes[i].stress[k] += s[k];
+    for (int k = 0; k < 9; ++k) nodes[i].gradient[k] += g[k];
+  }
+  return nodes;
+}
+
 std::vector<Voigt> vertex_stress(const Discretization &disc, const std::vector<NodeStress> &nodes)
 {
   Voigt none;

@@ -297,7 +297,12 @@ std::optional<double> optional_number(const json &j, const char *key, const Wher
 /// Keeps the values as given: the driver validates them after command-line overrides.
 void read_material(const json &j, const Where &w, ProblemSpec &spec)
 {
-  check_keys(j, w, {"E", "nu", "lambda", "mu"});
+  check_keys(j, w, {"E", "nu", "lambda", "mu", "density"});
+  spec.density = optional_number(j, "density", w);
+  if (spec.density && *spec.density < 0)
+    w.at("density").fail("the density must be >= 0 (mass per volume), got " + j["density"].dump());
+  if (spec.density)
+    check_magnitude(*spec.density, w.at("density"));
   spec.E = optional_number(j, "E", w);
   spec.nu = optional_number(j, "nu", w);
   spec.lambda = optional_number(j, "lambda", w);
@@ -416,9 +421,33 @@ void read_interior_points(const json &j, const Where &w, ProblemSpec &spec)
     spec.interior_grid = read_grid(j["grid"], w.at("grid"));
 }
 
+/// "gravity": [gx, gy, gz], an acceleration (the body force per volume is density × gravity).
+Vec3 read_gravity(const json &j, const Where &w)
+{
+  const Vec3 g = read_vec3(j, w);
+  for (int c = 0; c < 3; ++c) check_magnitude(g[c], w.at(c));
+  return g;
+}
+
+/// Gravity, at the top or in a frame, needs the material's density, and density × |gravity| must
+/// stay within the values' bound.
+void check_gravity_density(const ProblemSpec &spec, const Where &top)
+{
+  const auto weight_fits = [&](const std::optional<Vec3> &g, const Where &w) { // the body force too stays a value the solve can carry
+    if (g && spec.density) check_magnitude(*spec.density * norm(*g), w);
+  };
+  weight_fits(spec.gravity, top.at("gravity"));
+  for (std::size_t f = 0; f < spec.frames.size(); ++f) weight_fits(spec.frames[f].gravity, top.at("frames").at(f).at("gravity"));
+  if (spec.density) return;
+  const auto needs = [&](const Where &w) { w.fail("gravity needs the material's 'density' (mass per volume: \"material\": {\"E\": .., \"nu\": .., \"density\": ..})"); };
+  if (spec.gravity) needs(top.at("gravity"));
+  for (std::size_t f = 0; f < spec.frames.size(); ++f)
+    if (spec.frames[f].gravity) needs(top.at("frames").at(f).at("gravity"));
+}
+
 void read_top_level(const json &j, const Where &w, ProblemSpec &spec)
 {
-  check_keys(j, w, {"mesh", "material", "boundary", "frames", "interior_points", "output", "contact"});
+  check_keys(j, w, {"mesh", "material", "boundary", "frames", "interior_points", "output", "contact", "gravity"});
   if (!j.contains("mesh"))
     w.fail("missing 'mesh' (path of the surface mesh, relative to the problem file)");
   if (!j.contains("material"))
@@ -427,6 +456,8 @@ void read_top_level(const json &j, const Where &w, ProblemSpec &spec)
   read_material(j["material"], w.at("material"), spec);
   if (j.contains("output"))
     spec.output = read_string(j["output"], w.at("output"));
+  if (j.contains("gravity"))
+    spec.gravity = read_gravity(j["gravity"], w.at("gravity"));
   if (j.contains("interior_points"))
     read_interior_points(j["interior_points"], w.at("interior_points"), spec);
 }
@@ -479,10 +510,12 @@ void read_frame_obstacles(const json &j, const Where &w, FrameSpec &f)
 
 FrameSpec read_frame(const json &j, const Where &w)
 {
-  check_keys(j, w, {"boundary", "obstacles"});
-  if (!j.contains("boundary") && !j.contains("obstacles"))
-    w.fail("missing 'boundary' (the frame's rules, applied after the base rules; may be []) or 'obstacles'");
+  check_keys(j, w, {"boundary", "obstacles", "gravity"});
+  if (!j.contains("boundary") && !j.contains("obstacles") && !j.contains("gravity"))
+    w.fail("missing 'boundary' (the frame's rules, applied after the base rules; may be []), 'obstacles' or 'gravity'");
   FrameSpec f;
+  if (j.contains("gravity"))
+    f.gravity = read_gravity(j["gravity"], w.at("gravity"));
   if (j.contains("boundary"))
     f.rules = read_rule_list(j["boundary"], w.at("boundary"));
   if (j.contains("obstacles"))
@@ -651,6 +684,7 @@ ProblemSpec parse_problem(const std::string &json_text, const std::string &origi
   if (j.contains("contact"))
     spec.contact = read_contact(j["contact"], top.at("contact"), spec.file);
   check_frame_obstacles(spec, top);
+  check_gravity_density(spec, top);
   return spec;
 }
 

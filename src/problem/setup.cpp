@@ -3,6 +3,7 @@
 #include "hssbem/bem/rigid_modes.hpp"
 #include "hssbem/core/fault.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <stdexcept>
 
@@ -41,7 +42,7 @@ void accept_pure_traction(ProblemSetup &s)
 {
   const auto imbalance = load_imbalance(*s.disc, s.selection.known);
   if (imbalance[0] > max_load_imbalance || imbalance[1] > max_load_imbalance)
-    throw ConstraintError(s.spec.file + ": no displacement is prescribed anywhere and the load is not balanced " +
+    throw ConstraintError(s.spec.file + ": no displacement is prescribed anywhere and the load" + (s.body_force.zero() ? "" : " (with the body force)") + " is not balanced " +
                           format("(resultant force %.2g, moment %.2g of the total load); prescribe displacements to hold the body", imbalance[0], imbalance[1]));
   s.pure_traction = true;
   s.notices.push_back("no displacement is prescribed: pure traction problem; rigid motions are regularised and removed from the result");
@@ -58,7 +59,41 @@ void handle_rigid_modes(ProblemSetup &s)
                         "); prescribe displacements that fix all six rigid motions, or none at all for a balanced pure-traction problem");
 }
 
+/// The centroid of the vertices the triangles use: the particular solution's origin.
+Vec3 vertex_centroid(const SurfaceMesh &mesh)
+{
+  std::vector<char> used(mesh.vertices.size(), 0);
+  for (const auto &t : mesh.triangles)
+    for (int v : t) used[v] = 1;
+  Vec3 sum{0, 0, 0};
+  double count = 0;
+  for (std::size_t v = 0; v < used.size(); ++v)
+    if (used[v]) sum = sum + mesh.vertices[v], count += 1;
+  return count > 0 ? (1.0 / count) * sum : sum;
+}
+
+UniformBodyForce body_force_of(const ProblemSetup &s, const std::optional<Vec3> &gravity)
+{
+  if (!gravity || !s.spec.density) return UniformBodyForce(s.material, {0, 0, 0}, vertex_centroid(*s.mesh));
+  return UniformBodyForce(s.material, *s.spec.density * *gravity, vertex_centroid(*s.mesh));
+}
+
+/// Contact does not take a body force yet: refused before any work.
+void refuse_gravity_with_contact(const ProblemSpec &spec)
+{
+  if (!spec.contact.present) return;
+  const bool any = spec.gravity || std::any_of(spec.frames.begin(), spec.frames.end(), [](const FrameSpec &f) { return f.gravity.has_value(); });
+  if (any) throw ProblemError(spec.file + ": gravity: a contact problem does not take gravity yet (static solves and scenes do)");
+}
+
 } // namespace
+
+UniformBodyForce frame_body_force(const ProblemSetup &s, std::size_t frame)
+{
+  const FrameSpec &f = s.spec.frames.at(frame);
+  if (!f.gravity) return s.body_force;
+  return body_force_of(s, f.gravity);
+}
 
 void check_every_frame(const ProblemSetup &s)
 {
@@ -95,8 +130,10 @@ ProblemSetup setup_problem(ProblemSpec spec, const ProblemOverrides &o)
   s.mesh = std::make_unique<SurfaceMesh>(read_mesh(fault_path("MeshRead", s.spec.mesh_path)));
   validate_and_orient(*s.mesh, s.notices);
   s.disc = std::make_unique<Discretization>(*s.mesh, o.feature_angle_deg);
+  refuse_gravity_with_contact(s.spec);
+  s.body_force = body_force_of(s, s.spec.gravity);
   const NodeConditions nc = apply_rules(s.spec.rules, *s.disc, s.spec.file);
-  s.selection = selection_of(nc);
+  s.selection = homogeneous_selection(selection_of(nc), *s.disc, s.body_force);
   s.vertex_displacement_prescribed = vertex_displacement_prescribed(*s.disc, nc);
   for (std::size_t i = 0; i < s.spec.contact.obstacles.size(); ++i) { // an unreadable obstacle mesh ends the run before any work
     Obstacle &o = s.spec.contact.obstacles[i];

@@ -70,7 +70,7 @@ void ContactScene::set_obstacle_poses(const std::vector<Pose> &poses)
 const ContactFrameReport &ContactScene::solve()
 {
   const ContactFrameReport &rep = m_session->step(m_sel, m_poses);
-  SurfaceFields f = surface_fields(m_problem->setup(), NodalSolution{m_sol().u, m_sol().t}, {}, kMotion);
+  SurfaceFields f = surface_fields(m_problem->setup(), NodalSolution{m_sol().u, m_sol().t}, m_problem->setup().body_force, {}, kMotion);
   m_u = std::move(f.displacement);
   m_t = std::move(f.traction);
   return rep;

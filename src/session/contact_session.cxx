@@ -260,7 +260,7 @@ FrameData ContactSession::frame_data(unsigned parts) const
   FrameData f;
   NodeConditions nc;
   nc.displacement_prescribed = m_values.displacement_known;
-  put_fields(surface_fields(s, NodalSolution{m_sol.u, m_sol.t}, vertex_displacement_prescribed(*s.disc, nc), parts), f);
+  put_fields(surface_fields(s, NodalSolution{m_sol.u, m_sol.t}, s.body_force, vertex_displacement_prescribed(*s.disc, nc), parts), f);
   f.attributes_real = {{"seconds", m_report.seconds}};
   f.attributes_int = {{"iterations", m_report.iterations}, {"active_vertices", m_report.active_vertices}};
   f.contact = contact_data(*m_engine, m_sol, m_report, m_job.settings.bodies);
@@ -285,7 +285,7 @@ ResultData ContactSession::result(int ranks)
   NodeConditions nc;
   nc.displacement_prescribed = m_values.displacement_known;
   const NodalSolution nodal{m_sol.u, m_sol.t};
-  SurfaceFields f = surface_fields(s, nodal, vertex_displacement_prescribed(*s.disc, nc), kResultFields, &m_seconds);
+  SurfaceFields f = surface_fields(s, nodal, s.body_force, vertex_displacement_prescribed(*s.disc, nc), kResultFields, &m_seconds);
   const std::vector<NodeStress> nodes = f.nodes;
   put_fields(std::move(f), r);
   interior_fields(PETSC_COMM_SELF, s, nodal, nodes, m_options.interior, r, m_seconds); // the contact run is one rank's

@@ -45,6 +45,20 @@ struct InteriorSetup {
   std::optional<InteriorEvaluator> evaluator;
 };
 
+/// The particular solution of `force` added at every point inside (NaN outside stays NaN).
+std::vector<FieldValue> add_particular(const UniformBodyForce &force, const InteriorSetup &is, std::vector<FieldValue> v)
+{
+  if (force.zero()) return v;
+  for (std::size_t p = 0; p < v.size(); ++p) {
+    if (is.plan->kind(p) == PointKind::Outside) continue;
+    const Vec3 u = force.displacement(is.points[p]);
+    const Voigt st = force.stress(is.points[p]);
+    for (int c = 0; c < 3; ++c) v[p][c] += u[c];
+    for (int k = 0; k < 6; ++k) v[p][3 + k] += st[k];
+  }
+  return v;
+}
+
 /// The fields of the points into r: the explicit points first, then the grid.
 void store_fields(const ProblemSpec &spec, const InteriorSetup &is, const std::vector<FieldValue> &v, ResultData &r)
 {
@@ -71,28 +85,30 @@ void store_fields(const ProblemSpec &spec, const InteriorSetup &is, const std::v
 
 } // namespace
 
-SurfaceFields surface_fields(const ProblemSetup &s, const NodalSolution &sol, const std::vector<std::array<bool, 3>> &prescribed, unsigned parts,
-                             std::map<std::string, double> *seconds)
+SurfaceFields surface_fields(const ProblemSetup &s, const NodalSolution &sol, const UniformBodyForce &force, const std::vector<std::array<bool, 3>> &prescribed,
+                             unsigned parts, std::map<std::string, double> *seconds)
 {
   const Discretization &disc = *s.disc;
   SurfaceFields f;
+  const NodalSolution whole = with_particular(sol, disc, force);
   if (parts & kMotion) {
-    f.displacement = vertex_average(disc, sol.u);
-    f.traction = vertex_average(disc, sol.t);
+    f.displacement = vertex_average(disc, whole.u);
+    f.traction = vertex_average(disc, whole.t);
   }
   if (parts & kPrescribed) f.displacement_prescribed = prescribed;
   if (parts & kWhole) {
-    f.traction_corner = corner_values(disc, sol.t);
-    f.reactions = reactions(disc, sol.t);
+    f.traction_corner = corner_values(disc, whole.t);
+    f.reactions = reactions(disc, whole.t);
   }
   if (!(parts & kStress)) return f;
   const Timer timer;
   const EventScope event(BEM_Stress);
   f.nodes = node_stresses(disc, s.material, sol.u, sol.t);
-  f.stress.stress = vertex_stress(disc, f.nodes);
+  const std::vector<NodeStress> nodes = with_particular(f.nodes, disc, force);
+  f.stress.stress = vertex_stress(disc, nodes);
   f.stress.von_mises = von_mises_of(f.stress.stress);
   f.stress.principal = principal_of(f.stress.stress);
-  if (parts & kWhole) f.stress.corner = corner_stress(disc, f.nodes);
+  if (parts & kWhole) f.stress.corner = corner_stress(disc, nodes);
   if (seconds) (*seconds)["stress"] += timer.seconds();
   return f;
 }
@@ -124,6 +140,9 @@ ResultData result_base(const ProblemSetup &s, int ranks)
   r.sharp_vertex.resize(s.mesh->vertices.size());
   for (int v = 0; v < s.mesh->num_vertices(); ++v) r.sharp_vertex[v] = s.disc->node_count(v) > 1;
   r.attributes_real = {{"E", s.material.E}, {"nu", s.material.nu}, {"lambda", s.material.lambda()}, {"mu", s.material.mu()}, {"feature_angle_deg", s.disc->feature_angle_deg()}};
+  if (s.spec.density) r.attributes_real["density"] = *s.spec.density;
+  if (s.spec.gravity)
+    for (int c = 0; c < 3; ++c) r.attributes_real[std::string("gravity_") + "xyz"[c]] = (*s.spec.gravity)[c];
   r.attributes_int = {{"ranks", ranks}, {"num_dofs", 3 * s.disc->num_nodes()}, {"num_nodes", s.disc->num_nodes()}, {"num_sharp_vertices", s.disc->num_sharp_vertices()}};
   char petsc_version[128];
   HssbemCallThrow(PetscGetVersion(petsc_version, sizeof(petsc_version)));
@@ -203,7 +222,7 @@ void interior_fields(MPI_Comm comm, const ProblemSetup &s, const NodalSolution &
     std::vector<std::array<Vec3, 3>> corner_u(mesh.triangles.size());
     for (int e = 0; e < mesh.num_triangles(); ++e)
       for (int c = 0; c < 3; ++c) corner_u[e][c] = sol.u[s.disc->element_node(e, c)];
-    store_fields(s.spec, is, is.plan->finish(values, corner_u, corner_stress(*s.disc, nodes)), r);
+    store_fields(s.spec, is, add_particular(s.body_force, is, is.plan->finish(values, corner_u, corner_stress(*s.disc, nodes))), r);
   });
   seconds["interior"] += timer.seconds();
 }

@@ -71,7 +71,7 @@ SystemSelection Scene::selection() const { return node_selection(m_problem->disc
 const SceneFrameReport &Scene::solve()
 {
   const SceneFrameReport &rep = m_session->step(selection());
-  SurfaceFields f = surface_fields(m_problem->setup(), m_session->solution(), {}, kMotion);
+  SurfaceFields f = surface_fields(m_problem->setup(), m_session->solution(), m_session->body_force(), {}, kMotion);
   m_u = std::move(f.displacement);
   m_t = std::move(f.traction);
   return rep;

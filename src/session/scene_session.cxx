@@ -46,7 +46,8 @@ SceneReference scene_reference(const ProblemSetup &s)
   std::string ref_name = "the base rules";
   if (analyse_constraints(*s.disc, ref_nc.displacement_prescribed).rank != 6) ref_nc = frame_conditions(s.spec, 0, *s.disc), ref_name = "frame 0";
   SceneReference ref{selection_of(ref_nc), ref_name, std::vector<char>(3 * static_cast<std::size_t>(s.disc->num_nodes()), 0), uses_pressure(s.spec)};
-  for (std::size_t f = 0; f < s.spec.frames.size(); ++f) mark_scene_candidates(ref.selection, selection_of(frame_conditions(s.spec, f, *s.disc)), ref.candidates);
+  for (std::size_t f = 0; f < s.spec.frames.size(); ++f) // a body force loads the unknowns its traces reach: the homogeneous frame's
+    mark_scene_candidates(ref.selection, homogeneous_selection(selection_of(frame_conditions(s.spec, f, *s.disc)), *s.disc, frame_body_force(s, f)), ref.candidates);
   return ref;
 }
 
@@ -80,9 +81,16 @@ void SceneSession::set_up()
 
 const SceneFrameReport &SceneSession::step(const SystemSelection &frame)
 {
+  const ProblemSetup &s = m_problem->setup();
+  m_force = s.body_force;
+  return solve_homogeneous(homogeneous_selection(frame, *s.disc, m_force));
+}
+
+const SceneFrameReport &SceneSession::solve_homogeneous(const SystemSelection &homogeneous)
+{
   set_up();
   const EventScope event(SCN_Frame);
-  m_sel = frame;
+  m_sel = homogeneous;
   m_report = m_scene->solve(m_sel, m_x);
   for (double v : m_x)
     if (!std::isfinite(v)) throw std::runtime_error("the solution is not finite (the frame's system is singular or overflows)");
@@ -96,7 +104,8 @@ const SceneFrameReport &SceneSession::step(std::size_t i)
   const SystemSelection sel = selection_of(frame_conditions(s.spec, i, *s.disc)); // checked by setup_problem (check_every_frame)
   try {
     fault_point("Frame");
-    return step(sel);
+    m_force = frame_body_force(s, i);
+    return solve_homogeneous(homogeneous_selection(sel, *s.disc, m_force));
   } catch (const std::exception &e) {
     throw std::runtime_error(m_problem->where() + "frames[" + std::to_string(i) + "]: " + e.what());
   }
@@ -106,9 +115,12 @@ FrameData SceneSession::frame_data(unsigned parts) const
 {
   const ProblemSetup &s = m_problem->setup();
   FrameData f;
-  put_fields(surface_fields(s, m_sol, prescribed_per_vertex(*s.disc, m_sel), parts), f);
+  put_fields(surface_fields(s, m_sol, m_force, prescribed_per_vertex(*s.disc, m_sel), parts), f);
   const SceneFrameReport &rep = m_report;
   f.attributes_real = {{"seconds", rep.seconds}, {"predicted_seconds", rep.predicted}};
+  const double density = s.spec.density.value_or(0);
+  if (density > 0) // the frame's body force, as gravity (density × gravity)
+    for (int c = 0; c < 3; ++c) f.attributes_real[std::string("gravity_") + "xyz"[c]] = m_force.force_per_volume()[c] / density;
   f.attributes_int = {{"switched_unknowns", rep.switched}, {"changed_unknowns", rep.changed}, {"iterations", rep.iterations}, {"capacitance_rebuilt", rep.rebuilt}};
   f.attributes_str = {{"strategy", scene_strategy_name(rep.strategy)}};
   return f;

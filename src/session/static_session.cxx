@@ -143,9 +143,9 @@ ResultData StaticSession::result()
     const EventScope event(BEM_Post);
     fault_point("Post");
     sol = split_unknowns(s.selection, m_x);
-    if (s.pure_traction) remove_rigid_motion(*s.disc, sol.u);
+    if (s.pure_traction) remove_whole_rigid_motion(*s.disc, s.body_force, sol.u);
     const double stress_before = m_seconds["stress"];
-    f = surface_fields(s, sol, s.vertex_displacement_prescribed, kResultFields, &m_seconds);
+    f = surface_fields(s, sol, s.body_force, s.vertex_displacement_prescribed, kResultFields, &m_seconds);
     m_seconds["post"] += timer.seconds() - (m_seconds["stress"] - stress_before);
   });
   const std::vector<NodeStress> nodes = f.nodes;

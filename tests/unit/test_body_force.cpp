@@ -44,6 +44,9 @@ TEST(BodyForce, TheParticularSolutionSatisfiesHookeAndNavier)
     const double scale = norm(b) * 2; // |σ| at |r| ~ 2
     for (const Vec3 &x : {Vec3{0.5, -0.7, 1.1}, Vec3{-1.3, 0.2, 0.4}, Vec3{0.1, 0.2, -0.3}}) {
       const Voigt s = f.stress(x), h = hooke(m, gradient(f, x, 1e-3));
+      const std::array<Vec3, 3> fd = gradient(f, x, 1e-3);
+      const Mat3 g = f.gradient(x); // the exact ∇u_p the surface stress adds
+      for (int k = 0; k < 9; ++k) EXPECT_NEAR(g[k], fd[k / 3][k % 3], 1e-9 * scale / m.mu()) << "gradient " << k;
       for (int k = 0; k < 6; ++k) EXPECT_NEAR(s[k], h[k], 1e-9 * scale) << "nu " << nu << " component " << k;
       // div σ + b = 0: σ_p is linear, so a difference of stresses is exact.
       const double e = 0.25;

@@ -112,6 +112,31 @@ TEST(ProblemFile, TopLevelKeysAndPaths)
   EXPECT_TRUE(spec.rules.empty());
 }
 
+TEST(ProblemFile, GravityAndDensity)
+{
+  const ProblemSpec spec = parse_problem(R"({"mesh": "m.msh", "material": {"lambda": 2, "mu": 1, "density": 1050}, "gravity": [0, 0, -9.81],
+    "frames": [{"gravity": [9.81, 0, 0]}, {"boundary": []}]})", "problem.json");
+  EXPECT_EQ(*spec.density, 1050.0);
+  EXPECT_EQ(*spec.gravity, (Vec3{0, 0, -9.81}));
+  ASSERT_EQ(spec.frames.size(), 2u);
+  EXPECT_EQ(*spec.frames[0].gravity, (Vec3{9.81, 0, 0}));
+  EXPECT_FALSE(spec.frames[1].gravity.has_value());
+  const ProblemSpec none = parse_problem(k_head + R"("boundary": []})", "problem.json");
+  EXPECT_FALSE(none.gravity || none.density);
+}
+
+TEST(ProblemFile, GravityFaultsAreOneLineEach)
+{
+  expect_parse_error(R"({"mesh": "m.msh", "material": {"E": 1, "nu": 0.3}, "gravity": [0, 0, -9.81]})", {"problem.json: gravity: ", "density"});
+  expect_parse_error(R"({"mesh": "m.msh", "material": {"E": 1, "nu": 0.3}, "frames": [{"gravity": [0, 0, -9.81]}]})", {"frames[0].gravity: ", "density"});
+  expect_parse_error(R"({"mesh": "m.msh", "material": {"E": 1, "nu": 0.3, "density": -1}, "gravity": [0, 0, -9.81]})", {"material.density: ", ">= 0"});
+  expect_parse_error(R"({"mesh": "m.msh", "material": {"E": 1, "nu": 0.3, "density": 1}, "gravity": [0, -9.81]})", {"gravity: ", "3 components"});
+  expect_parse_error(R"({"mesh": "m.msh", "material": {"E": 1, "nu": 0.3, "density": 1}, "gravity": [0, 0, 1e999]})", {"finite"});
+  expect_parse_error(R"({"mesh": "m.msh", "material": {"E": 1, "nu": 0.3, "density": 1}, "gravity": [0, 0, "down"]})", {"gravity[2]: ", "expected a number"});
+  expect_parse_error(R"({"mesh": "m.msh", "material": {"E": 1, "nu": 0.3, "density": 1e31}, "gravity": [0, 0, -9.81]})", {"material.density: ", "exceeds"});
+  expect_parse_error(R"({"mesh": "m.msh", "material": {"E": 1, "nu": 0.3, "density": 1e20}, "frames": [{"gravity": [0, 0, -1e20]}]})", {"frames[0].gravity: ", "exceeds"});
+}
+
 TEST(ProblemFile, InteriorGrid)
 {
   const ProblemSpec spec = parse_problem(k_head + R"("interior_points": {"points": [[0.5, 0.5, 0.5]],
@@ -573,7 +598,7 @@ TEST(Frames, ParseErrorsNameTheFrame)
   expect_frame_error(R"({"boundary": []})", {"problem.json: frames: expected a non-empty list of frames", "got object"});
   expect_frame_error("[]", {"problem.json: frames: expected a non-empty list of frames", "got []"});
   expect_frame_error(R"([{"boundary": []}, [1]])", {"frames[1]: expected an object, got array"});
-  expect_frame_error(R"([{"boundary": [], "time": 0.5}])", {"frames[0]: unknown key 'time' (known: boundary, obstacles)"});
+  expect_frame_error(R"([{"boundary": [], "time": 0.5}])", {"frames[0]: unknown key 'time' (known: boundary, obstacles, gravity)"});
   expect_frame_error(R"([{}])", {"frames[0]: missing 'boundary'"});
   expect_frame_error(R"([{"boundary": {}}])", {"frames[0].boundary: expected a list of rules, got object"});
   expect_frame_error(R"([{"boundary": []}, {"boundary": []}, {"boundary": []},

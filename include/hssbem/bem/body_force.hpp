@@ -13,8 +13,12 @@
 /// Somigliana fields of (u_h, t_h). The load the body carries is its weight: ∫ t dA = −b V.
 #pragma once
 
+#include "hssbem/bem/bem_operator.hpp"
+#include "hssbem/bem/discretization.hpp"
 #include "hssbem/bem/kelvin.hpp"
 #include "hssbem/core/geometry.hpp"
+
+#include <vector>
 
 namespace hssbem {
 
@@ -31,6 +35,8 @@ public:
   const Vec3 &origin() const { return m_origin; }
 
   Vec3 displacement(const Vec3 &x) const;
+  /// ∇u_p, row-major (G[3i + j] = ∂u_i/∂x_j).
+  Mat3 gradient(const Vec3 &x) const;
   /// σ_p in Voigt order (xx, yy, zz, yz, xz, xy).
   Voigt stress(const Vec3 &x) const;
   /// σ_p n on a surface of unit normal n.
@@ -40,5 +46,18 @@ private:
   Vec3 m_b{0, 0, 0}, m_origin{0, 0, 0};
   double m_inv_3k = 0; ///< 1 / (3K)
 };
+
+/// The particular solution's traces at every dof node: u_p at the node's vertex (where its values
+/// live), t_p = σ_p n with the node's normal. Empty vectors when the force is zero.
+struct ParticularTraces {
+  std::vector<Vec3> u, t;
+};
+ParticularTraces particular_traces(const Discretization &disc, const UniformBodyForce &force);
+
+/// The selection of the homogeneous problem: `sel`'s known values less the particular
+/// solution's traces (u_h = ū − u_p where u is prescribed, t_h = t̄ − t_p where t is), and a
+/// pressure node's pressure less b·r (t_p = −(b·r) n is a pressure b·r, linear over each flat
+/// triangle, so the homogeneous pressure stays exact there). `sel` itself when the force is zero.
+SystemSelection homogeneous_selection(SystemSelection sel, const Discretization &disc, const UniformBodyForce &force);
 
 } // namespace hssbem

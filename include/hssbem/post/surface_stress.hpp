@@ -14,6 +14,7 @@
 /// and the full displacement gradient follows from σ_13, σ_23 and ε_33 as well.
 #pragma once
 
+#include "hssbem/bem/body_force.hpp"
 #include "hssbem/bem/discretization.hpp"
 #include "hssbem/bem/kelvin.hpp"
 #include "hssbem/post/stress_kernels.hpp"
@@ -32,6 +33,10 @@ struct NodeStress {
 /// Stress and displacement gradient at every dof node from the nodal displacements u and
 /// tractions t (node order; t at a node is σ n with the node's normal).
 std::vector<NodeStress> node_stresses(const Discretization &disc, const Material &material, const std::vector<Vec3> &u, const std::vector<Vec3> &t);
+
+/// The nodes' stress and gradient with a body force's particular solution added (its exact σ_p
+/// and ∇u_p at each node's vertex), to those of the homogeneous solution: the whole field's.
+std::vector<NodeStress> with_particular(std::vector<NodeStress> nodes, const Discretization &disc, const UniformBodyForce &force);
 
 /// Per mesh vertex, the mean stress over its dof nodes (NaN for a vertex used by no triangle).
 std::vector<Voigt> vertex_stress(const Discretization &disc, const std::vector<NodeStress> &nodes);

@@ -61,6 +61,9 @@ struct ObstacleTurn {
 /// cumulative: x ↦ R (x − c) + c + t); an obstacle not named stays at its base position.
 struct FrameSpec {
   std::vector<BoundaryRule> rules;
+  /// "gravity" of this frame (the patient turned): replaces the base's for this frame only;
+  /// none: the base's (ProblemSpec::gravity, or no body force).
+  std::optional<Vec3> gravity;
   std::vector<std::pair<std::string, Vec3>> obstacles; ///< "obstacles": {"name": {"translate": [dx, dy, dz]}} (zero when only "rotate" is given)
   std::map<std::string, ObstacleTurn> turns;           ///< "obstacles": {"name": {"rotate": {"axis": [..], "angle": deg, "about": [..]}}}
 };
@@ -96,6 +99,8 @@ struct ProblemSpec {
   std::string file;            ///< problem file path (for messages)
   std::string mesh_path;
   std::optional<double> E, nu, lambda, mu;
+  std::optional<double> density;  ///< "material.density": mass per volume (≥ 0), needed by gravity
+  std::optional<Vec3> gravity;    ///< "gravity": acceleration; the body force is density × gravity
   std::vector<BoundaryRule> rules; ///< base rules ("boundary")
   std::vector<FrameSpec> frames;   ///< "frames" in file order; empty: an ordinary single solve
   ContactSpec contact;             ///< "contact"; contact.present false: none

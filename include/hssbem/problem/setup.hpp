@@ -4,6 +4,7 @@
 #pragma once
 
 #include "hssbem/bem/bem_operator.hpp"
+#include "hssbem/bem/body_force.hpp"
 #include "hssbem/core/option_table.hpp"
 #include "hssbem/problem/problem.hpp"
 
@@ -27,7 +28,13 @@ struct ProblemSetup {
   std::unique_ptr<Discretization> disc;
   Material material;
   std::vector<std::array<bool, 3>> vertex_displacement_prescribed; ///< per mesh vertex, for output
+  /// The selection of the system the solver takes: the boundary data of the homogeneous problem,
+  /// that is, the rules' values less the traces of the body force's particular solution
+  /// (homogeneous_selection(); the rules' values themselves without a body force).
   SystemSelection selection;
+  /// The body force of the base problem (density × gravity; zero without gravity), its origin the
+  /// centroid of the mesh's vertices. Every field of the result adds its particular solution.
+  UniformBodyForce body_force;
   /// Pure traction (no displacement prescribed, balanced load): the system is regularised along
   /// the rigid modes and the rigid motion is removed from the result.
   bool pure_traction = false;
@@ -65,6 +72,10 @@ void check_every_frame(const ProblemSetup &s);
 
 /// The system's selection (what the BEM system builder takes) of a set of node conditions.
 SystemSelection selection_of(const NodeConditions &nc);
+
+/// The body force of frame `frame` of the scene `s`: the frame's "gravity" when it gives one,
+/// else the base's (s.body_force); same origin. Throws std::out_of_range for a frame past the end.
+UniformBodyForce frame_body_force(const ProblemSetup &s, std::size_t frame);
 
 /// Per mesh vertex, the components whose displacement `nc` prescribes (those of the vertex's
 /// first dof node; none for a vertex without nodes): the result file's displacement_prescribed.

@@ -44,14 +44,17 @@ struct SurfaceFields {
   std::vector<std::array<bool, 3>> displacement_prescribed;
   std::map<std::string, Vec3> reactions;
   StressFields stress;
-  std::vector<NodeStress> nodes; ///< the stress per dof node (what the interior evaluation starts from)
+  std::vector<NodeStress> nodes; ///< the homogeneous solution's stress per dof node (what the interior evaluation starts from)
 };
 
 /// The fields `parts` of the solution `sol` (per dof node) of problem `s`, whose prescribed
-/// components per vertex are `prescribed` (kPrescribed). The stress's seconds go to
-/// seconds["stress"] when given (an event BEM_Stress times it).
-SurfaceFields surface_fields(const ProblemSetup &s, const NodalSolution &sol, const std::vector<std::array<bool, 3>> &prescribed, unsigned parts,
-                             std::map<std::string, double> *seconds = nullptr);
+/// components per vertex are `prescribed` (kPrescribed). With a body force, `sol` is the
+/// homogeneous solution (what the system gives) and every field adds the particular solution of
+/// `force` (its traces to the motion, the corners and the reactions; its exact σ_p to the
+/// stress); `nodes` stays the homogeneous stress. The stress's seconds go to seconds["stress"]
+/// when given (an event BEM_Stress times it).
+SurfaceFields surface_fields(const ProblemSetup &s, const NodalSolution &sol, const UniformBodyForce &force, const std::vector<std::array<bool, 3>> &prescribed,
+                             unsigned parts, std::map<std::string, double> *seconds = nullptr);
 
 /// The fields into a result (all of them) or a frame (those a frame holds); moves them.
 void put_fields(SurfaceFields &&f, ResultData &r);
@@ -76,8 +79,9 @@ void check_interior_points(const ProblemSetup &s);
 
 /// Displacement and stress at the problem's interior points and grid points into r (interior_*),
 /// NaN at grid points outside the body; the evaluation's points are shared out over the ranks of
-/// comm and the values summed (collective). `nodes`: the stress per dof node (SurfaceFields).
-/// Adds the time to seconds["interior"].
+/// comm and the values summed (collective). `sol` and `nodes` (SurfaceFields) are the homogeneous
+/// solution and its stress per dof node, whose Somigliana fields the points take; the particular
+/// solution of s.body_force is added at each point inside. Adds the time to seconds["interior"].
 void interior_fields(MPI_Comm comm, const ProblemSetup &s, const NodalSolution &sol, const std::vector<NodeStress> &nodes, const InteriorRunOptions &o,
                      ResultData &r, std::map<std::string, double> &seconds);
 

@@ -33,7 +33,8 @@ struct SceneReference {
 };
 
 /// The reference of a problem file's scene: the base rules where they hold the body, else
-/// frame 0's; the candidates: the unknowns that some frame switches or loads.
+/// frame 0's; the candidates: the unknowns that some frame switches or loads (with a body
+/// force, its homogeneous data: gravity loads every unknown its particular traces reach).
 SceneReference scene_reference(const ProblemSetup &s);
 
 /// What a scene must pass before anything is allocated (set_up() checks it too; the driver asks
@@ -53,16 +54,20 @@ public:
 
   /// The precomputation: the memory check, then the reference LU and W's candidate columns.
   void set_up();
-  /// Solves a frame (the problem's dof nodes; its pattern may switch the candidates only);
-  /// solution() then holds it. set_up() first when not done.
+  /// Solves a frame (the problem's dof nodes; its pattern may switch the candidates only), under
+  /// the problem's body force (ProblemSetup::body_force); solution() then holds it. set_up()
+  /// first when not done.
   const SceneFrameReport &step(const SystemSelection &frame);
-  /// Frame i of the problem file; its error is "<file>: frames[i]: <what>" (a solution that is
-  /// not finite included).
+  /// Frame i of the problem file, under its gravity (frame_body_force); its error is
+  /// "<file>: frames[i]: <what>" (a solution that is not finite included).
   const SceneFrameReport &step(std::size_t i);
 
-  /// The last frame's solution per dof node, its selection and its report.
+  /// The last frame's solution per dof node, its selection and its report. With a body force,
+  /// the solution and the selection are the homogeneous problem's (bem/body_force.hpp) and
+  /// body_force() the frame's: surface_fields() adds its particular solution.
   const NodalSolution &solution() const { return m_sol; }
   const SystemSelection &selection() const { return m_sel; }
+  const UniformBodyForce &body_force() const { return m_force; }
   const SceneFrameReport &report() const { return m_report; }
   /// The last frame's fields (`parts`, result_fields.hpp) and attributes, as a result file's frame.
   FrameData frame_data(unsigned parts = kFrameFields) const;
@@ -86,7 +91,11 @@ private:
   MachineLimits m_limits;
   std::unique_ptr<KrylovSolver> m_krylov;
   std::unique_ptr<DenseScene> m_scene;
+  /// The frame's homogeneous system solved (the boundary data less the body force's traces).
+  const SceneFrameReport &solve_homogeneous(const SystemSelection &homogeneous);
+
   SystemSelection m_sel;
+  UniformBodyForce m_force;
   std::vector<double> m_x;
   NodalSolution m_sol;
   SceneFrameReport m_report;

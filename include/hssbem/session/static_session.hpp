@@ -48,7 +48,9 @@ public:
   /// Solves A x = b (create_solver() and assemble() first, when not done): the whole solution on
   /// every rank (3 per dof node, node order; without to_all on rank 0 only, and result() then
   /// needs it everywhere), checked finite; with pure traction the rigid motion is removed from
-  /// the result's displacement. Throws PetscFailure for a failed solve.
+  /// the result's displacement. With a body force (ProblemSetup::body_force) the system and
+  /// solution() are those of the homogeneous problem; result() adds the particular solution to
+  /// every field. Throws PetscFailure for a failed solve.
   const HssbemSolveInfo &solve(bool to_all = true);
   const std::vector<double> &solution() const { return m_x; }
 
