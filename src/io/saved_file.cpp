@@ -182,7 +182,9 @@ void SavedFileWriter::Impl::array(const std::string &name, const void *data, std
   const detail::H5Handle lcpl(H5Pcreate(H5P_LINK_CREATE), H5Pclose), dcpl(H5Pcreate(H5P_DATASET_CREATE), H5Pclose);
   check(space.get() < 0 || lcpl.get() < 0 || dcpl.get() < 0 ? -1 : H5Pset_create_intermediate_group(lcpl.get(), 1), object, "H5Pcreate");
   if (n >= kChecksummedElements) { // chunks of at most 8 MB, each with its Fletcher-32 checksum
-    const hsize_t chunk[1] = {std::min<hsize_t>(dims[0], (8u << 20) / H5Tget_size(file_type))};
+    // HDF5 stores the last chunk whole: chunks of equal size waste less than one element each
+    const hsize_t most = (8u << 20) / H5Tget_size(file_type), count = (dims[0] + most - 1) / most;
+    const hsize_t chunk[1] = {(dims[0] + count - 1) / count};
     check(H5Pset_chunk(dcpl.get(), 1, chunk), object, "H5Pset_chunk");
     check(H5Pset_fletcher32(dcpl.get()), object, "H5Pset_fletcher32");
   }
