@@ -97,7 +97,7 @@ void contact_frames(ContactSession &session, const std::string &output, int rank
 void load_set_up(ContactSession &session, const std::string &path)
 {
   const Timer timer;
-  session.adopt(load_precomputation(session, path));
+  session.load(path);
   session.timings()["contact_load"] += timer.seconds();
   HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF, "hssbem: contact: loaded the precomputation from %s in %.2f s\n", path.c_str(), timer.seconds()));
 }
@@ -106,7 +106,7 @@ void load_set_up(ContactSession &session, const std::string &path)
 void save_set_up(const ContactSession &session, const std::string &path, std::vector<std::string> inputs)
 {
   const Timer timer;
-  save_precomputation(session, path, inputs);
+  session.save(path, inputs);
   HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF, "hssbem: contact: saved the precomputation to %s in %.2f s\n", path.c_str(), timer.seconds()));
 }
 

@@ -208,4 +208,8 @@ std::shared_ptr<ContactPrecomputation> load_precomputation(const ContactSession 
   return pre;
 }
 
+void ContactSession::save(const std::string &path, const std::vector<std::string> &inputs) const { save_precomputation(*this, path, inputs); }
+
+void ContactSession::load(const std::string &path) { adopt(load_precomputation(*this, path)); }
+
 } // namespace hssbem

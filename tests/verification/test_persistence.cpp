@@ -6,6 +6,7 @@
 #include "solve_helpers.hpp"
 
 #include "hssbem/io/saved_file.hpp"
+#include "hssbem/session/contact_scene.hpp"
 #include "hssbem/session/precomputation_file.hpp"
 
 #include <gtest/gtest.h>
@@ -66,7 +67,7 @@ struct Case {
   {
     SystemSelection values = selection_of(job.base);
     for (Vec3 &v : values.known) v = (job.settings.bodies ? 1 + 0.5 * f : 1.0) * v;
-    s.step(values, std::vector<Vec3>(job.obstacles.size(), Vec3{0, 0, 0.2 * delta * f}));
+    s.step(values, std::vector<Pose>(job.obstacles.size(), Pose::translation({0, 0, 0.2 * delta * f})));
   }
 };
 
@@ -203,6 +204,53 @@ TEST(Persistence, OtherOptionsAreRefused)
   Case other;
   other.options.contact.reach = 0.2;
   EXPECT_NE(load_error(other, file.path).find("the options differ: -contact_reach 0 in the file, 0.2 in the problem"), std::string::npos) << load_error(other, file.path);
+  Case frames; // the frames' solver's own options do not shape the precomputation
+  frames.options.contact.tol = 1e-9, frames.options.contact.max_it = 7;
+  EXPECT_EQ(load_error(frames, file.path), "");
+}
+
+TEST(Persistence, AnotherCandidateSetIsRefused)
+{
+  Case c; // frames known ahead: the dense reference keeps the columns of K₀′ the candidates need
+  c.job.frames = {c.job.base};
+  c.job.placements = {std::vector<Pose>(1)};
+  const TempFile file("candidates");
+  save_altered(c, file.path, [](Fingerprint &) {});
+  Case fewer = c;
+  fewer.job.settings.candidate.assign(fewer.problem->mesh().num_vertices(), 0);
+  for (int v = 0; v < fewer.problem->mesh().num_vertices(); ++v) fewer.job.settings.candidate[v] = fewer.problem->mesh().vertices[v][0] < 0.5;
+  const std::string why = load_error(fewer, file.path);
+  EXPECT_NE(why.find("the candidate set differs: "), std::string::npos) << why;
+  EXPECT_EQ(load_error(c, file.path), "");
+}
+
+TEST(Persistence, ContactSceneSavesAndLoads)
+{
+  SurfaceMesh mesh = read_mesh(mesh_file("cube_l0.msh"));
+  std::vector<std::string> notices;
+  validate_and_orient(mesh, notices);
+  ContactScene::Pattern held(mesh.vertices.size(), {false, false, false});
+  std::vector<Vec3> values(mesh.vertices.size(), Vec3{0, 0, 0});
+  for (std::size_t v = 0; v < mesh.vertices.size(); ++v) {
+    const Vec3 &x = mesh.vertices[v];
+    if (x[2] > 1 - 1e-12) held[v][2] = true, values[v][2] = -delta;
+    if (x[0] < 1e-12) held[v][0] = true;
+    if (x[1] < 1e-12) held[v][1] = true;
+  }
+  ContactSceneReference ref;
+  ref.type = OperatorType::Dense;
+  const std::vector<Obstacle> table{Obstacle::plane("table", {0, 0, 0}, {0, 0, 1})};
+  ContactScene cold(mesh, Material{E, nu}, held, table, {}, {}, option_default::bem_feature_angle, ref);
+  const TempFile file("scene");
+  cold.save(file.path);
+  ref.load = file.path;
+  ContactScene warm(mesh, Material{E, nu}, held, table, {}, {}, option_default::bem_feature_angle, ref);
+  for (ContactScene *s : {&cold, &warm}) s->set_values(values), s->set_obstacle_offset("table", {0, 0, 0.002}), s->solve();
+  EXPECT_FALSE(cold.active_vertices().empty());
+  EXPECT_TRUE(same_bits(cold.displacement(), warm.displacement()));
+  EXPECT_TRUE(same_bits(cold.pressure(), warm.pressure()));
+  EXPECT_THROW( // another material: refused
+      ContactScene(mesh, Material{E, 0.4}, held, table, {}, {}, option_default::bem_feature_angle, ref), SavedFileError);
 }
 
 TEST(Persistence, AnotherRankCountIsRefused)
