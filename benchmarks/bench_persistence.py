@@ -3,7 +3,8 @@
 side by side with the cold set-up, through the driver: runs in turn a cold run that saves its
 precomputation and a run that loads it (cold, load, cold, load, ...), on one contact scene, and
 reports per run the set-up (cold) or the load, the first frame, the save, the process's wall
-time, one plain read of the file (file_read_s: what the load's checksum pass costs at least),
+time and CPU time (user + system, every thread: on a shared machine, what the run cost), one
+plain read of the file (file_read_s: what the load's checksum pass costs at least),
 the precomputation's memory against the file's size, and whether every frame's fields after the
 load are the cold run's to the bit.
 
@@ -55,12 +56,13 @@ def problem(mesh, share, frames, out_dir):
 
 
 def run(driver, prob, out, extra):
-    """(wall s, stdout) of one run."""
-    cmd = ["/usr/bin/time", "-f", "%e", driver, "-problem", prob, "-o", out] + extra
+    """(wall s, CPU s (user + system, every thread), stdout) of one run."""
+    cmd = ["/usr/bin/time", "-f", "%e %U %S", driver, "-problem", prob, "-o", out] + extra
     p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, universal_newlines=True)
     if p.returncode != 0:
         sys.exit("failed: %s\n%s\n%s" % (" ".join(cmd), p.stdout, p.stderr))
-    return float(p.stderr.strip().splitlines()[-1]), p.stdout
+    wall, user, system = p.stderr.strip().splitlines()[-1].split()
+    return float(wall), float(user) + float(system), p.stdout
 
 
 def figure(pattern, text):
@@ -91,6 +93,7 @@ def main():
     ap.add_argument("--runs", type=int, default=2)
     ap.add_argument("--dir", default=None, help="where the files go (default: a new temporary directory)")
     ap.add_argument("--csv", required=True)
+    ap.add_argument("--keep", action="store_true", help="keep the last saved file")
     a = ap.parse_args()
     d = a.dir or tempfile.mkdtemp(prefix="bench-persistence-")
     prob, ncand, nv = problem(a.mesh, a.candidates, a.frames, d)
@@ -99,24 +102,25 @@ def main():
     rows = []
     for i in range(1, a.runs + 1):
         saved = os.path.join(d, "precomputation_%d.h5" % i)
-        wall_c, out_c = run(a.driver, prob, os.path.join(d, "cold.h5"), ["-hssbem_save", saved])
+        wall_c, cpu_c, out_c = run(a.driver, prob, os.path.join(d, "cold.h5"), ["-hssbem_save", saved])
         cold, frame0_c, t_c = frames_of(os.path.join(d, "cold.h5"))
         t0 = time.time()
         with open(saved, "rb") as f:  # one read of the file (from the page cache when it is there)
             while f.read(1 << 24):
                 pass
         read_s = time.time() - t0
-        wall_l, out_l = run(a.driver, prob, os.path.join(d, "load.h5"), ["-hssbem_load", saved])
+        wall_l, cpu_l, out_l = run(a.driver, prob, os.path.join(d, "load.h5"), ["-hssbem_load", saved])
         load, frame0_l, t_l = frames_of(os.path.join(d, "load.h5"))
         row = {"run": i, "unknowns": int(figure(r"(\d+) unknowns", out_c)), "candidates": ncand,
                "setup_s": figure(r"contact: set up in ([\d.]+) s", out_c), "save_s": figure(r"saved the precomputation to .* in ([\d.]+) s", out_c),
-               "cold_frame0_s": frame0_c, "cold_wall_s": wall_c,
-               "load_s": figure(r"loaded the precomputation from .* in ([\d.]+) s", out_l), "load_frame0_s": frame0_l, "load_wall_s": wall_l,
+               "cold_frame0_s": frame0_c, "cold_wall_s": wall_c, "cold_cpu_s": cpu_c,
+               "load_s": figure(r"loaded the precomputation from .* in ([\d.]+) s", out_l), "load_frame0_s": frame0_l, "load_wall_s": wall_l, "load_cpu_s": cpu_l,
                "file_read_s": read_s, "memory_mb": figure(r"contact: set up in .*; (\d+) MB\)", out_c), "file_mb": os.path.getsize(saved) / 1e6,
                "bitwise": identical(cold, load), "loadavg_1min": os.getloadavg()[0]}
         rows.append(row)
         print(" ".join("%s=%s" % (k, ("%.3f" % v) if isinstance(v, float) else v) for k, v in row.items()), flush=True)
-        os.remove(saved)
+        if not a.keep or i < a.runs:
+            os.remove(saved)
     with open(a.csv, "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(rows[0]))
         w.writeheader()
