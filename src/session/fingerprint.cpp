@@ -75,6 +75,8 @@ std::string Fingerprint::difference(const Fingerprint &s) const
   if (s.E != E || s.nu != nu)
     return both("the material differs", "E " + num(s.E) + ", nu " + num(s.nu), "E " + num(E) + ", nu " + num(nu));
   if (s.pattern != pattern) return "the pattern of prescribed components differs";
+  if (s.candidates == candidates && s.candidate_set != candidate_set)
+    return "the candidate set differs: " + std::to_string(candidates) + " unknowns in both, not the same ones";
   if (s.candidates != candidates || s.candidate_set != candidate_set)
     return both("the candidate set differs", std::to_string(s.candidates) + " unknowns", std::to_string(candidates) + " unknowns");
   if (s.options != options) return option_difference(s.options, options);
