@@ -5,13 +5,16 @@
 #include "hssbem/core/progress.hpp"
 #include "hssbem/core/timer.hpp"
 #include "hssbem/io/hdf5_output.hpp"
+#include "hssbem/io/temp_files.hpp"
 #include "hssbem/petsc/log.h"
 #include "hssbem/petsc/system.h"
 #include "hssbem/session/choice.hpp"
 #include "hssbem/session/contact_session.hpp"
 #include "hssbem/session/petsc_call.hpp"
+#include "hssbem/session/precomputation_file.hpp"
 
 #include <algorithm>
+#include <stdexcept>
 #include <memory>
 
 namespace hssbem {
@@ -90,6 +93,33 @@ void contact_frames(ContactSession &session, const std::string &output, int rank
   HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF, "hssbem: wrote %s\n", output.c_str()));
 }
 
+/// -hssbem_load: the precomputation of the file instead of the set-up's.
+void load_set_up(ContactSession &session, const std::string &path)
+{
+  const Timer timer;
+  session.load(path);
+  session.timings()["contact_load"] += timer.seconds();
+  HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF, "hssbem: contact: loaded the precomputation from %s in %.2f s\n", path.c_str(), timer.seconds()));
+}
+
+/// -hssbem_save: the precomputation after the set-up (not over an input, nor the result file).
+void save_set_up(const ContactSession &session, const std::string &path, std::vector<std::string> inputs)
+{
+  const Timer timer;
+  session.save(path, inputs);
+  HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF, "hssbem: contact: saved the precomputation to %s in %.2f s\n", path.c_str(), timer.seconds()));
+}
+
+/// What -hssbem_save and -hssbem_load can do, checked on every rank before the set-up.
+void check_persistence(const DriverOptions &o, const std::string &mat_type, const std::string &output)
+{
+  if ((!o.save.empty() || !o.load.empty()) && mat_type != "dense")
+    throw std::invalid_argument(std::string(o.save.empty() ? "-hssbem_load" : "-hssbem_save") + ": only dense reference factorizations are saved and loaded yet; this contact takes the " +
+                                mat_type + " one (-bem_mat_type dense)");
+  if (!o.save.empty() && o.save == output) throw std::invalid_argument("-hssbem_save: '" + o.save + "' is the result file");
+  if (!o.save.empty() && o.save == o.load) throw std::invalid_argument("-hssbem_save: '" + o.save + "' is the file -hssbem_load reads");
+}
+
 } // namespace
 
 void run_contact(MPI_Comm comm, const DriverOptions &o, std::shared_ptr<const SessionProblem> problem, std::map<std::string, double> seconds)
@@ -106,6 +136,7 @@ void run_contact(MPI_Comm comm, const DriverOptions &o, std::shared_ptr<const Se
   HssbemCallThrow(PetscPrintf(comm, "hssbem: contact: %zu obstacles%s, %zu frames, on the %s reference factorization (rank 0)\n", s.spec.contact.obstacles.size(),
                               s.spec.contact.bodies ? " and the bodies" : "", std::max<std::size_t>(1, s.spec.frames.size()),
                               mat_type == "dense,h2" ? "dense and H2" : mat_type == "h2" ? "H2" : "dense"));
+  check_persistence(o, mat_type, s.output);
   run_collectively(comm, [&] {
     if (rank != 0) return;
     SessionOptions so = o.session;
@@ -117,9 +148,14 @@ void run_contact(MPI_Comm comm, const DriverOptions &o, std::shared_ptr<const Se
       };
     ContactSession session(problem, contact_job(s), so, limits);
     session.timings() = std::move(seconds);
+    std::vector<std::string> inputs = s.input_files;
+    if (!o.load.empty()) inputs.push_back(o.load);
+    if (!o.save.empty()) check_not_an_input(o.save, inputs); // before the set-up it would save
     const Timer timer;
+    if (!o.load.empty()) load_set_up(session, o.load);
     session.set_up();
     print_set_up(session, timer.seconds());
+    if (!o.save.empty()) save_set_up(session, o.save, inputs);
     if (s.spec.frames.empty()) contact_single(session, s.output, size);
     else contact_frames(session, s.output, size, frame);
   });

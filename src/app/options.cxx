@@ -101,6 +101,8 @@ DriverOptions read_driver_options(MPI_Comm comm)
   o.scene_monitor = given_or_default(given, "scene_monitor", d).number != 0;
   o.scene_keep_partial = given_or_default(given, "scene_keep_partial", d).number != 0;
   o.contact_monitor = given_or_default(given, "contact_monitor", d).number != 0;
+  o.save = given_or_default(given, "hssbem_save", d).text;
+  o.load = given_or_default(given, "hssbem_load", d).text;
   o.help = given_or_default(given, "help", d).number != 0;
   return o;
 }

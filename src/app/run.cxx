@@ -84,6 +84,9 @@ void run_problem(MPI_Comm comm, const DriverOptions &o)
   });
   seconds["setup"] += timer.seconds();
   if (o.help) print_help(comm, job_bit(problem->job()));
+  if ((!o.save.empty() || !o.load.empty()) && problem->job() != JobKind::Contact)
+    throw std::invalid_argument(std::string(o.save.empty() ? "-hssbem_load" : "-hssbem_save") + ": a saved precomputation is a contact's (this problem is a " + job_name(problem->job()) +
+                                " job)");
   switch (problem->job()) {
   case JobKind::Static: run_static(comm, o, problem, std::move(seconds)); break;
   case JobKind::Scene: run_scene(comm, o, problem, std::move(seconds)); break;

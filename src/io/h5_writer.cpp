@@ -16,36 +16,7 @@ void fail_output(const std::string &path, const std::string &reason)
   throw OutputError("cannot write output '" + path + "': " + reason);
 }
 
-H5ErrorSilencer::H5ErrorSilencer()
-{
-  m_saved = H5Eget_auto2(H5E_DEFAULT, &m_func, &m_data) >= 0;
-  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
-}
-
-H5ErrorSilencer::~H5ErrorSilencer()
-{
-  if (m_saved)
-    H5Eset_auto2(H5E_DEFAULT, m_func, m_data);
-}
-
 namespace {
-
-/// H5Ewalk2 callback: with H5E_WALK_UPWARD, entry 0 is where the error was detected.
-herr_t keep_innermost(unsigned n, const H5E_error2_t *err, void *out)
-{
-  if (n == 0 && err->desc)
-    *static_cast<std::string *>(out) = err->desc;
-  return 0;
-}
-
-/// The most specific message on HDF5's error stack (e.g. the errno text of a failed open).
-/// Must run before the next HDF5 call, which clears the stack.
-std::string h5_reason()
-{
-  std::string reason;
-  H5Ewalk2(H5E_DEFAULT, H5E_WALK_UPWARD, keep_innermost, &reason);
-  return reason;
-}
 
 /// Rows [first, last) of `rows` for `rank` of `size`: an even split in rank order when every
 /// rank gets a row, else all of them on rank 0. (HDF5 1.10 lets a rank with an empty selection

@@ -3,6 +3,8 @@
 /// that close what they open, and errors that name the final path of the result.
 #pragma once
 
+#include "h5_handle.hpp"
+
 #include "hssbem/core/geometry.hpp"
 
 #include <hdf5.h>
@@ -20,44 +22,6 @@ namespace hssbem::detail {
 /// Every error of the writers has this one form: "cannot write output '<path>': <reason>",
 /// naming the final (not the temporary) path. Throws OutputError.
 [[noreturn]] void fail_output(const std::string &path, const std::string &reason);
-
-/// Turns off HDF5's automatic error-stack printing while a writer runs: failures are reported
-/// through OutputError instead, and the previous handler is restored afterwards.
-class H5ErrorSilencer {
-public:
-  H5ErrorSilencer();
-  H5ErrorSilencer(const H5ErrorSilencer &) = delete;
-  H5ErrorSilencer &operator=(const H5ErrorSilencer &) = delete;
-  ~H5ErrorSilencer();
-
-private:
-  H5E_auto2_t m_func = nullptr;
-  void *m_data = nullptr;
-  bool m_saved = false;
-};
-
-/// Owns one HDF5 identifier, so error paths close everything they opened.
-class H5Handle {
-public:
-  using Closer = herr_t (*)(hid_t);
-  H5Handle(hid_t id, Closer closer) : m_id(id), m_closer(closer) {}
-  H5Handle(const H5Handle &) = delete;
-  H5Handle &operator=(const H5Handle &) = delete;
-  ~H5Handle()
-  {
-    if (m_id >= 0)
-      m_closer(m_id); // only reached on error paths, where a failed close changes nothing
-  }
-  hid_t get() const { return m_id; }
-  /// Closes now and reports the status, for the success path where it matters.
-  herr_t close() { return m_closer(std::exchange(m_id, H5I_INVALID_HID)); }
-  /// Gives the identifier up, unclosed, to the caller.
-  hid_t release() { return std::exchange(m_id, H5I_INVALID_HID); }
-
-private:
-  hid_t m_id;
-  Closer m_closer;
-};
 
 /// A contiguous array ready for H5Dwrite: memory layout `mem_type`, stored as `file_type`.
 /// Borrows `data`: build it inside the call that writes it, so temporaries outlive the write.

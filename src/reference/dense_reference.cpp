@@ -35,14 +35,43 @@ void add_columns(const std::vector<double> &M, int n, const std::vector<int> &co
 } // namespace
 
 DenseReference::DenseReference(const BemOperator &op, std::vector<char> pattern, const DenseReferenceOptions &options)
-    : m_n(3 * op.num_nodes()), m_nodes(op.num_nodes()), m_opt(options), m_pattern(std::move(pattern))
+    : m_n(3 * op.num_nodes()), m_nodes(op.num_nodes()), m_opt(options)
 {
-  if (static_cast<int>(m_pattern.size()) != m_n) throw std::invalid_argument("DenseReference: the pattern needs one entry per unknown");
+  m_d.pattern = std::move(pattern);
+  if (static_cast<int>(m_d.pattern.size()) != m_n) throw std::invalid_argument("DenseReference: the pattern needs one entry per unknown");
   check_options();
   assemble(op);
   if (!m_opt.node_body.empty()) separate_bodies(op);
   factor();
   if (!m_opt.keep_operator) drop_operator();
+}
+
+namespace {
+
+/// Throws std::invalid_argument "DenseReference: the saved <what> do not fit" unless ok.
+void require_fit(bool ok, const char *what)
+{
+  if (!ok) throw std::invalid_argument(std::string("DenseReference: the saved ") + what + " do not fit the reference");
+}
+
+} // namespace
+
+DenseReference::DenseReference(DenseReferenceData data) : m_n(static_cast<int>(data.pattern.size())), m_nodes(m_n / 3), m_d(std::move(data))
+{
+  const std::size_t N = static_cast<std::size_t>(m_n);
+  require_fit(m_n > 0 && m_n % 3 == 0, "pattern's entries");
+  require_fit(m_d.lu.size() == N * N && m_d.piv.size() == N, "factors");
+  require_fit(std::all_of(m_d.piv.begin(), m_d.piv.end(), [&](int p) { return p >= 1 && p <= m_n; }), "pivots");
+  require_fit(m_d.H.size() == m_d.G.size() && (m_d.H.empty() || m_d.H.size() == N * N), "operator's columns");
+  require_fit(m_d.Gn.empty() || m_d.Gn.size() == N * m_nodes, "pressure columns");
+  const long long kept = std::count_if(m_d.kpos.begin(), m_d.kpos.end(), [](int k) { return k >= 0; });
+  require_fit(m_d.kpos.empty() ? m_d.K.empty() : m_d.kpos.size() == N && m_d.K.size() == N * static_cast<std::size_t>(kept), "kept columns");
+  std::vector<char> seen(static_cast<std::size_t>(kept), 0);
+  for (int k : m_d.kpos) {
+    require_fit(k >= -1 && k < kept && (k < 0 || !seen[k]), "kept columns");
+    if (k >= 0) seen[k] = 1;
+  }
+  require_fit(std::all_of(m_d.pattern.begin(), m_d.pattern.end(), [](char c) { return c == 0 || c == 1; }), "pattern's entries");
 }
 
 DenseReference::~DenseReference() = default;
@@ -55,8 +84,8 @@ void DenseReference::check_options() const
     throw std::invalid_argument("DenseReference: kept_columns needs one entry per unknown");
 }
 
-/// Row block r0 .. r0 + rows: H and G into m_H and m_G, or (reference_columns_only) the columns
-/// A₀ uses into m_lu and the others, where kept, into m_K. sums += ‖H‖², ‖G‖² of the block.
+/// Row block r0 .. r0 + rows: H and G into m_d.H and m_d.G, or (reference_columns_only) the columns
+/// A₀ uses into m_d.lu and the others, where kept, into m_d.K. sums += ‖H‖², ‖G‖² of the block.
 void DenseReference::place_rows(int r0, int rows, const double *H, const double *G, double sums[2])
 {
   const int N = m_n;
@@ -68,12 +97,12 @@ void DenseReference::place_rows(int r0, int rows, const double *H, const double 
       const std::size_t at = row + static_cast<std::size_t>(c) * N;
       sums[0] += h[c] * h[c], sums[1] += g[c] * g[c];
       if (!compact) {
-        m_H[at] = h[c], m_G[at] = g[c];
+        m_d.H[at] = h[c], m_d.G[at] = g[c];
         continue;
       }
-      const bool u_known = m_pattern[c] != 0; // A₀ takes −G, K₀′ H; else A₀ H, K₀′ −G
-      m_lu[at] = u_known ? -g[c] : h[c];
-      if (m_kpos[c] >= 0) m_K[row + static_cast<std::size_t>(m_kpos[c]) * N] = u_known ? h[c] : -g[c];
+      const bool u_known = m_d.pattern[c] != 0; // A₀ takes −G, K₀′ H; else A₀ H, K₀′ −G
+      m_d.lu[at] = u_known ? -g[c] : h[c];
+      if (m_d.kpos[c] >= 0) m_d.K[row + static_cast<std::size_t>(m_d.kpos[c]) * N] = u_known ? h[c] : -g[c];
     }
   }
 }
@@ -83,17 +112,17 @@ void DenseReference::assemble(const BemOperator &op)
 {
   const int nn = m_nodes, N = m_n, chunk = 8;
   if (m_opt.reference_columns_only) {
-    m_kpos.assign(N, -1);
+    m_d.kpos.assign(N, -1);
     int kept = 0;
     for (int j = 0; j < N; ++j)
-      if (m_opt.kept_columns.empty() || m_opt.kept_columns[j]) m_kpos[j] = kept++;
-    m_lu.assign(sq(N), 0.0);
-    m_K.assign(static_cast<std::size_t>(N) * kept, 0.0);
+      if (m_opt.kept_columns.empty() || m_opt.kept_columns[j]) m_d.kpos[j] = kept++;
+    m_d.lu.assign(sq(N), 0.0);
+    m_d.K.assign(static_cast<std::size_t>(N) * kept, 0.0);
   } else {
-    m_H.assign(sq(N), 0.0);
-    m_G.assign(sq(N), 0.0);
+    m_d.H.assign(sq(N), 0.0);
+    m_d.G.assign(sq(N), 0.0);
   }
-  if (m_opt.with_pressure) m_Gn.assign(static_cast<std::size_t>(N) * nn, 0.0);
+  if (m_opt.with_pressure) m_d.Gn.assign(static_cast<std::size_t>(N) * nn, 0.0);
   double h2 = 0, g2 = 0;
   std::vector<int> J(nn);
   std::iota(J.begin(), J.end(), 0);
@@ -126,7 +155,7 @@ void DenseReference::assemble(const BemOperator &op)
         g2 += sums[1];
         if (m_opt.with_pressure)
           for (std::size_t r = 0; r < 3 * I.size(); ++r)
-            for (int c = 0; c < nn; ++c) m_Gn[3 * static_cast<std::size_t>(r0) + r + static_cast<std::size_t>(c) * N] = Gn[r * nn + c];
+            for (int c = 0; c < nn; ++c) m_d.Gn[3 * static_cast<std::size_t>(r0) + r + static_cast<std::size_t>(c) * N] = Gn[r * nn + c];
       } catch (...) {
 #pragma omp critical(hssbem_reference_assembly)
         if (!failure) failure = std::current_exception();
@@ -134,7 +163,7 @@ void DenseReference::assemble(const BemOperator &op)
     }
   }
   if (failure) std::rethrow_exception(failure);
-  m_scale_t = g2 > 0 ? std::sqrt(h2 / g2) : 1.0;
+  m_d.scale_t = g2 > 0 ? std::sqrt(h2 / g2) : 1.0;
 }
 
 /// With H's row sums zero (a rigid translation gives no traction), the other bodies' part S of
@@ -154,19 +183,19 @@ void DenseReference::separate_bodies(const BemOperator &op)
       for (int c = 0; c < 3; ++c) {
         const std::size_t col = static_cast<std::size_t>(3 * j + c) * N;
         for (int k = 0; k < 3; ++k) {
-          S[3 * k + c] += m_H[col + 3 * i + k];
-          m_H[col + 3 * i + k] = 0, m_G[col + 3 * i + k] = 0;
+          S[3 * k + c] += m_d.H[col + 3 * i + k];
+          m_d.H[col + 3 * i + k] = 0, m_d.G[col + 3 * i + k] = 0;
         }
       }
-      if (!m_Gn.empty())
-        for (int k = 0; k < 3; ++k) m_Gn[static_cast<std::size_t>(j) * N + 3 * i + k] = 0;
+      if (!m_d.Gn.empty())
+        for (int k = 0; k < 3; ++k) m_d.Gn[static_cast<std::size_t>(j) * N + 3 * i + k] = 0;
     }
     int cols[3];
     double w[3];
     const int nc = op.rigid_body_columns(i, cols, w);
     for (int q = 0; q < nc; ++q)
       for (int c = 0; c < 3; ++c)
-        for (int k = 0; k < 3; ++k) m_H[static_cast<std::size_t>(3 * cols[q] + c) * N + 3 * i + k] += w[q] * S[3 * k + c];
+        for (int k = 0; k < 3; ++k) m_d.H[static_cast<std::size_t>(3 * cols[q] + c) * N + 3 * i + k] += w[q] * S[3 * k + c];
   }
 }
 
@@ -174,16 +203,16 @@ void DenseReference::factor()
 {
   const int N = m_n;
   if (!m_opt.reference_columns_only) { // (compact: assembled into place)
-    m_lu.resize(sq(N));
-    system_matrix(m_pattern, m_lu.data());
+    m_d.lu.resize(sq(N));
+    system_matrix(m_d.pattern, m_d.lu.data());
   }
   if (!m_opt.node_body.empty()) { // the separated operator's scale
     double h2 = 0, g2 = 0;
-    for (std::size_t i = 0; i < m_H.size(); ++i) h2 += m_H[i] * m_H[i], g2 += m_G[i] * m_G[i];
-    m_scale_t = g2 > 0 ? std::sqrt(h2 / g2) : 1.0;
+    for (std::size_t i = 0; i < m_d.H.size(); ++i) h2 += m_d.H[i] * m_d.H[i], g2 += m_d.G[i] * m_d.G[i];
+    m_d.scale_t = g2 > 0 ? std::sqrt(h2 / g2) : 1.0;
   }
-  m_piv.resize(N);
-  const int info = lapack::getrf(N, m_lu.data(), N, m_piv.data());
+  m_d.piv.resize(N);
+  const int info = lapack::getrf(N, m_d.lu.data(), N, m_d.piv.data());
   if (info != 0) throw std::runtime_error("scene: the reference pattern's system is singular (LU pivot " + std::to_string(info) + " is zero); the base rules must hold the body");
 }
 
@@ -193,7 +222,7 @@ void DenseReference::system_matrix(const std::vector<char> &pattern, double *A) 
   const int N = m_n;
 #pragma omp parallel for schedule(static)
   for (int j = 0; j < N; ++j) {
-    const double *src = pattern[j] ? &m_G[static_cast<std::size_t>(j) * N] : &m_H[static_cast<std::size_t>(j) * N];
+    const double *src = pattern[j] ? &m_d.G[static_cast<std::size_t>(j) * N] : &m_d.H[static_cast<std::size_t>(j) * N];
     double *a = A + static_cast<std::size_t>(j) * N;
     if (pattern[j])
       for (int i = 0; i < N; ++i) a[i] = -src[i];
@@ -203,28 +232,28 @@ void DenseReference::system_matrix(const std::vector<char> &pattern, double *A) 
 
 void DenseReference::drop_operator()
 {
-  std::vector<double>().swap(m_H);
-  std::vector<double>().swap(m_G);
-  std::vector<double>().swap(m_Gn);
-  std::vector<double>().swap(m_K);
-  std::vector<int>().swap(m_kpos);
+  std::vector<double>().swap(m_d.H);
+  std::vector<double>().swap(m_d.G);
+  std::vector<double>().swap(m_d.Gn);
+  std::vector<double>().swap(m_d.K);
+  std::vector<int>().swap(m_d.kpos);
 }
 
 void DenseReference::solve(double *X, int nrhs) const
 {
-  if (nrhs > 0) lapack::getrs('N', m_n, nrhs, m_lu.data(), m_n, m_piv.data(), X, m_n);
+  if (nrhs > 0) lapack::getrs('N', m_n, nrhs, m_d.lu.data(), m_n, m_d.piv.data(), X, m_n);
 }
 
 void DenseReference::reference_column(int j, double *col) const
 {
   if (!has_operator()) {
-    std::copy_n(&m_K[static_cast<std::size_t>(m_kpos[j]) * m_n], m_n, col);
+    std::copy_n(&m_d.K[static_cast<std::size_t>(m_d.kpos[j]) * m_n], m_n, col);
     return;
   }
   const std::size_t off = static_cast<std::size_t>(j) * m_n;
-  if (m_pattern[j]) std::copy_n(&m_H[off], m_n, col);
+  if (m_d.pattern[j]) std::copy_n(&m_d.H[off], m_n, col);
   else
-    for (int i = 0; i < m_n; ++i) col[i] = -m_G[off + i];
+    for (int i = 0; i < m_n; ++i) col[i] = -m_d.G[off + i];
 }
 
 void DenseReference::columns(const std::vector<int> &js, double *out) const
@@ -233,7 +262,7 @@ void DenseReference::columns(const std::vector<int> &js, double *out) const
   for (int j : js) {
     if (j < 0 || j >= m_n) throw std::out_of_range("reference: column " + std::to_string(j) + " out of range");
     if (!has_column(j))
-      throw std::invalid_argument(!m_kpos.empty() ? "reference: column " + std::to_string(j) + " of W was not kept (kept_columns)"
+      throw std::invalid_argument(!m_d.kpos.empty() ? "reference: column " + std::to_string(j) + " of W was not kept (kept_columns)"
                                                   : "reference: new columns of W need the operator (keep_operator)");
   }
   const int k = static_cast<int>(js.size());
@@ -244,14 +273,14 @@ void DenseReference::columns(const std::vector<int> &js, double *out) const
 
 void DenseReference::pressure_columns(const std::vector<int> &nodes, double *out) const
 {
-  if (m_Gn.empty()) throw std::invalid_argument("reference: pressure loads need a reference set up with pressure");
-  for (std::size_t q = 0; q < nodes.size(); ++q) std::copy_n(&m_Gn[static_cast<std::size_t>(nodes[q]) * m_n], m_n, out + q * m_n);
+  if (m_d.Gn.empty()) throw std::invalid_argument("reference: pressure loads need a reference set up with pressure");
+  for (std::size_t q = 0; q < nodes.size(); ++q) std::copy_n(&m_d.Gn[static_cast<std::size_t>(nodes[q]) * m_n], m_n, out + q * m_n);
   solve(out, static_cast<int>(nodes.size()));
 }
 
 void DenseReference::rhs(const SystemSelection &sel, const std::vector<char> &pattern, std::vector<double> &b) const
 {
-  if (!has_operator() && (m_kpos.empty() || pattern != m_pattern)) throw std::invalid_argument("scene: this strategy needs the operator (SceneOptions::keep_operator)");
+  if (!has_operator() && (m_d.kpos.empty() || pattern != m_d.pattern)) throw std::invalid_argument("scene: this strategy needs the operator (SceneOptions::keep_operator)");
   b.assign(m_n, 0.0);
   std::vector<int> hc, gc, pc;
   std::vector<double> hv, gv, pv;
@@ -264,22 +293,22 @@ void DenseReference::rhs(const SystemSelection &sel, const std::vector<char> &pa
   }
   for (int node = 0; node < m_nodes; ++node)
     if (has_pressure(sel, node)) pc.push_back(node), pv.push_back(-sel.pressure[node]);
-  if (!pc.empty() && m_Gn.empty()) throw std::invalid_argument("scene frame: pressure loads need a scene set up with pressure (SceneOptions::with_pressure)");
+  if (!pc.empty() && m_d.Gn.empty()) throw std::invalid_argument("scene frame: pressure loads need a scene set up with pressure (SceneOptions::with_pressure)");
   if (!has_operator()) { // K₀′ alone: b = −Σ_j K₀′(:, j) v_j
     for (std::vector<int> *cols : {&hc, &gc})
       for (int &j : *cols) {
-        if (m_kpos[j] < 0) throw std::invalid_argument("reference: a known value at unknown " + std::to_string(j) + ", whose column was not kept (kept_columns)");
-        j = m_kpos[j];
+        if (m_d.kpos[j] < 0) throw std::invalid_argument("reference: a known value at unknown " + std::to_string(j) + ", whose column was not kept (kept_columns)");
+        j = m_d.kpos[j];
       }
     for (double &v : gv) v = -v;
-    add_columns(m_K, m_n, hc, hv, b.data());
-    add_columns(m_K, m_n, gc, gv, b.data());
-    add_columns(m_Gn, m_n, pc, pv, b.data());
+    add_columns(m_d.K, m_n, hc, hv, b.data());
+    add_columns(m_d.K, m_n, gc, gv, b.data());
+    add_columns(m_d.Gn, m_n, pc, pv, b.data());
     return;
   }
-  add_columns(m_H, m_n, hc, hv, b.data());
-  add_columns(m_G, m_n, gc, gv, b.data());
-  add_columns(m_Gn, m_n, pc, pv, b.data());
+  add_columns(m_d.H, m_n, hc, hv, b.data());
+  add_columns(m_d.G, m_n, gc, gv, b.data());
+  add_columns(m_d.Gn, m_n, pc, pv, b.data());
 }
 
 void DenseReference::apply(const std::vector<char> &pattern, const double *x, double *y) const
@@ -287,21 +316,21 @@ void DenseReference::apply(const std::vector<char> &pattern, const double *x, do
   if (!has_operator()) throw std::invalid_argument("reference: the product needs the operator (keep_operator)");
   std::vector<double> xu(m_n), xt(m_n);
   for (int j = 0; j < m_n; ++j) (pattern[j] ? xt : xu)[j] = x[j];
-  lapack::gemv('N', m_n, m_n, 1.0, m_H.data(), m_n, xu.data(), 0.0, y);
-  lapack::gemv('N', m_n, m_n, -1.0, m_G.data(), m_n, xt.data(), 1.0, y);
+  lapack::gemv('N', m_n, m_n, 1.0, m_d.H.data(), m_n, xu.data(), 0.0, y);
+  lapack::gemv('N', m_n, m_n, -1.0, m_d.G.data(), m_n, xt.data(), 1.0, y);
 }
 
 void DenseReference::free_response(const SystemSelection &sel, std::vector<double> &y) const
 {
   if (static_cast<int>(sel.displacement_known.size()) != m_nodes) throw std::invalid_argument("reference: the values do not match the reference's nodes");
   for (int j = 0; j < m_n; ++j)
-    if (static_cast<char>(sel.displacement_known[j / 3][j % 3]) != m_pattern[j])
+    if (static_cast<char>(sel.displacement_known[j / 3][j % 3]) != m_d.pattern[j])
       throw std::invalid_argument("reference: the free response needs the reference pattern (unknown " + std::to_string(j) + " differs)");
-  rhs(sel, m_pattern, y);
+  rhs(sel, m_d.pattern, y);
   solve(y.data(), 1);
 }
 
-std::size_t DenseReference::memory_bytes() const { return 8 * (m_H.size() + m_G.size() + m_Gn.size() + m_K.size() + m_lu.size()) + 4 * (m_piv.size() + m_kpos.size()); }
+std::size_t DenseReference::memory_bytes() const { return 8 * (m_d.H.size() + m_d.G.size() + m_d.Gn.size() + m_d.K.size() + m_d.lu.size()) + 4 * (m_d.piv.size() + m_d.kpos.size()); }
 
 // --- the column cache ---------------------------------------------------------------------------
 
@@ -327,22 +356,46 @@ void ReferenceColumns::require(const std::vector<int> &js)
   const Timer timer;
   const std::size_t n = static_cast<std::size_t>(m_ref->num_unknowns()), k = missing.size();
   std::unique_ptr<double[]> block(new double[n * k]);
-  std::unique_ptr<float[]> single(new float[n * k]);
   m_ref->columns(missing, block.get());
+  if (!m_order.empty()) {
 #pragma omp parallel for schedule(static)
-  for (std::size_t q = 0; q < k; ++q) {
-    double *col = block.get() + q * n;
-    if (!m_order.empty()) {
+    for (std::size_t q = 0; q < k; ++q) {
+      double *col = block.get() + q * n;
       const std::vector<double> natural(col, col + n);
       for (std::size_t p = 0; p < n; ++p) col[p] = natural[m_order[p]];
     }
-    for (std::size_t p = 0; p < n; ++p) single[q * n + p] = static_cast<float>(col[p]);
   }
-  for (std::size_t q = 0; q < k; ++q) m_index.emplace(missing[q], block.get() + q * n), m_single.emplace(missing[q], single.get() + q * n);
+  keep(std::move(missing), std::move(block));
+  m_seconds += timer.seconds();
+}
+
+void ReferenceColumns::keep(std::vector<int> js, std::unique_ptr<double[]> block)
+{
+  const std::size_t n = static_cast<std::size_t>(m_ref->num_unknowns()), k = js.size();
+  std::unique_ptr<float[]> single(new float[n * k]);
+#pragma omp parallel for schedule(static)
+  for (std::size_t i = 0; i < n * k; ++i) single[i] = static_cast<float>(block[i]);
+  for (std::size_t q = 0; q < k; ++q) m_index.emplace(js[q], block.get() + q * n), m_single.emplace(js[q], single.get() + q * n);
   m_columns += k;
   m_blocks.push_back(std::move(block));
   m_single_blocks.push_back(std::move(single));
-  m_seconds += timer.seconds();
+  m_block_columns.push_back(std::move(js));
+}
+
+std::vector<ReferenceColumns::Block> ReferenceColumns::blocks() const
+{
+  std::vector<Block> out;
+  for (std::size_t b = 0; b < m_blocks.size(); ++b) out.push_back(Block{m_block_columns[b], m_blocks[b].get()});
+  return out;
+}
+
+void ReferenceColumns::adopt(std::vector<int> js, std::unique_ptr<double[]> block)
+{
+  std::unordered_set<int> seen;
+  for (int j : js)
+    if (j < 0 || j >= m_ref->num_unknowns() || has(j) || !seen.insert(j).second)
+      throw std::invalid_argument("ReferenceColumns: a saved column " + std::to_string(j) + " is out of range or held twice");
+  keep(std::move(js), std::move(block));
 }
 
 std::size_t ReferenceColumns::memory_bytes() const { return 12 * m_columns * static_cast<std::size_t>(m_ref->num_unknowns()); }

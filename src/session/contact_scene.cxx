@@ -33,6 +33,7 @@ ContactScene::ContactScene(const SurfaceMesh &mesh, const Material &material, co
   MachineLimits limits;
   HssbemCallThrow(HssbemMachineLimits(PETSC_COMM_SELF, &limits));
   m_session = std::make_unique<ContactSession>(m_problem, std::move(job), so, limits);
+  if (!reference.load.empty()) m_session->load(reference.load);
   m_session->set_up();
 }
 

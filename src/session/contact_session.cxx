@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <stdexcept>
 
 namespace hssbem {
@@ -171,7 +172,7 @@ void ContactSession::make_reference()
 {
   const bool pressure = has_pressure(m_job.base) || std::any_of(m_job.frames.begin(), m_job.frames.end(), has_pressure);
   std::vector<char> pattern = m_job.base.unknown_pattern();
-  std::vector<char> kept = kept_columns(contact_loaded_unknowns(m_problem->disc(), pattern, m_job.obstacles, m_job.settings, m_options.contact), m_job);
+  std::vector<char> kept = kept_unknowns();
   m_pre = std::make_shared<ContactPrecomputation>();
   m_pre->on_h2 = m_on_h2;
   m_bodies.assign(m_on_h2.size(), ContactBodyReport{});
@@ -223,11 +224,21 @@ void ContactSession::adopt(std::shared_ptr<ContactPrecomputation> pre)
   m_pre = std::move(pre);
 }
 
+std::vector<char> ContactSession::kept_unknowns() const
+{
+  return kept_columns(contact_loaded_unknowns(m_problem->disc(), m_job.base.unknown_pattern(), m_job.obstacles, m_job.settings, m_options.contact), m_job);
+}
+
+/// The options that shape the precomputation: the operator's quadrature, the reference's type and
+/// compression, the candidates' reach and depth (not the frames' solver, nor the interior's).
 Fingerprint ContactSession::fingerprint() const
 {
   OptionValues used = options_used();
   used["bem_mat_type"] = OptionValue::of(*find_option("bem_mat_type"), mat_type());
-  return hssbem::fingerprint(*m_problem, m_job.base.unknown_pattern(), {}, used, 1);
+  for (auto it = used.begin(); it != used.end();)
+    it = it->first == "contact_tol" || it->first == "contact_max_it" || it->first.rfind("bem_interior_", 0) == 0 ? used.erase(it) : std::next(it);
+  const bool dense = std::none_of(m_on_h2.begin(), m_on_h2.end(), [](char h) { return h != 0; });
+  return hssbem::fingerprint(*m_problem, m_job.base.unknown_pattern(), dense ? kept_unknowns() : std::vector<char>{}, used, 1);
 }
 
 const ContactFrameReport &ContactSession::solve(const SystemSelection &values, const std::vector<Pose> &poses, long long frame)

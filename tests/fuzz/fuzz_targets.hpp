@@ -1,16 +1,22 @@
 // The fuzzed entry points, shared by the libFuzzer harnesses (fuzz_entry.cpp) and the regression
 // test of the main build (test_fuzz_regressions.cpp): each reads one input as a user's file would
 // be read, and may only fail with the reader's own error (MeshError, ProblemError). Anything
-// else — another exception, a crash, a sanitizer report — is a bug.
+// else — another exception, a crash, a sanitizer report — is a bug. (Saved precomputations:
+// SavedFileError.)
 #pragma once
 
+#include "hssbem/io/saved_file.hpp"
 #include "hssbem/mesh/mesh.hpp"
 #include "hssbem/problem/problem.hpp"
 
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
+#include <fstream>
 #include <string>
 #include <vector>
+
+#include <unistd.h>
 
 namespace hssbem::fuzz {
 
@@ -46,10 +52,29 @@ inline void problem_input(const std::string &bytes)
   }
 }
 
+/// A saved precomputation as -hssbem_load reads it (the reader takes a path: the bytes go to a
+/// file of this process first): the header, length and checksum, then HDF5 and the arrays and
+/// attributes a contact's load reads. It may only fail with SavedFileError.
+inline void saved_input(const std::string &bytes)
+{
+  const std::string path = "/tmp/hssbem_fuzz_saved." + std::to_string(::getpid());
+  std::ofstream(path, std::ios::binary | std::ios::trunc).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  try {
+    const SavedFileReader r(path, "contact precomputation", 1);
+    (void)r.text("fingerprint_version");
+    (void)r.chars("on_h2");
+    (void)r.ints("reference/piv");
+    (void)r.doubles("reference/lu");
+  } catch (const SavedFileError &) {
+  }
+  std::remove(path.c_str());
+}
+
 inline void fuzz_msh(const std::string &b) { mesh_input(b, "fuzz.msh"); }
 inline void fuzz_stl(const std::string &b) { mesh_input(b, "fuzz.stl"); }
 inline void fuzz_off(const std::string &b) { mesh_input(b, "fuzz.off"); }
 inline void fuzz_obj(const std::string &b) { mesh_input(b, "fuzz.obj"); }
 inline void fuzz_problem(const std::string &b) { problem_input(b); }
+inline void fuzz_saved(const std::string &b) { saved_input(b); }
 
 } // namespace hssbem::fuzz

@@ -3,10 +3,11 @@
 
     make_seeds.py OUT_DIR
 
-writes OUT_DIR/{msh,stl,off,obj,problem}/: the small shipped .msh files (Gmsh 2.2 and 4.1), the
+writes OUT_DIR/{msh,stl,off,obj,problem,saved}/: the small shipped .msh files (Gmsh 2.2 and 4.1), the
 box with a spherical cavity (tests/data) converted to ASCII STL, binary STL, OFF and OBJ (polygons and the OBJ
 corner forms included), a unit cube alone, with a cavity and overlapping another in every format
-(small: under the harnesses' 4 kB input limit), and the shipped example problems (.json)."""
+(small: under the harnesses' 4 kB input limit), the shipped example problems (.json) and saved
+precomputations' headers."""
 import os
 import shutil
 import struct
@@ -101,6 +102,20 @@ def main():
     for name in sorted(os.listdir(examples)):
         if name.endswith(".json"):
             shutil.copy(os.path.join(examples, name), os.path.join(out, "problem", name))
+    saved_seeds(out)
+
+
+def saved_seeds(out):
+    """Saved precomputations' headers (io/saved_file.hpp): the right kind and format with a
+    length and checksum that do not hold, another kind, another format, a damaged field."""
+    def header(kind="contact precomputation", fmt="1", size="512", checksum="0123456789abcdef", tail=b""):
+        text = "hssbem saved file\nkind: %s\nformat: %s\nbytes: %s\nchecksum: %s\n" % (kind, fmt, size, checksum)
+        return text.encode().ljust(512, b"\0") + tail
+    seeds = {"empty_body": header(), "with_body": header(size="600", tail=b"\x89HDF\r\n\x1a\n" + bytes(80)),
+             "other_kind": header(kind="scene precomputation"), "other_format": header(fmt="7"),
+             "bad_size": header(size="5x2"), "bad_checksum": header(checksum="zz")}
+    for name, data in seeds.items():
+        write(os.path.join(out, "saved", name + ".pre"), data)
 
 
 if __name__ == "__main__":

@@ -3,7 +3,8 @@
 # its seeds (make_seeds.py) and its kept regression inputs, for a bounded time or number of
 # inputs each, two harnesses at a time (one per core of the CI machine):
 #
-#   tests/fuzz/run_fuzzers.sh BUILD 60              # 60 s per harness (CI: 3 rounds, about 3 min)
+#   tests/fuzz/run_fuzzers.sh BUILD 60              # 60 s per harness (CI: 3 rounds, about 3 min;
+#                                                   # the sixth, saved, shares the third round)
 #   tests/fuzz/run_fuzzers.sh BUILD runs=1000000    # 10^6 inputs per harness
 #   tests/fuzz/run_fuzzers.sh BUILD 600 --grow      # then merge what is new into corpus/<harness>/
 #
@@ -22,7 +23,7 @@ case "$limit" in
   *) budget="-max_total_time=$limit" ;;
 esac
 rm -rf "$build/seeds" && /usr/bin/python3 "$here/make_seeds.py" "$build/seeds"
-harnesses=(msh stl off obj problem)
+harnesses=(msh stl off obj problem saved)
 
 run_one() { # run_one HARNESS: fuzz, then report one line; returns non-zero on a crash
   local h=$1 start corpus artifacts

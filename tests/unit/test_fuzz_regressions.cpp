@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -62,6 +63,17 @@ TEST(FuzzRegressions, Corpora)
   EXPECT_GE(replay(corpus / "off", fuzz_off), k_min_corpus);
   EXPECT_GE(replay(corpus / "obj", fuzz_obj), k_min_corpus);
   EXPECT_GE(replay(corpus / "problem", fuzz_problem), k_min_corpus);
+}
+
+TEST(FuzzRegressions, SavedInputs)
+{
+  using namespace hssbem::fuzz;
+  replay(regressions / "saved", fuzz_saved);
+  replay(corpus / "saved", fuzz_saved);
+  const fs::path seeds = fs::temp_directory_path() / ("hssbem_saved_seeds." + std::to_string(::getpid()));
+  ASSERT_EQ(std::system(("/usr/bin/python3 " + (fs::path(HSSBEM_FUZZ_DIR) / "make_seeds.py").string() + " " + seeds.string() + " > /dev/null").c_str()), 0);
+  EXPECT_GE(replay(seeds / "saved", fuzz_saved), 6);
+  fs::remove_all(seeds);
 }
 
 TEST(FuzzRegressions, ProblemInputs)

@@ -23,6 +23,8 @@ struct DriverOptions {
   bool scene_monitor = option_default::scene_monitor;           ///< -scene_monitor: one line per frame
   bool scene_keep_partial = option_default::scene_keep_partial; ///< -scene_keep_partial: a failed frame commits the frames before it
   bool contact_monitor = option_default::contact_monitor;       ///< -contact_monitor: one line per iteration
+  std::string save{option_default::hssbem_save};               ///< -hssbem_save: the precomputation's file, written after the set-up
+  std::string load{option_default::hssbem_load};               ///< -hssbem_load: the precomputation's file, read instead of the set-up
   bool help = false;          ///< -help
 };
 

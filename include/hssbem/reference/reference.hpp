@@ -74,6 +74,18 @@ struct DenseReferenceOptions {
   std::vector<char> kept_columns;
 };
 
+/// What a dense reference holds once set up: the arrays a saved precomputation keeps
+/// (session/precomputation_file.hpp) and gives back to DenseReference(DenseReferenceData).
+struct DenseReferenceData {
+  std::vector<char> pattern;        ///< the reference pattern, one entry per unknown
+  std::vector<double> H, G, Gn;     ///< the operator (keep_operator), column-major; Gn with pressure
+  std::vector<double> K;            ///< reference_columns_only: the kept columns of K₀′, column-major
+  std::vector<int> kpos;            ///< per unknown: its column in K, or -1 (empty: H and G hold them)
+  std::vector<double> lu;           ///< LU of A₀ (LAPACK getrf), column-major
+  std::vector<int> piv;             ///< its pivots (1-based)
+  double scale_t = 1;               ///< ‖H‖_F / ‖G‖_F (operator_scale())
+};
+
 /// The dense reference: H and G assembled, A₀ = LU (LAPACK), W's columns by getrs on demand.
 /// Memory 8 N² bytes for the LU, plus 16 N² for H and G (keep_operator) or 8 N · kept for K₀′
 /// alone (reference_columns_only), and 8 N² / 3 for Gn.
@@ -82,11 +94,15 @@ public:
   /// Assembles and factors A₀ for `pattern` (one entry per unknown, 1 where u is known). Throws
   /// std::runtime_error when A₀ is singular (a pattern that leaves a body free to move).
   DenseReference(const BemOperator &op, std::vector<char> pattern, const DenseReferenceOptions &options = {});
+  /// A reference set up before (data() of one, saved and loaded): no assembly, no factorization.
+  /// Throws std::invalid_argument when the arrays do not fit together (sizes, pivots, kept
+  /// columns), so that no solve ever reads outside them.
+  explicit DenseReference(DenseReferenceData data);
   ~DenseReference() override;
   DenseReference(const DenseReference &) = delete;
   DenseReference &operator=(const DenseReference &) = delete;
 
-  const std::vector<char> &pattern() const override { return m_pattern; }
+  const std::vector<char> &pattern() const override { return m_d.pattern; }
   void solve(double *X, int nrhs) const override;
   void columns(const std::vector<int> &js, double *out) const override;
   void free_response(const SystemSelection &sel, std::vector<double> &y) const override;
@@ -101,11 +117,13 @@ public:
   void apply(const std::vector<char> &pattern, const double *x, double *y) const;
   /// A_S, column-major N × N, into A (needs the operator).
   void system_matrix(const std::vector<char> &pattern, double *A) const;
-  bool has_operator() const { return !m_H.empty(); }
+  bool has_operator() const { return !m_d.H.empty(); }
+  /// What it holds (to save it).
+  const DenseReferenceData &data() const { return m_d; }
   /// Frees H, G and Gn (what keep_operator = false does after the set-up).
   void drop_operator();
   /// ‖H‖_F / ‖G‖_F: the scale of −G columns against H columns (the krylov strategy's scaling).
-  double operator_scale() const { return m_scale_t; }
+  double operator_scale() const { return m_d.scale_t; }
 
 private:
   void assemble(const BemOperator &op);
@@ -113,7 +131,7 @@ private:
   void place_rows(int r0, int rows, const double *H, const double *G, double sums[2]);
   void check_options() const;
   /// Column j of K₀′ is at hand (H and G, or kept in K₀′).
-  bool has_column(int j) const { return has_operator() || (!m_kpos.empty() && m_kpos[j] >= 0); }
+  bool has_column(int j) const { return has_operator() || (!m_d.kpos.empty() && m_d.kpos[j] >= 0); }
   /// Separate bodies' rows and columns made independent (DenseReferenceOptions::node_body).
   void separate_bodies(const BemOperator &op);
   void factor();
@@ -122,13 +140,7 @@ private:
 
   int m_n = 0, m_nodes = 0;
   DenseReferenceOptions m_opt;
-  std::vector<char> m_pattern;
-  std::vector<double> m_H, m_G, m_Gn; ///< the operator, column-major
-  std::vector<double> m_K;            ///< reference_columns_only: the kept columns of K₀′, column-major
-  std::vector<int> m_kpos;            ///< per unknown: its column in m_K, or -1
-  std::vector<double> m_lu;           ///< LU of A₀, column-major, and its pivots
-  std::vector<int> m_piv;
-  double m_scale_t = 1;
+  DenseReferenceData m_d;
 };
 
 /// Columns W(:, j) of a reference factorization, computed on demand in blocks and kept (a
@@ -161,11 +173,28 @@ public:
   double seconds() const { return m_seconds; }
   const ReferenceFactorization &reference() const { return *m_ref; }
 
+  /// The columns held, block by block as require() computed them: each block's unknowns and its
+  /// columns (N × |js|, column-major, rows in row_order()) — what a saved precomputation keeps.
+  struct Block {
+    const std::vector<int> &js;
+    const double *data;
+  };
+  std::vector<Block> blocks() const;
+  /// A block computed before (one of blocks(), saved and loaded; rows in this cache's
+  /// row_order()), held as if require() had computed it: its single-precision copy is made here
+  /// as require() makes it, so the columns are the same to the bit. Throws std::invalid_argument
+  /// for an unknown out of range or held already.
+  void adopt(std::vector<int> js, std::unique_ptr<double[]> block);
+
 private:
+  /// Holds `block` (the columns of js, rows in order) and its single-precision copy.
+  void keep(std::vector<int> js, std::unique_ptr<double[]> block);
+
   const ReferenceFactorization *m_ref;
   std::vector<int> m_order, m_position;
   std::vector<std::unique_ptr<double[]>> m_blocks;
   std::vector<std::unique_ptr<float[]>> m_single_blocks;
+  std::vector<std::vector<int>> m_block_columns; ///< per block: its unknowns
   std::size_t m_columns = 0;
   double m_seconds = 0;
   std::unordered_map<int, const double *> m_index;

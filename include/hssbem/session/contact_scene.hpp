@@ -47,6 +47,10 @@ struct ContactSceneReference {
   H2Options h2;                                                         ///< the H² references' compression
   double h2_rtol = option_default::contact_h2_rtol;                     ///< their accurate solves' GMRES tolerance
   double h2_factor_tol = option_default::contact_h2_factor_tol;         ///< their factorization's tolerance
+  /// A file ContactScene::save() wrote for the same scene: its precomputation is loaded instead
+  /// of set up (a second start in seconds); refused (SavedFileError, naming what differs) when it
+  /// was made for another mesh, material, pattern, candidates or options. Empty: set up.
+  std::string load;
 };
 
 class ContactScene {
@@ -96,6 +100,11 @@ public:
   /// pulling force). Throws std::runtime_error after a failed solve.
   std::vector<Vec3> haptic_forces(const std::vector<Vec3> &offsets) { return m_session->haptic_forces(offsets); }
   std::vector<Vec3> haptic_forces(const std::vector<Pose> &poses) { return m_session->haptic_forces(poses); }
+
+  /// Saves the precomputation (the dense references and the columns of W computed so far) to
+  /// `path`, for a later scene's ContactSceneReference::load (docs/persistence.md). Throws
+  /// std::invalid_argument on an H² reference (not saved yet), OutputError when it cannot write.
+  void save(const std::string &path) const { m_session->save(path); }
 
   int obstacle_index(const std::string &name) const;
   const Discretization &discretization() const { return m_problem->disc(); }

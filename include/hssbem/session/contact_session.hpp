@@ -85,8 +85,15 @@ public:
   void adopt(std::shared_ptr<ContactPrecomputation> precomputation);
   /// What set_up() built (null before).
   const std::shared_ptr<ContactPrecomputation> &precomputation() const { return m_pre; }
-  /// The fingerprint of this session's precomputation (the problem, the pattern, the options).
+  /// The fingerprint of this session's precomputation (the problem, the pattern, the kept
+  /// columns of a dense reference as its candidate set, the options that shape it).
   Fingerprint fingerprint() const;
+  /// Saves the precomputation (after set_up(); the columns frames added included) to `path`,
+  /// which may not be one of `inputs` (session/precomputation_file.hpp: the format, the errors).
+  void save(const std::string &path, const std::vector<std::string> &inputs = {}) const;
+  /// Adopts the precomputation saved in `path` (before set_up(), which then builds the engine
+  /// only). Throws SavedFileError naming what differs or what is damaged.
+  void load(const std::string &path);
 
   /// Solves a frame: `values` the known values (the reference pattern's), the obstacles at their
   /// base positions at `poses` (one per obstacle, absolute; Pose::translation(offset) for a
@@ -128,6 +135,8 @@ private:
   const ContactFrameReport &solve(const SystemSelection &values, const std::vector<Pose> &poses, long long frame);
   std::unique_ptr<ReferenceFactorization> body_reference(const BemOperator &op, std::vector<char> pattern, std::vector<char> kept, bool pressure, int body);
   void make_reference();
+  /// Per unknown, the columns of K₀′ a dense reference keeps (kept_columns(); empty: every one).
+  std::vector<char> kept_unknowns() const;
 
   std::shared_ptr<const SessionProblem> m_problem;
   ContactJob m_job;

@@ -17,6 +17,7 @@
 namespace hssbem {
 
 struct Fingerprint {
+  std::string version;        ///< hssbem's version (a precomputation is read by the version that made it)
   long long vertices = 0, triangles = 0, nodes = 0;
   std::uint64_t mesh = 0;     ///< the vertices' coordinates and the triangles (FNV-1a of their bytes)
   double feature_angle = 0;   ///< the dof nodes follow from the mesh and this angle
@@ -26,7 +27,7 @@ struct Fingerprint {
   long long candidates = 0;   ///< unknowns whose columns the precomputation may hold (0: every one)
   std::uint64_t candidate_set = 0;
   std::string options;        ///< the options it was made with, "name=value" separated by spaces, by name
-  int ranks = 1;
+  int ranks = 1;              ///< the ranks the precomputation is spread over (a contact's: 1, rank 0's)
 
   /// The first way in which `stored` (a precomputation's) differs from this one (the problem's),
   /// as one line ("the mesh differs: 13402 vertices in the file, 13398 in the problem"), or empty

@@ -1,0 +1,41 @@
+/// \file precomputation_file.hpp
+/// A contact's precomputation (ContactPrecomputation: the dense reference of each body, its LU
+/// factors and pivots and the kept columns of K₀′, and the columns of W computed so far) saved
+/// to one file and loaded back instead of the set-up, for the same problem (docs/persistence.md).
+///
+/// The file (io/saved_file.hpp: a checksummed HDF5 file, written the safe way) keeps the
+/// precomputation's Fingerprint beside it; a load compares it with the session's before it reads
+/// anything else and refuses a file made for another problem with one line naming what differs.
+/// Values (loads, prescribed displacements, obstacle poses) may differ: that is the point. The
+/// frames after a load are the cold run's to the bit (the same factors, the same columns).
+///
+/// Layout (format 1): text attributes `fingerprint_*` (the Fingerprint's fields); arrays
+/// `on_h2` (per body), `reference/*` (one body) or `body<b>/*` (several: CompositeReference),
+/// each a DenseReferenceData (`pattern`, `lu`, `piv`, `K`, `kpos`, `H`, `G`, `Gn`, `scale_t`),
+/// and `columns/order` with `columns/<k>/js`, `columns/<k>/values` for the k-th block of W's
+/// columns. A contact's precomputation lives on one rank (rank 0's): the file is one rank's too.
+#pragma once
+
+#include "hssbem/session/contact_session.hpp"
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace hssbem {
+
+/// The format version the files are written in and the only one read (a change of layout
+/// increments it; docs/persistence.md).
+inline constexpr int kPrecomputationFormat = 1;
+
+/// Saves `session`'s precomputation (after set_up(), or after frames: the columns they added are
+/// kept too) to `path`, which may not be one of `inputs`. Throws std::invalid_argument before
+/// set-up or for an H² reference (not saved yet), OutputError when the file cannot be written.
+void save_precomputation(const ContactSession &session, const std::string &path, const std::vector<std::string> &inputs = {});
+
+/// The precomputation saved in `path` for `session`'s problem, ready for session.adopt(). Throws
+/// SavedFileError ("cannot load '<path>': ...") for a file that is not one, is damaged, or was
+/// made for another problem (the first difference named: Fingerprint::difference()).
+std::shared_ptr<ContactPrecomputation> load_precomputation(const ContactSession &session, const std::string &path);
+
+} // namespace hssbem
