@@ -27,6 +27,10 @@ Usage
         [--radius R] [--hertz-far HF] [--hertz-fine-radius RF] [--hertz-pair GAP]
         (pole at the origin, flat face up at z = R; size HC within RF of the pole, growing to HF;
         --hertz-pair adds its mirror image below, pole at z = -GAP: two bodies in one mesh)
+  scripts/gen_meshes.py --block-size HC --out b.msh      # a contact block (friction: sliding, Mindlin)
+        [--block-width W] [--block-depth D] [--block-far HF] [--block-fine-radius RF]
+        (the box [-W/2, W/2]^2 x [-D, 0], top face at z = 0; size HC within RF of the top's centre,
+        growing to HF; regions top, bottom, sides)
 
 Nested refinement (sphere, cube, hollow sphere, disk organ; not the cardioid): every triangle
 (a, b, c) is split into (a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca) with the new mid-edge vertices
@@ -745,6 +749,28 @@ def hertz_mesh(R, hc, hf, rf, pair_gap):
             ["flat_a", "curved_a", "flat_b", "curved_b"], [+1, +1])
 
 
+# A contact block (an elastic half-space under a sliding instrument) -----------------------------
+
+
+def contact_block(W, D, hc, hf, rf):
+    """The box [-W/2, W/2]^2 x [-D, 0] (top face at z = 0): gmsh size hc within rf of the top face's
+    centre (the origin), growing linearly to hf.  Vertices snapped onto the box's planes.  Returns
+    (V, T, region) with regions 0 top, 1 bottom, 2 sides."""
+    def build():
+        gmsh.model.occ.addBox(-W / 2, -W / 2, -D, W, W, D)
+        gmsh.model.occ.synchronize()
+        f = gmsh.model.mesh.field.add("MathEval")
+        gmsh.model.mesh.field.setString(f, "F", f"min({hf}, {hc} + 0.35 * max(0, sqrt(x*x + y*y + z*z) - {rf}))")
+        gmsh.model.mesh.field.setAsBackgroundMesh(f)
+    V, T = mesh_occ_surface(build, hf)
+    for d, planes in ((0, (-W / 2, W / 2)), (1, (-W / 2, W / 2)), (2, (-D, 0.0))):
+        for p in planes:
+            V[np.abs(V[:, d] - p) < 1e-9 * max(W, D), d] = p
+    T = orient_outward(V, T)
+    on_top, on_bottom = V[:, 2] == 0.0, V[:, 2] == -D
+    return V, T, np.where(on_top[T].all(axis=1), 0, np.where(on_bottom[T].all(axis=1), 1, 2))
+
+
 # ------------------------------------------------------------------------------------------------
 # example problem checks
 
@@ -866,6 +892,13 @@ def main():
                     help="Hertz: size HC within this distance of the pole (default 0.3 R)")
     ap.add_argument("--hertz-pair", type=float, metavar="GAP",
                     help="Hertz: add the mirror image below, its pole at z = -GAP (two bodies)")
+    ap.add_argument("--block-size", type=float, metavar="HC",
+                    help="write a contact block (top face at z = 0) with size HC near the top's centre to --out FILE")
+    ap.add_argument("--block-width", type=float, default=1.2, help="contact block: width W (default 1.2)")
+    ap.add_argument("--block-depth", type=float, default=0.6, help="contact block: depth D (default 0.6)")
+    ap.add_argument("--block-far", type=float, default=0.15, help="contact block: size far from the centre (default 0.15)")
+    ap.add_argument("--block-fine-radius", type=float, default=0.28,
+                    help="contact block: size HC within this distance of the top's centre (default 0.28)")
     ap.add_argument("--disk-pair", type=float, metavar="GAP",
                     help="disk organ: add its mirror image below, the two flat faces' poles GAP apart "
                     "(two bodies; regions a_face, a_rest, b_face, b_rest, the faces toward each other)")
@@ -895,6 +928,16 @@ def main():
         d = os.path.dirname(os.path.abspath(args.out))
         os.makedirs(d, exist_ok=True)
         save(d, os.path.basename(args.out), V, T, reg, names, signs, [])
+        return
+
+    if args.block_size is not None:
+        if not args.out or not args.out.endswith(".msh"):
+            ap.error("contact block mode needs --out FILE.msh")
+        V, T, reg = contact_block(args.block_width, args.block_depth, args.block_size, args.block_far,
+                                  args.block_fine_radius)
+        d = os.path.dirname(os.path.abspath(args.out))
+        os.makedirs(d, exist_ok=True)
+        save(d, os.path.basename(args.out), V, T, reg, ["top", "bottom", "sides"], [+1], [])
         return
 
     if single_cardioid:

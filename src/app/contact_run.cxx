@@ -39,7 +39,7 @@ void print_set_up(const ContactSession &session, double seconds)
 /// The single solve: what it found, and the result file.
 void contact_single(ContactSession &session, const std::string &output, int ranks)
 {
-  session.obstacles().note_depth(0, poses_of(session.job().placements)[0]);
+  session.obstacles().note_depth(0, session.job().placements[0]);
   const ContactFrameReport &rep = session.step(0);
   HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF, "hssbem: contact: %lld vertices touching (%lld stick, %lld slip) after %lld iterations, %.3f ms\n", rep.active_vertices, rep.stick,
                               rep.slip, rep.iterations, 1e3 * rep.seconds));
@@ -68,7 +68,7 @@ void contact_frames(ContactSession &session, const std::string &output, int rank
   long long iterations = 0;
   { // the progress line ends before the summary
     const Progress progress("contact frames");
-    const std::vector<std::vector<Pose>> poses = poses_of(session.job().placements);
+    const std::vector<std::vector<Pose>> &poses = session.job().placements;
     for (std::size_t i = 0; i < nframes; ++i) {
       frame = static_cast<long long>(i);
       session.obstacles().note_depth(frame, poses[i]);

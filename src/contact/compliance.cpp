@@ -12,7 +12,7 @@ std::vector<int> loaded_unknowns(const std::vector<ContactPoint> &points, const 
   for (const ContactPoint &p : points)
     for (int i = 0; i < p.terms; ++i)
       for (int b = 0; b < 3; ++b)
-        if (!pattern[3 * p.term_node[i] + b] && (!normal_only || p.lw[i] * p.frame[0][b] != 0.0)) loaded.push_back(3 * p.term_node[i] + b);
+        if (!pattern[3 * p.term_node[i] + b] && (!normal_only || p.lw[i][0] * p.frame[0][b] != 0.0)) loaded.push_back(3 * p.term_node[i] + b);
   return loaded;
 }
 
@@ -29,14 +29,14 @@ Compliance::Compliance(const std::vector<ContactPoint> &points, const std::vecto
       for (int k = 0; k < 3; ++k)
         for (int a = 0; a < 3; ++a) {
           const bool u_unknown = !pattern[3 * m + a]; // and so t known: the column is loaded
-          t.M[i][3 * k + a] = u_unknown ? p.mw[i] * p.frame[k][a] : 0.0;
-          t.L[i][3 * a + k] = u_unknown ? p.lw[i] * p.frame[k][a] : 0.0;
+          t.M[i][3 * k + a] = u_unknown ? p.mw[i][k] * p.frame[k][a] : 0.0;
+          t.L[i][3 * a + k] = u_unknown ? p.lw[i][k] * p.frame[k][a] : 0.0;
         }
       t.row[i] = columns.position(3 * m);
     }
     for (int k = 0; k < 3; ++k) { // the slave node's measure along frame k: zero when prescribed
       const Mat3 &M = t.M[0];
-      m_held[c][k] = std::abs(M[3 * k]) + std::abs(M[3 * k + 1]) + std::abs(M[3 * k + 2]) <= 1e-12;
+      m_held[c][k] = p.held[k] || std::abs(M[3 * k]) + std::abs(M[3 * k + 1]) + std::abs(M[3 * k + 2]) <= 1e-12;
     }
     if (!normal_only) attach(static_cast<int>(c));
   }
@@ -163,13 +163,13 @@ std::vector<Vec3> Compliance::free_w(const std::vector<Vec3> &u_free, const std:
   std::vector<Vec3> w(m_points->size());
   for (std::size_t c = 0; c < w.size(); ++c) {
     const ContactPoint &p = (*m_points)[c];
-    Vec3 d{}, dp{};
-    for (int i = 0; i < p.terms; ++i) {
-      d = d + p.mw[i] * u_free[p.term_node[i]];
-      if (!u_prev.empty()) dp = dp + p.mw[i] * u_prev[p.term_node[i]];
+    for (int k = 0; k < 3; ++k) {
+      // the gap; the slip over the step (a follower's tie rows: the whole relative displacement)
+      const bool step = k > 0 && !u_prev.empty() && p.lead < 0;
+      double d = 0;
+      for (int i = 0; i < p.terms; ++i) d += p.mw[i][k] * dot(p.frame[k], step ? u_free[p.term_node[i]] - u_prev[p.term_node[i]] : u_free[p.term_node[i]]);
+      w[c][k] = k == 0 ? p.g0 + d : d - dot(p.frame[k], p.motion); // relative to the obstacle's surface point (pairs: the master's terms move too)
     }
-    const Vec3 slip = d - dp;
-    w[c] = {p.g0 + dot(p.frame[0], d), dot(p.frame[1], slip), dot(p.frame[2], slip)};
   }
   return w;
 }

@@ -17,25 +17,37 @@
 
 namespace hssbem::contact_detail {
 
-/// One contact point: a dof node of a candidate vertex facing an obstacle or another body (every
-/// node of a sharp vertex is a point of its own, with the vertex's gap and normal: the
-/// non-penetration holds for the whole vertex, and each node's face group carries its own
-/// contact traction; the vertex's pressure is that of the node whose group faces the other side). Its
-/// relative displacement is Σ_i mw[i] u(node[i]) (the slave node, minus the master triangle's
-/// nodes interpolated), its contact traction λ (local frame) loads node[i] with lw[i] λ: the
-/// slave node with λ, the master's nodes with −β_i a_s / a_i λ (equal and opposite forces).
+/// One contact point: a candidate vertex against a partner — an obstacle or another body. Points
+/// are keyed by (node, partner): a vertex may touch an obstacle and a body, or two bodies, at once,
+/// each through points of its own. The point at the node facing the partner leads: Signorini's
+/// and Coulomb's conditions are its. Every other dof node of the vertex (a sharp vertex's face
+/// groups) follows it: closed while the lead is, its normal row bound to the partner like the
+/// lead's (g = 0, its traction of either sign: it is a shear of its own face), and — for the
+/// vertex's anchor partner (the nearest) with friction — its tangential rows tied to the anchor's
+/// node along the anchor's friction tangents (equal and opposite forces, internal to the body):
+/// a stuck vertex holds all its nodes, as a displacement rule reaches every node of a vertex.
+/// Row k of its relative displacement is Σ_i mw[i][k] (frame[k] · u(node[i])) (the slave node,
+/// minus the master triangle's nodes interpolated, or the anchor's node for a tie row); its
+/// contact traction λ (local frame) loads node[i] with Σ_k lw[i][k] λ_k frame[k]: the slave node
+/// with λ, the master's nodes with −β_i a_s / a_i λ (equal and opposite forces).
 struct ContactPoint {
   int vertex = -1, node = -1;   ///< slave vertex and this point's dof node
-  bool facing = true;           ///< the node's face group faces the other side (the vertex's pressure)
+  bool facing = true;           ///< a leading point (at the node facing its partner); false: a follower at another node of the vertex
+  int lead = -1;                ///< a follower's leading point (its index in the frame's points); -1 for a leading point
   int obstacle = -1;            ///< the obstacle, or -1 for a pair of bodies
   int body = -1, other = -1;    ///< the slave's body; the master body (body pairs), else -1
+  int partner = 0;              ///< the obstacle, or the number of obstacles plus the master body
+  int key = -1;                 ///< node × partners + partner: the point from frame to frame (warm starts, kept inverses)
   int terms = 1;
-  std::array<int, 4> term_node{};
-  std::array<double, 4> mw{}, lw{};
+  std::array<int, 5> term_node{};
+  std::array<Vec3, 5> mw{}, lw{}; ///< per term, per local row k: the measure's and the load's weights
   std::array<Vec3, 3> frame{};  ///< n (from the obstacle or the master toward the slave), t1, t2
+  std::array<bool, 3> held{};   ///< local components that carry no contact traction (prescribed, or dependent on the node's other rows)
   double g0 = 0;                ///< gap of the undeformed geometry
   double mu = 0;                ///< Coulomb coefficient
   double area = 0;              ///< the slave node's lumped area
+  Vec3 anchor{};                ///< obstacle: its material point touched at the start of the step (base position)
+  Vec3 motion{};                ///< obstacle: that point's rigid motion over the step (the obstacle's share of the slip)
 };
 
 /// What detection needs of the mesh, built once.
@@ -46,6 +58,7 @@ struct Geometry {
   std::vector<char> candidate;            ///< per vertex: may touch (where, and not held in all three components)
   std::vector<TriangleBvh> body_bvh;      ///< per body, its triangles
   std::vector<ObstacleGeometry> obstacles;
+  int partners = 0;                       ///< obstacles plus bodies: the partner numbers of ContactPoint
   double friction = 0;                    ///< the global coefficient
   bool bodies_touch = false;
   double reach = 0;
@@ -58,19 +71,25 @@ std::array<Vec3, 3> local_frame(const Vec3 &n);
 /// The dof node of vertex v facing direction n (its smooth group's normal most opposite to n).
 int facing_node(const Discretization &disc, int v, const Vec3 &n);
 
-/// The obstacles' contact points at the placements `offsets` (one per obstacle): per candidate
-/// vertex the obstacle with the smallest gap, if it is within reach (or the vertex is in `forced`);
-/// a point per dof node of the vertex whose displacement along the normal is not prescribed.
-std::vector<ContactPoint> obstacle_points(const Geometry &g, const std::vector<Vec3> &offsets, const std::vector<char> &forced);
+/// The obstacles' contact points at the poses `poses` (one per obstacle): per candidate vertex and
+/// obstacle within reach (or at any distance when `forced[v × obstacles + o]`), a point per dof
+/// node of the vertex whose displacement along the normal is not all prescribed.
+std::vector<ContactPoint> obstacle_points(const Geometry &g, const std::vector<Pose> &poses, const std::vector<char> &forced);
 
-/// The pairs of bodies: per candidate vertex of a slave body, the closest point of the other
-/// bodies' surfaces within reach (node-to-surface, one pass per pair: the body with the finer
+/// The pairs of bodies: per candidate vertex of a slave body, the closest point of each other
+/// body's surface within reach (node-to-surface, one pass per pair: the body with the finer
 /// mesh near the contact is the slave).
 std::vector<ContactPoint> body_points(const Geometry &g);
 
-/// Per vertex, the points of one side: those with the smaller gap when a vertex has two; sorted
-/// by where their node's rows sit in the columns (`position`: per dof node).
-std::vector<ContactPoint> merge_points(std::vector<ContactPoint> a, const std::vector<ContactPoint> &b, int num_vertices, const std::vector<int> &position = {});
+/// A frame's points from the obstacles' and the bodies' (every (vertex, partner) kept), with their
+/// local frames, the followers at the vertices' other nodes and their leads (ContactPoint::lead),
+/// sorted by where their node's rows sit in the columns (`position`: per dof node). Per vertex
+/// the constraint rows stay independent: its free directions (its components not prescribed)
+/// carry the normals first (by gap, smallest first; an obstacle's point whose normal is parallel
+/// to a nearer obstacle's is implied by it and dropped), then the friction tangents of each point
+/// in the free directions no normal and no earlier tangent takes (a roller plane, a second
+/// partner's normal take theirs); a tangent left without such a direction is held.
+std::vector<ContactPoint> merge_points(const Geometry &g, std::vector<ContactPoint> a, const std::vector<ContactPoint> &b, const std::vector<int> &position = {});
 
 /// The dof nodes in a spatial order (Morton's curve over their positions) as a row order of the
 /// unknowns (3 per node, kept together): a contact's candidates then sit in a few runs of rows.
@@ -97,10 +116,15 @@ public:
   /// D(c n, c' n): the normal-normal entry.
   double normal(int c, int cp) const;
   /// Local component k of point c is held: its displacement is prescribed (a roller along a
-  /// tangent, say), so it neither slips nor carries a contact traction.
+  /// tangent, say) or its row depends on the node's other rows (ContactPoint::held), so it neither
+  /// slips nor carries a contact traction.
   bool held(int c, int k) const { return m_held[c][k] != 0; }
-  /// The free relative displacement of every point (local frame: gap, slip since u_prev) from
-  /// the nodal displacements u_free (prescribed where known) and u_prev (empty: zero).
+  /// The free relative displacement of every point (local frame) from the nodal displacements
+  /// u_free (prescribed where known) and u_prev (the last frame's; empty: zero): the gap, and the
+  /// slip over the step — the body's displacement since u_prev relative to the partner's surface
+  /// point: minus the obstacle point's rigid motion (ContactPoint::motion), or the master's nodes'
+  /// own step (the pair's terms). A follower's tie rows: its whole displacement relative to the
+  /// anchor's node (not a step).
   std::vector<Vec3> free_w(const std::vector<Vec3> &u_free, const std::vector<Vec3> &u_prev) const;
   /// out[r] += Σ_q D(rows[r] n, cols[q] :) λ[q]: the normal gaps of the points `rows` moved by
   /// the tractions λ (local frames) at the points `cols`, column by column (each column's rows
@@ -114,9 +138,9 @@ private:
   /// Per point and term, the masked rows M (local k × Cartesian a: u unknown) and load columns L
   /// (Cartesian b × local l: t known), weights included.
   struct Terms {
-    std::array<Mat3, 4> M, L;
-    std::array<std::array<const double *, 3>, 4> col; ///< W's columns of the term's node (null: not loaded)
-    std::array<int, 4> row;                           ///< where the term's node's rows sit in a column
+    std::array<Mat3, 5> M, L;
+    std::array<std::array<const double *, 3>, 5> col; ///< W's columns of the term's node (null: not loaded)
+    std::array<int, 5> row;                           ///< where the term's node's rows sit in a column
   };
   /// Point c's column pointers from the cache (they stay valid for the cache's life).
   void attach(int c) const;
@@ -135,32 +159,39 @@ private:
 std::vector<int> loaded_unknowns(const std::vector<ContactPoint> &points, const std::vector<char> &pattern, bool normal_only);
 
 /// Frictionless contact: primal–dual active set on the normal compliance, the inverse of the
-/// active block kept by a CapacitanceInverse over dof nodes that lives from frame to frame.
+/// active block kept by a CapacitanceInverse over the points' keys that lives from frame to frame.
 class NormalSolver {
 public:
-  explicit NormalSolver(int num_nodes);
+  explicit NormalSolver(int num_keys);
   struct Result {
     int iterations = 0;
     bool rebuilt = false;
   };
   /// λ_n per point (local frame, tangential 0) for free gaps wf[c][0], starting from the points
-  /// whose node is in `warm` (node flags); tol_gap: how deep an inactive point may sit before it
-  /// joins. Only the points of `zone` (per point) are watched: the caller checks the others'
-  /// gaps in the fields and solves again with them when one went through. Throws
-  /// std::runtime_error after max_it iterations. `monitor(it, active, changed)`.
-  Result solve(const Compliance &D, const std::vector<Vec3> &wf, const std::vector<char> &warm, const std::vector<char> &zone, double tol_gap, int max_it,
+  /// whose key is in `warm` (key flags); tol_gap: how deep an inactive point may sit before it
+  /// joins. Leading points switch; a follower is active with its lead, its λ_n of either sign.
+  /// Only the points of `zone` (per point) are watched: the caller checks the others' gaps in the
+  /// fields and solves again with them when one went through. Throws std::runtime_error after
+  /// max_it iterations, naming the residual (penetrations relative to `size`, the mesh's size).
+  /// `monitor(it, active, changed)`.
+  Result solve(const Compliance &D, const std::vector<Vec3> &wf, const std::vector<char> &warm, const std::vector<char> &zone, double tol_gap, double size, int max_it,
                std::vector<Vec3> &lambda, const std::function<void(int, long long, long long)> &monitor);
-  /// λ_n of the current active set for other free gaps (the haptic call): the points must be
-  /// those of the last solve.
+  /// λ_n of the current active set for other free gaps: the points must be those of the last solve.
   void resolve(const Compliance &D, const std::vector<Vec3> &wf, std::vector<Vec3> &lambda) const;
+  /// The haptic call: as resolve(), but a leading point that would pull opens (with its
+  /// followers) and an open one whose gap closes rejoins (open_pulling_points).
+  void haptic(const Compliance &D, const std::vector<Vec3> &wf, double tol_gap, std::vector<Vec3> &lambda) const;
+  /// Forget the kept inverse: the next solve rebuilds it (after a solve whose residual was too large).
+  void reset();
 
 private:
   class Entries;
-  void sync(const Compliance &D, const std::vector<int> &active_nodes, bool *rebuilt);
+  void sync(const Compliance &D, const std::vector<int> &active_keys, bool *rebuilt);
   std::shared_ptr<Entries> m_entries;
   CapacitanceInverse m_cap;
-  std::vector<ContactPoint> m_signature; ///< per node in the capacitance set: the point it was added with
+  std::vector<ContactPoint> m_signature; ///< per key in the capacitance set: the point it was added with
   int m_updates = 0;
+  bool m_stale = false;                  ///< reset(): rebuild at the next sync
 };
 
 /// Coulomb friction: semismooth Newton on Alart–Curnier's function, warm-started from λ.
@@ -173,16 +204,20 @@ public:
   };
   struct Preconditioner; ///< the Newton matrix of an earlier step, factored
   /// λ (local frames) for the free relative displacements wf; λ holds the initial guess.
-  /// status per point: 0 open, 1 stick, 2 slip. Newton runs on the points of `zone` (per
-  /// point): the others keep λ = 0; the caller checks their gaps in the fields, as for the
-  /// frictionless solver. Throws std::runtime_error after max_it iterations.
+  /// status per point: 0 open, 1 stick, 2 slip (a follower: 1 while closed). Newton runs on the
+  /// points of `zone` (per point): the others keep λ = 0; the caller checks their gaps in the
+  /// fields, as for the frictionless solver. Converged when max |Φ| ≤ tol × the traction scale on
+  /// w = w_f + D λ computed afresh. Throws std::runtime_error after max_it iterations, naming the
+  /// residual.
   Result solve(const Compliance &D, const std::vector<Vec3> &wf, const std::vector<char> &zone, double tol, int max_it, std::vector<Vec3> &lambda,
                std::vector<std::int8_t> &status, const std::function<void(int, long long, long long, double)> &monitor);
-  /// λ with the stick and slip states (and slip directions) of the last solve fixed, for other
-  /// free relative displacements: one solve with the factored linear system (the haptic call).
-  void resolve(const Compliance &D, const std::vector<Vec3> &wf, std::vector<Vec3> &lambda);
+  /// The haptic call: λ with the stick and slip states (and slip directions) of the last solve
+  /// fixed, for other free relative displacements (one solve with the factored fixed-state
+  /// system); a leading point that would pull opens with its followers (open_pulling_points).
+  void haptic(const Compliance &D, const std::vector<Vec3> &wf, double tol_gap, std::vector<Vec3> &lambda);
 
 private:
+  void factor_fixed_states(const Compliance &D);
   std::vector<double> m_lu;          ///< the fixed-state system of the last solve, factored (haptic)
   std::vector<int> m_piv, m_rows;    ///< its pivots and the points it covers
   std::vector<std::int8_t> m_state;
@@ -190,5 +225,16 @@ private:
   bool m_factored = false;
   std::shared_ptr<Preconditioner> m_pre; ///< kept from step to step and frame to frame
 };
+
+/// The haptic call's small active set on the last solve's closed points `points` (k rows each,
+/// the normal row first), whose fixed-state system A is factored: y = A⁻¹ rhs is the answer with
+/// every point closed. With O the open points, λ = y + A⁻¹(:, O) r, A⁻¹(O, O) r = −y(O): λ
+/// vanishes on O and O's rows carry the residual r (a normal row's residual is the point's gap).
+/// A leading point whose λ_n < 0 opens with its followers; an open one whose gap is below
+/// −tol_gap closes again; repeated until nothing changes (nothing to do, and no work, when no
+/// leading point pulls). `inverse_columns(rows, out)` fills the columns `rows` of A⁻¹ (k |points|
+/// entries each, one after the other). Returns λ (k per point).
+std::vector<double> open_pulling_points(const Compliance &D, const std::vector<int> &points, int k, const std::vector<double> &y,
+                                        const std::function<void(const std::vector<int> &, double *)> &inverse_columns, double tol_gap);
 
 } // namespace hssbem::contact_detail

@@ -1,11 +1,12 @@
-// Contact points of a frame (contact_points.hpp): per candidate vertex the closest obstacle
-// within reach, and node-to-surface pairs between bodies.
+// Contact points of a frame (contact_points.hpp): per candidate vertex every obstacle within
+// reach, node-to-surface pairs between bodies, and the points' local frames per node.
 #include "contact_points.hpp"
 
 #include <algorithm>
 #include <cstdint>
 #include <cmath>
 #include <limits>
+#include <unordered_map>
 
 namespace hssbem::contact_detail {
 
@@ -39,43 +40,25 @@ bool movable(const Geometry &g, int node, const Vec3 &n)
   return free > 1e-12;
 }
 
-/// The points of vertex v against normal n: one per movable dof node, the facing node first.
-std::vector<ContactPoint> vertex_points(const Geometry &g, int v, const Vec3 &n, double gap)
+/// The point of vertex v against partner `partner` with normal n: at the node facing n (every
+/// node of a vertex shares its pattern); false when its displacement along n is all prescribed.
+bool vertex_point(const Geometry &g, int v, const Vec3 &n, double gap, int partner, ContactPoint &p)
 {
-  const Discretization &disc = *g.disc;
-  const int facing = facing_node(disc, v, n);
-  std::vector<ContactPoint> out;
-  std::vector<int> nodes{facing};
-  for (int i = disc.first_node(v); i < disc.first_node(v) + disc.node_count(v); ++i)
-    if (i != facing) nodes.push_back(i);
-  for (int node : nodes) {
-    if (!movable(g, node, n)) continue;
-    ContactPoint p;
-    p.vertex = v;
-    p.node = node;
-    p.facing = node == facing;
-    p.body = g.bodies.of_vertex[v];
-    p.terms = 1;
-    p.term_node[0] = node;
-    p.mw[0] = p.lw[0] = 1;
-    p.frame = local_frame(n);
-    p.g0 = gap;
-    p.area = g.area[node];
-    out.push_back(p);
-  }
-  return out;
-}
-
-/// The closest obstacle point of vertex v (within reach, or at any distance when forced).
-bool closest_obstacle(const Geometry &g, int v, const std::vector<Vec3> &offsets, bool forced, int &which, ObstacleGap &best)
-{
-  const double reach = forced ? std::numeric_limits<double>::infinity() : g.reach;
-  which = -1;
-  for (std::size_t o = 0; o < g.obstacles.size(); ++o) {
-    ObstacleGap h;
-    if (g.obstacles[o].gap(g.disc->mesh().vertices[v], offsets[o], reach, h) && (which < 0 || h.gap < best.gap)) which = static_cast<int>(o), best = h;
-  }
-  return which >= 0;
+  const int node = facing_node(*g.disc, v, n);
+  if (!movable(g, node, n)) return false;
+  p = ContactPoint{};
+  p.vertex = v;
+  p.node = node;
+  p.body = g.bodies.of_vertex[v];
+  p.partner = partner;
+  p.key = node * g.partners + partner;
+  p.terms = 1;
+  p.term_node[0] = node;
+  p.mw[0] = p.lw[0] = Vec3{1, 1, 1};
+  p.frame = local_frame(n);
+  p.g0 = gap;
+  p.area = g.area[node];
+  return true;
 }
 
 /// Node-to-surface points of the candidate vertices of body a against the surface of body b.
@@ -98,34 +81,157 @@ std::vector<ContactPoint> pass(const Geometry &g, int a, int b)
     }
     std::array<int, 3> master;
     for (int k = 0; k < 3; ++k) master[k] = facing_node(disc, mesh.triangles[h.triangle][k], -1.0 * n); // the master group whose normal is n: it faces the slave
-    for (ContactPoint p : vertex_points(g, v, n, gap)) {
-      p.other = b;
-      p.terms = 4;
-      for (int k = 0; k < 3; ++k) {
-        p.term_node[k + 1] = master[k];
-        p.mw[k + 1] = -h.bary[k];
-        p.lw[k + 1] = -h.bary[k] * p.area / g.area[master[k]];
-      }
-      p.mu = g.friction;
-      out.push_back(p);
+    ContactPoint p;
+    if (!vertex_point(g, v, n, gap, static_cast<int>(g.obstacles.size()) + b, p)) continue;
+    p.other = b;
+    p.terms = 4;
+    for (int k = 0; k < 3; ++k) {
+      p.term_node[k + 1] = master[k];
+      p.mw[k + 1] = -h.bary[k] * Vec3{1, 1, 1};
+      p.lw[k + 1] = (-h.bary[k] * p.area / g.area[master[k]]) * Vec3{1, 1, 1};
     }
+    p.mu = g.friction;
+    out.push_back(p);
+  }
+  return out;
+}
+
+/// A normal row within this fraction of the span of a node's earlier rows depends on them.
+constexpr double k_dependent = 1e-3;
+
+/// v without its components along the orthonormal rows R.
+Vec3 residual(Vec3 v, const std::vector<Vec3> &R)
+{
+  for (const Vec3 &q : R) v = v - dot(v, q) * q;
+  return v;
+}
+
+/// v with the node's prescribed components zeroed: its row on the node's free directions.
+Vec3 free_part(const Geometry &g, int node, Vec3 v)
+{
+  for (int a = 0; a < 3; ++a)
+    if ((*g.pattern)[3 * node + a]) v[a] = 0;
+  return v;
+}
+
+/// The node's free directions orthogonal to the rows R (orthonormal).
+std::vector<Vec3> complement(const Geometry &g, int node, const std::vector<Vec3> &R)
+{
+  std::vector<Vec3> basis = R, out;
+  for (int a = 0; a < 3; ++a) {
+    if ((*g.pattern)[3 * node + a]) continue;
+    Vec3 e{};
+    e[a] = 1;
+    const Vec3 r = residual(e, basis);
+    if (norm(r) > 1e-6) basis.push_back(normalized(r)), out.push_back(normalized(r));
+  }
+  return out;
+}
+
+/// The local frames of one vertex's leading points (`pts`, nearest first; the vertex's nodes share
+/// its pattern and follow its leads while it touches) and which of them to drop: the normals
+/// take the vertex's free directions first (an obstacle's normal parallel to a nearer obstacle's is
+/// implied by it: that point is dropped), then each point with friction takes tangents among the
+/// free directions left (both when its normal is the vertex's only row, else the one left, else
+/// none: held).
+void vertex_frames(const Geometry &g, const std::vector<ContactPoint *> &pts, std::vector<char> &drop)
+{
+  const int node = pts[0]->node;
+  std::vector<Vec3> R;
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    const Vec3 n = pts[i]->frame[0], r = free_part(g, node, n), res = residual(r, R);
+    if (norm(res) > k_dependent * norm(r)) {
+      R.push_back(normalized(res));
+      continue;
+    }
+    for (std::size_t j = 0; j < i; ++j)
+      if (!drop[j] && pts[i]->obstacle >= 0 && pts[j]->obstacle >= 0 && dot(pts[j]->frame[0], n) > 1 - k_dependent) drop[i] = 1;
+  }
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    ContactPoint &p = *pts[i];
+    p.held = {false, true, true};
+    if (drop[i] || p.mu <= 0) continue;
+    const std::vector<Vec3> G = complement(g, node, R);
+    if (G.size() >= 2) {
+      p.held = {false, false, false};
+      R.push_back(p.frame[1]), R.push_back(p.frame[2]);
+    } else if (G.size() == 1) {
+      p.frame = {p.frame[0], G[0], cross(p.frame[0], G[0])};
+      p.held = {false, false, true};
+      R.push_back(G[0]);
+    }
+  }
+}
+
+/// The followers of leading point `lead` at its vertex's other dof nodes: the lead's measure and
+/// load at the node (its normal row bound to the partner); for the vertex's anchor (its nearest
+/// partner, with friction) the tangential rows tie the node to the anchor's node instead, along the
+/// anchor's friction tangents (relative displacement u_node − u_anchor, equal and opposite forces).
+void add_followers(const Geometry &g, const ContactPoint &lead, bool anchor, std::vector<ContactPoint> &out)
+{
+  const Discretization &disc = *g.disc;
+  for (int node = disc.first_node(lead.vertex); node < disc.first_node(lead.vertex) + disc.node_count(lead.vertex); ++node) {
+    if (node == lead.node) continue;
+    ContactPoint f = lead;
+    f.node = node;
+    f.key = node * g.partners + lead.partner;
+    f.facing = false;
+    f.term_node[0] = node;
+    f.area = g.area[node];
+    f.motion = Vec3{0, 0, 0};
+    f.held = {false, true, true};
+    for (int i = 1; i < f.terms; ++i) f.lw[i] = (g.area[node] / lead.area) * lead.lw[i];
+    if (anchor && lead.mu > 0 && !(lead.held[1] && lead.held[2])) {
+      for (int i = 1; i < f.terms; ++i) f.mw[i][1] = f.mw[i][2] = f.lw[i][1] = f.lw[i][2] = 0;
+      f.term_node[f.terms] = lead.node;
+      f.mw[f.terms] = {0, -1, -1};
+      f.lw[f.terms] = (-g.area[node] / lead.area) * Vec3{0, 1, 1};
+      ++f.terms;
+      f.held = lead.held;
+    }
+    out.push_back(f);
+  }
+}
+
+/// Frames per vertex (vertex_frames) and the followers at its other nodes; returns the points kept
+/// (ContactPoint::lead is set by merge_points).
+std::vector<ContactPoint> assign_frames(const Geometry &g, std::vector<ContactPoint> points)
+{
+  std::vector<int> order(points.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
+  std::sort(order.begin(), order.end(), [&](int x, int y) {
+    const ContactPoint &a = points[x], &b = points[y];
+    return a.vertex != b.vertex ? a.vertex < b.vertex : a.g0 != b.g0 ? a.g0 < b.g0 : a.partner < b.partner;
+  });
+  std::vector<ContactPoint> out;
+  for (std::size_t s = 0; s < order.size();) {
+    std::size_t e = s;
+    std::vector<ContactPoint *> pts;
+    while (e < order.size() && points[order[e]].vertex == points[order[s]].vertex) pts.push_back(&points[order[e++]]);
+    std::vector<char> drop(pts.size(), 0);
+    vertex_frames(g, pts, drop);
+    for (std::size_t k = 0; k < pts.size(); ++k)
+      if (!drop[k]) out.push_back(*pts[k]), add_followers(g, *pts[k], k == 0, out);
+    s = e;
   }
   return out;
 }
 
 } // namespace
 
-std::vector<ContactPoint> obstacle_points(const Geometry &g, const std::vector<Vec3> &offsets, const std::vector<char> &forced)
+std::vector<ContactPoint> obstacle_points(const Geometry &g, const std::vector<Pose> &poses, const std::vector<char> &forced)
 {
   std::vector<ContactPoint> out;
-  const int nv = g.disc->mesh().num_vertices();
+  const int nv = g.disc->mesh().num_vertices(), no = static_cast<int>(g.obstacles.size());
   for (int v = 0; v < nv; ++v) {
     if (!g.candidate[v]) continue;
-    int o = -1;
-    ObstacleGap h;
-    if (!closest_obstacle(g, v, offsets, !forced.empty() && forced[v], o, h)) continue;
-    const double own = g.obstacles[o].obstacle().friction;
-    for (ContactPoint p : vertex_points(g, v, h.normal, h.gap)) {
+    for (int o = 0; o < no; ++o) {
+      const bool far = !forced.empty() && forced[static_cast<std::size_t>(v) * no + o];
+      ObstacleGap h;
+      if (!g.obstacles[o].gap(g.disc->mesh().vertices[v], poses[o], far ? std::numeric_limits<double>::infinity() : g.reach, h)) continue;
+      const double own = g.obstacles[o].obstacle().friction;
+      ContactPoint p;
+      if (!vertex_point(g, v, h.normal, h.gap, o, p)) continue;
       p.obstacle = o;
       p.mu = std::isnan(own) ? g.friction : own;
       out.push_back(p);
@@ -149,19 +255,19 @@ std::vector<ContactPoint> body_points(const Geometry &g)
   return out;
 }
 
-std::vector<ContactPoint> merge_points(std::vector<ContactPoint> a, const std::vector<ContactPoint> &b, int num_vertices, const std::vector<int> &position)
+std::vector<ContactPoint> merge_points(const Geometry &g, std::vector<ContactPoint> a, const std::vector<ContactPoint> &b, const std::vector<int> &position)
 {
-  const double inf = std::numeric_limits<double>::infinity();
-  std::vector<double> gap_a(num_vertices, inf), gap_b(num_vertices, inf);
-  for (const ContactPoint &p : a) gap_a[p.vertex] = p.g0;
-  for (const ContactPoint &p : b) gap_b[p.vertex] = p.g0;
-  std::vector<ContactPoint> out;
-  for (const ContactPoint &p : a)
-    if (gap_a[p.vertex] <= gap_b[p.vertex]) out.push_back(p);
-  for (const ContactPoint &p : b)
-    if (gap_b[p.vertex] < gap_a[p.vertex]) out.push_back(p);
-  if (!position.empty())
-    std::stable_sort(out.begin(), out.end(), [&](const ContactPoint &x, const ContactPoint &y) { return position[x.node] < position[y.node]; });
+  a.insert(a.end(), b.begin(), b.end());
+  std::vector<ContactPoint> out = assign_frames(g, std::move(a));
+  std::stable_sort(out.begin(), out.end(), [&](const ContactPoint &x, const ContactPoint &y) {
+    const int px = position.empty() ? x.node : position[x.node], py = position.empty() ? y.node : position[y.node];
+    return px != py ? px < py : x.partner < y.partner;
+  });
+  // A follower's lead: the leading point of its vertex and partner.
+  std::unordered_map<long long, int> anchor;
+  for (std::size_t c = 0; c < out.size(); ++c)
+    if (out[c].facing) anchor[static_cast<long long>(out[c].vertex) * g.partners + out[c].partner] = static_cast<int>(c);
+  for (ContactPoint &p : out) p.lead = p.facing ? -1 : anchor.at(static_cast<long long>(p.vertex) * g.partners + p.partner);
   return out;
 }
 

@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <numeric>
 #include <unordered_map>
 #include <stdexcept>
@@ -91,10 +92,22 @@ private:
 
 struct PointState {
   std::int8_t kind = 0; ///< 0 open, 1 stick, 2 slip
+  bool free_slip = false; ///< slipping with λ_T = 0 (frictionless, or no slip direction)
   double rho = 0, rn = 0;
   double rt[2] = {0, 0}, rt_norm = 0;
   Vec3 phi{};           ///< the residual: λ (open); g, s (stick); g, λ_T − μ r_n q (slip)
 };
+
+/// The slip rows of a point in the slip state: g = 0 and λ_T = μ r_n q, q = r_T / |r_T| (λ_T = 0
+/// without friction or a slip direction).
+void slip_rows(const ContactPoint &p, const std::array<bool, 3> &held, const Vec3 &lambda, const Vec3 &w, PointState &s)
+{
+  for (int a = 0; a < 2; ++a) s.rt[a] = held[a + 1] ? 0.0 : lambda[a + 1] - s.rho * w[a + 1];
+  s.rt_norm = std::hypot(s.rt[0], s.rt[1]);
+  s.free_slip = !(p.mu > 0 && s.rt_norm > 0);
+  const double scale = s.free_slip ? 0.0 : p.mu * s.rn / s.rt_norm;
+  s.phi = {w[0], lambda[1] - scale * s.rt[0], lambda[2] - scale * s.rt[1]};
+}
 
 /// Held tangential components (prescribed displacement along them) keep λ = 0 and take no part
 /// in the slip.
@@ -109,15 +122,23 @@ PointState classify(const ContactPoint &p, const std::array<bool, 3> &held, cons
   }
   for (int a = 0; a < 2; ++a) s.rt[a] = held[a + 1] ? 0.0 : lambda[a + 1] - rho * w[a + 1];
   s.rt_norm = std::hypot(s.rt[0], s.rt[1]);
-  if (p.mu > 0 && s.rt_norm <= p.mu * s.rn) {
-    s.kind = 1;
-    s.phi = w;
-  } else {
-    s.kind = 2; // frictionless points slide whatever r_T is: λ_T = 0
-    const double scale = p.mu > 0 ? p.mu * s.rn / s.rt_norm : 0.0;
-    s.phi = {w[0], lambda[1] - scale * s.rt[0], lambda[2] - scale * s.rt[1]};
-  }
+  s.kind = p.mu > 0 && s.rt_norm <= p.mu * s.rn ? 1 : 2; // frictionless points slide whatever r_T is: λ_T = 0
+  if (s.kind == 1) s.phi = w;
+  else slip_rows(p, held, lambda, w, s);
   for (int k = 1; k < 3; ++k)
+    if (held[k]) s.phi[k] = lambda[k];
+  return s;
+}
+
+/// A follower is closed with its lead and open with it: closed, its rows are w = 0 (its normal row
+/// bound to the partner, its tie rows to the lead's node; tractions of either sign), open λ = 0.
+PointState classify_follower(const std::array<bool, 3> &held, const Vec3 &lambda, const Vec3 &w, double rho, std::int8_t lead_kind)
+{
+  PointState s;
+  s.rho = rho;
+  s.kind = lead_kind ? 1 : 0;
+  s.phi = s.kind ? w : lambda;
+  for (int k = 1; k < 3 && s.kind; ++k)
     if (held[k]) s.phi[k] = lambda[k];
   return s;
 }
@@ -144,7 +165,7 @@ RowMap row_map(const ContactPoint &p, const std::array<bool, 3> &held, const Poi
   RowMap m;
   m.R[0] = 1;
   if (s.kind == 1) m.R[4] = m.R[8] = 1;
-  else if (p.mu > 0) {
+  else if (!s.free_slip) {
     const double q[2] = {s.rt[0] / s.rt_norm, s.rt[1] / s.rt_norm};
     const double P[2][2] = {{(1 - q[0] * q[0]) / s.rt_norm, -q[0] * q[1] / s.rt_norm}, {-q[1] * q[0] / s.rt_norm, (1 - q[1] * q[1]) / s.rt_norm}};
     for (int a = 0; a < 2; ++a) {
@@ -158,7 +179,7 @@ RowMap row_map(const ContactPoint &p, const std::array<bool, 3> &held, const Poi
     }
   } else m.diag[4] = m.diag[8] = 1; // frictionless: λ_T = 0
   for (int k = 1; k < 3; ++k)
-    if (held[k] || (s.kind == 2 && p.mu == 0))
+    if (held[k] || (s.kind == 2 && s.free_slip))
       for (int l = 0; l < 3; ++l) m.R[3 * k + l] = 0, m.diag[3 * k + l] = (l == k ? 1.0 : 0.0);
   return m;
 }
@@ -200,9 +221,12 @@ double classify_zone(const Compliance &D, const std::vector<int> &zone, const st
   double residual = 0;
   merit = 0;
   closed.clear();
+  for (std::size_t k = 0; k < zone.size(); ++k) // the leading points first: their followers take their states
+    if (D.point(zone[k]).lead < 0) st[zone[k]] = classify(D.point(zone[k]), held_of(D, zone[k]), lambda[zone[k]], w[k], rho[zone[k]]);
+  for (std::size_t k = 0; k < zone.size(); ++k)
+    if (D.point(zone[k]).lead >= 0) st[zone[k]] = classify_follower(held_of(D, zone[k]), lambda[zone[k]], w[k], rho[zone[k]], st[D.point(zone[k]).lead].kind);
   for (std::size_t k = 0; k < zone.size(); ++k) {
     const int c = zone[k];
-    st[c] = classify(D.point(c), held_of(D, c), lambda[c], w[k], rho[c]);
     const Vec3 r = scaled_residual(st[c]);
     residual = std::max(residual, max_abs(r));
     merit += dot(r, r);
@@ -263,7 +287,7 @@ public:
       const double t = s.kind == 1 ? s.rho : 1.0;
       m_scale[a] = {s.rho, t, t};
       for (int k = 1; k < 3; ++k) // a held (or frictionless) tangential row is λ_k itself
-        if (held_of(D, rows[a])[k] || (s.kind == 2 && D.point(rows[a]).mu == 0)) m_scale[a][k] = 1.0;
+        if (held_of(D, rows[a])[k] || (s.kind == 2 && s.free_slip)) m_scale[a][k] = 1.0;
     }
   }
   int size() const { return 3 * static_cast<int>(m_rows.size()); }
@@ -382,7 +406,7 @@ int gmres(int n, const std::function<void(const double *, double *)> &A, const s
 /// precision): it preconditions the Newton systems while the closed set and the states change
 /// little, and is factored again when the systems take too many products.
 struct FrictionSolver::Preconditioner {
-  std::unordered_map<int, int> slot; ///< dof node → its point's position in the factored matrix
+  std::unordered_map<int, int> slot; ///< point key → its position in the factored matrix
   std::vector<float> lu;
   std::vector<int> piv;
   int m = 0;
@@ -393,7 +417,7 @@ struct FrictionSolver::Preconditioner {
     J.assemble(lu);
     piv.resize(m);
     slot.clear();
-    for (std::size_t a = 0; a < rows.size(); ++a) slot[D.point(rows[a]).node] = static_cast<int>(a);
+    for (std::size_t a = 0; a < rows.size(); ++a) slot[D.point(rows[a]).key] = static_cast<int>(a);
     if (m > 0 && lapack::getrf(m, lu.data(), m, piv.data()) != 0) throw std::runtime_error("contact: the friction Newton matrix is singular (dependent contact constraints)");
   }
 };
@@ -422,7 +446,7 @@ int solve_newton_system(const Compliance &D, const NewtonOperator &J, const std:
     int covered = 0;
     if (!pre.empty())
       for (int a = 0; a < nr; ++a) {
-        const auto it = pre.slot.find(D.point(rows[a]).node);
+        const auto it = pre.slot.find(D.point(rows[a]).key);
         if (it != pre.slot.end()) at[a] = it->second, ++covered;
       }
     if (pre.empty() || covered < 0.8 * nr) {
@@ -522,8 +546,18 @@ void newton(const Compliance &D, BlockCache &blocks, const std::vector<int> &zon
     long long changed = 0;
     for (int c : zone) changed += st[c].kind != last[c], last[c] = st[c].kind;
     if (monitor) monitor(r.iterations, static_cast<long long>(closed.size()), changed, scale > 0 ? residual / scale : residual);
-    if (residual <= tol * scale) return;
-    if (r.iterations >= max_it) throw std::runtime_error("contact: friction did not converge in " + std::to_string(max_it) + " Newton iterations (-contact_max_it)");
+    if (residual <= tol * scale) { // checked on w = w_f + D λ afresh (the steps update w by products)
+      for (std::size_t k = 0; k < nz; ++k) w[k] = wf[zone[k]];
+      blocks.apply(lambda, w);
+      residual = classify_zone(D, zone, rho, lambda, w, st, closed, merit);
+      if (residual <= tol * scale) return;
+    }
+    if (r.iterations >= max_it) {
+      char text[200];
+      std::snprintf(text, sizeof text, "friction did not converge in %d Newton iterations (-contact_max_it): residual %.2e of the traction scale (tolerance %.1e)", max_it,
+                    scale > 0 ? residual / scale : residual, tol);
+      throw std::runtime_error(text);
+    }
     // An inexact Newton step, its system solved to η |Φ| with η = min(1e-2, max |Φ| / scale)
     // (the steps stay quadratic; a tenth of the tolerance at least), damped: semismooth Newton
     // alone cycles between stick and slip sets (measured on the sliding instrument), so its
@@ -557,8 +591,8 @@ FrictionSolver::Result FrictionSolver::solve(const Compliance &D, const std::vec
   lambda.resize(n, Vec3{0, 0, 0});
   std::vector<int> zone;
   std::vector<double> rho(n, 0.0);
-  for (int c = 0; c < n; ++c)
-    if (in_zone[c]) zone.push_back(c), rho[c] = 1.0 / std::max(D.block(c, c)[0], 1e-300);
+  for (int c = 0; c < n; ++c) // a follower is watched with its lead
+    if (in_zone[D.point(c).lead < 0 ? c : D.point(c).lead]) zone.push_back(c), rho[c] = 1.0 / std::max(D.block(c, c)[0], 1e-300);
     else lambda[c] = {0, 0, 0};
   blocks.set_zone(zone);
   m_factored = false;
@@ -572,46 +606,57 @@ FrictionSolver::Result FrictionSolver::solve(const Compliance &D, const std::vec
   for (int c : zone) {
     if (!st[c].kind) lambda[c] = {0, 0, 0};
     status[c] = m_state[c] = st[c].kind;
-    if (st[c].kind == 2 && st[c].rt_norm > 0) m_direction[c] = {0, st[c].rt[0] / st[c].rt_norm, st[c].rt[1] / st[c].rt_norm};
+    if (st[c].kind == 2 && !st[c].free_slip) m_direction[c] = {0, st[c].rt[0] / st[c].rt_norm, st[c].rt[1] / st[c].rt_norm};
   }
   return r;
 }
 
-void FrictionSolver::resolve(const Compliance &D, const std::vector<Vec3> &wf, std::vector<Vec3> &lambda)
+void FrictionSolver::factor_fixed_states(const Compliance &D)
 {
-  const int n = D.size();
-  if (!m_factored) { // the fixed-state system: g = 0 and s = 0 (stick), g = 0 and λ_T = μ λ_n q (slip)
-    m_rows.clear();
-    for (int c = 0; c < n; ++c)
-      if (m_state[c]) m_rows.push_back(c);
-    const int m = 3 * static_cast<int>(m_rows.size());
-    m_lu.assign(static_cast<std::size_t>(m) * m, 0.0);
-    for (int a = 0; a < static_cast<int>(m_rows.size()); ++a)
-      for (int b = 0; b < static_cast<int>(m_rows.size()); ++b) {
-        const Mat3 B = D.block(m_rows[a], m_rows[b]);
-        const bool slip = m_state[m_rows[a]] == 2;
-        for (int k = 0; k < 3; ++k)
-          for (int l = 0; l < 3; ++l) {
-            double v = B[3 * k + l];
-            if (slip && k > 0) v = (a == b) ? (l == k ? 1.0 : 0.0) - (l == 0 ? D.point(m_rows[a]).mu * m_direction[m_rows[a]][k] : 0.0) : 0.0;
-            if (k > 0 && D.held(m_rows[a], k)) v = (a == b && l == k) ? 1.0 : 0.0;
-            m_lu[(3 * a + k) + static_cast<std::size_t>(3 * b + l) * m] = v;
-          }
-      }
-    m_piv.resize(m);
-    if (m > 0 && lapack::getrf(m, m_lu.data(), m, m_piv.data()) != 0) throw std::runtime_error("contact: the contact's fixed-state system is singular");
-    m_factored = true;
-  }
+  // The fixed-state system: g = 0 and s = 0 (stick), g = 0 and λ_T = μ λ_n q (slip; λ_T = 0 for a
+  // frictionless point), λ_k = 0 along a held tangent.
+  m_rows.clear();
+  for (int c = 0; c < D.size(); ++c)
+    if (m_state[c]) m_rows.push_back(c);
   const int m = 3 * static_cast<int>(m_rows.size());
-  std::vector<double> rhs(m, 0.0);
+  m_lu.assign(static_cast<std::size_t>(m) * m, 0.0);
+  for (int a = 0; a < static_cast<int>(m_rows.size()); ++a)
+    for (int b = 0; b < static_cast<int>(m_rows.size()); ++b) {
+      const Mat3 B = D.block(m_rows[a], m_rows[b]);
+      const bool slip = m_state[m_rows[a]] == 2;
+      for (int k = 0; k < 3; ++k)
+        for (int l = 0; l < 3; ++l) {
+          double v = B[3 * k + l];
+          if (slip && k > 0) v = (a == b) ? (l == k ? 1.0 : 0.0) - (l == 0 ? D.point(m_rows[a]).mu * m_direction[m_rows[a]][k] : 0.0) : 0.0; // no direction: λ_T = 0
+          if (k > 0 && D.held(m_rows[a], k)) v = (a == b && l == k) ? 1.0 : 0.0;
+          m_lu[(3 * a + k) + static_cast<std::size_t>(3 * b + l) * m] = v;
+        }
+    }
+  m_piv.resize(m);
+  if (m > 0 && lapack::getrf(m, m_lu.data(), m, m_piv.data()) != 0) throw std::runtime_error("the contact's fixed-state system is singular");
+  m_factored = true;
+}
+
+void FrictionSolver::haptic(const Compliance &D, const std::vector<Vec3> &wf, double tol_gap, std::vector<Vec3> &lambda)
+{
+  if (!m_factored) factor_fixed_states(D);
+  const int m = 3 * static_cast<int>(m_rows.size());
+  std::vector<double> y(m, 0.0);
   for (int a = 0; a < static_cast<int>(m_rows.size()); ++a) {
     const bool slip = m_state[m_rows[a]] == 2;
-    for (int k = 0; k < 3; ++k) rhs[3 * a + k] = ((slip || D.held(m_rows[a], k)) && k > 0) ? 0.0 : -wf[m_rows[a]][k];
+    for (int k = 0; k < 3; ++k) y[3 * a + k] = ((slip || D.held(m_rows[a], k)) && k > 0) ? 0.0 : -wf[m_rows[a]][k];
   }
-  if (m > 0) lapack::getrs('N', m, 1, m_lu.data(), m, m_piv.data(), rhs.data(), m);
-  lambda.assign(n, Vec3{0, 0, 0});
+  if (m > 0) lapack::getrs('N', m, 1, m_lu.data(), m, m_piv.data(), y.data(), m);
+  const auto column = [&](const std::vector<int> &rows, double *out) { // one blocked solve
+    const int nr = static_cast<int>(rows.size());
+    std::fill(out, out + static_cast<std::size_t>(m) * nr, 0.0);
+    for (int j = 0; j < nr; ++j) out[rows[j] + static_cast<std::size_t>(j) * m] = 1;
+    lapack::getrs('N', m, nr, m_lu.data(), m, m_piv.data(), out, m);
+  };
+  const std::vector<double> l = open_pulling_points(D, m_rows, 3, y, column, tol_gap);
+  lambda.assign(D.size(), Vec3{0, 0, 0});
   for (int a = 0; a < static_cast<int>(m_rows.size()); ++a)
-    for (int k = 0; k < 3; ++k) lambda[m_rows[a]][k] = rhs[3 * a + k];
+    for (int k = 0; k < 3; ++k) lambda[m_rows[a]][k] = l[3 * a + k];
 }
 
 } // namespace hssbem::contact_detail

@@ -285,22 +285,24 @@ bool ObstacleGeometry::side(const Vec3 &x, const Pose &pose, double bound, Obsta
   const Vec3 d = y - m.hit.point;
   out.distance = (dot(d, m.pseudo_normal) >= 0 ? 1.0 : -1.0) * norm(d);
   out.on_boundary = m.boundary;
+  out.normal = pose.rotate(normalized(m.pseudo_normal));
   return true;
 }
 
-bool check_obstacle_faces(const ObstacleGeometry &o, const std::vector<Vec3> &x, const Pose &pose, double reach)
+bool check_obstacle_faces(const ObstacleGeometry &o, const std::vector<Vec3> &x, const Pose &pose, double reach, const std::vector<Vec3> &normals)
 {
   if (o.obstacle().shape != Obstacle::Shape::Mesh) return false;
+  if (!normals.empty() && normals.size() != x.size()) throw std::invalid_argument("check_obstacle_faces: one normal per point expected");
   long long front = 0, behind = 0;
-  for (const Vec3 &p : x) {
+  for (std::size_t i = 0; i < x.size(); ++i) {
     ObstacleSide s;
-    if (!o.side(p, pose, reach, s) || s.on_boundary) continue;
-    ++(s.distance >= 0 ? front : behind);
+    if (!o.side(x[i], pose, reach, s) || s.on_boundary) continue;
+    ++((normals.empty() ? s.distance >= 0 : dot(normals[i], s.normal) <= 0) ? front : behind);
   }
   if (behind > front)
-    refuse(o.obstacle(), "its triangles face away from the bodies (" + std::to_string(behind) + " of the " + std::to_string(front + behind) +
-                             " body vertices within reach of its faces lie behind them); an obstacle mesh's triangles must face the bodies (right-hand normals toward them): "
-                             "reverse the vertex order of its triangles");
+    refuse(o.obstacle(), "its triangles face away from the bodies (" + std::to_string(behind) + " of the " + std::to_string(front + behind) + " body vertices within reach of its faces " +
+                             (normals.empty() ? "lie behind them" : "face their back") +
+                             "); an obstacle mesh's triangles must face the bodies (right-hand normals toward them): reverse the vertex order of its triangles");
   return front + behind > 0;
 }
 

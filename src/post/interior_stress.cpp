@@ -125,7 +125,11 @@ std::vector<std::array<Vec3, 3>> corner_tractions(const Discretization &disc, co
     for (int c = 0; c < 3; ++c) {
       const int i = disc.element_node(e, c);
       const bool pressure = !sel.pressure.empty() && !std::isnan(sel.pressure[i]);
-      out[e][c] = pressure ? -sel.pressure[i] * mesh.triangle_normal(e) : sol.t[i];
+      out[e][c] = sol.t[i];
+      if (!pressure) continue;
+      out[e][c] = -sel.pressure[i] * mesh.triangle_normal(e);
+      for (int k = 0; k < 3; ++k) // beyond the pressure's nodal value (sel.known where the traction is known)
+        out[e][c][k] += sol.t[i][k] - (sel.displacement_known[i][k] ? 0.0 : sel.known[i][k]);
     }
   return out;
 }

@@ -443,21 +443,38 @@ std::vector<BoundaryRule> read_rule_list(const json &j, const Where &w)
   return rules;
 }
 
-/// A frame's "obstacles": {"name": {"translate": [dx, dy, dz]}, ...}; the names are checked
-/// against "contact.obstacles" once the whole file is read (check_frame_obstacles).
-std::vector<std::pair<std::string, Vec3>> read_frame_obstacles(const json &j, const Where &w)
+/// A frame's "rotate": {"axis": [ax, ay, az], "angle": degrees, "about": [cx, cy, cz]}.
+ObstacleTurn read_turn(const json &j, const Where &w)
+{
+  check_keys(j, w, {"axis", "angle", "about"});
+  if (!j.contains("axis") || !j.contains("angle"))
+    w.fail("missing 'axis' or 'angle' (a turn by 'angle' degrees about 'axis', through 'about' or the obstacle's default centre)");
+  ObstacleTurn t;
+  t.axis = read_vec3(j["axis"], w.at("axis"));
+  if (norm(t.axis) == 0)
+    w.at("axis").fail("the rotation axis is zero");
+  t.angle_deg = read_number(j["angle"], w.at("angle"));
+  if (j.contains("about"))
+    t.about = read_vec3(j["about"], w.at("about"));
+  return t;
+}
+
+/// A frame's "obstacles": {"name": {"translate": [dx, dy, dz], "rotate": {...}}, ...}; the names
+/// are checked against "contact.obstacles" once the whole file is read (check_frame_obstacles).
+void read_frame_obstacles(const json &j, const Where &w, FrameSpec &f)
 {
   if (!j.is_object())
-    w.fail(std::string("expected {\"<obstacle name>\": {\"translate\": [dx, dy, dz]}, ...}, got ") + j.type_name());
-  std::vector<std::pair<std::string, Vec3>> placed;
+    w.fail(std::string("expected {\"<obstacle name>\": {\"translate\": [dx, dy, dz], \"rotate\": {...}}, ...}, got ") + j.type_name());
   for (const auto &item : j.items()) {
     const Where wi = w.at(item.key());
-    check_keys(item.value(), wi, {"translate"});
-    if (!item.value().contains("translate"))
-      wi.fail("missing 'translate' (the obstacle's offset from its base position in this frame)");
-    placed.emplace_back(item.key(), read_vec3(item.value()["translate"], wi.at("translate")));
+    check_keys(item.value(), wi, {"translate", "rotate"});
+    if (!item.value().contains("translate") && !item.value().contains("rotate"))
+      wi.fail("missing 'translate' or 'rotate' (the obstacle's place relative to its base position in this frame)");
+    const Vec3 t = item.value().contains("translate") ? read_vec3(item.value()["translate"], wi.at("translate")) : Vec3{0, 0, 0};
+    f.obstacles.emplace_back(item.key(), t);
+    if (item.value().contains("rotate"))
+      f.turns[item.key()] = read_turn(item.value()["rotate"], wi.at("rotate"));
   }
-  return placed;
 }
 
 FrameSpec read_frame(const json &j, const Where &w)
@@ -469,7 +486,7 @@ FrameSpec read_frame(const json &j, const Where &w)
   if (j.contains("boundary"))
     f.rules = read_rule_list(j["boundary"], w.at("boundary"));
   if (j.contains("obstacles"))
-    f.obstacles = read_frame_obstacles(j["obstacles"], w.at("obstacles"));
+    read_frame_obstacles(j["obstacles"], w.at("obstacles"), f);
   return f;
 }
 

@@ -26,30 +26,38 @@ const char *shape_name(Obstacle::Shape s)
 
 /// The vertices `where` selects (`where` empty: all) whose displacement is not prescribed in all
 /// three components.
-std::vector<Vec3> candidate_points(const ProblemSetup &s, const std::vector<std::array<bool, 3>> &held, const std::vector<char> &where)
+std::vector<int> candidate_vertices(const ProblemSetup &s, const std::vector<std::array<bool, 3>> &held, const std::vector<char> &where)
 {
-  std::vector<Vec3> out;
+  std::vector<int> out;
   for (std::size_t v = 0; v < s.mesh->vertices.size(); ++v)
-    if ((where.empty() || where[v]) && !(held[v][0] && held[v][1] && held[v][2])) out.push_back(s.mesh->vertices[v]);
+    if ((where.empty() || where[v]) && !(held[v][0] && held[v][1] && held[v][2])) out.push_back(static_cast<int>(v));
   return out;
+}
+
+/// Each vertex's outward unit normal: the area-weighted mean of its triangles' (the mesh is
+/// oriented outward).
+std::vector<Vec3> vertex_normals(const SurfaceMesh &mesh)
+{
+  std::vector<Vec3> n(mesh.vertices.size(), Vec3{0, 0, 0});
+  for (const auto &tri : mesh.triangles) {
+    const Vec3 a = cross(mesh.vertices[tri[1]] - mesh.vertices[tri[0]], mesh.vertices[tri[2]] - mesh.vertices[tri[0]]);
+    for (int k = 0; k < 3; ++k) n[tri[k]] = n[tri[k]] + a;
+  }
+  for (Vec3 &v : n) v = normalized(v);
+  return n;
 }
 
 } // namespace
 
-std::vector<std::vector<Pose>> poses_of(const std::vector<std::vector<Vec3>> &placements)
-{
-  std::vector<std::vector<Pose>> out;
-  for (const std::vector<Vec3> &frame : placements) {
-    out.emplace_back();
-    for (const Vec3 &t : frame) out.back().push_back(Pose::translation(t));
-  }
-  return out;
-}
-
 ContactObstacles::ContactObstacles(const ProblemSetup &s, const std::vector<Obstacle> &obstacles, const std::vector<std::array<bool, 3>> &held, const std::vector<char> &where,
                                    double reach, double depth)
-    : m_s(s), m_candidates(candidate_points(s, held, where)), m_noted(obstacles.size(), 0)
+    : m_s(s), m_noted(obstacles.size(), 0)
 {
+  const std::vector<Vec3> normals = vertex_normals(*s.mesh);
+  for (int v : candidate_vertices(s, held, where)) {
+    m_candidates.push_back(s.mesh->vertices[v]);
+    m_candidate_normals.push_back(normals[v]);
+  }
   Vec3 lo = s.mesh->vertices.empty() ? Vec3{} : s.mesh->vertices[0], hi = lo;
   for (const Vec3 &p : s.mesh->vertices)
     for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], p[d]), hi[d] = std::max(hi[d], p[d]);
@@ -67,7 +75,7 @@ void ContactObstacles::check_facing(const std::vector<std::vector<Pose>> &poses)
     if (m_geometry[k].obstacle().shape != Obstacle::Shape::Mesh) continue;
     try {
       for (const std::vector<Pose> &frame : poses)
-        if (check_obstacle_faces(m_geometry[k], m_candidates, frame[k], m_reach)) break;
+        if (check_obstacle_faces(m_geometry[k], m_candidates, frame[k], m_reach, m_candidate_normals)) break;
     } catch (const std::invalid_argument &e) {
       if (k >= m_s.spec.contact.obstacles.size()) throw ProblemError("contact obstacle '" + m_geometry[k].name() + "': " + e.what()); // made in memory
       throw ProblemError(m_s.spec.file + ": contact.obstacles[" + std::to_string(k) + "] (" + m_s.spec.contact.obstacles[k].mesh_path + "): " + e.what());

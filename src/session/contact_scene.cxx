@@ -23,7 +23,7 @@ ContactScene::ContactScene(const SurfaceMesh &mesh, const Material &material, co
   m_sel = selection_of(job.base);
   job.obstacles = std::move(obstacles);
   job.settings = settings;
-  m_offsets.assign(job.obstacles.size(), Vec3{0, 0, 0});
+  m_poses.assign(job.obstacles.size(), Pose{});
   SessionOptions so;
   so.contact = options;
   so.operator_type = reference.type;
@@ -51,17 +51,25 @@ int ContactScene::obstacle_index(const std::string &name) const
   throw std::invalid_argument("ContactScene: no obstacle named '" + name + "'");
 }
 
-void ContactScene::set_obstacle_offset(const std::string &name, const Vec3 &offset) { m_offsets[obstacle_index(name)] = offset; }
+void ContactScene::set_obstacle_offset(const std::string &name, const Vec3 &offset) { m_poses[obstacle_index(name)] = Pose::translation(offset); }
+
+void ContactScene::set_obstacle_pose(const std::string &name, const Pose &pose) { m_poses[obstacle_index(name)] = pose; }
 
 void ContactScene::set_obstacle_offsets(const std::vector<Vec3> &offsets)
 {
-  if (offsets.size() != m_offsets.size()) throw std::invalid_argument("ContactScene::set_obstacle_offsets: one offset per obstacle expected");
-  m_offsets = offsets;
+  if (offsets.size() != m_poses.size()) throw std::invalid_argument("ContactScene::set_obstacle_offsets: one offset per obstacle expected");
+  for (std::size_t o = 0; o < offsets.size(); ++o) m_poses[o] = Pose::translation(offsets[o]);
+}
+
+void ContactScene::set_obstacle_poses(const std::vector<Pose> &poses)
+{
+  if (poses.size() != m_poses.size()) throw std::invalid_argument("ContactScene::set_obstacle_poses: one pose per obstacle expected");
+  m_poses = poses;
 }
 
 const ContactFrameReport &ContactScene::solve()
 {
-  const ContactFrameReport &rep = m_session->step(m_sel, m_offsets);
+  const ContactFrameReport &rep = m_session->step(m_sel, m_poses);
   SurfaceFields f = surface_fields(m_problem->setup(), NodalSolution{m_sol().u, m_sol().t}, {}, kMotion);
   m_u = std::move(f.displacement);
   m_t = std::move(f.traction);

@@ -59,15 +59,24 @@ ContactSettings settings_of(const ProblemSetup &s)
   return c;
 }
 
-/// Per frame (or the single solve), the obstacles' offsets in the engine's order.
-std::vector<std::vector<Vec3>> placements_of(const ProblemSpec &spec)
+/// Per frame (or the single solve), the obstacles' poses in the engine's order: x ↦ R (x − c) + c + t,
+/// c the frame's "about" or the obstacle's default centre.
+std::vector<std::vector<Pose>> placements_of(const ProblemSpec &spec, const std::vector<Obstacle> &obstacles)
 {
   const std::size_t no = spec.contact.obstacles.size();
-  std::vector<std::vector<Vec3>> out(std::max<std::size_t>(1, spec.frames.size()), std::vector<Vec3>(no, Vec3{0, 0, 0}));
+  std::vector<std::vector<Pose>> out(std::max<std::size_t>(1, spec.frames.size()), std::vector<Pose>(no));
   for (std::size_t f = 0; f < spec.frames.size(); ++f)
     for (const auto &[name, offset] : spec.frames[f].obstacles)
-      for (std::size_t o = 0; o < no; ++o)
-        if (spec.contact.obstacles[o].name == name) out[f][o] = offset;
+      for (std::size_t o = 0; o < no; ++o) {
+        if (spec.contact.obstacles[o].name != name) continue;
+        const auto turn = spec.frames[f].turns.find(name);
+        if (turn == spec.frames[f].turns.end()) {
+          out[f][o] = Pose::translation(offset);
+          continue;
+        }
+        const ObstacleTurn &r = turn->second;
+        out[f][o] = Pose::turn(r.axis, r.angle_deg, r.about ? *r.about : ObstacleGeometry(obstacles[o]).default_centre(), offset);
+      }
   return out;
 }
 
@@ -127,7 +136,7 @@ ContactJob contact_job(const ProblemSetup &s)
   job.settings = settings_of(s);
   job.base = apply_rules(s.spec.rules, *s.disc, s.spec.file);
   job.frames = frames_of(s, job.base);
-  job.placements = placements_of(s.spec);
+  job.placements = placements_of(s.spec, job.obstacles);
   return job;
 }
 
@@ -199,7 +208,11 @@ void ContactSession::set_up()
   const Discretization &disc = m_problem->disc();
   m_drawn = std::make_unique<ContactObstacles>(m_problem->setup(), m_job.obstacles, vertex_displacement_prescribed(disc, m_job.base), m_job.settings.candidate,
                                                m_options.contact.reach, m_options.contact.depth);
-  m_drawn->check_facing(m_job.placements.empty() ? std::vector<std::vector<Pose>>{std::vector<Pose>(m_job.obstacles.size())} : poses_of(m_job.placements));
+  { // judged where the file describes the obstacles (an interference a frame presses in would look like facing away), then per frame
+    std::vector<std::vector<Pose>> judged{std::vector<Pose>(m_job.obstacles.size())};
+    judged.insert(judged.end(), m_job.placements.begin(), m_job.placements.end());
+    m_drawn->check_facing(judged);
+  }
   try {
     check_bodies_held(disc, m_job.base.displacement_prescribed, m_job.obstacles, m_job.settings, m_options.contact);
   } catch (const ConstraintError &e) {
@@ -229,20 +242,20 @@ Fingerprint ContactSession::fingerprint() const
   return hssbem::fingerprint(*m_problem, m_job.base.unknown_pattern(), {}, used, 1);
 }
 
-const ContactFrameReport &ContactSession::solve(const SystemSelection &values, const std::vector<Vec3> &offsets, long long frame)
+const ContactFrameReport &ContactSession::solve(const SystemSelection &values, const std::vector<Pose> &poses, long long frame)
 {
   set_up();
   m_values = values;
-  m_offsets = offsets;
+  m_poses = poses;
   {
     const EventScope event(SCN_Frame);
-    m_report = m_engine->solve(m_values, offsets, m_sol);
+    m_report = m_engine->solve(m_values, poses, m_sol);
   }
   check_finite(m_sol, frame);
   return m_report;
 }
 
-const ContactFrameReport &ContactSession::step(const SystemSelection &values, const std::vector<Vec3> &offsets) { return solve(values, offsets, -1); }
+const ContactFrameReport &ContactSession::step(const SystemSelection &values, const std::vector<Pose> &poses) { return solve(values, poses, -1); }
 
 const ContactFrameReport &ContactSession::step(std::size_t i)
 {
@@ -263,7 +276,7 @@ FrameData ContactSession::frame_data(unsigned parts) const
   f.attributes_real = {{"seconds", m_report.seconds}};
   f.attributes_int = {{"iterations", m_report.iterations}, {"active_vertices", m_report.active_vertices}};
   f.contact = contact_data(*m_engine, m_sol, m_report, m_job.settings.bodies);
-  f.obstacle_vertices = m_drawn->placed(poses_of({m_offsets})[0]);
+  f.obstacle_vertices = m_drawn->placed(m_poses);
   return f;
 }
 
@@ -289,7 +302,7 @@ ResultData ContactSession::result(int ranks)
   put_fields(std::move(f), r);
   interior_fields(PETSC_COMM_SELF, s, nodal, nodes, m_options.interior, r, m_seconds); // the contact run is one rank's
   r.contact = contact_data(*m_engine, m_sol, m_report, m_job.settings.bodies);
-  r.obstacles = m_drawn->surfaces(poses_of({m_offsets})[0]);
+  r.obstacles = m_drawn->surfaces(m_poses);
   m_seconds["contact_solve"] += m_report.seconds;
   r.timings = m_seconds;
   return r;

@@ -50,6 +50,12 @@ class ContactErrorTests(ContactCase):
         self.assertFailsCleanly(r, r"problem\.json: frames\[1\]\.obstacles: no obstacle named 'tool' \(known: table\)")
         self.assertErrorLine(r)
 
+    def test_zero_rotation_axis(self):
+        self.cube_contact({"obstacles": [TABLE]}, frames=[{"obstacles": {"table": {"rotate": {"axis": [0, 0, 0], "angle": 5}}}}])
+        r = self.run_problem()
+        self.assertFailsCleanly(r, r"problem\.json: frames\[0\]\.obstacles\.table\.rotate\.axis: the rotation axis is zero")
+        self.assertErrorLine(r)
+
     def test_duplicate_obstacle_name(self):
         self.cube_contact({"obstacles": [TABLE, TABLE]})
         self.assertFailsCleanly(self.run_problem(), r"contact\.obstacles\[1\]\.name: duplicate obstacle name 'table'")
@@ -123,7 +129,7 @@ class ContactErrorTests(ContactCase):
         self.write("wall.off", off_text([(-1, -1, -0.01), (2, -1, -0.01), (2, 2, -0.01), (-1, 2, -0.01)], [(0, 2, 1), (0, 3, 2)]))
         self.cube_contact({"obstacles": [{"name": "wall", "mesh": "wall.off"}]})
         self.fails_on_one_and_two_ranks(r"problem\.json: contact\.obstacles\[0\] \(.*wall\.off\): obstacle 'wall': its triangles face away from the bodies "
-                                        r"\(25 of the 25 body vertices within reach of its faces lie behind them\).*reverse the vertex order")
+                                        r"\(25 of the 25 body vertices within reach of its faces face their back\).*reverse the vertex order")
 
     def test_obstacle_mesh_inconsistently_oriented(self):
         self.write("wall.off", off_text([(-1, -1, -0.01), (2, -1, -0.01), (2, 2, -0.01), (-1, 2, -0.01)], [(0, 1, 2), (0, 3, 2)]))
@@ -136,6 +142,17 @@ class ContactErrorTests(ContactCase):
         r = self.run_problem("problem.json", "-contact_max_it", "1")
         self.assertFailsCleanly(r, r"the active set did not settle in 1 iterations \(-contact_max_it\)")
         self.assertErrorLine(r)
+
+    def test_a_frame_that_does_not_converge_on_one_and_two_ranks(self):
+        # Friction's Newton stopped after one iteration (the cube pushed sideways on a rough
+        # table): one line naming the frame and the residual, on 1 and 2 ranks, no file.
+        top = [{"where": {"region": "z1"}, "displacement": [0.05, 0, -0.01]}]
+        self.cube_contact({"obstacles": [TABLE], "friction": 0.3}, boundary=top)
+        for np_ in (1, 2):
+            r = self.run_driver("-problem", "problem.json", "-o", self.out, "-contact_max_it", "1", np=np_)
+            self.assertFailsCleanly(r, r"hssbem: error: contact: frame 0: friction did not converge in 1 Newton iterations "
+                                       r"\(-contact_max_it\): residual \d\.\d+e[-+]\d+ of the traction scale")
+            self.assertEqual(r.output.count("hssbem: error:"), 1, r.describe())
 
 
 class ContactRunTests(ContactCase):
@@ -205,6 +222,35 @@ class ContactRunTests(ContactCase):
         self.assertTrue(np.all(data["interior/grid/inside"]))
         self.assertLess(np.max(np.abs(data["interior/grid/stress"] - exact)), 3.5e-4)  # measured 1.2e-4
 
+    def test_interior_stress_of_a_pressed_face_under_a_tool(self):
+        # A pressure on the top face and a tool (sphere) pressed into it: at the pressure-loaded
+        # nodes the interior evaluation takes the pressure on each face plus the node's contact
+        # traction. The same problem with the pressure given as the traction [0, 0, -p] (the top
+        # is flat: the same loads) is an independent path (no pressure nodes): the interior
+        # stress must agree to round-off; without the tool it differs by the tool's share.
+        import h5py
+        import numpy as np
+        points = [[0.5, 0.5, 0.75], [0.42, 0.55, 0.9], [0.6, 0.45, 0.95], [0.3, 0.3, 0.5]]
+        tool = {"name": "tool", "sphere": {"center": [0.5, 0.5, 1.28], "radius": 0.3}}
+        cases = {"pressure": ({"pressure": 1.0}, [tool]), "traction": ({"traction": [0, 0, -1.0]}, [tool]),
+                 "no_tool": ({"pressure": 1.0}, [])}
+        stress = {}
+        for name, (load, obstacles) in cases.items():
+            boundary = [{"where": {"region": "z0"}, "displacement": [0, 0, 0]}, dict({"where": {"region": "z1"}}, **load)]
+            self.cube_contact({"obstacles": obstacles}, boundary=boundary, name=name + ".json",
+                              interior_points={"points": points})
+            out = self.path(name + ".h5")
+            self.assertSucceeds(self.run_driver("-problem", name + ".json", "-o", out, timeout=TIMEOUT_RUN), out)
+            with h5py.File(out, "r") as f:
+                stress[name] = f["/interior/stress"][()]
+                if obstacles:
+                    self.assertLess(f["/contact/forces/tool"][()][2], -1.0)  # the tool presses down (measured -5.9)
+        scale = np.max(np.abs(stress["traction"]))
+        tool_share = np.max(np.abs(stress["traction"] - stress["no_tool"]))
+        self.assertGreater(tool_share, 0.3 * scale)  # the tool matters here (measured 0.97 of the largest)
+        # measured 0 (the same loads; before the fix, 0.12 of the largest: the tool's share dropped)
+        self.assertLess(np.max(np.abs(stress["pressure"] - stress["traction"])), 1e-9 * scale)
+
     def test_scene_frames_equal_static_runs(self):
         # The table rises under the cube frame by frame; each frictionless frame is the static
         # problem with the table at that frame's place (its own run, -bem_mat_type dense).
@@ -232,6 +278,51 @@ class ContactRunTests(ContactCase):
             self.assertLess(np.max(np.abs(frames[i][0] - u)), 1e-6 * np.max(np.abs(u)), "frame %d" % i)
             self.assertLess(np.max(np.abs(frames[i][1] - p)), 1e-6 * max(np.max(p), 1e-12), "frame %d" % i)
         self.assertGreater(np.max(frames[2][1]), np.max(frames[0][1]))  # the higher table presses harder
+
+    def test_a_turned_obstacle_equals_the_obstacle_given_at_the_turned_place(self):
+        # A frame's "rotate" (and "translate") of a plane, a sphere and a mesh obstacle, against
+        # a single solve with the obstacle described at the turned place: x -> R (x - c) + c + t,
+        # c = "about" or the default centre (the plane's point, the mesh's centroid).
+        import h5py
+        import numpy as np
+        from test_cli import off_text
+
+        def turn(axis, deg):
+            k = np.array(axis, float) / np.linalg.norm(axis)
+            K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+            a = np.radians(deg)
+            return np.eye(3) + np.sin(a) * K + (1 - np.cos(a)) * K @ K
+
+        wall = [(-1, -1, 0), (2, -1, 0), (2, 2, 0), (-1, 2, 0)]
+        self.write("wall.off", off_text(wall, [(0, 1, 2), (0, 2, 3)]))
+        R, t = turn([1, 0.2, 0], 0.3), np.array([0, 0, 0.002])
+        centroid = np.mean(np.array(wall, float), axis=0)
+        self.write("wall_turned.off", off_text([tuple(R @ (np.array(v) - centroid) + centroid + t) for v in wall], [(0, 1, 2), (0, 2, 3)]))
+        clamped = [{"where": {"region": "z0"}, "displacement": [0, 0, 0]}]
+        Rs, about = turn([0, 1, 0], 1.0), np.array([0.5, 0.5, 0.5])
+        centre = np.array([0.5, 0.5, 1.95])
+        cases = {
+            "plane": (None, dict(TABLE), {"translate": list(t), "rotate": {"axis": [1, 0.2, 0], "angle": 0.3}},
+                      dict(TABLE, plane={"point": list(t), "normal": list(R @ [0, 0, 1])})),
+            "sphere": (clamped, {"name": "table", "sphere": {"center": list(centre), "radius": 1.0}},
+                       {"rotate": {"axis": [0, 1, 0], "angle": 1.0, "about": list(about)}},
+                       {"name": "table", "sphere": {"center": list(Rs @ (centre - about) + about), "radius": 1.0}}),
+            "mesh": (None, {"name": "table", "mesh": "wall.off"}, {"translate": list(t), "rotate": {"axis": [1, 0.2, 0], "angle": 0.3}},
+                     {"name": "table", "mesh": "wall_turned.off"}),
+        }
+        for name, (boundary, base, place, turned) in cases.items():
+            self.cube_contact({"obstacles": [base]}, boundary=boundary, frames=[{"obstacles": {"table": place}}], name=name + "_scene.json")
+            self.cube_contact({"obstacles": [turned]}, boundary=boundary, name=name + "_static.json")
+            for run in ("scene", "static"):
+                out = self.path("%s_%s.h5" % (name, run))
+                self.assertSucceeds(self.run_driver("-problem", "%s_%s.json" % (name, run), "-o", out, timeout=TIMEOUT_RUN), out)
+            with h5py.File(self.path(name + "_scene.h5"), "r") as f:
+                u, p = f["/frames/0/displacement"][()], f["/frames/0/contact/pressure"][()]
+            with h5py.File(self.path(name + "_static.h5"), "r") as f:
+                ur, pr = f["/fields/displacement"][()], f["/contact/pressure"][()]
+            self.assertGreaterEqual(np.count_nonzero(pr), 3, name)  # a real contact (measured 25, 3, 25 vertices)
+            self.assertLess(np.max(np.abs(u - ur)), 1e-9 * np.max(np.abs(ur)), name)  # measured 4.7e-15 at most (pressure 6.0e-15)
+            self.assertLess(np.max(np.abs(p - pr)), 1e-9 * np.max(pr), name)
 
     def test_two_bodies_forces(self):
         self.check_two_bodies()

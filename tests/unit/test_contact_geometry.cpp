@@ -296,6 +296,29 @@ TEST(ContactGeometry, AnObstacleMeshMustFaceTheBodies)
   EXPECT_THROW(check_obstacle_faces(ObstacleGeometry(Obstacle::mesh("skull", container)), {{0, 0, -0.45}, {0, 1.95, 0}}, Pose{}, 0.1), std::invalid_argument);
 }
 
+TEST(ContactGeometry, AnInterferenceIsNoEvidenceOfAMeshFacingAway)
+{
+  // A body's bottom face (outward normal -z) pressed 0.02 into a plate that faces it (+z): by the
+  // side alone every point lies behind the plate and the plate looks turned away; with the body's
+  // normals every point faces the plate's front. The plate flipped is still refused.
+  SurfaceMesh plate;
+  plate.vertices = {{-2, -2, 0}, {2, -2, 0}, {2, 2, 0}, {-2, 2, 0}};
+  plate.triangles = {{0, 1, 2}, {0, 2, 3}};
+  std::vector<Vec3> bottom, down;
+  for (int i = 0; i < 5; ++i)
+    for (int j = 0; j < 5; ++j) bottom.push_back({-1 + 0.5 * i, -1 + 0.5 * j, -0.02}), down.push_back({0, 0, -1});
+  EXPECT_THROW(check_obstacle_faces(ObstacleGeometry(Obstacle::mesh("plate", plate)), bottom, Pose{}, 0.1), std::invalid_argument);
+  EXPECT_TRUE(check_obstacle_faces(ObstacleGeometry(Obstacle::mesh("plate", plate)), bottom, Pose{}, 0.1, down));
+  try {
+    check_obstacle_faces(ObstacleGeometry(Obstacle::mesh("plate", flipped(plate))), bottom, Pose{}, 0.1, down);
+    ADD_FAILURE() << "a plate facing away was accepted";
+  } catch (const std::invalid_argument &e) {
+    EXPECT_NE(std::string(e.what()).find("(25 of the 25 body vertices within reach of its faces face their back)"), std::string::npos) << e.what();
+  }
+  // Turned by the pose, the plate's normals turn with it: tilted 170 degrees it faces away.
+  EXPECT_THROW(check_obstacle_faces(ObstacleGeometry(Obstacle::mesh("plate", plate)), bottom, Pose::turn({1, 0, 0}, 170, {0, 0, 0}), 0.1, down), std::invalid_argument);
+}
+
 TEST(ContactGeometry, ObstacleSurfacesToDraw)
 {
   // A sphere: 162 vertices on it, closed, facing out (its volume within 5 % of the ball's at

@@ -648,6 +648,30 @@ TEST(Frames, BaseRuleErrorsKeepTheirName)
                {"problem.json: frames[0].boundary[0]: unknown region 'lid'"});
 }
 
+TEST(Frames, ObstacleTurnsParse)
+{
+  const std::string contact = R"("contact": {"obstacles": [{"name": "tool", "sphere": {"center": [0, 0, 2], "radius": 0.5}}]}, "frames": )";
+  const auto parse = [&](const std::string &frames) { return parse_problem(k_head + "\"boundary\": " + k_base_rules + ", " + contact + frames + "}", "problem.json"); };
+  const ProblemSpec spec = parse(R"([{"obstacles": {"tool": {"translate": [0.1, 0, 0], "rotate": {"axis": [0, 1, 0], "angle": 30, "about": [0, 0, 1]}}}},
+                                     {"obstacles": {"tool": {"rotate": {"axis": [0, 0, 2], "angle": -90}}}}, {"obstacles": {"tool": {"translate": [0, 0, -0.1]}}}])");
+  ASSERT_EQ(spec.frames.size(), 3u);
+  EXPECT_EQ(spec.frames[0].obstacles.at(0).second, (Vec3{0.1, 0, 0}));
+  const ObstacleTurn &t0 = spec.frames[0].turns.at("tool");
+  EXPECT_EQ(t0.axis, (Vec3{0, 1, 0}));
+  EXPECT_EQ(t0.angle_deg, 30);
+  ASSERT_TRUE(t0.about.has_value());
+  EXPECT_EQ(*t0.about, (Vec3{0, 0, 1}));
+  EXPECT_EQ(spec.frames[1].obstacles.at(0).second, (Vec3{0, 0, 0})); // rotate alone: no translation
+  EXPECT_FALSE(spec.frames[1].turns.at("tool").about.has_value());    // the obstacle's default centre
+  EXPECT_TRUE(spec.frames[2].turns.empty());
+  const auto error = [&](const std::string &frames, std::initializer_list<const char *> words) { expect_error([&] { parse(frames); }, words); };
+  error(R"([{"obstacles": {"tool": {"rotate": {"axis": [0, 0, 0], "angle": 10}}}}])", {"problem.json: frames[0].obstacles.tool.rotate.axis: the rotation axis is zero"});
+  error(R"([{"obstacles": {"tool": {"rotate": {"axis": [0, 0, 1]}}}}])", {"frames[0].obstacles.tool.rotate: missing 'axis' or 'angle'"});
+  error(R"([{"obstacles": {"tool": {"rotate": {"axis": [0, 0, 1], "angle": "10"}}}}])", {"frames[0].obstacles.tool.rotate.angle: expected a number, got string"});
+  error(R"([{"obstacles": {"tool": {"rotate": {"axis": [0, 0, 1], "angle": 10, "centre": [0, 0, 0]}}}}])", {"rotate: unknown key 'centre' (known: axis, angle, about)"});
+  error(R"([{"obstacles": {"tool": {}}}])", {"frames[0].obstacles.tool: missing 'translate' or 'rotate'"});
+}
+
 // ---- material --------------------------------------------------------------------------------
 
 TEST(Material, YoungValidation)

@@ -2,8 +2,11 @@
 // uniform pressure and the linear field; a gap wider than the push gives nothing; friction that
 // sticks equals the clamped bottom; a push sideways slides with |F_t| = μ F_n), the plane as a
 // rigid mesh, two bodies, moving obstacles against cold static solves, warm starts, the haptic
-// call, and the free-motion errors. Independent references are static dense solves
+// call (with friction, a retracting tool), and the free-motion errors; symmetry rollers and a
+// roller across a tilted table under sticking friction against the clamped bottom; a turning
+// rough table dragging what sticks. Independent references are static dense solves
 // (DenseReference of another pattern).
+#include "hand_problem.hpp"
 #include "solve_helpers.hpp"
 
 #include "hssbem/contact/contact_engine.hpp"
@@ -171,20 +174,18 @@ TEST(Contact, PushedSidewaysItSlidesAtTheCoulombLimit)
   const std::vector<int> bottom = bottom_vertices(c.s.disc->mesh());
   long long slipping = 0;
   for (int v : bottom) slipping += c.sol.status[v] == 2;
-  // Every point slides at the limit; their directions differ a little (the Poisson expansion
-  // slides outward), so the net tangential force is a hair below μ F_n.
+  // Every vertex slides at the limit (its contact traction, ContactSolution::contact_traction);
+  // their directions differ a little (the Poisson expansion slides outward), and the side faces'
+  // nodes of the bottom edges carry a normal traction of their own (a shear of their face, held to
+  // the table with the vertex), so the net tangential force is a hair below μ F_n.
   double limit = 0, normal = 0;
-  for (int v : bottom) {
-    const int i = c.s.disc->first_node(v); // the cube's bottom-face node of a bottom vertex
-    for (int k = i; k < i + c.s.disc->node_count(v); ++k)
-      if (c.s.disc->node(k).normal[2] < -0.9) limit += std::hypot(c.sol.t[k][0], c.sol.t[k][1]), normal += c.sol.t[k][2];
-  }
+  for (int v : bottom) limit += std::hypot(c.sol.contact_traction[v][0], c.sol.contact_traction[v][1]), normal += c.sol.contact_traction[v][2];
   std::printf("sliding cube: F = (%.4f, %.4f, %.4f), |F_t| / F_n = %.6f (mu 0.3), per point %.9f; %lld of %zu bottom vertices slip; %lld Newton steps\n", F[0], F[1], F[2],
               ft / F[2], limit / normal, slipping, bottom.size(), c.rep.iterations);
   EXPECT_GT(F[2], 0);
   EXPECT_LT(F[0], 0); // friction opposes the slide along +x
   EXPECT_NEAR(limit, 0.3 * normal, 1e-8 * normal);
-  EXPECT_NEAR(ft, 0.3 * F[2], 2e-3 * F[2]); // measured 6.1e-4
+  EXPECT_NEAR(ft, 0.3 * F[2], 2e-3 * F[2]); // measured 1.6e-3 of F_n (0.299529)
   EXPECT_GE(slipping, static_cast<long long>(0.9 * bottom.size()));
 }
 
@@ -211,14 +212,10 @@ TEST(Contact, FrictionFramesKeepCoulombsLawAndAgreeWithoutWarmStarts)
     warm_steps += warm.rep.iterations, cold_steps += cold.rep.iterations;
     worst = std::max(worst, max_norm_diff(warm.sol.u, cold.sol.u) / delta);
     for (int v : bottom_vertices(warm.s.disc->mesh())) {
-      const int i = warm.s.disc->first_node(v);
-      for (int k = i; k < i + warm.s.disc->node_count(v); ++k) {
-        if (warm.s.disc->node(k).normal[2] > -0.9) continue; // the bottom face's node
-        const Vec3 &t = warm.sol.t[k];
-        const double tt = std::hypot(t[0], t[1]), limit = 0.3 * t[2];
-        if (warm.sol.status[v] == 2) law = std::max(law, std::abs(tt - limit) / (E * delta));
-        if (warm.sol.status[v] == 1) law = std::max(law, std::max(0.0, tt - limit) / (E * delta));
-      }
+      const Vec3 &t = warm.sol.contact_traction[v];
+      const double tt = std::hypot(t[0], t[1]), limit = 0.3 * t[2];
+      if (warm.sol.status[v] == 2) law = std::max(law, std::abs(tt - limit) / (E * delta));
+      if (warm.sol.status[v] == 1) law = std::max(law, std::max(0.0, tt - limit) / (E * delta));
     }
     if (f == 1) stick_first = warm.rep.stick;
     if (f == frames - 1) slip_last = warm.rep.slip;
@@ -226,8 +223,10 @@ TEST(Contact, FrictionFramesKeepCoulombsLawAndAgreeWithoutWarmStarts)
   std::printf("friction frames: warm against no warm starts %.2e; Coulomb's law %.2e of E delta; frame 1: %lld stick, last frame: %lld slip; Newton steps warm %lld, "
               "cold %lld\n",
               worst, law, stick_first, slip_last, warm_steps, cold_steps);
-  EXPECT_LE(worst, 5e-11); // measured 1.5e-11 (the Newton tolerance, 1e-10 of the traction scale)
-  EXPECT_LE(law, 6e-11);   // measured 1.9e-11
+  // Both stop at the Newton tolerance (max |Φ| ≤ 1e-10 of the traction scale): their difference
+  // and the law's residual are bounded by about that; 10x for other machines, BLAS and threads.
+  EXPECT_LE(worst, 1e-9); // measured 3.1e-11
+  EXPECT_LE(law, 1e-9);   // measured 1.6e-11
   EXPECT_GT(stick_first, 0);
   EXPECT_GT(slip_last, 0);
 }
@@ -257,7 +256,7 @@ TEST(Contact, ASlidingToolWithFrictionAgreesWithoutWarmStarts)
   }
   std::printf("sliding rough tool: warm against no warm starts %.2e (relative); at least %lld vertices touching; Newton steps warm %lld, cold %lld\n", worst / scale, least,
               warm_steps, cold_steps);
-  EXPECT_LE(worst, 3e-11 * scale); // measured 1.1e-11 (the Newton tolerance)
+  EXPECT_LE(worst, 1e-9 * scale); // measured 5.7e-11; the Newton tolerance 1e-10 times 10 (2.72e-12 against 3e-11 failed on a fresh machine)
   EXPECT_GT(least, 0);             // measured: 1 to a few vertices of the coarse cube's top
 }
 
@@ -323,7 +322,7 @@ TEST(Contact, TwoStackedCubesShareTheLoad)
   const DenseReference ref(op, pattern, ro);
   ContactEngine engine(disc, ref, {}, s);
   ContactSolution sol;
-  const ContactFrameReport rep = engine.solve(sel, {}, sol);
+  const ContactFrameReport rep = engine.solve(sel, std::vector<Pose>{}, sol);
   double perr = 0;
   int touching = 0;
   for (int v = 0; v < two.num_vertices(); ++v)
@@ -440,7 +439,162 @@ TEST(Contact, ContactSceneApiDrivesFrames)
   // The bottom pushed up by 2 delta, the top held: u_z at the bottom is 2 delta (the vertex
   // averages: a bottom edge's side nodes sit 9e-6 higher, measured).
   for (int v : bottom_vertices(mesh)) EXPECT_NEAR(scene.displacement()[v][2], 2 * delta, 3e-5);
-  const std::vector<Vec3> F = scene.haptic_forces({{0, 0, 2.5 * delta}});
+  const std::vector<Vec3> F = scene.haptic_forces(std::vector<Vec3>{{0, 0, 2.5 * delta}});
   EXPECT_NEAR(F[0][2] / previous, 0.75, 1e-10); // the table at 1.5 delta instead of 2 delta: 3/4 of the force
   EXPECT_THROW(scene.set_obstacle_offset("tool", {0, 0, 0}), std::invalid_argument);
+  // A pose: the table turned about its normal through its point (the same plane) and raised.
+  scene.set_obstacle_pose("table", Pose::turn({0, 0, 1}, 30, {0, 0, -delta}, {0, 0, 3 * delta}));
+  EXPECT_NEAR(scene.solve().active_vertices, static_cast<long long>(bottom_vertices(mesh).size()), 0);
+  EXPECT_NEAR(scene.obstacle_forces()[0][2], previous, 1e-10 * previous);
+}
+
+
+namespace {
+
+Mat3 turn_about_y(double deg)
+{
+  const double a = deg * M_PI / 180, c = std::cos(a), s = std::sin(a);
+  return {c, 0, s, 0, 1, 0, -s, 0, c};
+}
+
+Vec3 times(const Mat3 &R, const Vec3 &v) { return {R[0] * v[0] + R[1] * v[1] + R[2] * v[2], R[3] * v[0] + R[4] * v[1] + R[5] * v[2], R[6] * v[0] + R[7] * v[1] + R[8] * v[2]}; }
+
+} // namespace
+
+TEST(Contact, StickingWithSymmetryRollersEqualsTheClampedBottom)
+{
+  // Rollers on x0 and y0 (symmetry planes) and a rough table (friction 100: everything sticks):
+  // the table holds every node of a bottom vertex — the roller faces' nodes of the bottom edges
+  // too (they follow the bottom face's node: bound along the normal, tied along the friction
+  // tangent the roller leaves free) — so the answer is the clamped bottom's with the same rollers.
+  // Before, those nodes were contact points of their own, pulled, and let go: 2.1e-2 delta.
+  for (const Vec3 top : {Vec3{k_nan, k_nan, -delta}, Vec3{0, 0, -delta}}) {
+    ContactSettings rough;
+    rough.friction = 100;
+    Case c(cube_spec(true, top), {Obstacle::plane("table", {0, 0, 0}, {0, 0, 1})}, rough);
+    c.solve({{0, 0, 0}});
+    ProblemSpec clamped = cube_spec(true, top);
+    clamped.rules.push_back(rule(Kind::Displacement, region("z0"), {{0, 0, 0}}));
+    const NodalSolution ref = static_solve(clamped, *c.s.disc, *c.op);
+    double us = 0, ts = 0;
+    for (std::size_t i = 0; i < ref.u.size(); ++i) us = std::max(us, norm(ref.u[i])), ts = std::max(ts, norm(ref.t[i]));
+    const double du = max_norm_diff(c.sol.u, ref.u) / us, dt = max_norm_diff(c.sol.t, ref.t) / ts;
+    std::printf("sticking cube with symmetry rollers (top %s) against the clamped bottom: u %.2e, t %.2e (relative); %lld stick\n", std::isnan(top[0]) ? "pushed" : "held", du, dt,
+                c.rep.stick);
+    EXPECT_EQ(c.rep.stick, static_cast<long long>(bottom_vertices(c.s.disc->mesh()).size()));
+    EXPECT_LE(du, 1e-9); // measured 1.5e-13, 2.2e-13 (the Newton tolerance, 1e-10 of the traction scale, times 10)
+    EXPECT_LE(dt, 1e-9); // measured 1.0e-12, 1.6e-12
+  }
+}
+
+TEST(Contact, ARollerAcrossATiltedTableKeepsContactInItsFreeDirections)
+{
+  // The cube and the table turned by 20° about y, the top pushed along the turned z and held,
+  // a roller u_x = 0 (global x) on the bottom: the roller's direction is no local axis of the
+  // table (n = (sin, 0, cos)); the contact's rows in the bottom's free directions (y, z) are the
+  // normal and the tangent n × x, the other tangent is held (it would repeat the normal's row).
+  // Sticking (friction 100) it equals the clamped bottom.
+  const Mat3 R = turn_about_y(20);
+  SurfaceMesh mesh = read_mesh(mesh_file("cube_l0.msh"));
+  const std::vector<Vec3> x0 = mesh.vertices;
+  for (Vec3 &x : mesh.vertices) x = times(R, x);
+  const auto top = [&](int v) { return x0[v][2] > 1 - 1e-12; };
+  const auto bottom = [&](int v) { return x0[v][2] < 1e-12; };
+  const Vec3 push = times(R, {0, 0, -delta});
+  HandProblem contact(mesh, Material{E, nu}), clamped(mesh, Material{E, nu});
+  for (HandProblem *h : {&contact, &clamped})
+    for (int c = 0; c < 3; ++c) h->hold(top, c, [&](const Vec3 &) { return push[c]; });
+  contact.hold(bottom, 0, [](const Vec3 &) { return 0.0; });
+  for (int c = 0; c < 3; ++c) clamped.hold(bottom, c, [](const Vec3 &) { return 0.0; });
+  const DenseReference ref(*contact.op, contact.pattern());
+  ContactSettings rough;
+  rough.friction = 100;
+  ContactEngine engine(*contact.disc, ref, {Obstacle::plane("table", {0, 0, 0}, times(R, {0, 0, 1}))}, rough);
+  ContactSolution sol;
+  const ContactFrameReport rep = engine.solve(contact.sel, {Vec3{0, 0, 0}}, sol);
+  const NodalSolution want = clamped.statics();
+  double us = 0;
+  for (const Vec3 &u : want.u) us = std::max(us, norm(u));
+  const double du = max_norm_diff(sol.u, want.u) / us;
+  std::printf("a roller across a tilted rough table: u against the clamped bottom %.2e (relative); %lld stick of %zu\n", du, rep.stick, bottom_vertices(read_mesh(mesh_file("cube_l0.msh"))).size());
+  EXPECT_EQ(rep.stick, 25);
+  EXPECT_LE(du, 1e-9); // measured 1.8e-13
+}
+
+TEST(Contact, ATurningRoughTableDragsWhatSticksToIt)
+{
+  // The top held and pushed down, the bottom on a rough table (friction 100); the table turns by
+  // 2° about its normal (the z axis through (0.5, 0.5, 0)) in the next frame: each stuck bottom
+  // vertex follows the rigid motion of the table's point it touched, R (x − c) + c − x, so the
+  // frame equals the static problem with that motion prescribed on the bottom.
+  ContactSettings rough;
+  rough.friction = 100;
+  const ProblemSpec spec = cube_spec(false, {0, 0, -delta});
+  Case c(spec, {Obstacle::plane("table", {0, 0, 0}, {0, 0, 1})}, rough);
+  c.solve({Vec3{0, 0, 0}});
+  const Vec3 centre{0.5, 0.5, 0};
+  const Pose turned = Pose::turn({0, 0, 1}, 2.0, centre);
+  c.rep = c.engine->solve(selection_of(c.base), std::vector<Pose>{turned}, c.sol);
+  ProblemSpec dragged = spec;
+  const SurfaceMesh &mesh = c.s.disc->mesh();
+  std::vector<int> bottom = bottom_vertices(mesh);
+  std::vector<Vec3> motion;
+  for (int v : bottom) motion.push_back(turned.apply(mesh.vertices[v]) - mesh.vertices[v]);
+  dragged.rules.push_back(rule(Kind::Displacement, vertices(bottom), motion));
+  const NodalSolution ref = static_solve(dragged, *c.s.disc, *c.op);
+  double us = 0;
+  for (const Vec3 &u : ref.u) us = std::max(us, norm(u));
+  const double du = max_norm_diff(c.sol.u, ref.u) / us;
+  std::printf("a rough table turning by 2 degrees: u against the static problem with the table's motion prescribed %.2e (relative; the largest motion %.2e); %lld stick\n", du,
+              norm(motion[0]), c.rep.stick);
+  EXPECT_EQ(c.rep.stick, static_cast<long long>(bottom.size()));
+  EXPECT_GT(us, 5 * delta * 0.01); // the drag is real: 2° at 0.7 from the centre moves the corners by 0.025
+  EXPECT_LE(du, 1e-9);             // measured 1.2e-13
+}
+
+TEST(Contact, HapticForcesDragWithFrictionAndNeverPull)
+{
+  // The bottom clamped. A flat rough tool (a plane) pressed on the top and moved a little along
+  // x: the haptic force equals the full solve's at that place (the states stay: with friction 5
+  // the top sticks to the tool, which drags it along x). A sphere pressed into the top and lifted part way: the haptic
+  // force equals the full solve (points that would pull open), lifted off it is zero. After a
+  // failed frame the call refuses to run.
+  ProblemSpec spec = spec_for("cube_l0.msh", E, nu);
+  spec.rules = {rule(Kind::Displacement, region("z0"), {{0, 0, 0}})};
+  const Obstacle flat = Obstacle::plane("tool", {0, 0, 1 - delta}, {0, 0, -1}), sphere = Obstacle::sphere("tool", {0.5, 0.5, 1.5 - 0.05}, 0.5);
+  for (double mu : {0.0, 5.0}) {
+    ContactSettings rough;
+    rough.friction = mu;
+    Case a(spec, {flat}, rough), b(spec, {flat}, rough);
+    a.solve({{0, 0, 0}}), b.solve({{0, 0, 0}});
+    const Vec3 step{0.002, 0, 0};
+    const Vec3 haptic = a.engine->haptic_forces(std::vector<Vec3>{step})[0];
+    b.solve({step});
+    const Vec3 full = b.sol.obstacle_force[0];
+    Case c(spec, {sphere}, rough), d(spec, {sphere}, rough);
+    c.solve({{0, 0, 0}}), d.solve({{0, 0, 0}});
+    const Vec3 lift{0, 0, 0.025};
+    const Vec3 lifted = c.engine->haptic_forces(std::vector<Vec3>{lift})[0], off = c.engine->haptic_forces(std::vector<Vec3>{{0, 0, 0.06}})[0];
+    d.solve({lift});
+    const Vec3 lifted_full = d.sol.obstacle_force[0];
+    std::printf("haptic, friction %.1f: moved (%.6f, %.6f, %.6f), against the full solve %.1e; lifted %.6f, against the full solve %.1e; lifted off %.1e\n", mu, haptic[0],
+                haptic[1], haptic[2], norm(haptic - full) / norm(full), lifted[2], norm(lifted - lifted_full) / norm(lifted_full), norm(off));
+    EXPECT_LE(norm(haptic - full), 1e-8 * norm(full)); // measured 4.2e-14; the full solve's Newton tolerance (1e-10) is its share
+    if (mu > 0) EXPECT_GT(haptic[0], 0.02 * std::abs(haptic[2])); // the tool drags the top along x
+    EXPECT_LT(lifted[2], 0);                                       // it still pushes down
+    EXPECT_LE(norm(lifted - lifted_full), 1e-8 * norm(lifted_full)); // the lifted points open as in the full solve (measured 4.6e-16)
+    EXPECT_EQ(norm(off), 0.0);
+  }
+  ContactSettings rough;
+  rough.friction = 0.3;
+  ContactOptions one;
+  one.max_it = 1;
+  Case failing(spec, {sphere}, rough, one);
+  EXPECT_THROW(failing.solve({{0, 0, 0}}), std::runtime_error);
+  try {
+    failing.engine->haptic_forces(std::vector<Vec3>{{0, 0, 0}});
+    ADD_FAILURE() << "the haptic call ran after a failed frame";
+  } catch (const std::runtime_error &e) {
+    EXPECT_NE(std::string(e.what()).find("refuses to run: the last frame (0) was not solved"), std::string::npos) << e.what();
+  }
 }

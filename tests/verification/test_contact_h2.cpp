@@ -91,7 +91,7 @@ TEST(ContactH2, HertzAgreesWithTheDenseReference)
   EXPECT_GE(d.rep.active_vertices, 20); // a real contact area
   EXPECT_GE(h.rep.corrections, 1);
   EXPECT_LE(h.rep.correction, 1e-8);
-  // Measured: u 2.1e-5, pressure 2.0e-5 of the peak, force 1.9e-8 (the H² operator's own
+  // Measured: u 2.1e-5, pressure 2.0e-5 of the peak, force 2.1e-8 (the H² operator's own
   // difference from the dense one at the driver's 1e-5; the corrections end at 5e-13).
   EXPECT_LE(du, 6e-5 * um);
   EXPECT_LE(dp, 6e-5 * pm);
@@ -112,13 +112,13 @@ TEST(ContactH2, HertzAgreesWithTheDenseReference)
     worst = std::max(worst, d / s);
   }
   std::printf("H2 factorization: blocked solve against single solves %.1e\n", worst);
-  EXPECT_LE(worst, 1e-14); // measured 2.3e-15
+  EXPECT_LE(worst, 3e-14); // measured 2.1e-15 (round-off, 10x)
 }
 
 TEST(ContactH2, ToolFramesAndFrictionAgreeWithTheDenseReference)
 {
   // The bottom clamped, a tool (sphere) pressed into the top slides along x over four frames,
-  // frictionless and with friction 0.3 (quasi-static steps: slip from the previous frame): on
+  // frictionless and with friction 0.3 (quasi-static steps: slip relative to the tool): on
   // the H² reference (columns W̃ corrected by accurate solves every frame) against the dense one.
   const References r("cube_l0.msh", rule(BoundaryRule::Kind::Displacement, region("z0"), {{0, 0, 0}}), 16); // leaves of 16: several levels on the small cube
   const ProblemSetup &s = r.s;
@@ -144,7 +144,7 @@ TEST(ContactH2, ToolFramesAndFrictionAgreeWithTheDenseReference)
                 dp / pm, corrections, least);
     EXPECT_GT(least, 0);
     EXPECT_GE(corrections, 4);
-    EXPECT_LE(du, 8e-7 * um); // measured 2.5e-7 (frictionless), 1.8e-7 (friction 0.3)
-    EXPECT_LE(dp, 1e-7 * pm); // measured 2.8e-8, 3.3e-8
+    EXPECT_LE(du, 1.5e-6 * um); // measured 4.6e-7 (frictionless), 4.3e-7 (friction 0.3, the tool dragging the top)
+    EXPECT_LE(dp, 1e-7 * pm);   // measured 2.8e-8, 3.1e-8
   }
 }

@@ -175,7 +175,7 @@ TEST(ContactHertz, SphereOnAPlane)
   double ds = 0, us = 0;
   for (std::size_t i = 0; i < u_plane.size(); ++i) ds = std::max(ds, norm(st.u[i] - u_plane[i])), us = std::max(us, norm(u_plane[i]));
   std::printf("Hertz sphere on a plane: the static solve with the contact area prescribed differs by %.1e (relative)\n", ds / us);
-  EXPECT_LE(ds, 2e-8 * us); // measured 6.8e-9: the default single-precision fields (7e-15 in double); the target is 1e-6
+  EXPECT_LE(ds, 7e-8 * us); // measured 6.8e-9: the default single-precision fields' rounding (7e-15 in double), 10x; the target is 1e-6
 }
 
 TEST(ContactHertz, TwoSpheres)
@@ -218,13 +218,13 @@ TEST(ContactHertz, TwoSpheres)
   opt.reach = 0.05 * R;
   ContactEngine engine(*r->s.disc, composite, {}, bodies, opt);
   ContactSolution sol;
-  const ContactFrameReport rep = engine.solve(selection_of(r->base), {}, sol);
+  const ContactFrameReport rep = engine.solve(selection_of(r->base), std::vector<Pose>{}, sol);
   double dp = 0, pm = 0, du = 0, um = 0;
   for (int v = 0; v < m.num_vertices(); ++v) dp = std::max(dp, std::abs(sol.pressure[v] - r->sol.pressure[v])), pm = std::max(pm, r->sol.pressure[v]);
   for (std::size_t i = 0; i < sol.u.size(); ++i) du = std::max(du, norm(sol.u[i] - r->sol.u[i])), um = std::max(um, norm(r->sol.u[i]));
   std::printf("Hertz two spheres, composite reference against node_body: pressure %.1e, u %.1e; %lld touching (%lld); memory %.0f MB (%.0f MB)\n", dp / pm, du / um,
               rep.active_vertices, r->rep.active_vertices, composite.memory_bytes() / 1e6, r->ref->memory_bytes() / 1e6);
   EXPECT_EQ(rep.active_vertices, r->rep.active_vertices);
-  EXPECT_LE(dp, 2e-13 * pm); // measured 5.2e-14 (node_body's other-body integrals cancel to round-off)
-  EXPECT_LE(du, 1.2e-11 * um); // measured 3.8e-12
+  EXPECT_LE(dp, 5e-13 * pm); // measured 5.2e-14 (node_body's other-body integrals cancel to round-off; 10x)
+  EXPECT_LE(du, 4e-11 * um); // measured 3.8e-12
 }

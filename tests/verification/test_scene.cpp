@@ -305,8 +305,10 @@ TEST(DenseScene, EveryStrategyMatchesADenseSolveOfTheFrame)
     const SystemSelection sel = c.frame(0.25 * f, 0.04 + 0.002 * f, f % 3 == 2);
     const SceneFrameReport &rep = scene.solve(sel, x, order[f]);
     const std::vector<double> ref = c.dense(sel);
-    EXPECT_LT(rel_diff(x, ref), 1e-9) << "frame " << f << " (" << scene_strategy_name(rep.strategy) << ")";
-    EXPECT_LT(scene.residual(sel, x), 1e-10) << "frame " << f;
+    // Round-off margins (10x): measured up to 4.7e-10 (the krylov frames: GMRES to a true residual
+    // of 1e-10), and a residual of 8.4e-11, below the tolerance by construction but for rounding.
+    EXPECT_LT(rel_diff(x, ref), 5e-9) << "frame " << f << " (" << scene_strategy_name(rep.strategy) << ")";
+    EXPECT_LT(scene.residual(sel, x), 1e-9) << "frame " << f;
     EXPECT_GE(rep.switched, 10) << "frame " << f; // the patch switches unknowns: not the reference
     EXPECT_GT(rep.changed, 0) << "frame " << f;
     if (order[f] != SceneStrategy::Auto) EXPECT_EQ(rep.strategy, order[f]);
@@ -401,7 +403,7 @@ TEST(DenseScene, SinglePrecisionFieldsKeepTheSwitchedUnknownsInDouble)
     const std::vector<double> ref = c.dense(sel);
     const double err = rel_diff(x, ref);
     worst = std::max(worst, err), least = std::min(least, rel_diff(x, y));
-    EXPECT_LT(err, 1.5e-8) << "frame " << f; // measured up to 5.0e-9 (W's single-precision rounding)
+    EXPECT_LT(err, 5e-8) << "frame " << f; // measured up to 5.0e-9 (W's single-precision rounding; 10x for other machines)
     double d = 0, n = 0; // the switched unknowns (the contact's tractions) stay double-accurate
     for (int j : scene.switched()) d = std::max(d, std::abs(x[j] - ref[j])), n = std::max(n, std::abs(ref[j]));
     EXPECT_LT(d, 1e-9 * n) << "frame " << f;

@@ -306,14 +306,14 @@ TEST(ContactSessionPrecomputation, AdoptedWhereTheFingerprintMatchesRefusedWhere
   dense.operator_type = OperatorType::Dense;
   ContactSession first(problem, job(), dense, limits);
   first.set_up();
-  const ContactFrameReport rep = first.step(selection_of(first.job().base), {Vec3{0, 0, 0}});
+  const ContactFrameReport rep = first.step(selection_of(first.job().base), {Pose{}});
   ASSERT_GT(rep.active_vertices, 0);
   const std::vector<Vec3> u = first.solution().u;
   ContactSession second(problem, job(), dense, limits);
   second.adopt(first.precomputation());
   second.set_up();
   EXPECT_EQ(&second.reference(), &first.reference()); // not built again
-  second.step(selection_of(second.job().base), {Vec3{0, 0, 0}});
+  second.step(selection_of(second.job().base), {Pose{}});
   EXPECT_TRUE(second.solution().u == u);
   SessionOptions other = dense;
   other.contact_h2_rtol = 1e-9;

@@ -6,20 +6,37 @@
 /// leaves every candidate vertex traction-known (the bodies' surface is traction-free but for
 /// the base rules), so with W = A₀⁻¹ K₀′ the unknowns of any contact tractions λ are
 /// x = x_f − Σ_j W(:, j) (L λ)_j, x_f the free response of the frame's known values. On the
-/// frame's contact points (candidate vertices within reach of an obstacle or another body; one
-/// point per dof node, a sharp vertex's nodes sharing its gap and normal) the relative displacement in local
-/// frames (normal n, tangents t1, t2) is therefore w = w_f + D λ with the compliance (Delassus)
-/// matrix D = −Mᵀ W L: a small dense problem, |C| points instead of N unknowns. Gap (small
-/// deformations): g = g₀ + n·(u − u_other), g₀ measured along the obstacle's normal at the point
-/// of it closest to the undeformed vertex; slip: the tangential displacement since the previous
-/// frame (a single solve: since the undeformed state). Frictionless: primal–dual active set on
-/// the Signorini conditions g ≥ 0, λ_n ≥ 0, λ_n g = 0, the inverse of the active block of D kept
-/// by a CapacitanceInverse from iteration to iteration and frame to frame (warm start: the
-/// previous frame's active set). Friction (Coulomb, |λ_T| ≤ μ λ_n): semismooth Newton on
-/// Alart–Curnier's function. The fields then come from one product with the loaded columns.
+/// frame's contact points the relative displacement in local frames (normal n, tangents t1, t2)
+/// is therefore w = w_f + D λ with the compliance (Delassus) matrix D = −Mᵀ W L: a small dense
+/// problem, |C| points instead of N unknowns.
+///
+/// Points are keyed by (dof node, partner): per candidate vertex and obstacle within reach, and
+/// per candidate vertex of a slave body and other body within reach, so a vertex may touch an
+/// obstacle and a body, or two bodies, at once. The point at the node facing the partner leads:
+/// Signorini's and Coulomb's conditions are its. The vertex's other dof nodes follow it, as a
+/// displacement rule reaches every node of a vertex: closed with it, their normal rows bound to the
+/// partner (tractions of either sign) and, with friction, their tangential rows tied to the lead's
+/// node. Per vertex the constraint rows stay independent: the normals (nearest partner first; an
+/// obstacle's normal parallel to a nearer obstacle's is implied and dropped), then friction
+/// tangents in the free directions left (a roller plane, a second partner's normal take theirs).
+///
+/// Gap (small deformations): g = g₀ + n·(u − u_other), g₀ measured along the obstacle's normal at
+/// the point of it closest to the undeformed vertex, at the obstacle's pose. Slip, per frame (a
+/// quasi-static step): the body's displacement since the previous frame relative to the
+/// partner's surface point it touches — minus the rigid motion, from the previous frame's pose to
+/// this one's, of the obstacle's material point touched at the previous pose; for a pair of
+/// bodies minus the master surface's own step. An obstacle that moves tangentially drags what
+/// sticks to it, and makes it slip once the Coulomb limit is reached. Frictionless: primal–dual
+/// active set on the Signorini conditions g ≥ 0, λ_n ≥ 0, λ_n g = 0, the inverse of the active
+/// block kept by a CapacitanceInverse from iteration to iteration and frame to frame (warm
+/// start: the previous frame's active set), its solves checked by the touching points' gaps.
+/// Friction (Coulomb, |λ_T| ≤ μ λ_n): semismooth Newton on Alart–Curnier's function, its
+/// residual checked on w computed afresh. The fields then come from one product with the loaded
+/// columns. A frame that does not meet the contact conditions within its iterations and rounds
+/// is an error naming the frame and the residual.
 ///
 /// Frictionless frames carry no history: each equals the static problem at its obstacle
-/// positions. Frames with friction are quasi-static steps.
+/// poses. Frames with friction are quasi-static steps.
 #pragma once
 
 #include "hssbem/bem/discretization.hpp"
@@ -77,7 +94,7 @@ struct ContactFrameReport {
   long long iterations = 0;    ///< active-set iterations (frictionless) or Newton steps (friction), all rounds
   long long active_vertices = 0; ///< vertices touching (their facing node in the active set)
   long long stick = 0, slip = 0; ///< of them: sticking, slipping (frictionless: all slip)
-  long long candidates = 0;    ///< contact points considered (one per dof node of a candidate vertex)
+  long long candidates = 0;    ///< contact points considered (per partner within reach, one per dof node of a candidate vertex)
   int rounds = 1;              ///< solves: more than one when a vertex beyond reach penetrated
   bool rebuilt = false;        ///< the active block's inverse was rebuilt, not updated (frictionless)
   long long factorizations = 0; ///< friction: Newton matrices factored (the others' systems by GMRES on a kept one)
@@ -91,9 +108,13 @@ struct ContactFrameReport {
 struct ContactSolution {
   std::vector<double> x;            ///< the unknowns, 3 per dof node (t where S₀ prescribes u, u elsewhere)
   std::vector<Vec3> u, t;           ///< per dof node: displacement and traction (contact tractions included)
-  std::vector<double> pressure;     ///< per vertex: normal contact traction, ≥ 0 (0 where free); both sides of a body pair
-  std::vector<double> gap;          ///< per vertex: the gap after deformation (NaN: no contact point there)
-  std::vector<std::int8_t> status;  ///< per vertex: 0 free, 1 stick, 2 slip (frictionless contact: 2)
+  std::vector<double> pressure;     ///< per vertex: normal contact traction, ≥ 0 (0 where free); both sides of a body pair; the largest of its partners'
+  std::vector<double> gap;          ///< per vertex: the gap after deformation (NaN: no contact point there); the smallest of its partners'
+  std::vector<std::int8_t> status;  ///< per vertex: 0 free, 1 stick, 2 slip (frictionless contact: 2); that of the partner pressing hardest
+  /// per vertex: the contact traction of its partner pressing hardest (pressure along the normal,
+  /// friction across it; Cartesian, zero where free). The nodal tractions `t` also carry the
+  /// forces that hold a sharp vertex's nodes together, so Coulomb's law is read here.
+  std::vector<Vec3> contact_traction;
   std::vector<Vec3> obstacle_force; ///< per obstacle: the force it exerts on the bodies
   std::vector<Vec3> body_force;     ///< per body: the force the other bodies exert on it (zero without "bodies")
 };
@@ -127,16 +148,29 @@ public:
   ContactEngine &operator=(const ContactEngine &) = delete;
 
   /// Computes now, in one blocked call, the columns of W every placement of `placements` (each
-  /// one offset per obstacle) will need: a scene's frames are known ahead. Frictionless contact
+  /// one pose per obstacle) will need: a scene's frames are known ahead. Frictionless contact
   /// needs only the columns of the points that become active; on a reference whose columns
   /// cost solves (exact_columns() false) nothing is computed ahead, the iterations ask for them.
+  void prefetch(const std::vector<std::vector<Pose>> &placements);
+  /// The same with the obstacles translated by offsets (one per obstacle).
   void prefetch(const std::vector<std::vector<Vec3>> &placements);
   /// Solves a frame: `values` holds the known values (the reference pattern, its values), the
-  /// obstacles are at their base positions translated by `offsets` (one per obstacle). Throws
-  /// std::runtime_error when the iterations do not settle within the options' maximum.
+  /// obstacles are at `poses` (one per obstacle, absolute: relative to their base positions).
+  /// With friction the frame is a step from the last solved frame (its poses and displacements).
+  /// Throws std::runtime_error "contact: frame <f>: ..." when the iterations or rounds do not meet
+  /// the contact conditions, naming the residual; the haptic call then refuses to run until a
+  /// frame is solved.
+  const ContactFrameReport &solve(const SystemSelection &values, const std::vector<Pose> &poses, ContactSolution &out);
+  /// The same with the obstacles translated by `offsets` (one per obstacle).
   const ContactFrameReport &solve(const SystemSelection &values, const std::vector<Vec3> &offsets, ContactSolution &out);
-  /// The haptic call: the force each obstacle exerts for new offsets, with the contact points,
+  /// The haptic call: the force each obstacle exerts at new poses, with the contact points and
   /// the active set (and stick/slip states) of the last solve: one small solve, no detection.
+  /// The gaps move with the poses, and with friction so does the slip (the same rule as a frame:
+  /// the step from the last solved frame's poses to these). A leading point that would pull
+  /// opens, so a retracting tool feels no pulling force. Throws std::runtime_error when the last
+  /// frame failed (or none was solved).
+  std::vector<Vec3> haptic_forces(const std::vector<Pose> &poses);
+  /// The same with the obstacles translated by `offsets`.
   std::vector<Vec3> haptic_forces(const std::vector<Vec3> &offsets);
 
   int num_obstacles() const;

@@ -88,6 +88,7 @@ struct ObstacleGap {
 struct ObstacleSide {
   double distance = 0;
   bool on_boundary = false;
+  Vec3 normal{}; ///< a mesh obstacle's unit pseudo-normal at the closest point, posed (planes and spheres: zero)
 };
 
 /// An obstacle ready for gap queries (a mesh obstacle's hierarchy and pseudo-normals are built once).
@@ -150,9 +151,13 @@ private:
 
 /// Throws std::invalid_argument naming the obstacle when a mesh obstacle faces away from the
 /// bodies: among the body points `x` (the candidate vertices) within `reach` of it at `pose`
-/// whose closest point is not on its boundary, more lie behind it than in front. Returns whether
-/// any such point was found (no verdict otherwise). Planes and spheres pass.
-bool check_obstacle_faces(const ObstacleGeometry &o, const std::vector<Vec3> &x, const Pose &pose, double reach);
+/// whose closest point is not on its boundary, more face its back than its front. With the
+/// bodies' outward unit normals at the points (`normals`, one per point), a point faces the
+/// obstacle's front when its normal points against the obstacle's there (so an interference,
+/// a point pressed a little behind a surface that faces it, is no evidence against it);
+/// without, when it lies in front. Returns whether any such point was found (no verdict
+/// otherwise). Planes and spheres pass.
+bool check_obstacle_faces(const ObstacleGeometry &o, const std::vector<Vec3> &x, const Pose &pose, double reach, const std::vector<Vec3> &normals = {});
 
 /// The surface that shows an obstacle at its base position: a mesh obstacle's own triangles; a
 /// sphere as an icosahedron refined twice (162 vertices) on it; a plane as a square patch of

@@ -41,8 +41,10 @@ struct Particles {
   std::size_t size() const { return y[0].size(); }
 };
 
-/// Traction of triangle t at corner c: the node's traction, or −p n_t (the triangle's own normal)
-/// at a node loaded by a pressure, as the solve loaded it.
+/// Traction of triangle t at corner c, as the solve loaded it: the node's traction; at a node
+/// loaded by a pressure, −p n_t (the triangle's own normal) plus the rest of the node's traction —
+/// what it carries beyond the pressure's nodal value (a contact traction; a reaction along a
+/// component whose displacement is prescribed).
 std::vector<std::array<Vec3, 3>> corner_tractions(const Discretization &disc, const SystemSelection &sel, const NodalSolution &sol);
 
 /// Displacement of triangle t at corner c (its corner's dof node).

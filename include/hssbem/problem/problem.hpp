@@ -8,6 +8,7 @@
 #include "hssbem/mesh/mesh.hpp"
 
 #include <limits>
+#include <map>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -43,14 +44,24 @@ struct BoundaryRule {
   std::vector<double> pressure; ///< pressure values (size 1 or number selected)
 };
 
+/// A frame's "rotate" of an obstacle: the turn by `angle_deg` degrees (right-hand rule) about
+/// `axis` through `about` (absent: the obstacle's default centre — a plane's point, a sphere's
+/// centre, a mesh's centroid), before the frame's "translate".
+struct ObstacleTurn {
+  Vec3 axis{0, 0, 1};
+  double angle_deg = 0;
+  std::optional<Vec3> about;
+};
+
 /// One frame of a scene: its "boundary" rules, applied after the base rules (ProblemSpec::rules),
 /// so that later rules win per node and component as within one list. No rules: the frame is the
 /// base problem. A contact scene's frame also places obstacles: each named one at its base
-/// position translated by `translate` (absolute, not cumulative); an obstacle not named stays at
-/// its base position.
+/// position turned by `rotate` (if given) and translated by `translate` (absolute, not
+/// cumulative: x ↦ R (x − c) + c + t); an obstacle not named stays at its base position.
 struct FrameSpec {
   std::vector<BoundaryRule> rules;
-  std::vector<std::pair<std::string, Vec3>> obstacles; ///< "obstacles": {"name": {"translate": [dx, dy, dz]}}
+  std::vector<std::pair<std::string, Vec3>> obstacles; ///< "obstacles": {"name": {"translate": [dx, dy, dz]}} (zero when only "rotate" is given)
+  std::map<std::string, ObstacleTurn> turns;           ///< "obstacles": {"name": {"rotate": {"axis": [..], "angle": deg, "about": [..]}}}
 };
 
 /// A rigid obstacle of "contact.obstacles" as the file gives it (the mesh not yet read).

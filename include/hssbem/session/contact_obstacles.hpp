@@ -13,10 +13,6 @@
 
 namespace hssbem {
 
-/// Per frame (or the single solve), one pose per obstacle from its offset: frames translate
-/// obstacles (placements as the driver reads them from the problem file).
-std::vector<std::vector<Pose>> poses_of(const std::vector<std::vector<Vec3>> &placements);
-
 class ContactObstacles {
 public:
   /// `held`: per vertex, its prescribed displacement components (a vertex held in all three is no
@@ -28,8 +24,9 @@ public:
                    double depth);
 
   /// Throws ProblemError naming the file and the obstacle when a mesh obstacle's triangles face
-  /// away from the bodies (check_obstacle_faces), judged at the first of `poses` (per frame) that
-  /// has candidate vertices within reach of it.
+  /// away from the bodies (check_obstacle_faces), judged at the first of `poses` (the session
+  /// gives the base position first, then the frames') that has candidate vertices within reach
+  /// of it.
   void check_facing(const std::vector<std::vector<Pose>> &poses) const;
   /// Says once per open mesh obstacle (on rank 0's standard output) when frame `frame` starts
   /// with candidate vertices deeper than the depth behind it: not in contact with it.
@@ -44,6 +41,7 @@ private:
   std::vector<ObstacleGeometry> m_geometry;
   std::vector<SurfaceMesh> m_surface; ///< at the base position
   std::vector<Vec3> m_candidates;     ///< the vertices that may touch (where, and not held in all three components)
+  std::vector<Vec3> m_candidate_normals; ///< their outward unit normals
   double m_reach = 0, m_depth = 0;
   std::vector<char> m_noted;          ///< per obstacle: the depth note was said
 };

@@ -8,7 +8,7 @@
 ///                                       hssbem::Obstacle::sphere("tool", {0, 0, 1.3}, 0.3)};
 ///   hssbem::ContactScene scene(mesh, hssbem::Material::from_young(3000, 0.45), held, tools);
 ///   for (;;) {                                        // each frame of the simulation
-///     scene.set_obstacle_offset("tool", tool_position - tool_base);
+///     scene.set_obstacle_offset("tool", tool_position - tool_base);   // or set_obstacle_pose("tool", pose)
 ///     scene.solve();
 ///     draw(scene.displacement(), scene.pressure());
 ///     for (int k = 0; k < 10; ++k)                    // the haptic loop, between frames
@@ -69,8 +69,13 @@ public:
   void set_values(const std::vector<Vec3> &values);
   /// Obstacle `name` at its base position translated by `offset` (absolute, not cumulative).
   void set_obstacle_offset(const std::string &name, const Vec3 &offset);
+  /// Obstacle `name` at `pose` (a turn about a centre and a translation of its base position;
+  /// absolute, not cumulative): Pose::turn(axis, degrees, ObstacleGeometry::default_centre(), t).
+  void set_obstacle_pose(const std::string &name, const Pose &pose);
   /// Every obstacle's offset, in the order given to the constructor.
   void set_obstacle_offsets(const std::vector<Vec3> &offsets);
+  /// Every obstacle's pose, in the order given to the constructor.
+  void set_obstacle_poses(const std::vector<Pose> &poses);
 
   /// Solves the frame; then the accessors below hold it.
   const ContactFrameReport &solve();
@@ -85,9 +90,12 @@ public:
   /// The vertices touching (status not 0), ascending.
   std::vector<int> active_vertices() const;
 
-  /// The haptic call: each obstacle's force for new offsets, with the last solve's contact points
-  /// and active set (one small solve with the factored active block).
+  /// The haptic call: each obstacle's force for new offsets (or poses), with the last solve's
+  /// contact points and active set (one small solve with the factored active block; with
+  /// friction the obstacles' tangential motion drags as in a frame; a retracting tool feels no
+  /// pulling force). Throws std::runtime_error after a failed solve.
   std::vector<Vec3> haptic_forces(const std::vector<Vec3> &offsets) { return m_session->haptic_forces(offsets); }
+  std::vector<Vec3> haptic_forces(const std::vector<Pose> &poses) { return m_session->haptic_forces(poses); }
 
   int obstacle_index(const std::string &name) const;
   const Discretization &discretization() const { return m_problem->disc(); }
@@ -102,7 +110,8 @@ private:
   std::shared_ptr<const SessionProblem> m_problem;
   std::unique_ptr<ContactSession> m_session;
   SystemSelection m_sel;
-  std::vector<Vec3> m_offsets, m_u, m_t;
+  std::vector<Pose> m_poses;
+  std::vector<Vec3> m_u, m_t;
 };
 
 } // namespace hssbem

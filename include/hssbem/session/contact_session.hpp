@@ -35,8 +35,8 @@ struct ContactJob {
   /// values, not the pattern, and only their unknowns with non-zero values need a dense
   /// reference's columns. Empty: values come per step (any unknown may carry one).
   std::vector<NodeConditions> frames;
-  /// Per frame known ahead, the obstacles' offsets (the engine computes their columns at once).
-  std::vector<std::vector<Vec3>> placements;
+  /// Per frame known ahead, the obstacles' poses (the engine computes their columns at once).
+  std::vector<std::vector<Pose>> placements;
 };
 
 /// The contact of a problem file: its obstacles (checked: a degenerate triangle of an obstacle
@@ -89,13 +89,15 @@ public:
   Fingerprint fingerprint() const;
 
   /// Solves a frame: `values` the known values (the reference pattern's), the obstacles at their
-  /// base positions translated by `offsets` (one per obstacle). Throws std::runtime_error when
-  /// the solution is not finite.
-  const ContactFrameReport &step(const SystemSelection &values, const std::vector<Vec3> &offsets);
+  /// base positions at `poses` (one per obstacle, absolute; Pose::translation(offset) for a
+  /// translation). Throws std::runtime_error when the solution is not finite or the frame does
+  /// not converge.
+  const ContactFrameReport &step(const SystemSelection &values, const std::vector<Pose> &poses);
   /// Frame i of the job's frames (the single solve: 0), with its placements.
   const ContactFrameReport &step(std::size_t i);
-  /// The haptic call after a step: each obstacle's force for new offsets.
+  /// The haptic call after a step: each obstacle's force for new offsets or poses.
   std::vector<Vec3> haptic_forces(const std::vector<Vec3> &offsets) { return m_engine->haptic_forces(offsets); }
+  std::vector<Vec3> haptic_forces(const std::vector<Pose> &poses) { return m_engine->haptic_forces(poses); }
 
   const ContactSolution &solution() const { return m_sol; }
   const ContactFrameReport &report() const { return m_report; }
@@ -123,7 +125,7 @@ public:
   OptionValues options_used() const;
 
 private:
-  const ContactFrameReport &solve(const SystemSelection &values, const std::vector<Vec3> &offsets, long long frame);
+  const ContactFrameReport &solve(const SystemSelection &values, const std::vector<Pose> &poses, long long frame);
   std::unique_ptr<ReferenceFactorization> body_reference(const BemOperator &op, std::vector<char> pattern, std::vector<char> kept, bool pressure, int body);
   void make_reference();
 
@@ -137,7 +139,7 @@ private:
   std::unique_ptr<ContactEngine> m_engine;
   std::unique_ptr<ContactObstacles> m_drawn;
   SystemSelection m_values;
-  std::vector<Vec3> m_offsets; ///< the last step's obstacle offsets
+  std::vector<Pose> m_poses; ///< the last step's obstacle poses
   ContactSolution m_sol;
   ContactFrameReport m_report;
   std::map<std::string, double> m_seconds;

@@ -3,7 +3,7 @@
 /// (io/hdf5_output.hpp: ResultData for a solve, FrameData for a frame), what the library's scenes
 /// hand out per vertex, and what the Python module will show as arrays. From a solution per dof
 /// node (u and t, post/post.hpp): the vertex fields, the corners' tractions, the prescribed
-/// components, the reactions per region, the surface stress (bem/surface_stress.hpp), and inside
+/// components, the reactions per region, the surface stress (post/surface_stress.hpp), and inside
 /// the body the displacement and stress at the problem's interior points and grid (Somigliana's
 /// identities, evaluated fast over the ranks: interior/interior_evaluation.hpp, near the surface
 /// post/near_surface.hpp).

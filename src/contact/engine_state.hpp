@@ -1,0 +1,89 @@
+// Private to contact/: the contact engine's state (contact_engine.hpp), shared by the engine's set-up
+// and free responses (contact_engine.cpp) and a frame's phases (contact_frame.cpp).
+#pragma once
+
+#include "hssbem/contact/contact_engine.hpp"
+
+#include "contact_points.hpp"
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace hssbem {
+
+struct ContactEngine::State {
+  State(const Discretization &d, const ReferenceFactorization &r, contact_detail::Geometry geometry, const ContactOptions &o)
+      : disc(&d), ref(&r), opt(o), geo(std::move(geometry)), normal(d.num_nodes() * std::max(1, geo.partners))
+  {
+  }
+  const Discretization *disc;
+  const ReferenceFactorization *ref;
+  ContactOptions opt;
+  contact_detail::Geometry geo;
+  std::shared_ptr<ReferenceColumns> columns;
+  std::vector<int> node_position;      ///< per dof node: where its rows sit in the columns
+  std::vector<contact_detail::ContactPoint> body_points, points;
+  bool body_points_done = false;
+  std::vector<char> forced;            ///< per (vertex, obstacle): penetrated from beyond reach once; always a point since
+  double tol_gap = 0;
+  double size = 0;                     ///< the mesh's bounding-box diagonal
+  // the free response of the last values
+  bool has_free = false;
+  SystemSelection free_values;
+  std::vector<double> xf;
+  SystemSelection solved_values;       ///< the values of the last free response solved (not scaled)
+  std::vector<double> solved_xf;       ///< and that response
+  bool exact = true;                   ///< the reference's columns are exact (its x_f is never corrected)
+  std::vector<Vec3> u_free;
+  // the frame
+  std::unique_ptr<contact_detail::Compliance> D;
+  std::vector<Vec3> wf, lambda, u_prev, warm_lambda;
+  std::vector<double> gap;             ///< per point: the gap after the solve
+  std::vector<std::int8_t> point_status;
+  std::vector<char> warm_keys;         ///< per point key: touching in the last solve (round or frame)
+  std::vector<char> zone, zone_keys;   ///< per point: watched by the iterations; per key: joined this frame
+  std::vector<Pose> poses;             ///< the obstacles' poses of this frame
+  std::vector<Pose> step_from;         ///< the poses the step starts from: the last solved frame's (this frame's for the first)
+  std::vector<Pose> last_poses;        ///< the last solved frame's poses (empty: none yet)
+  double worst_penetration = 0;        ///< of the last round's checks, relative to the mesh's size
+  bool friction = false, solved = false;
+  long long frame = -1;                ///< the frame being solved (solve() calls so far, from 0): errors name it
+  contact_detail::NormalSolver normal;
+  contact_detail::FrictionSolver friction_solver;
+  ContactFrameReport report;
+  std::vector<Pose> warm_poses;        ///< the obstacles' poses of the warm start
+  TriangleBvh surface;                 ///< the mesh's triangles (the warm start's interpolation)
+
+  void free_response(const SystemSelection &values);
+  void set_u_free();
+  /// The solve of a frame's points until no vertex went through (rounds of detection).
+  void rounds(ContactSolution &out, ContactFrameReport &rep);
+  void correct(const SystemSelection &values, ContactSolution &out, ContactFrameReport &rep);
+  void detect();
+  /// Each obstacle point's rigid motion over the step (ContactPoint::motion).
+  void set_motions();
+  void solve_points(ContactFrameReport &rep);
+  void fields(ContactSolution &out) const;
+  void point_gaps(const ContactSolution &out, bool single);
+  /// Frictionless: the touching points' gaps after the solve are zero to 1e-8 of the gaps the
+  /// tractions closed (the capacitance solves checked by their residual); the largest, relative.
+  double gap_residual() const;
+  /// The fields in single precision: frictionless frames on exact columns only (friction
+  /// measures the next frame's slip from the fields, and approximate columns are corrected
+  /// against the fields to 1e-8, below single precision's 1e-7).
+  bool single_fields() const { return opt.single_fields && !friction && ref->exact_columns(); }
+  bool zone_violations();
+  bool penetrations(const ContactSolution &out);
+  void outputs(ContactSolution &out) const;
+  /// The warm start of the next solve (round or frame): the active set and its tractions.
+  void remember();
+  Vec3 predicted_traction(int c);
+  /// The rigid motion from pose `from` to pose `to` of obstacle p's material point touched at
+  /// `from` (the obstacle's point closest to the vertex there): the obstacle's share of the slip.
+  Vec3 step_motion(const contact_detail::ContactPoint &p, const Pose &to, const Pose &from) const;
+  /// "contact: frame <f>: <what>".
+  std::string frame_error(const std::string &what) const;
+};
+
+} // namespace hssbem
