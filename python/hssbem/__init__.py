@@ -301,19 +301,18 @@ class Scene:
 
     def haptic_forces(self, obstacles):
         """The haptic call between frames: each obstacle's force on the bodies (a dict by name of
-        (3,) arrays) with the obstacles moved to new offsets from their base positions,
-        {"name": [dx, dy, dz]} (or {"name": {"translate": [...]}}); the others stay where the
-        last frame put them. Uses the last frame's contact points and active set: one small
-        solve, no new frame."""
-        offsets = {}
-        for name, value in dict(obstacles).items():
-            if isinstance(value, dict):
-                value = value.get("translate")
-            v = _np.asarray(value, dtype=float)
-            if v.shape != (3,) or not _np.all(_np.isfinite(v)):
-                raise Error("haptic_forces: obstacle %r: expected a finite offset [dx, dy, dz]" % (name,))
-            offsets[name] = v.tolist()
-        return self._s.haptic_forces(offsets)
+        (3,) arrays) with obstacles moved to new poses: {"name": [dx, dy, dz]} (a translation
+        from the base position) or, as in a frame, {"name": {"translate": [...], "rotate":
+        {"axis": [...], "angle": degrees}}}; the others stay where the last frame put them. Uses
+        the last frame's contact points and active set: one small solve, no new frame."""
+        if not isinstance(obstacles, dict):
+            raise Error("haptic_forces: expected a dict by obstacle name, got %s" % type(obstacles).__name__)
+        poses = {}
+        for name, value in obstacles.items():
+            if not isinstance(value, dict):
+                value = {"translate": value}
+            poses[name] = value
+        return self._s.haptic_forces(_to_json(poses, "haptic_forces"))
 
 
 # --- the operator for petsc4py ------------------------------------------------------------------

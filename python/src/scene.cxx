@@ -82,18 +82,21 @@ public:
 
   py::dict contact(py::object self) const { return contact_of(m_frame.contact, self); }
 
-  /// The haptic call: per obstacle, its force for new offsets (obstacles not named keep the last
-  /// frame's).
-  py::dict haptic_forces(const std::map<std::string, Vec3> &offsets)
+  /// The haptic call: per obstacle, its force for new poses, `obstacles` the JSON of a frame's
+  /// "obstacles" ({"name": {"translate": [..], "rotate": {..}}}); obstacles not named keep the
+  /// last frame's poses.
+  py::dict haptic_forces(const std::string &obstacles)
   {
     if (!m_contact && m_rank == 0) throw Failure("haptic_forces: the problem has no \"contact\"");
     const CallEnvironment env(m_options);
     std::vector<Vec3> forces;
     guarded([&] {
       if (m_rank != 0) return;
-      std::vector<Vec3> o = m_offsets;
-      for (const auto &[name, offset] : offsets) o.at(obstacle(name)) = offset;
-      forces = m_contact->haptic_forces(o);
+      const ProblemSpec spec = parse_frame(m_setup->spec, "{\"obstacles\": " + obstacles + "}", "haptic_forces");
+      const std::vector<Pose> placed = contact_placements(spec, m_obstacles)[0];
+      std::vector<Pose> poses = m_poses;
+      for (const auto &entry : spec.frames[0].obstacles) poses[obstacle(entry.first)] = placed[obstacle(entry.first)];
+      forces = m_contact->haptic_forces(poses);
     });
     py::dict d;
     for (std::size_t i = 0; i < forces.size(); ++i) d[py::str(m_names[i])] = copy_vec3(forces[i]);
@@ -138,7 +141,8 @@ private:
       m_base_pattern = job.base.displacement_prescribed;
       m_file_frames = std::move(job.frames), m_file_placements = std::move(job.placements);
       job.frames.clear(), job.placements.clear();
-      m_offsets.assign(m_names.size(), Vec3{0, 0, 0});
+      m_obstacles = job.obstacles;
+      m_poses.assign(m_names.size(), Pose());
       m_contact = std::make_unique<ContactSession>(m_problem, std::move(job), o.session, limits);
       m_contact->set_up();
     });
@@ -169,18 +173,16 @@ private:
       } else {
         if (nc.displacement_prescribed != m_base_pattern)
           throw ProblemError(m_problem->where() + "frame.boundary: a contact's frames may change the values of the base rules, not which components they prescribe (the reference factorization's pattern)");
-        std::vector<Vec3> offsets(m_names.size(), Vec3{0, 0, 0});
-        for (const auto &[name, offset] : spec.frames[0].obstacles) offsets[obstacle(name)] = offset;
-        step_contact(selection_of(nc), offsets);
+        step_contact(selection_of(nc), contact_placements(spec, m_obstacles)[0]);
       }
     }
     refill(m_frame, m_scene ? m_scene->frame_data(m_parts) : m_contact->frame_data(m_parts));
   }
 
-  void step_contact(const SystemSelection &values, const std::vector<Vec3> &offsets)
+  void step_contact(const SystemSelection &values, const std::vector<Pose> &poses)
   {
-    m_contact->step(values, offsets);
-    m_offsets = offsets;
+    m_contact->step(values, poses);
+    m_poses = poses;
   }
 
   MPI_Comm m_comm;
@@ -194,8 +196,9 @@ private:
   std::vector<std::string> m_names;          ///< the obstacles
   std::vector<std::array<bool, 3>> m_base_pattern;
   std::vector<NodeConditions> m_file_frames;
-  std::vector<std::vector<Vec3>> m_file_placements;
-  std::vector<Vec3> m_offsets;               ///< the last frame's obstacle offsets
+  std::vector<std::vector<Pose>> m_file_placements;
+  std::vector<Obstacle> m_obstacles;         ///< the contact's obstacles (their default centres for a frame's turns)
+  std::vector<Pose> m_poses;                 ///< the last frame's obstacle poses
   FrameData m_frame;                         ///< the last frame's fields: numpy views look into it
 };
 
@@ -208,7 +211,7 @@ void bind_scene(py::module_ &m)
       .def("step", &Scene::step, py::arg("frame"))
       .def("fields", [](py::object self) { return self.cast<const Scene &>().fields(self); })
       .def("contact", [](py::object self) { return self.cast<const Scene &>().contact(self); })
-      .def("haptic_forces", &Scene::haptic_forces, py::arg("offsets"))
+      .def("haptic_forces", &Scene::haptic_forces, py::arg("obstacles"))
       .def_property_readonly("obstacles", &Scene::obstacle_names)
       .def_property_readonly("num_frames", &Scene::num_frames)
       .def_property_readonly("kind", &Scene::kind);
