@@ -35,6 +35,14 @@ def first_frames(problem, n):
     return problem
 
 
+def single_touch():
+    """The organ under the instrument, once: no frames, the instrument lowered into the organ."""
+    problem = example("organ_table_instrument")
+    del problem["frames"]
+    problem["contact"]["obstacles"][1]["sphere"]["center"][2] -= 0.05
+    return problem
+
+
 # name -> (problem dict, the command line's options)
 CASES = {
     # cube_l0 in uniaxial tension (closed form u_z(z=1) = 0.01), dense operator + LU
@@ -45,6 +53,8 @@ CASES = {
     "cardioid_scene": (lambda: first_frames(example("cardioid_moving_contact"), 3), []),
     # contact: the organ on the table under the instrument, 3 frames
     "organ_contact": (lambda: first_frames(example("organ_table_instrument"), 3), []),
+    # contact's single solve: the same organ, the instrument pressed in, no frames
+    "organ_touch": (single_touch, []),
 }
 
 

@@ -52,6 +52,25 @@ def test_h2_iterations_identical_to_command_line():
     assert np.linalg.norm(u - u_ref) <= 1e-6 * np.linalg.norm(u_ref)
 
 
+def test_contact_single_solve_identical_to_command_line():
+    """A contact solved once (no frames): /contact (pressure, gap, status, forces) and /fields as
+    the command line's, on rank 0 where the contact runs."""
+    ref = reference("organ_touch")
+    r = hssbem.solve(problem("organ_touch"))
+    if COMM.rank != 0:
+        assert r.fields == {} and not r._r.on_every_rank
+        return
+    want = datasets(ref, "contact")
+    for name in ("pressure", "gap", "status"):
+        assert_identical(r.contact[name], want[name], "/contact/" + name)
+    for name, force in r.contact["forces"].items():
+        assert_identical(force, want["forces/" + name], "/contact/forces/" + name)
+    assert r.contact["active_vertices"] > 0 and r.contact["forces"]["tool"][2] < 0
+    for name, value in datasets(ref, "fields").items():
+        assert_identical(r.fields[name], value, "/fields/" + name)
+    assert r.iterations == attributes(ref, "/contact")["iterations"]
+
+
 def cube_by_boxes(mesh):
     """cube_tension with its regions as boxes (a mesh made of arrays has no regions)."""
     p = problem("cube_dense")
