@@ -153,4 +153,4 @@ if [ -n "$module" ]; then
 fi
 
 ok=1
-step "passed: installed hssbem builds and runs examples/clamped_block on 1 and 2 ranks and examples/moving_contact"
+step "passed: installed hssbem builds and runs examples/clamped_block on 1 and 2 ranks and examples/moving_contact${module:+, and examples/python/solve.py on 1 and 2 ranks}"
