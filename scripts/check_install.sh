@@ -131,5 +131,26 @@ grep -E "$scene_re" "$scene_out" || { cat "$scene_out"; fail "no summary line fr
 # the indentation (0.03 of the size 1.3, deepened 4 x 10 % per frame) must show: max |u| in (0.01, 0.2)
 awk '/^moving_contact:/ { split($0, a, "max \\|u\\| = "); split(a[2], b, ","); u = b[1] + 0; if (!(u > 0.01 && u < 0.2)) { print "check_install: max |u| " u " out of range" > "/dev/stderr"; exit 1 } }' "$scene_out" || fail "moving_contact results"
 
+# The Python module, when the build has it: imported from the prefix alone (not the build tree),
+# examples/python/solve.py on 1 and 2 ranks against its closed form.
+module=$(find "$prefix" -name '_hssbem*.so' | head -n 1)
+if [ -n "$module" ]; then
+  site=$(dirname "$(dirname "$module")")
+  python=$(grep -h "^Python3_EXECUTABLE:" "$build/CMakeCache.txt" | cut -d= -f2)
+  for np in 1 2; do
+    step "running examples/python/solve.py from $site on $np rank(s)"
+    py_out="$work/solve-py-np$np.log"
+    (cd "$work" && PYTHONPATH="$site" "$mpiexec" -n "$np" "${mpiflags[@]}" "$python" "$repo/examples/python/solve.py") >"$py_out" 2>&1 || {
+      cat "$py_out"
+      fail "examples/python/solve.py on $np rank(s)"
+    }
+    cat "$py_out"
+    grep -q "^hssbem imported from $site" "$py_out" || fail "examples/python/solve.py did not import hssbem from the prefix"
+    # sphere_l1 under pressure: the P1 discretisation's error is about 1 % of the displacement
+    awk '/largest error against the closed form/ { e = $(NF-2) + 0; if (!(e < 2e-3)) { print "check_install: error " e " too large" > "/dev/stderr"; exit 1 }; found = 1 } END { exit !found }' "$py_out" ||
+      fail "examples/python/solve.py results"
+  done
+fi
+
 ok=1
-step "passed: installed hssbem builds and runs examples/clamped_block on 1 and 2 ranks and examples/moving_contact"
+step "passed: installed hssbem builds and runs examples/clamped_block on 1 and 2 ranks and examples/moving_contact${module:+, and examples/python/solve.py on 1 and 2 ranks}"

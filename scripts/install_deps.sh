@@ -18,6 +18,8 @@ packages=(
   python3-matplotlib                        # scripts/render.py (Agg PNGs; brings python3-pil for GIFs)
   python3-jsonschema                        # the problem file's schema (scripts/problem_schema.py, ctest problem_schema)
   python3-meshio                            # the CLI tests read the XDMF sidecar as another reader would
+  python3-dev python3-pybind11              # the Python module hssbem (python/, docs/python.md)
+  python3-petsc4py python3-mpi4py python3-pytest # its PETSc and MPI objects, its tests (tests/python/)
 )
 
 echo "install_deps: apt-get install ${#packages[@]} packages"

@@ -688,6 +688,16 @@ ProblemSpec parse_problem(const std::string &json_text, const std::string &origi
   return spec;
 }
 
+ProblemSpec parse_frame(const ProblemSpec &spec, const std::string &json_text, const std::string &what)
+{
+  ProblemSpec out = spec;
+  const Where top{out.file, ""};
+  const json j = parse_json(json_text, top);
+  out.frames = {read_frame(j, top.at(what))};
+  check_frame_obstacles(out, top);
+  return out;
+}
+
 std::vector<Vec3> InteriorGrid::points() const
 {
   const auto n = points_per_axis();

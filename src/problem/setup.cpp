@@ -124,10 +124,11 @@ ProblemSetup setup_problem(ProblemSpec spec, const ProblemOverrides &o)
   s.spec = std::move(spec);
   if (o.mesh) s.spec.mesh_path = *o.mesh;
   s.output = o.output ? *o.output : s.spec.output;
-  s.input_files = {s.spec.file, s.spec.mesh_path};
+  s.input_files = {s.spec.file};
+  if (!o.mesh_data) s.input_files.push_back(s.spec.mesh_path);
   s.material = material_of(s.spec, o);
   fault_point("MeshRead"); // tests: a mesh seen by some ranks only (kind unreadable: fault_path)
-  s.mesh = std::make_unique<SurfaceMesh>(read_mesh(fault_path("MeshRead", s.spec.mesh_path)));
+  s.mesh = std::make_unique<SurfaceMesh>(o.mesh_data ? *o.mesh_data : read_mesh(fault_path("MeshRead", s.spec.mesh_path)));
   validate_and_orient(*s.mesh, s.notices);
   s.disc = std::make_unique<Discretization>(*s.mesh, o.feature_angle_deg);
   refuse_gravity_with_contact(s.spec);

@@ -48,27 +48,6 @@ ContactSettings settings_of(const ProblemSetup &s)
   return c;
 }
 
-/// Per frame (or the single solve), the obstacles' poses in the engine's order: x ↦ R (x − c) + c + t,
-/// c the frame's "about" or the obstacle's default centre.
-std::vector<std::vector<Pose>> placements_of(const ProblemSpec &spec, const std::vector<Obstacle> &obstacles)
-{
-  const std::size_t no = spec.contact.obstacles.size();
-  std::vector<std::vector<Pose>> out(std::max<std::size_t>(1, spec.frames.size()), std::vector<Pose>(no));
-  for (std::size_t f = 0; f < spec.frames.size(); ++f)
-    for (const auto &[name, offset] : spec.frames[f].obstacles)
-      for (std::size_t o = 0; o < no; ++o) {
-        if (spec.contact.obstacles[o].name != name) continue;
-        const auto turn = spec.frames[f].turns.find(name);
-        if (turn == spec.frames[f].turns.end()) {
-          out[f][o] = Pose::translation(offset);
-          continue;
-        }
-        const ObstacleTurn &r = turn->second;
-        out[f][o] = Pose::turn(r.axis, r.angle_deg, r.about ? *r.about : ObstacleGeometry(obstacles[o]).default_centre(), offset);
-      }
-  return out;
-}
-
 /// Every frame's conditions, checked before frame 0: a contact scene keeps the base pattern.
 std::vector<NodeConditions> frames_of(const ProblemSetup &s, const NodeConditions &base)
 {
@@ -118,6 +97,25 @@ void check_finite(const ContactSolution &sol, long long frame)
 
 } // namespace
 
+std::vector<std::vector<Pose>> contact_placements(const ProblemSpec &spec, const std::vector<Obstacle> &obstacles)
+{
+  const std::size_t no = spec.contact.obstacles.size();
+  std::vector<std::vector<Pose>> out(std::max<std::size_t>(1, spec.frames.size()), std::vector<Pose>(no));
+  for (std::size_t f = 0; f < spec.frames.size(); ++f)
+    for (const auto &[name, offset] : spec.frames[f].obstacles)
+      for (std::size_t o = 0; o < no; ++o) {
+        if (spec.contact.obstacles[o].name != name) continue;
+        const auto turn = spec.frames[f].turns.find(name);
+        if (turn == spec.frames[f].turns.end()) {
+          out[f][o] = Pose::translation(offset);
+          continue;
+        }
+        const ObstacleTurn &r = turn->second;
+        out[f][o] = Pose::turn(r.axis, r.angle_deg, r.about ? *r.about : ObstacleGeometry(obstacles[o]).default_centre(), offset);
+      }
+  return out;
+}
+
 ContactJob contact_job(const ProblemSetup &s)
 {
   ContactJob job;
@@ -125,7 +123,7 @@ ContactJob contact_job(const ProblemSetup &s)
   job.settings = settings_of(s);
   job.base = apply_rules(s.spec.rules, *s.disc, s.spec.file);
   job.frames = frames_of(s, job.base);
-  job.placements = placements_of(s.spec, job.obstacles);
+  job.placements = contact_placements(s.spec, job.obstacles);
   return job;
 }
 

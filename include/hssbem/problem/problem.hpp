@@ -114,6 +114,11 @@ ProblemSpec read_problem(const std::string &path);
 /// Parse from a JSON string (for tests); `origin` is used in messages and to resolve paths.
 ProblemSpec parse_problem(const std::string &json_text, const std::string &origin);
 
+/// `spec` with one frame, parsed from JSON in the grammar of one element of "frames" (a frame
+/// given on its own: the Python module's Scene.step); `what` names it in messages ("frame").
+/// Throws ProblemError as parse_problem does.
+ProblemSpec parse_frame(const ProblemSpec &spec, const std::string &json_text, const std::string &what);
+
 /// The vertices a selector picks (ascending), for selectors outside boundary rules (the
 /// contact's "where"); `what` names it in messages ("contact.where"). Throws ProblemError for a
 /// selection that is empty, an unknown region or a vertex index out of range.

@@ -20,6 +20,9 @@ struct ProblemOverrides {
   std::optional<std::string> mesh, output;
   std::optional<double> E, nu;
   double feature_angle_deg = option_default::bem_feature_angle;
+  /// A mesh made in memory (the Python module's arrays) instead of the file the problem names:
+  /// validated as a mesh read from a file, and no input file of the run.
+  std::shared_ptr<const SurfaceMesh> mesh_data;
 };
 
 struct ProblemSetup {

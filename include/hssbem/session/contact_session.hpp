@@ -44,6 +44,11 @@ struct ContactJob {
 /// pattern) and placements (one frame, the single solve, when it has no "frames").
 ContactJob contact_job(const ProblemSetup &s);
 
+/// Per frame of `spec` (one entry, the single solve, when it has no "frames"), the obstacles'
+/// poses in the order of `obstacles` (contact.obstacles'): x ↦ R (x − c) + c + t, c the frame's
+/// "about" or the obstacle's default centre; an obstacle a frame does not name stays at its base.
+std::vector<std::vector<Pose>> contact_placements(const ProblemSpec &spec, const std::vector<Obstacle> &obstacles);
+
 /// What a contact precomputes, apart from the problem: per body whether its reference is the
 /// H² one, the reference (a CompositeReference for several bodies), and the cache of W's columns
 /// the engine fills (shared with it). The unit a saved precomputation keeps, with its fingerprint.
