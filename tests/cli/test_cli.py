@@ -1711,9 +1711,11 @@ def add_example_tests():
         setattr(ExampleTests, test.__name__, test)
 
 
-def main():
+def configure(description):
+    """Reads every CLI suite's command line (--driver, --meshes, --mpiexec) into this module's
+    DRIVER, MESHES and MPIEXEC, checked; returns the rest, unittest's arguments."""
     global DRIVER, MESHES, MPIEXEC
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(description=description.split("\n")[0])
     parser.add_argument("--driver", required=True, help="path of the hssbem executable")
     parser.add_argument("--meshes", required=True, help="the repository's meshes/ directory")
     parser.add_argument("--mpiexec", default=shutil.which("mpiexec") or "",
@@ -1726,9 +1728,19 @@ def main():
         parser.error("driver %s is not an executable" % DRIVER)
     if not os.path.isdir(os.path.join(MESHES, "examples")):
         parser.error("%s has no examples/ directory" % MESHES)
-    add_example_tests()
+    return rest
+
+
+def run_suite(description):
+    """The main of a CLI suite: configure() from the command line, then unittest."""
+    rest = configure(description)
     unittest.main(argv=[sys.argv[0]] + rest, verbosity=1)
 
+
+def main():
+    rest = configure(__doc__)
+    add_example_tests()
+    unittest.main(argv=[sys.argv[0]] + rest, verbosity=1)
 
 if __name__ == "__main__":
     main()

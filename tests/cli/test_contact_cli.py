@@ -12,13 +12,9 @@ the sidecar's pressure, the bodies' forces), a contact scene's frames against st
 same obstacle positions, and the same file from 1 and 2 ranks.
 """
 
-import argparse
-import json
 import os
 import re
-import shutil
 import sys
-import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import test_cli  # noqa: E402
@@ -434,15 +430,7 @@ class ContactRunTests(ContactCase):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--driver", required=True, help="path of the hssbem executable")
-    parser.add_argument("--meshes", required=True, help="the repository's meshes/ directory")
-    parser.add_argument("--mpiexec", default=shutil.which("mpiexec") or "", help="MPI launcher for the multi-rank cases")
-    args, rest = parser.parse_known_args()
-    test_cli.DRIVER = os.path.abspath(args.driver)
-    test_cli.MESHES = os.path.abspath(args.meshes)
-    test_cli.MPIEXEC = args.mpiexec
-    unittest.main(argv=[sys.argv[0]] + rest, verbosity=1)
+    test_cli.run_suite(__doc__)
 
 
 if __name__ == "__main__":

@@ -14,12 +14,10 @@ option of their job with the table's default (the same values -help shows), and 
 the command line instead. VersionTests: -version and --version.
 """
 
-import argparse
 import os
 import re
 import shutil
 import sys
-import unittest
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
@@ -183,15 +181,7 @@ class VersionTests(CliTestCase):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--driver", required=True, help="path of the hssbem executable")
-    parser.add_argument("--meshes", required=True, help="the repository's meshes/ directory")
-    parser.add_argument("--mpiexec", default=shutil.which("mpiexec") or "", help="MPI launcher for the multi-rank cases")
-    args, rest = parser.parse_known_args()
-    test_cli.DRIVER = os.path.abspath(args.driver)
-    test_cli.MESHES = os.path.abspath(args.meshes)
-    test_cli.MPIEXEC = args.mpiexec
-    unittest.main(argv=[sys.argv[0]] + rest, verbosity=1)
+    test_cli.run_suite(__doc__)
 
 
 if __name__ == "__main__":

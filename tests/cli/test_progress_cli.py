@@ -13,14 +13,11 @@ with -hssbem_progress 0, none from rank 1, and the result file holds the same da
 attributes (timings aside) as a run without progress, with no progress text in it.
 """
 
-import argparse
 import os
 import pty
 import re
-import shutil
 import subprocess
 import sys
-import unittest
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
@@ -172,16 +169,8 @@ class ProgressTests(base.CliTestCase):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--driver", required=True, help="path of the hssbem executable")
-    parser.add_argument("--meshes", required=True, help="the repository's meshes/ directory")
-    parser.add_argument("--mpiexec", default=shutil.which("mpiexec") or "", help="MPI launcher for the two-rank case")
-    args, rest = parser.parse_known_args()
-    base.DRIVER = os.path.abspath(args.driver)
-    base.MESHES = os.path.abspath(args.meshes)
-    base.MPIEXEC = args.mpiexec
     base.ENV = dict(base.ENV, OMP_NUM_THREADS="1")  # the same arithmetic run to run
-    unittest.main(argv=[sys.argv[0]] + rest, verbosity=1)
+    base.run_suite(__doc__)
 
 
 if __name__ == "__main__":

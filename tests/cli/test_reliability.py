@@ -10,15 +10,12 @@ Usage:
 The helpers (temporary directory per test, problem files, assertions) are test_cli.py's.
 """
 
-import argparse
 import math
 import os
 import re
-import shutil
 import socket
 import subprocess
 import sys
-import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import test_cli  # noqa: E402  (the CLI tests' helpers and option parsing)
@@ -339,17 +336,7 @@ class OptionValueTests(OneCleanError, CliTestCase):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--driver", required=True, help="path of the hssbem executable")
-    parser.add_argument("--meshes", required=True, help="the repository's meshes/ directory")
-    parser.add_argument("--mpiexec", default=shutil.which("mpiexec") or "", help="MPI launcher for the multi-rank cases")
-    args, rest = parser.parse_known_args()
-    test_cli.DRIVER = os.path.abspath(args.driver)
-    test_cli.MESHES = os.path.abspath(args.meshes)
-    test_cli.MPIEXEC = args.mpiexec
-    if not os.access(test_cli.DRIVER, os.X_OK):
-        parser.error("driver %s is not an executable" % test_cli.DRIVER)
-    unittest.main(argv=[sys.argv[0]] + rest, verbosity=1)
+    test_cli.run_suite(__doc__)
 
 
 if __name__ == "__main__":

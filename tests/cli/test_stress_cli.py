@@ -11,11 +11,8 @@ The cube in uniaxial tension (cube_l0, rollers on z = 0, traction 10 on z = 1) h
 solution sigma = diag(0, 0, 10), u = (10 / E) (-nu x, -nu y, z), which every output must give.
 """
 
-import argparse
 import os
-import shutil
 import sys
-import unittest
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
@@ -146,15 +143,7 @@ class StressTests(base.CliTestCase):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--driver", required=True, help="path of the hssbem executable")
-    parser.add_argument("--meshes", required=True, help="the repository's meshes/ directory")
-    parser.add_argument("--mpiexec", default=shutil.which("mpiexec") or "", help="MPI launcher for the two-rank case")
-    args, rest = parser.parse_known_args()
-    base.DRIVER = os.path.abspath(args.driver)
-    base.MESHES = os.path.abspath(args.meshes)
-    base.MPIEXEC = args.mpiexec
-    unittest.main(argv=[sys.argv[0]] + rest, verbosity=1)
+    base.run_suite(__doc__)
 
 
 if __name__ == "__main__":
