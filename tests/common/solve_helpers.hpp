@@ -6,6 +6,7 @@
 #include "hssbem/bem/rigid_modes.hpp"
 #include "hssbem/session/static_session.hpp"
 #include "hssbem/problem/setup.hpp"
+#include "test_paths.hpp"
 
 #include <gtest/gtest.h>
 

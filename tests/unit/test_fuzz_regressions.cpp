@@ -4,6 +4,7 @@
 /// examples through the fuzzers' entry points (tests/fuzz/fuzz_targets.hpp): each may fail only
 /// with the reader's own error.
 #include "fuzz_targets.hpp"
+#include "test_paths.hpp"
 
 #include <gtest/gtest.h>
 

@@ -6,6 +6,7 @@
 #include "hssbem/h2/h2_compression.hpp"
 #include "hss_test_helpers.hpp"
 #include "test_shapes.hpp"
+#include "test_paths.hpp"
 
 #include <gtest/gtest.h>
 

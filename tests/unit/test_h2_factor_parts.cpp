@@ -10,6 +10,7 @@
 #include "hssbem/h2/h2_compression.hpp"
 #include "hssbem/h2factor/h2_factorization.hpp"
 #include "hss_test_helpers.hpp"
+#include "test_paths.hpp"
 
 #include <gtest/gtest.h>
 

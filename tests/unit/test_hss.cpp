@@ -7,6 +7,7 @@
 #include "hss_test_helpers.hpp"
 #include "hssbem/core/lapack.hpp"
 #include "hssbem/core/timer.hpp"
+#include "test_paths.hpp"
 
 #include <gtest/gtest.h>
 

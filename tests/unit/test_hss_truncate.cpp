@@ -7,6 +7,7 @@
 #include "hssbem/hss/ulv.hpp"
 
 #include "hss_test_helpers.hpp"
+#include "test_paths.hpp"
 
 #include <gtest/gtest.h>
 

@@ -2,6 +2,7 @@
 /// Mesh readers (.msh 2.2/4.1, STL, OFF, OBJ) and topology validation / orientation.
 
 #include "hssbem/mesh/mesh.hpp"
+#include "test_paths.hpp"
 
 #include <gtest/gtest.h>
 

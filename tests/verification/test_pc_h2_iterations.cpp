@@ -6,6 +6,7 @@
 #include "hssbem/petsc/pc_h2.h"
 #include "hssbem/petsc/system.h"
 #include "hssbem/problem/benchmark_problem.hpp"
+#include "test_paths.hpp"
 
 #include <gtest/gtest.h>
 

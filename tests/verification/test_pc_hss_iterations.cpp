@@ -4,6 +4,7 @@
 // from above; the counts of -pc_type none and jacobi are printed beside it.
 #include "hssbem/petsc/system.h"
 #include "hssbem/problem/benchmark_problem.hpp"
+#include "test_paths.hpp"
 
 #include <gtest/gtest.h>
 

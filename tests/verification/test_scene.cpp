@@ -9,6 +9,7 @@
 #include "hssbem/scene/dense_scene.hpp"
 #include "hssbem/scene/scene.hpp"
 #include "hssbem/post/post.hpp"
+#include "test_paths.hpp"
 
 #include <gtest/gtest.h>
 

@@ -12,6 +12,7 @@
 #include "hssbem/session/contact_scene.hpp"
 #include "hssbem/session/scene.hpp"
 #include "hssbem/session/static_session.hpp"
+#include "test_paths.hpp"
 
 #include <gtest/gtest.h>
 #include <hdf5.h>
