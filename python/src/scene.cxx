@@ -46,14 +46,14 @@ public:
   Scene(const ProblemInput &in, OptionList options, std::optional<long long> comm, bool stress)
       : m_comm(comm_of(comm)), m_options(std::move(options)), m_parts(stress ? kFrameFields : kMotion | kPrescribed)
   {
-    const CallEnvironment env(m_options);
+    const CallEnvironment env(m_options, m_comm);
     guarded([&] { set_up(in); });
   }
 
   /// Frame `frame`: an index into the problem's "frames", or the JSON of one frame.
   py::dict step(const std::variant<long long, std::string> &frame)
   {
-    const CallEnvironment env(m_options);
+    const CallEnvironment env(m_options, m_comm);
     guarded([&] {
       run_collectively(m_comm, [&] {
         if (m_rank == 0) solve(frame);
@@ -82,13 +82,22 @@ public:
 
   py::dict contact(py::object self) const { return contact_of(m_frame.contact, self); }
 
+  /// The surface the fields live on (after the set-up's checks and orientation), on every rank.
+  py::dict mesh(py::object self) const
+  {
+    py::dict d;
+    d["vertices"] = view_vec3(m_setup->mesh->vertices, self);
+    d["triangles"] = view_triangles(m_setup->mesh->triangles, self);
+    return d;
+  }
+
   /// The haptic call: per obstacle, its force for new poses, `obstacles` the JSON of a frame's
   /// "obstacles" ({"name": {"translate": [..], "rotate": {..}}}); obstacles not named keep the
   /// last frame's poses.
   py::dict haptic_forces(const std::string &obstacles)
   {
     if (!m_contact && m_rank == 0) throw Failure("haptic_forces: the problem has no \"contact\"");
-    const CallEnvironment env(m_options);
+    const CallEnvironment env(m_options, m_comm);
     std::vector<Vec3> forces;
     guarded([&] {
       if (m_rank != 0) return;
@@ -131,10 +140,13 @@ private:
   }
 
   /// The contact session takes its frames per step (any unknown may carry a value); the
-  /// problem's own frames are kept to be stepped by their index.
+  /// problem's own frames are kept to be stepped by their index. hssbem_load and hssbem_save as
+  /// in the command line (dense references only).
   void set_up_contact(const DriverOptions &o, const MachineLimits &limits)
   {
-    (void)contact_references_on_h2(m_problem->disc(), o.session.operator_type, limits); // every rank: the same error everywhere
+    const std::string mat_type = reference_mat_type(contact_references_on_h2(m_problem->disc(), o.session.operator_type, limits)); // every rank: the same error everywhere
+    if ((!o.save.empty() || !o.load.empty()) && mat_type != "dense")
+      throw std::invalid_argument(std::string(o.save.empty() ? "hssbem_load" : "hssbem_save") + ": only dense reference factorizations are saved and loaded yet; this contact takes the " + mat_type + " one");
     run_collectively(m_comm, [&] {
       if (m_rank != 0) return;
       ContactJob job = contact_job(*m_setup);
@@ -144,7 +156,9 @@ private:
       m_obstacles = job.obstacles;
       m_poses.assign(m_names.size(), Pose());
       m_contact = std::make_unique<ContactSession>(m_problem, std::move(job), o.session, limits);
+      if (!o.load.empty()) m_contact->load(o.load); // a precomputation saved for this scene (docs/persistence.md)
       m_contact->set_up();
+      if (!o.save.empty()) m_contact->save(o.save, m_setup->input_files);
     });
   }
 
@@ -211,6 +225,7 @@ void bind_scene(py::module_ &m)
       .def("step", &Scene::step, py::arg("frame"))
       .def("fields", [](py::object self) { return self.cast<const Scene &>().fields(self); })
       .def("contact", [](py::object self) { return self.cast<const Scene &>().contact(self); })
+      .def("mesh", [](py::object self) { return self.cast<const Scene &>().mesh(self); })
       .def("haptic_forces", &Scene::haptic_forces, py::arg("obstacles"))
       .def_property_readonly("obstacles", &Scene::obstacle_names)
       .def_property_readonly("num_frames", &Scene::num_frames)
