@@ -151,6 +151,7 @@ private:
       if (m_rank != 0) return;
       ContactJob job = contact_job(*m_setup);
       m_base_pattern = job.base.displacement_prescribed;
+      m_base_values = selection_of(frame_conditions(parse_frame(m_setup->spec, "{\"boundary\": []}", "frame"), 0, *m_setup->disc));
       m_file_frames = std::move(job.frames), m_file_placements = std::move(job.placements);
       job.frames.clear(), job.placements.clear();
       m_obstacles = job.obstacles;
@@ -180,17 +181,26 @@ private:
       else step_contact(selection_of(m_file_frames[*i]), m_file_placements[*i]);
     } else {
       const ProblemSpec spec = parse_frame(s.spec, std::get<std::string>(frame), "frame");
-      const NodeConditions nc = frame_conditions(spec, 0, *s.disc);
       if (m_scene) {
+        const NodeConditions nc = frame_conditions(spec, 0, *s.disc);
         check_frame_constraints(s, nc.displacement_prescribed, "frame");
         m_scene->step(selection_of(nc));
-      } else {
-        if (nc.displacement_prescribed != m_base_pattern)
-          throw ProblemError(m_problem->where() + "frame.boundary: a contact's frames may change the values of the base rules, not which components they prescribe (the reference factorization's pattern)");
-        step_contact(selection_of(nc), contact_placements(spec, m_obstacles)[0]);
-      }
+      } else step_contact_frame(spec);
     }
     refill(m_frame, m_scene ? m_scene->frame_data(m_parts) : m_contact->frame_data(m_parts));
+  }
+
+  /// A contact's frame given as a dict. One that moves obstacles only (no "boundary", no
+  /// "gravity") has the base rules' values, taken from the set-up instead of applied over the
+  /// mesh again: a simulator's frames cost the step, not a pass over the mesh.
+  void step_contact_frame(const ProblemSpec &spec)
+  {
+    const FrameSpec &f = spec.frames[0];
+    if (f.rules.empty() && !f.gravity) return step_contact(m_base_values, contact_placements(spec, m_obstacles)[0]);
+    const NodeConditions nc = frame_conditions(spec, 0, *m_setup->disc);
+    if (nc.displacement_prescribed != m_base_pattern)
+      throw ProblemError(m_problem->where() + "frame.boundary: a contact's frames may change the values of the base rules, not which components they prescribe (the reference factorization's pattern)");
+    step_contact(selection_of(nc), contact_placements(spec, m_obstacles)[0]);
   }
 
   void step_contact(const SystemSelection &values, const std::vector<Pose> &poses)
@@ -209,6 +219,7 @@ private:
   std::unique_ptr<ContactSession> m_contact; ///< a contact, on rank 0
   std::vector<std::string> m_names;          ///< the obstacles
   std::vector<std::array<bool, 3>> m_base_pattern;
+  SystemSelection m_base_values;             ///< a contact's frame without rules of its own: the base rules' values
   std::vector<NodeConditions> m_file_frames;
   std::vector<std::vector<Pose>> m_file_placements;
   std::vector<Obstacle> m_obstacles;         ///< the contact's obstacles (their default centres for a frame's turns)
