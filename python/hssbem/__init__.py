@@ -290,6 +290,12 @@ class Scene:
         return self._s.contact()
 
     @property
+    def mesh(self):
+        """The surface the fields are given on: vertices (n, 3) and triangles (m, 3), 0-based,
+        as the set-up checked and oriented them (views, on every rank)."""
+        return self._s.mesh()
+
+    @property
     def obstacles(self):
         """The names of the contact's obstacles, in the problem's order."""
         return list(self._s.obstacles)

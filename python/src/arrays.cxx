@@ -25,6 +25,8 @@ py::array view_mask(const std::vector<std::array<bool, 3>> &v, py::handle owner)
   return view(v.empty() ? nullptr : v[0].data(), {size(v.size()), 3}, owner);
 }
 
+py::array view_triangles(const std::vector<std::array<int, 3>> &t, py::handle owner) { return view(t.empty() ? nullptr : t[0].data(), {size(t.size()), 3}, owner); }
+
 py::array copy_vec3(const Vec3 &v)
 {
   py::array_t<double> a(3);

@@ -18,7 +18,9 @@
 
 #include <memory>
 #include <optional>
+#include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -32,18 +34,33 @@ using OptionList = std::vector<std::pair<std::string, std::optional<std::string>
 /// For the lifetime of the object: PETSc's errors are returned to the caller instead of printed
 /// (a Python user sees one line in hssbem.Error, never PETSc's traceback), and `options` is the
 /// options database that every object created meanwhile reads (a database of its own, pushed over
-/// the global one: a call reads its options and nothing else).
+/// the global one: a call reads its options and nothing else). On a communicator of one rank the
+/// call can also be interrupted (Ctrl-C): see Interrupted.
 class CallEnvironment {
 public:
-  explicit CallEnvironment(const OptionList &options);
+  explicit CallEnvironment(const OptionList &options, MPI_Comm comm = MPI_COMM_NULL);
   ~CallEnvironment();
   CallEnvironment(const CallEnvironment &) = delete;
   CallEnvironment &operator=(const CallEnvironment &) = delete;
 
 private:
   PetscOptions m_options = nullptr;
-  bool m_pushed = false, m_quiet = false;
+  bool m_pushed = false, m_quiet = false, m_hooked = false;
 };
+
+/// Thrown by the progress hook (core/progress.hpp) that a call on one rank installs, at the
+/// engines' checkpoints (a level of the H² compression or factorization, a GMRES iteration, a
+/// step of a scene's set-up), when Python has a signal pending (PyErr_CheckSignals(): Ctrl-C):
+/// the solve ends through the engines' ordinary error path (PETSc's faces turn it into an error
+/// code, RAII frees what was built) and guarded() hands Python its KeyboardInterrupt. Not on
+/// several ranks: one rank leaving a collective step would leave the others waiting.
+class Interrupted : public std::runtime_error {
+public:
+  Interrupted() : std::runtime_error("interrupted (a signal, e.g. Ctrl-C)") {}
+};
+
+/// The exception Python has pending (KeyboardInterrupt after an interrupted solve), if any.
+void throw_if_python_error();
 
 /// The communicator of a call: the Fortran handle of an mpi4py communicator (comm.py2f()), or
 /// PETSC_COMM_WORLD when none is given.
@@ -75,6 +92,7 @@ py::array view_vec3(const std::vector<Vec3> &v, py::handle owner);
 py::array view_voigt(const std::vector<Voigt> &v, py::handle owner);
 py::array view_doubles(const std::vector<double> &v, py::handle owner);
 py::array view_mask(const std::vector<std::array<bool, 3>> &v, py::handle owner);
+py::array view_triangles(const std::vector<std::array<int, 3>> &t, py::handle owner);
 /// A small array copied (forces, reactions: three numbers).
 py::array copy_vec3(const Vec3 &v);
 
@@ -106,11 +124,20 @@ std::string message_of(const std::exception &e);
 
 /// fn() with every C++ exception but Python's own turned into Failure while the call's
 /// environment (its options) still stands, so that the message can name the option at fault.
+/// When Python has an exception pending (an Interrupted solve's KeyboardInterrupt, whatever the
+/// engines made of the Interrupted on its way out), that exception is raised instead.
 template <class F>
 auto guarded(F &&fn) -> decltype(fn())
 {
   try {
-    return fn();
+    if constexpr (std::is_void_v<decltype(fn())>) {
+      fn();
+      throw_if_python_error();
+    } else {
+      auto r = fn();
+      throw_if_python_error();
+      return r;
+    }
   } catch (const py::error_already_set &) {
     throw;
   } catch (const py::builtin_exception &) {
@@ -118,6 +145,7 @@ auto guarded(F &&fn) -> decltype(fn())
   } catch (const Failure &) {
     throw;
   } catch (const std::exception &e) {
+    throw_if_python_error();
     throw Failure(message_of(e));
   }
 }

@@ -34,7 +34,7 @@ void keep_with(Mat A, const std::shared_ptr<const SessionProblem> &problem)
 py::tuple make_operator(const ProblemInput &in, const OptionList &options, std::optional<long long> comm_handle)
 {
   const MPI_Comm comm = comm_of(comm_handle);
-  const CallEnvironment env(options);
+  const CallEnvironment env(options, comm);
   return guarded([&] {
     const DriverOptions o = read_driver_options(comm);
     const std::shared_ptr<const ProblemSetup> s = set_up(comm, in, o.overrides);

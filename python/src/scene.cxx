@@ -46,14 +46,14 @@ public:
   Scene(const ProblemInput &in, OptionList options, std::optional<long long> comm, bool stress)
       : m_comm(comm_of(comm)), m_options(std::move(options)), m_parts(stress ? kFrameFields : kMotion | kPrescribed)
   {
-    const CallEnvironment env(m_options);
+    const CallEnvironment env(m_options, m_comm);
     guarded([&] { set_up(in); });
   }
 
   /// Frame `frame`: an index into the problem's "frames", or the JSON of one frame.
   py::dict step(const std::variant<long long, std::string> &frame)
   {
-    const CallEnvironment env(m_options);
+    const CallEnvironment env(m_options, m_comm);
     guarded([&] {
       run_collectively(m_comm, [&] {
         if (m_rank == 0) solve(frame);
@@ -82,13 +82,22 @@ public:
 
   py::dict contact(py::object self) const { return contact_of(m_frame.contact, self); }
 
+  /// The surface the fields live on (after the set-up's checks and orientation), on every rank.
+  py::dict mesh(py::object self) const
+  {
+    py::dict d;
+    d["vertices"] = view_vec3(m_setup->mesh->vertices, self);
+    d["triangles"] = view_triangles(m_setup->mesh->triangles, self);
+    return d;
+  }
+
   /// The haptic call: per obstacle, its force for new poses, `obstacles` the JSON of a frame's
   /// "obstacles" ({"name": {"translate": [..], "rotate": {..}}}); obstacles not named keep the
   /// last frame's poses.
   py::dict haptic_forces(const std::string &obstacles)
   {
     if (!m_contact && m_rank == 0) throw Failure("haptic_forces: the problem has no \"contact\"");
-    const CallEnvironment env(m_options);
+    const CallEnvironment env(m_options, m_comm);
     std::vector<Vec3> forces;
     guarded([&] {
       if (m_rank != 0) return;
@@ -131,20 +140,26 @@ private:
   }
 
   /// The contact session takes its frames per step (any unknown may carry a value); the
-  /// problem's own frames are kept to be stepped by their index.
+  /// problem's own frames are kept to be stepped by their index. hssbem_load and hssbem_save as
+  /// in the command line (dense references only).
   void set_up_contact(const DriverOptions &o, const MachineLimits &limits)
   {
-    (void)contact_references_on_h2(m_problem->disc(), o.session.operator_type, limits); // every rank: the same error everywhere
+    const std::string mat_type = reference_mat_type(contact_references_on_h2(m_problem->disc(), o.session.operator_type, limits)); // every rank: the same error everywhere
+    if ((!o.save.empty() || !o.load.empty()) && mat_type != "dense")
+      throw std::invalid_argument(std::string(o.save.empty() ? "hssbem_load" : "hssbem_save") + ": only dense reference factorizations are saved and loaded yet; this contact takes the " + mat_type + " one");
     run_collectively(m_comm, [&] {
       if (m_rank != 0) return;
       ContactJob job = contact_job(*m_setup);
       m_base_pattern = job.base.displacement_prescribed;
+      m_base_values = selection_of(frame_conditions(parse_frame(m_setup->spec, "{\"boundary\": []}", "frame"), 0, *m_setup->disc));
       m_file_frames = std::move(job.frames), m_file_placements = std::move(job.placements);
       job.frames.clear(), job.placements.clear();
       m_obstacles = job.obstacles;
       m_poses.assign(m_names.size(), Pose());
       m_contact = std::make_unique<ContactSession>(m_problem, std::move(job), o.session, limits);
+      if (!o.load.empty()) m_contact->load(o.load); // a precomputation saved for this scene (docs/persistence.md)
       m_contact->set_up();
+      if (!o.save.empty()) m_contact->save(o.save, m_setup->input_files);
     });
   }
 
@@ -166,17 +181,26 @@ private:
       else step_contact(selection_of(m_file_frames[*i]), m_file_placements[*i]);
     } else {
       const ProblemSpec spec = parse_frame(s.spec, std::get<std::string>(frame), "frame");
-      const NodeConditions nc = frame_conditions(spec, 0, *s.disc);
       if (m_scene) {
+        const NodeConditions nc = frame_conditions(spec, 0, *s.disc);
         check_frame_constraints(s, nc.displacement_prescribed, "frame");
         m_scene->step(selection_of(nc));
-      } else {
-        if (nc.displacement_prescribed != m_base_pattern)
-          throw ProblemError(m_problem->where() + "frame.boundary: a contact's frames may change the values of the base rules, not which components they prescribe (the reference factorization's pattern)");
-        step_contact(selection_of(nc), contact_placements(spec, m_obstacles)[0]);
-      }
+      } else step_contact_frame(spec);
     }
     refill(m_frame, m_scene ? m_scene->frame_data(m_parts) : m_contact->frame_data(m_parts));
+  }
+
+  /// A contact's frame given as a dict. One that moves obstacles only (no "boundary", no
+  /// "gravity") has the base rules' values, taken from the set-up instead of applied over the
+  /// mesh again: a simulator's frames cost the step, not a pass over the mesh.
+  void step_contact_frame(const ProblemSpec &spec)
+  {
+    const FrameSpec &f = spec.frames[0];
+    if (f.rules.empty() && !f.gravity) return step_contact(m_base_values, contact_placements(spec, m_obstacles)[0]);
+    const NodeConditions nc = frame_conditions(spec, 0, *m_setup->disc);
+    if (nc.displacement_prescribed != m_base_pattern)
+      throw ProblemError(m_problem->where() + "frame.boundary: a contact's frames may change the values of the base rules, not which components they prescribe (the reference factorization's pattern)");
+    step_contact(selection_of(nc), contact_placements(spec, m_obstacles)[0]);
   }
 
   void step_contact(const SystemSelection &values, const std::vector<Pose> &poses)
@@ -195,6 +219,7 @@ private:
   std::unique_ptr<ContactSession> m_contact; ///< a contact, on rank 0
   std::vector<std::string> m_names;          ///< the obstacles
   std::vector<std::array<bool, 3>> m_base_pattern;
+  SystemSelection m_base_values;             ///< a contact's frame without rules of its own: the base rules' values
   std::vector<NodeConditions> m_file_frames;
   std::vector<std::vector<Pose>> m_file_placements;
   std::vector<Obstacle> m_obstacles;         ///< the contact's obstacles (their default centres for a frame's turns)
@@ -211,6 +236,7 @@ void bind_scene(py::module_ &m)
       .def("step", &Scene::step, py::arg("frame"))
       .def("fields", [](py::object self) { return self.cast<const Scene &>().fields(self); })
       .def("contact", [](py::object self) { return self.cast<const Scene &>().contact(self); })
+      .def("mesh", [](py::object self) { return self.cast<const Scene &>().mesh(self); })
       .def("haptic_forces", &Scene::haptic_forces, py::arg("obstacles"))
       .def_property_readonly("obstacles", &Scene::obstacle_names)
       .def_property_readonly("num_frames", &Scene::num_frames)

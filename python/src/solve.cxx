@@ -85,7 +85,7 @@ std::shared_ptr<SolveResult> solve(const ProblemInput &in, const OptionList &opt
 {
   auto r = std::make_shared<SolveResult>();
   r->comm = comm_of(comm_handle);
-  const CallEnvironment env(options);
+  const CallEnvironment env(options, r->comm);
   return guarded([&] { return solve_in(r, in); });
 }
 
@@ -144,7 +144,7 @@ void bind_solve(py::module_ &m)
         py::dict d;
         if (r.vertices.empty()) return d;
         d["vertices"] = view_vec3(r.vertices, self);
-        d["triangles"] = py::array(py::dtype::of<int>(), {static_cast<py::ssize_t>(r.triangles.size()), py::ssize_t(3)}, {}, r.triangles[0].data(), self);
+        d["triangles"] = view_triangles(r.triangles, self);
         d["triangle_region"] = py::array(py::dtype::of<int>(), {static_cast<py::ssize_t>(r.triangle_region.size())}, {}, r.triangle_region.data(), self);
         d["sharp_vertex"] = py::array(py::dtype::of<int>(), {static_cast<py::ssize_t>(r.sharp_vertex.size())}, {}, r.sharp_vertex.data(), self);
         return d;

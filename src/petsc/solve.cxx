@@ -93,7 +93,7 @@ static PetscErrorCode KSPMonitorProgress_Private(KSP ksp, PetscInt it, PetscReal
   PetscCall(KSPGetConvergedReason(ksp, &reason));
   PetscCall(KSPGetType(ksp, &type));
   const double done = p->r0 > 0 && rnorm > 0 && rtol < 1 ? std::log(p->r0 / rnorm) / std::log(1 / rtol) : 0;
-  hook(type, reason != KSP_CONVERGED_ITERATING ? 1.0 : std::min(std::max(done, 0.0), 0.999), p->timer.seconds());
+  PetscCallCXX(hook(type, reason != KSP_CONVERGED_ITERATING ? 1.0 : std::min(std::max(done, 0.0), 0.999), p->timer.seconds())); /* a host's hook may throw to stop the solve (Python: Ctrl-C) */
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

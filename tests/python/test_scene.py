@@ -81,6 +81,27 @@ def test_contact_frames_identical_to_command_line():
             close(force, want["contact/forces/" + name], "frame %d force of %s" % (i, name))
 
 
+def test_contact_frames_as_dicts():
+    """The same frames given as dicts (obstacles moved only: the base rules' values kept from
+    the set-up), and one with a "boundary" of its own that restates a base rule (applied over
+    the mesh): the command line's frames, to round-off."""
+    ref = reference("organ_contact")
+    p = problem("organ_contact")
+    scene = hssbem.Scene(p)
+    for i in range(3):
+        frame = dict(p["frames"][i])
+        if i == 2:
+            frame["boundary"] = p["boundary"]
+        scene.step(frame)
+        if COMM.rank != 0:
+            continue
+        want = datasets(ref, "frames/%d" % i)
+        assert_identical(scene.contact["status"], want["contact/status"], "frame %d status" % i)
+        close(scene.fields["displacement"], want["displacement"], "frame %d displacement" % i)
+        close(scene.contact["pressure"], want["contact/pressure"], "frame %d pressure" % i)
+        close(scene.contact["forces"]["tool"], want["contact/forces/tool"], "frame %d force of the tool" % i)
+
+
 def test_haptic_forces():
     """The haptic call at the last frame's positions gives that frame's forces (the same
     active set, to round-off), and a deeper instrument presses harder (and the table holds
