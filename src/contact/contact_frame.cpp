@@ -73,10 +73,32 @@ void ContactEngine::State::set_motions()
     if (p.obstacle >= 0 && p.lead < 0) p.motion = step_motion(p, poses[p.obstacle], step_from[p.obstacle]);
 }
 
+bool ContactEngine::State::pair_bodies()
+{
+  if (!geo.bodies_touch) return false;
+  const int nn = disc->num_nodes();
+  if (!body_points_done) {
+    body_points = contact_detail::body_points(geo), body_points_done = true;
+    u_paired.assign(nn, Vec3{0, 0, 0});
+    loadable.assign(nn, 0); // what contact_loaded_unknowns keeps: the candidates' nodes and the undeformed pairs' masters
+    for (int i = 0; i < nn; ++i) loadable[i] = geo.candidate[disc->node(i).vertex];
+    for (const ContactPoint &p : body_points)
+      for (int k = 0; k < p.terms; ++k) loadable[p.term_node[k]] = 1;
+  }
+  // Pairs found at u_paired within the reach r hold every master surface within r − 2 max |u − u_paired|
+  // of a slave vertex at u (both sides move): with pair_again 1/4, paired again before that falls below r / 2.
+  std::vector<Vec3> u(nn);
+  double moved = 0;
+  for (int i = 0; i < nn; ++i) u[i] = u_free[i] + u_response[i], moved = std::max(moved, norm(u[i] - u_paired[i]));
+  if (opt.pair_again > 0 && moved <= opt.pair_again * geo.reach) return false;
+  body_points = contact_detail::body_points(geo, contact_detail::BodyPlacement(geo, u, loadable));
+  u_paired = std::move(u);
+  return true;
+}
+
 void ContactEngine::State::detect()
 {
   const PhaseScope phase(Phase::ContactDetect);
-  if (!body_points_done) body_points = contact_detail::body_points(geo), body_points_done = true;
   points = contact_detail::merge_points(geo, contact_detail::obstacle_points(geo, poses, forced), body_points, node_position);
   if (friction) set_motions();
 }

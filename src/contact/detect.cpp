@@ -61,17 +61,20 @@ bool vertex_point(const Geometry &g, int v, const Vec3 &n, double gap, int partn
   return true;
 }
 
-/// Node-to-surface points of the candidate vertices of body a against the surface of body b.
-std::vector<ContactPoint> pass(const Geometry &g, int a, int b)
+/// Node-to-surface points of the candidate vertices of body a against the surface of body b, in
+/// the configuration `at` (BodyPlacement: the undeformed one when its displacement is empty).
+std::vector<ContactPoint> pass(const Geometry &g, const BodyPlacement &at, int a, int b)
 {
   const Discretization &disc = *g.disc;
   const SurfaceMesh &mesh = disc.mesh();
+  const std::vector<Vec3> &x = at.u.empty() ? mesh.vertices : at.vertices;
   std::vector<ContactPoint> out;
   for (int v = 0; v < mesh.num_vertices(); ++v) {
     if (!g.candidate[v] || g.bodies.of_vertex[v] != a) continue;
-    const TriangleHit h = g.body_bvh[b].closest(mesh.vertices[v], g.reach);
+    const TriangleHit h = (at.u.empty() ? g.body_bvh : at.bvh)[b].closest(x[v], g.reach);
     if (h.triangle < 0) continue;
-    const Vec3 nt = mesh.triangle_normal(h.triangle), d = mesh.vertices[v] - h.point;
+    const std::array<int, 3> &tri = mesh.triangles[h.triangle];
+    const Vec3 nt = normalized(cross(x[tri[1]] - x[tri[0]], x[tri[2]] - x[tri[0]])), d = x[v] - h.point;
     const double dist = norm(d);
     Vec3 n = nt;
     double gap = dot(d, nt);
@@ -80,7 +83,8 @@ std::vector<ContactPoint> pass(const Geometry &g, int a, int b)
       n = (side / dist) * d, gap = side * dist;
     }
     std::array<int, 3> master;
-    for (int k = 0; k < 3; ++k) master[k] = facing_node(disc, mesh.triangles[h.triangle][k], -1.0 * n); // the master group whose normal is n: it faces the slave
+    for (int k = 0; k < 3; ++k) master[k] = facing_node(disc, tri[k], -1.0 * n); // the master group whose normal is n: it faces the slave
+    if (!at.loadable.empty() && !(at.loadable[master[0]] && at.loadable[master[1]] && at.loadable[master[2]])) continue;
     ContactPoint p;
     if (!vertex_point(g, v, n, gap, static_cast<int>(g.obstacles.size()) + b, p)) continue;
     p.other = b;
@@ -90,6 +94,10 @@ std::vector<ContactPoint> pass(const Geometry &g, int a, int b)
       p.mw[k + 1] = -h.bary[k] * Vec3{1, 1, 1};
       p.lw[k + 1] = (-h.bary[k] * p.area / g.area[master[k]]) * Vec3{1, 1, 1};
     }
+    // The gap of the configuration, linearised about its displacement: g = g0 + n · (relative
+    // displacement) equals it there.
+    if (!at.u.empty())
+      for (int i = 0; i < p.terms; ++i) p.g0 -= p.mw[i][0] * dot(n, at.u[p.term_node[i]]);
     p.mu = g.friction;
     out.push_back(p);
   }
@@ -240,13 +248,34 @@ std::vector<ContactPoint> obstacle_points(const Geometry &g, const std::vector<P
   return out;
 }
 
-std::vector<ContactPoint> body_points(const Geometry &g)
+BodyPlacement::BodyPlacement(const Geometry &g, std::vector<Vec3> displacement, std::vector<char> loadable_nodes)
+    : u(std::move(displacement)), loadable(std::move(loadable_nodes))
+{
+  if (u.empty()) return;
+  const Discretization &disc = *g.disc;
+  const SurfaceMesh &mesh = disc.mesh();
+  vertices = mesh.vertices;
+  for (int v = 0; v < mesh.num_vertices(); ++v) { // a vertex moves by its nodes' mean (displacement is continuous)
+    Vec3 s{0, 0, 0};
+    for (int i = disc.first_node(v); i < disc.first_node(v) + disc.node_count(v); ++i) s = s + u[i];
+    if (disc.node_count(v) > 0) vertices[v] = vertices[v] + (1.0 / disc.node_count(v)) * s;
+  }
+  if (!g.bodies_touch) return;
+  for (int b = 0; b < g.bodies.count; ++b) {
+    std::vector<int> tris;
+    for (int t = 0; t < mesh.num_triangles(); ++t)
+      if (g.bodies.of_triangle[t] == b) tris.push_back(t);
+    bvh.emplace_back(vertices, mesh.triangles, tris);
+  }
+}
+
+std::vector<ContactPoint> body_points(const Geometry &g, const BodyPlacement &at)
 {
   std::vector<ContactPoint> out;
   if (!g.bodies_touch) return out;
   for (int a = 0; a < g.bodies.count; ++a)
     for (int b = a + 1; b < g.bodies.count; ++b) {
-      std::vector<ContactPoint> ab = pass(g, a, b), ba = pass(g, b, a);
+      std::vector<ContactPoint> ab = pass(g, at, a, b), ba = pass(g, at, b, a);
       // One pass per pair: the side with more vertices near the other (the finer mesh there) is
       // the slave; both passes at once would constrain matching meshes twice (a singular D).
       const std::vector<ContactPoint> &slave = ba.size() > ab.size() ? ba : ab;

@@ -25,6 +25,9 @@ struct ContactEngine::State {
   std::vector<int> node_position;      ///< per dof node: where its rows sit in the columns
   std::vector<contact_detail::ContactPoint> body_points, points;
   bool body_points_done = false;
+  std::vector<Vec3> u_response;        ///< per dof node: the last frame's displacement minus its free response (the contact's share; zero before the first)
+  std::vector<Vec3> u_paired;          ///< per dof node: the displacement the body pairs were found at (zero: undeformed)
+  std::vector<char> loadable;          ///< per dof node: may carry a pair's load (contact_loaded_unknowns: its columns are kept)
   std::vector<char> forced;            ///< per (vertex, obstacle): penetrated from beyond reach once; always a point since
   double tol_gap = 0;
   double size = 0;                     ///< the mesh's bounding-box diagonal
@@ -61,6 +64,12 @@ struct ContactEngine::State {
   void rounds(ContactSolution &out, ContactFrameReport &rep);
   void correct(const SystemSelection &values, ContactSolution &out, ContactFrameReport &rep);
   void detect();
+  /// The body pairs (contact_detail::body_points): found in the undeformed geometry first, and
+  /// again at the bodies' current positions once those moved by more than pair_again times the
+  /// reach since the last pairing. The current positions: this frame's free response (its
+  /// prescribed motion, and what that moves with it) plus the last frame's contact response (its
+  /// solved displacement minus its free response). Returns whether it paired.
+  bool pair_bodies();
   /// Each obstacle point's rigid motion over the step (ContactPoint::motion).
   void set_motions();
   void solve_points(ContactFrameReport &rep);
