@@ -213,12 +213,12 @@ struct Setup {
 
 /// The pair's reference: per body its own dense LU and the columns of K₀′ the contact reads (the
 /// candidates' and the pushed cap's).
-std::unique_ptr<ReferenceFactorization> composite_reference(const Setup &st, const std::vector<char> &pattern, const Scenario &sc, const ContactOptions &opt)
+std::unique_ptr<ReferenceFactorization> composite_reference(const Setup &st, const std::vector<char> &pattern, const Scenario &sc, const ContactOptions &opt, bool slide)
 {
   const Discretization &disc = *st.s.disc;
   std::vector<char> kept = contact_loaded_unknowns(disc, pattern, sc.obstacles, sc.settings, opt);
-  for (int i = 0; i < disc.num_nodes(); ++i)
-    for (int c = 0; c < 3; ++c) kept[3 * i + c] = kept[3 * i + c] || st.base.value[i][c] != 0;
+  for (int i = 0; i < disc.num_nodes(); ++i) // the pushed cap's (every component when it slides)
+    for (int c = 0; c < 3; ++c) kept[3 * i + c] = kept[3 * i + c] || st.base.value[i][c] != 0 || (slide && st.base.value[i][2] != 0);
   const BodyReferenceFactory dense = [](const BemOperator &op, std::vector<char> p, std::vector<char> k, int b) {
     DenseReferenceOptions o;
     o.reference_columns_only = true;
@@ -257,7 +257,7 @@ int run(const Args &a)
   opt.single_fields = a.single_fields;
   opt.pair_again = a.pair_again;
   const double cpu0 = cpu_seconds();
-  if (sc.settings.bodies && !a.whole) st.ref = composite_reference(st, pattern, sc, opt);
+  if (sc.settings.bodies && !a.whole) st.ref = composite_reference(st, pattern, sc, opt, a.slide != 0);
   else {
     DenseReferenceOptions ro;
     ro.node_body = node_bodies(*st.s.disc);

@@ -146,16 +146,16 @@ TEST(ContactSliding, ABlockDraggedAlongALongerBlockKeepsItsContact)
     paired += slid[f].paired;
     // Continuous: every frame carries the press; the blocks are uniform along x, so the force is
     // the same wherever the block stands but for where its rim falls on the lower block's grid
-    // (a quarter of a square per frame: measured 0.9 % at most).
+    // (a quarter of a square per frame: measured 1.5 % at most).
     EXPECT_NEAR(slid[f].fz / fz_end, 1.0, 3e-2) << "frame " << f;
-    // Frictionless on flat faces: the force is normal but for the rim's tilted normals (measured 9.5e-4).
+    // Frictionless on flat faces: the force is normal but for the rim's tilted normals (measured 1.8e-3).
     EXPECT_LE(std::abs(slid[f].fx), 1e-2 * slid[f].fz) << "frame " << f;
   }
-  EXPECT_GE(paired, frames / 2); // it did pair again (a quarter of the reach per frame)
+  EXPECT_GE(paired, frames / 3); // it did pair again (measured: every other frame, at half the reach)
   // The end (aligned with the grid again) against the static solve at the end position: the
   // same meshes, paired about the last frame's displacement instead of the undeformed geometry.
   // The force (measured 3.7e-3), and the pressure where the block now stands: vertex by vertex
-  // on the lower block's top (measured 8.8e-3; with the undeformed pairs the pressure stays where the block started).
+  // on the lower block's top (measured 9.4e-3; with the undeformed pairs the pressure stays where the block started).
   EXPECT_NEAR(slid.back().fz / fz_end, 1.0, 1e-2);
   const double dp = pressure_difference(start, slid.back(), at_end);
   std::printf("the last frame's pressure on the lower block against the static solve's: %.2e of its largest\n", dp);
@@ -169,7 +169,7 @@ TEST(ContactSliding, ARoughBlockDraggedFarSlidesWithMuTimesTheNormalForce)
   // lower block pulls the upper one back with μ times the normal force (Coulomb, steady sliding),
   // a little less: the nodes of the block's sharp rim follow its bottom's (docs/contact.md, the
   // junction rule), their normal forces shears of the side faces without friction — 0.29383 for
-  // μ = 0.3 on this mesh with the undeformed pairs (which hold here: flat faces), 0.2917–0.2939
+  // μ = 0.3 on this mesh with the undeformed pairs (which hold here: flat faces), 0.2914–0.2944
   // measured with the pairs found again.
   constexpr double mu = 0.3;
   const std::vector<Frame> slid = drag(two_blocks(0), path(), mu);
@@ -178,7 +178,7 @@ TEST(ContactSliding, ARoughBlockDraggedFarSlidesWithMuTimesTheNormalForce)
     paired += slid[f].paired;
     EXPECT_GT(slid[f].fz, 0.9 * slid[0].fz) << "frame " << f; // the press is carried every frame
   }
-  EXPECT_GE(paired, frames / 2);
+  EXPECT_GE(paired, frames / 3);
   for (std::size_t f = slid.size() - 3; f < slid.size(); ++f) {
     std::printf("frame %zu: drag / normal force %.6f (mu %.2f)\n", f, -slid[f].fx / slid[f].fz, mu);
     EXPECT_NEAR(-slid[f].fx / slid[f].fz, mu, 5e-2 * mu) << "frame " << f;
