@@ -314,7 +314,7 @@ const ContactFrameReport &ContactEngine::solve(const SystemSelection &values, co
   s.outputs(out);
   if (s.friction) s.u_prev = out.u; // slip is measured from the previous frame
   if (s.geo.bodies_touch) // the contact's share of the displacement: the next frame's pairing adds its free response
-    for (std::size_t i = 0; i < out.u.size(); ++i) s.u_response[i] = out.u[i] - s.u_free[i];
+    for (std::size_t i = 0; i < out.u.size(); ++i) s.u_response[i] = out.u[i] - s.u_free[i], s.responded = true;
   s.last_poses = poses;
   s.solved = true;
   rep.candidates = s.D->size();

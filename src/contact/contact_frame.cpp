@@ -103,6 +103,7 @@ bool ContactEngine::State::pair_bodies()
     for (const ContactPoint &p : body_points)
       for (int k = 0; k < p.terms; ++k) loadable[p.term_node[k]] = 1;
   }
+  if (!responded) return false; // no frame solved yet: the free response alone may carry bodies through each other
   std::vector<Vec3> u(nn);
   for (int i = 0; i < nn; ++i) u[i] = u_free[i] + u_response[i];
   if (opt.pair_again > 0 && relative_motion(u) <= opt.pair_again * geo.reach) return false;
