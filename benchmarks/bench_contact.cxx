@@ -7,6 +7,8 @@
 //                 [--target 0.2] [--check 3] [--haptic 20] [--E 3000 --nu 0.45] [--reach 0]
 //                 [--candidates 0.2] [--double-fields]   (frictionless fields in double; single is the default)
 //                 [--whole]   (pair: one dense system of the whole mesh, the bodies' blocks zeroed)
+//                 [--slide S] (pair: the pushed cap also slides along x by S × the reach over the frames)
+//                 [--pair-again F] (ContactOptions::pair_again: 0 pairs the bodies every frame)
 //
 //   wall:       the mesh's region "base" clamped; a rigid wall (plane) comes in along -x and
 //               pushes until `target` of the vertices touch (the paper's cardioid: 20 %).
@@ -53,6 +55,8 @@ struct Args {
   double friction = 0, target = -1, E = 3000, nu = 0.45, reach = 0, candidates = 0.2;
   bool single_fields = true;
   bool whole = false; ///< pair: the whole mesh's dense reference with the bodies' blocks zeroed (node_body), for comparison
+  double slide = 0;   ///< pair: the pushed cap's travel along x over the frames, in reaches
+  double pair_again = ContactOptions{}.pair_again;
 };
 
 Args parse(int argc, char **argv)
@@ -78,6 +82,8 @@ Args parse(int argc, char **argv)
     else if (k == "--single-fields") a.single_fields = true;
     else if (k == "--double-fields") a.single_fields = false;
     else if (k == "--whole") a.whole = true;
+    else if (k == "--slide") a.slide = std::stod(next());
+    else if (k == "--pair-again") a.pair_again = std::stod(next());
     else if (k.rfind("-", 0) == 0 && k.rfind("--", 0) != 0) { // a PETSc option and its value
       if (i + 1 < argc && argv[i + 1][0] != '-') ++i;
     } else throw std::invalid_argument("unknown argument " + k);
@@ -207,12 +213,12 @@ struct Setup {
 
 /// The pair's reference: per body its own dense LU and the columns of K₀′ the contact reads (the
 /// candidates' and the pushed cap's).
-std::unique_ptr<ReferenceFactorization> composite_reference(const Setup &st, const std::vector<char> &pattern, const Scenario &sc, const ContactOptions &opt)
+std::unique_ptr<ReferenceFactorization> composite_reference(const Setup &st, const std::vector<char> &pattern, const Scenario &sc, const ContactOptions &opt, bool slide)
 {
   const Discretization &disc = *st.s.disc;
   std::vector<char> kept = contact_loaded_unknowns(disc, pattern, sc.obstacles, sc.settings, opt);
-  for (int i = 0; i < disc.num_nodes(); ++i)
-    for (int c = 0; c < 3; ++c) kept[3 * i + c] = kept[3 * i + c] || st.base.value[i][c] != 0;
+  for (int i = 0; i < disc.num_nodes(); ++i) // the pushed cap's (every component when it slides)
+    for (int c = 0; c < 3; ++c) kept[3 * i + c] = kept[3 * i + c] || st.base.value[i][c] != 0 || (slide && st.base.value[i][2] != 0);
   const BodyReferenceFactory dense = [](const BemOperator &op, std::vector<char> p, std::vector<char> k, int b) {
     DenseReferenceOptions o;
     o.reference_columns_only = true;
@@ -249,8 +255,9 @@ int run(const Args &a)
   ContactOptions opt;
   opt.reach = a.reach;
   opt.single_fields = a.single_fields;
+  opt.pair_again = a.pair_again;
   const double cpu0 = cpu_seconds();
-  if (sc.settings.bodies && !a.whole) st.ref = composite_reference(st, pattern, sc, opt);
+  if (sc.settings.bodies && !a.whole) st.ref = composite_reference(st, pattern, sc, opt, a.slide != 0);
   else {
     DenseReferenceOptions ro;
     ro.node_body = node_bodies(*st.s.disc);
@@ -261,7 +268,12 @@ int run(const Args &a)
   auto values_at = [&](int f, double depth) { // the known values of frame f (the pair's push scales them)
     SystemSelection v = base_values;
     const double k = sc.scale(f, a.frames, depth);
-    for (Vec3 &x : v.known) x = k * x;
+    const double reach = a.reach > 0 ? a.reach : 0.05 * Box::of(st.s.mesh->vertices).diagonal();
+    for (std::size_t i = 0; i < v.known.size(); ++i) { // the pushed cap: base value (0, 0, −1)
+      const bool pushed = base_values.known[i][2] != 0;
+      v.known[i] = k * v.known[i];
+      if (pushed) v.known[i][0] += a.slide * reach * f / std::max(1, a.frames - 1);
+    }
     return v;
   };
   auto offsets_at = [&](int f, double depth) { return sc.obstacles.empty() ? std::vector<Vec3>{} : std::vector<Vec3>{sc.offset(f, a.frames, depth)}; };
@@ -297,7 +309,8 @@ int run(const Args &a)
   engine.prefetch(placements);
   const double t_prefetch = columns->seconds(); // every column computed, the calibration's included
   const double cpu_setup = cpu_seconds() - cpu0; // the reference, the calibration and every column
-  std::vector<double> seconds, cpu, haptic;
+  std::vector<double> seconds, cpu, haptic, pairing;
+  int paired = 0;
   std::vector<std::vector<Vec3>> sampled;
   std::vector<int> sampled_frame;
   long long iterations = 0, max_it = 0, factorizations = 0, products = 0;
@@ -308,10 +321,12 @@ int run(const Args &a)
     const ContactFrameReport rep = engine.solve(values[f], placements[f], sol);
     cpu.push_back(cpu_seconds() - c0);
     seconds.push_back(rep.seconds);
+    pairing.push_back(rep.pair_seconds), paired += rep.paired;
     if (std::getenv("BENCH_CONTACT_VERBOSE"))
-      std::printf("  frame %d: %.3f ms (detect %.3f, solve %.3f, fields %.3f), %lld iterations (%lld factored, %lld products), %lld rounds, %lld candidates, %lld touching%s\n", f,
+      std::printf("  frame %d: %.3f ms (detect %.3f, solve %.3f, fields %.3f), %lld iterations (%lld factored, %lld products), %lld rounds, %lld candidates, %lld touching%s; pairing %.3f ms%s\n", f,
                   1e3 * rep.seconds, 1e3 * rep.detect_seconds, 1e3 * rep.solve_seconds, 1e3 * rep.fields_seconds, rep.iterations, rep.factorizations, rep.products,
-                  static_cast<long long>(rep.rounds), rep.candidates, rep.active_vertices, rep.rebuilt ? ", rebuilt" : "");
+                  static_cast<long long>(rep.rounds), rep.candidates, rep.active_vertices, rep.rebuilt ? ", rebuilt" : "",
+                  1e3 * rep.pair_seconds, rep.paired ? " (paired again)" : "");
     iterations += rep.iterations, max_it = std::max(max_it, rep.iterations);
     factorizations += rep.factorizations, products += rep.products;
     most = std::max(most, touching(sol));
@@ -342,6 +357,9 @@ int run(const Args &a)
               "friction: %.2f factorizations, %.1f GMRES products per frame); touching up to %.1f %%; cold static solves of %zu frames differ by %.1e (relative); haptic median %.1f us (%.0f Hz); peak RSS %.0f MB; load %.2f\n",
               t_ref, cpu_ref, st.ref->memory_bytes() / 1e6, t_prefetch, engine.memory_bytes() / 1e6, cpu_setup, ms, 1e3 / ms, 1e3 * median(cpu), 1e3 * *std::max_element(seconds.begin(), seconds.end()), static_cast<double>(iterations) / a.frames, max_it,
               static_cast<double>(factorizations) / a.frames, static_cast<double>(products) / a.frames, 100 * most, sampled.size(), scale > 0 ? worst / scale : worst, 1e6 * median(haptic), 1.0 / median(haptic), bench::peak_rss_mb(), load_average());
+  if (settings.bodies)
+    std::printf("  body pairing: %d of %d frames paired again (pair_again %g, slide %g reaches); pairing per frame median %.3f ms, slowest %.3f ms\n", paired, a.frames, a.pair_again, a.slide,
+                1e3 * median(pairing), 1e3 * *std::max_element(pairing.begin(), pairing.end()));
   std::printf("csv,%s,%s,%d,%.2g,%d,%.2f,%.2f,%.3f,%.0f,%.3f,%.2f,%lld,%.3f,%.2e,%.2f,%.0f,%.2f\n", a.scenario.c_str(), a.mesh.c_str(), N, a.friction, a.frames, t_ref, t_prefetch, ms, 1e3 / ms, 1e3 * median(cpu),
               static_cast<double>(iterations) / a.frames, max_it, most, scale > 0 ? worst / scale : worst, 1e6 * median(haptic), bench::peak_rss_mb(), load_average());
   return 0;

@@ -44,8 +44,8 @@ std::vector<char> candidates(const Discretization &disc, const std::vector<char>
 Geometry make_geometry(const Discretization &disc, const std::vector<char> &pattern, std::vector<Obstacle> obstacles, const ContactSettings &s, const ContactOptions &o)
 {
   if (!(s.friction >= 0 && std::isfinite(s.friction))) throw std::invalid_argument("contact: the friction coefficient must be finite and >= 0");
-  if (!(o.reach >= 0 && std::isfinite(o.reach)) || !(o.depth >= 0 && std::isfinite(o.depth)) || !(o.tol > 0 && o.tol < 1) || o.max_it < 1)
-    throw std::invalid_argument("contact: options out of range (reach >= 0, depth >= 0, 0 < tol < 1, max_it >= 1)");
+  if (!(o.reach >= 0 && std::isfinite(o.reach)) || !(o.depth >= 0 && std::isfinite(o.depth)) || !(o.tol > 0 && o.tol < 1) || o.max_it < 1 || !(o.pair_again >= 0))
+    throw std::invalid_argument("contact: options out of range (reach >= 0, depth >= 0, 0 < tol < 1, max_it >= 1, pair_again >= 0)");
   Geometry g;
   g.reach = o.reach > 0 ? o.reach : 0.05 * mesh_size(disc.mesh());
   g.disc = &disc;
@@ -158,6 +158,7 @@ ContactEngine::ContactEngine(const Discretization &disc, const ReferenceFactoriz
   m->tol_gap = options.tol * m->size;
   m->forced.assign(static_cast<std::size_t>(disc.mesh().num_vertices()) * m->geo.obstacles.size(), 0);
   m->u_prev.assign(disc.num_nodes(), Vec3{0, 0, 0});
+  m->u_response.assign(disc.num_nodes(), Vec3{0, 0, 0});
   m->friction = settings.friction > 0;
   for (const ObstacleGeometry &o : m->geo.obstacles) m->friction = m->friction || o.obstacle().friction > 0;
 }
@@ -296,6 +297,8 @@ const ContactFrameReport &ContactEngine::solve(const SystemSelection &values, co
     s.step_from = s.last_poses.empty() ? poses : s.last_poses;
     s.zone_keys.assign(s.disc->num_nodes() * static_cast<std::size_t>(s.geo.partners), 0);
     const Timer detect;
+    rep.paired = s.pair_bodies();
+    rep.pair_seconds = detect.seconds();
     s.detect();
     rep.detect_seconds += detect.seconds();
     rep.rounds = 0;
@@ -310,6 +313,8 @@ const ContactFrameReport &ContactEngine::solve(const SystemSelection &values, co
   }
   s.outputs(out);
   if (s.friction) s.u_prev = out.u; // slip is measured from the previous frame
+  if (s.geo.bodies_touch) // the contact's share of the displacement: the next frame's pairing adds its free response
+    for (std::size_t i = 0; i < out.u.size(); ++i) s.u_response[i] = out.u[i] - s.u_free[i], s.responded = true;
   s.last_poses = poses;
   s.solved = true;
   rep.candidates = s.D->size();

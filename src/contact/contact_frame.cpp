@@ -73,10 +73,48 @@ void ContactEngine::State::set_motions()
     if (p.obstacle >= 0 && p.lead < 0) p.motion = step_motion(p, poses[p.obstacle], step_from[p.obstacle]);
 }
 
+double ContactEngine::State::relative_motion(const std::vector<Vec3> &u) const
+{
+  // Per body the mean change since the pairing (its translation) and the largest change beside it.
+  const int nn = disc->num_nodes(), nb = geo.bodies.count;
+  std::vector<Vec3> mean(nb, Vec3{0, 0, 0});
+  std::vector<int> count(nb, 0);
+  for (int i = 0; i < nn; ++i) {
+    const int b = geo.bodies.of_vertex[disc->node(i).vertex];
+    mean[b] = mean[b] + (u[i] - u_paired[i]), ++count[b];
+  }
+  for (int b = 0; b < nb; ++b) mean[b] = (1.0 / std::max(1, count[b])) * mean[b];
+  double apart = 0, own = 0;
+  for (int a = 0; a < nb; ++a)
+    for (int b = a + 1; b < nb; ++b) apart = std::max(apart, norm(mean[a] - mean[b]));
+  for (int i = 0; i < nn; ++i) own = std::max(own, norm(u[i] - u_paired[i] - mean[geo.bodies.of_vertex[disc->node(i).vertex]]));
+  return apart + 2 * own;
+}
+
+bool ContactEngine::State::pair_bodies()
+{
+  if (!geo.bodies_touch) return false;
+  const int nn = disc->num_nodes();
+  if (!body_points_done) {
+    body_points = contact_detail::body_points(geo, {}, &slave_of), body_points_done = true;
+    u_paired.assign(nn, Vec3{0, 0, 0});
+    loadable.assign(nn, 0); // what contact_loaded_unknowns keeps: the candidates' nodes and the undeformed pairs' masters
+    for (int i = 0; i < nn; ++i) loadable[i] = geo.candidate[disc->node(i).vertex];
+    for (const ContactPoint &p : body_points)
+      for (int k = 0; k < p.terms; ++k) loadable[p.term_node[k]] = 1;
+  }
+  if (!responded) return false; // no frame solved yet: the free response alone may carry bodies through each other
+  std::vector<Vec3> u(nn);
+  for (int i = 0; i < nn; ++i) u[i] = u_free[i] + u_response[i];
+  if (opt.pair_again > 0 && relative_motion(u) <= opt.pair_again * geo.reach) return false;
+  body_points = contact_detail::body_points(geo, contact_detail::BodyPlacement(geo, u, loadable), &slave_of);
+  u_paired = std::move(u);
+  return true;
+}
+
 void ContactEngine::State::detect()
 {
   const PhaseScope phase(Phase::ContactDetect);
-  if (!body_points_done) body_points = contact_detail::body_points(geo), body_points_done = true;
   points = contact_detail::merge_points(geo, contact_detail::obstacle_points(geo, poses, forced), body_points, node_position);
   if (friction) set_motions();
 }

@@ -76,10 +76,30 @@ int facing_node(const Discretization &disc, int v, const Vec3 &n);
 /// node of the vertex whose displacement along the normal is not all prescribed.
 std::vector<ContactPoint> obstacle_points(const Geometry &g, const std::vector<Pose> &poses, const std::vector<char> &forced);
 
+/// Where the bodies are paired: the undeformed geometry (no displacement), or the bodies moved by
+/// a displacement per dof node (their current positions: a frame's prescribed motion and the last
+/// solved displacement), with their triangles' hierarchies at those positions.
+struct BodyPlacement {
+  BodyPlacement() = default;
+  /// `loadable` (per dof node; empty: every node): the master nodes a pair may load (those whose
+  /// columns the reference keeps); a pair whose master triangle has another node is not made.
+  BodyPlacement(const Geometry &g, std::vector<Vec3> displacement, std::vector<char> loadable = {});
+  std::vector<Vec3> u;             ///< per dof node (empty: the undeformed geometry)
+  std::vector<char> loadable;      ///< per dof node (empty: every node)
+  std::vector<Vec3> vertices;      ///< the vertices moved by u (their nodes' mean)
+  std::vector<TriangleBvh> bvh;    ///< per body, its triangles at `vertices`
+  std::vector<std::vector<int>> triangles_of; ///< per vertex, its triangles
+};
+
 /// The pairs of bodies: per candidate vertex of a slave body, the closest point of each other
 /// body's surface within reach (node-to-surface, one pass per pair: the body with the finer
-/// mesh near the contact is the slave).
-std::vector<ContactPoint> body_points(const Geometry &g);
+/// mesh near the contact is the slave), in the placement `at`. Moved bodies: the gap, normal and
+/// closest point are those of the moved surfaces, and g0 is the gap linearised about `at.u`
+/// (g0 + n · (u_s − Σ β_i u_i) is the moved configuration's gap at u = at.u). `slave_of` (per
+/// pair a × bodies + b, a < b: 0 not chosen yet, 1 body a is the slave, 2 body b): a pair's
+/// slave once chosen stays (found again, the points keep their keys and their side); null:
+/// chosen afresh.
+std::vector<ContactPoint> body_points(const Geometry &g, const BodyPlacement &at = {}, std::vector<signed char> *slave_of = nullptr);
 
 /// A frame's points from the obstacles' and the bodies' (every (vertex, partner) kept), with their
 /// local frames, the followers at the vertices' other nodes and their leads (ContactPoint::lead),

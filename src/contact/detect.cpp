@@ -61,26 +61,64 @@ bool vertex_point(const Geometry &g, int v, const Vec3 &n, double gap, int partn
   return true;
 }
 
-/// Node-to-surface points of the candidate vertices of body a against the surface of body b.
-std::vector<ContactPoint> pass(const Geometry &g, int a, int b)
+/// On moved bodies, a slave vertex within this fraction of the reach of a master edge or corner
+/// takes the normal of the master's faces there that face it (pass(), facing_normal()).
+constexpr double k_edge_band = 0.1;
+
+/// The normal, at positions x, of the master triangle at the closest feature of hit h (its
+/// triangles: those of the feature's vertices) that faces slave vertex v best (most opposite one
+/// of v's nodes' normals): two faces that lie on each other press along their normals, whichever
+/// triangle at a shared edge the search met.
+Vec3 facing_normal(const Geometry &g, const BodyPlacement &at, const TriangleHit &h, int v)
 {
   const Discretization &disc = *g.disc;
   const SurfaceMesh &mesh = disc.mesh();
+  const auto normal = [&](int t) {
+    const std::array<int, 3> &q = mesh.triangles[t];
+    return normalized(cross(at.vertices[q[1]] - at.vertices[q[0]], at.vertices[q[2]] - at.vertices[q[0]]));
+  };
+  Vec3 best = normal(h.triangle);
+  double score = 2;
+  for (int k = 0; k < 3; ++k) {
+    if (h.bary[k] < 1e-9) continue; // not a vertex of the feature
+    const int w = mesh.triangles[h.triangle][k];
+    for (int t : at.triangles_of[w]) {
+      const Vec3 n = normal(t);
+      for (int i = disc.first_node(v); i < disc.first_node(v) + disc.node_count(v); ++i)
+        if (dot(n, disc.node(i).normal) < score) score = dot(n, disc.node(i).normal), best = n;
+    }
+  }
+  return best;
+}
+
+/// Node-to-surface points of the candidate vertices of body a against the surface of body b, in
+/// the configuration `at` (BodyPlacement: the undeformed one when its displacement is empty).
+std::vector<ContactPoint> pass(const Geometry &g, const BodyPlacement &at, int a, int b)
+{
+  const Discretization &disc = *g.disc;
+  const SurfaceMesh &mesh = disc.mesh();
+  const std::vector<Vec3> &x = at.u.empty() ? mesh.vertices : at.vertices;
   std::vector<ContactPoint> out;
   for (int v = 0; v < mesh.num_vertices(); ++v) {
     if (!g.candidate[v] || g.bodies.of_vertex[v] != a) continue;
-    const TriangleHit h = g.body_bvh[b].closest(mesh.vertices[v], g.reach);
+    const TriangleHit h = (at.u.empty() ? g.body_bvh : at.bvh)[b].closest(x[v], g.reach);
     if (h.triangle < 0) continue;
-    const Vec3 nt = mesh.triangle_normal(h.triangle), d = mesh.vertices[v] - h.point;
+    const std::array<int, 3> &tri = mesh.triangles[h.triangle];
+    const Vec3 nt = normalized(cross(x[tri[1]] - x[tri[0]], x[tri[2]] - x[tri[0]])), d = x[v] - h.point;
     const double dist = norm(d);
     Vec3 n = nt;
     double gap = dot(d, nt);
-    if (!h.interior && dist > 1e-12 * g.reach) {
+    // Beyond the master's edge or corner the normal is the direction to it — where that is
+    // defined: on moved bodies a closed pair's offset (its gap near zero) is the deformation's
+    // noise, so within k_edge_band of the reach the normal is that of the faces facing it.
+    if (!h.interior && !at.u.empty() && dist <= k_edge_band * g.reach) n = facing_normal(g, at, h, v), gap = dot(d, n);
+    else if (!h.interior && dist > 1e-12 * g.reach) {
       const double side = gap >= 0 ? 1.0 : -1.0;
       n = (side / dist) * d, gap = side * dist;
     }
     std::array<int, 3> master;
-    for (int k = 0; k < 3; ++k) master[k] = facing_node(disc, mesh.triangles[h.triangle][k], -1.0 * n); // the master group whose normal is n: it faces the slave
+    for (int k = 0; k < 3; ++k) master[k] = facing_node(disc, tri[k], -1.0 * n); // the master group whose normal is n: it faces the slave
+    if (!at.loadable.empty() && !(at.loadable[master[0]] && at.loadable[master[1]] && at.loadable[master[2]])) continue;
     ContactPoint p;
     if (!vertex_point(g, v, n, gap, static_cast<int>(g.obstacles.size()) + b, p)) continue;
     p.other = b;
@@ -90,6 +128,10 @@ std::vector<ContactPoint> pass(const Geometry &g, int a, int b)
       p.mw[k + 1] = -h.bary[k] * Vec3{1, 1, 1};
       p.lw[k + 1] = (-h.bary[k] * p.area / g.area[master[k]]) * Vec3{1, 1, 1};
     }
+    // The gap of the configuration, linearised about its displacement: g = g0 + n · (relative
+    // displacement) equals it there.
+    if (!at.u.empty())
+      for (int i = 0; i < p.terms; ++i) p.g0 -= p.mw[i][0] * dot(n, at.u[p.term_node[i]]);
     p.mu = g.friction;
     out.push_back(p);
   }
@@ -240,16 +282,50 @@ std::vector<ContactPoint> obstacle_points(const Geometry &g, const std::vector<P
   return out;
 }
 
-std::vector<ContactPoint> body_points(const Geometry &g)
+BodyPlacement::BodyPlacement(const Geometry &g, std::vector<Vec3> displacement, std::vector<char> loadable_nodes)
+    : u(std::move(displacement)), loadable(std::move(loadable_nodes))
+{
+  if (u.empty()) return;
+  const Discretization &disc = *g.disc;
+  const SurfaceMesh &mesh = disc.mesh();
+  vertices = mesh.vertices;
+  for (int v = 0; v < mesh.num_vertices(); ++v) { // a vertex moves by its nodes' mean (displacement is continuous)
+    Vec3 s{0, 0, 0};
+    for (int i = disc.first_node(v); i < disc.first_node(v) + disc.node_count(v); ++i) s = s + u[i];
+    if (disc.node_count(v) > 0) vertices[v] = vertices[v] + (1.0 / disc.node_count(v)) * s;
+  }
+  if (!g.bodies_touch) return;
+  for (int b = 0; b < g.bodies.count; ++b) {
+    std::vector<int> tris;
+    for (int t = 0; t < mesh.num_triangles(); ++t)
+      if (g.bodies.of_triangle[t] == b) tris.push_back(t);
+    bvh.emplace_back(vertices, mesh.triangles, tris);
+  }
+  triangles_of.resize(vertices.size());
+  for (int t = 0; t < mesh.num_triangles(); ++t)
+    for (int k = 0; k < 3; ++k) triangles_of[mesh.triangles[t][k]].push_back(t);
+}
+
+std::vector<ContactPoint> body_points(const Geometry &g, const BodyPlacement &at, std::vector<signed char> *slave_of)
 {
   std::vector<ContactPoint> out;
   if (!g.bodies_touch) return out;
-  for (int a = 0; a < g.bodies.count; ++a)
-    for (int b = a + 1; b < g.bodies.count; ++b) {
-      std::vector<ContactPoint> ab = pass(g, a, b), ba = pass(g, b, a);
+  const int nb = g.bodies.count;
+  if (slave_of && slave_of->size() != static_cast<std::size_t>(nb) * nb) slave_of->assign(static_cast<std::size_t>(nb) * nb, 0);
+  for (int a = 0; a < nb; ++a)
+    for (int b = a + 1; b < nb; ++b) {
+      signed char *kept = slave_of ? &(*slave_of)[static_cast<std::size_t>(a) * nb + b] : nullptr;
+      if (kept && *kept) { // the slave chosen before (the pairs' keys and history stay on its side)
+        const std::vector<ContactPoint> one = *kept == 1 ? pass(g, at, a, b) : pass(g, at, b, a);
+        out.insert(out.end(), one.begin(), one.end());
+        continue;
+      }
+      std::vector<ContactPoint> ab = pass(g, at, a, b), ba = pass(g, at, b, a);
       // One pass per pair: the side with more vertices near the other (the finer mesh there) is
       // the slave; both passes at once would constrain matching meshes twice (a singular D).
-      const std::vector<ContactPoint> &slave = ba.size() > ab.size() ? ba : ab;
+      const bool b_slave = ba.size() > ab.size();
+      const std::vector<ContactPoint> &slave = b_slave ? ba : ab;
+      if (kept && !slave.empty()) *kept = b_slave ? 2 : 1;
       out.insert(out.end(), slave.begin(), slave.end());
     }
   return out;

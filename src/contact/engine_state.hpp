@@ -25,6 +25,11 @@ struct ContactEngine::State {
   std::vector<int> node_position;      ///< per dof node: where its rows sit in the columns
   std::vector<contact_detail::ContactPoint> body_points, points;
   bool body_points_done = false;
+  std::vector<Vec3> u_response;        ///< per dof node: the last frame's displacement minus its free response (the contact's share; zero before the first)
+  bool responded = false;              ///< u_response is a solved frame's: the bodies may be paired again
+  std::vector<Vec3> u_paired;          ///< per dof node: the displacement the body pairs were found at (zero: undeformed)
+  std::vector<char> loadable;          ///< per dof node: may carry a pair's load (contact_loaded_unknowns: its columns are kept)
+  std::vector<signed char> slave_of;   ///< per pair of bodies: which one is the slave, once chosen (body_points)
   std::vector<char> forced;            ///< per (vertex, obstacle): penetrated from beyond reach once; always a point since
   double tol_gap = 0;
   double size = 0;                     ///< the mesh's bounding-box diagonal
@@ -61,6 +66,18 @@ struct ContactEngine::State {
   void rounds(ContactSolution &out, ContactFrameReport &rep);
   void correct(const SystemSelection &values, ContactSolution &out, ContactFrameReport &rep);
   void detect();
+  /// The body pairs (contact_detail::body_points): found in the undeformed geometry first, and
+  /// again at the bodies' current positions once those moved relative to each other by more than
+  /// pair_again times the reach since the last pairing (relative_motion()). The current positions: this frame's free response (its
+  /// prescribed motion, and what that moves with it) plus the last frame's contact response (its
+  /// solved displacement minus its free response); the first frame (a static solve) keeps the
+  /// undeformed pairs. Returns whether it paired.
+  bool pair_bodies();
+  /// A bound on how far any two points of different bodies moved relative to each other between
+  /// the displacements u_paired and u: the bodies' mean motions apart plus twice the largest
+  /// motion of a node beside its body's mean. Pairs found within the reach r at u_paired hold
+  /// every master surface within r minus this of a slave vertex at u.
+  double relative_motion(const std::vector<Vec3> &u) const;
   /// Each obstacle point's rigid motion over the step (ContactPoint::motion).
   void set_motions();
   void solve_points(ContactFrameReport &rep);

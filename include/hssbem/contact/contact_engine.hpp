@@ -87,6 +87,13 @@ struct ContactOptions {
   /// false: H2Reference), the frame's answer is corrected with accurate solves until one changes
   /// the unknowns by at most correction_tol relative to them (max_it corrections at most).
   double correction_tol = 1e-8;
+  /// Bodies that slide far: the body pairs are found again at the bodies' current positions (the
+  /// frame's free response plus the last frame's contact response) once the bodies moved relative
+  /// to each other by more than pair_again times the reach since the last pairing (a bound: their
+  /// mean motions apart plus twice a node's own motion beside its body's) — 0.5 keeps every
+  /// surface within half the reach of a slave vertex paired; 0: every frame; infinity: never
+  /// (the undeformed pairs). Bodies that move together are not paired again.
+  double pair_again = 0.5;
 };
 
 /// What a frame did.
@@ -102,6 +109,8 @@ struct ContactFrameReport {
   int corrections = 0;         ///< accurate solves that corrected the answer (approximate columns only)
   double correction = 0;       ///< the last correction's relative change of the unknowns
   double seconds = 0, detect_seconds = 0, solve_seconds = 0, fields_seconds = 0, correct_seconds = 0;
+  bool paired = false;         ///< the bodies were paired again (at their current positions: they moved relative to each other by half the reach)
+  double pair_seconds = 0;     ///< of detect_seconds: the bodies' pairing check (and pairing, when `paired`)
 };
 
 /// A frame's solution. Per dof node (u, t) and per vertex (the rest), mesh order.
