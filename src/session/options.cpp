@@ -68,6 +68,7 @@ const std::vector<Binding> &bindings()
       HSSBEM_BIND("contact_max_it", contact.max_it),
       HSSBEM_BIND("contact_reach", contact.reach),
       HSSBEM_BIND("contact_depth", contact.depth),
+      HSSBEM_BIND("contact_pair_again", contact.pair_again),
       HSSBEM_BIND("contact_h2_rtol", contact_h2_rtol),
       HSSBEM_BIND("contact_h2_factor_tol", contact_h2_factor_tol),
       HSSBEM_BIND("bem_interior_band", interior.plan.band),

@@ -93,7 +93,7 @@ struct ContactOptions {
   /// mean motions apart plus twice a node's own motion beside its body's) — 0.5 keeps every
   /// surface within half the reach of a slave vertex paired; 0: every frame; infinity: never
   /// (the undeformed pairs). Bodies that move together are not paired again.
-  double pair_again = 0.5;
+  double pair_again = option_default::contact_pair_again;
 };
 
 /// What a frame did.
