@@ -200,11 +200,7 @@ void ContactSession::set_up()
     judged.insert(judged.end(), m_job.placements.begin(), m_job.placements.end());
     m_drawn->check_facing(judged);
   }
-  try {
-    check_bodies_held(disc, m_job.base.displacement_prescribed, m_job.obstacles, m_job.settings, m_options.contact);
-  } catch (const ConstraintError &e) {
-    throw ConstraintError(m_problem->where() + e.what());
-  }
+  pin_floating();
   fault_point("ContactSetup");
   if (!m_pre) make_reference();
   m_engine = std::make_unique<ContactEngine>(disc, *m_pre->reference, m_job.obstacles, m_job.settings, m_options.contact, m_pre->columns);
@@ -222,6 +218,34 @@ void ContactSession::adopt(std::shared_ptr<ContactPrecomputation> pre)
   m_pre = std::move(pre);
 }
 
+void ContactSession::pin_floating()
+{
+  if (m_pinned) return;
+  m_pinned = true;
+  const Discretization &disc = m_problem->disc();
+  std::vector<char> loaded(disc.mesh().num_vertices(), 0); // the vertices a load reaches: no pin there
+  std::vector<const NodeConditions *> all{&m_job.base};
+  for (const NodeConditions &nc : m_job.frames) all.push_back(&nc);
+  for (const NodeConditions *nc : all)
+    for (int i = 0; i < disc.num_nodes(); ++i)
+      for (int c = 0; c < 3; ++c)
+        if (!nc->displacement_prescribed[i][c] && (nc->value[i][c] != 0 || (!nc->pressure.empty() && !std::isnan(nc->pressure[i])))) loaded[disc.node(i).vertex] = 1;
+  m_job.settings.pins = floating_pins(disc, m_job.base.displacement_prescribed, m_job.obstacles, m_job.settings, m_options.contact, loaded);
+  pin(m_job.base);
+  for (NodeConditions &nc : m_job.frames) pin(nc);
+}
+
+void ContactSession::pin(NodeConditions &nc) const
+{
+  for (int j : m_job.settings.pins) nc.displacement_prescribed[j / 3][j % 3] = true, nc.value[j / 3][j % 3] = 0;
+}
+
+SystemSelection ContactSession::pinned(SystemSelection values) const
+{
+  for (int j : m_job.settings.pins) values.displacement_known[j / 3][j % 3] = true, values.known[j / 3][j % 3] = 0;
+  return values;
+}
+
 std::vector<char> ContactSession::kept_unknowns() const
 {
   return kept_columns(contact_loaded_unknowns(m_problem->disc(), m_job.base.unknown_pattern(), m_job.obstacles, m_job.settings, m_options.contact), m_job);
@@ -231,6 +255,7 @@ std::vector<char> ContactSession::kept_unknowns() const
 /// compression, the candidates' reach and depth (not the frames' solver, nor the interior's).
 Fingerprint ContactSession::fingerprint() const
 {
+  const_cast<ContactSession *>(this)->pin_floating(); // the pins are part of the pattern
   OptionValues used = options_used();
   used["bem_mat_type"] = OptionValue::of(*find_option("bem_mat_type"), mat_type());
   for (auto it = used.begin(); it != used.end();)
@@ -242,7 +267,7 @@ Fingerprint ContactSession::fingerprint() const
 const ContactFrameReport &ContactSession::solve(const SystemSelection &values, const std::vector<Pose> &poses, long long frame)
 {
   set_up();
-  m_values = values;
+  m_values = pinned(values);
   m_poses = poses;
   {
     const EventScope event(SCN_Frame);

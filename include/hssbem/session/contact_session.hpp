@@ -142,12 +142,19 @@ private:
   void make_reference();
   /// Per unknown, the columns of K₀′ a dense reference keeps (kept_columns(); empty: every one).
   std::vector<char> kept_unknowns() const;
+  /// Once: the pins of the bodies contact alone holds (floating_pins) into the settings, the base
+  /// pattern and the frames (prescribed, zero): the reference's pattern.
+  void pin_floating();
+  void pin(NodeConditions &nc) const;
+  /// A frame's values with the pins (the face gives the values of the base rules' pattern).
+  SystemSelection pinned(SystemSelection values) const;
 
   std::shared_ptr<const SessionProblem> m_problem;
   ContactJob m_job;
   SessionOptions m_options;
   MachineLimits m_limits;
   std::vector<char> m_on_h2;
+  bool m_pinned = false;
   std::shared_ptr<ContactPrecomputation> m_pre;
   std::vector<ContactBodyReport> m_bodies;
   std::unique_ptr<ContactEngine> m_engine;
