@@ -302,6 +302,19 @@ void ContactEngine::State::set_u_free()
     for (int c = 0; c < 3; ++c) u_free[i][c] = pattern[3 * i + c] ? free_values.known[i][c] : xf[3 * i + c];
   if (!floating.empty())
     for (int i = 0; i < disc->num_nodes(); ++i) u_free[i] = u_free[i] + rigid_at(i, alpha); // the floating bodies' motions
+  if (!u_particular.empty())
+    for (int i = 0; i < disc->num_nodes(); ++i) u_free[i] = u_free[i] + u_particular[i]; // the body force's particular solution
+}
+
+void ContactEngine::set_body_force(const Vec3 &b, std::vector<Vec3> u_p, std::vector<Vec3> t_p)
+{
+  const std::size_t n = m->disc->num_nodes();
+  if ((!u_p.empty() && u_p.size() != n) || t_p.size() != u_p.size()) throw std::invalid_argument("contact: the particular traces need one entry per dof node");
+  m->body_force = b;
+  m->t_particular = std::move(t_p);
+  if (u_p == m->u_particular) return;
+  m->u_particular = std::move(u_p);
+  m->has_free = false; // the free displacement changes
 }
 
 /// Approximate columns W̃ (ReferenceFactorization::exact_columns() false): the frame was solved

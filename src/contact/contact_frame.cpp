@@ -245,6 +245,8 @@ void ContactEngine::State::fields(ContactSolution &out) const
   for (std::size_t q = 0; q < js.size(); ++q) out.t[js[q] / 3][js[q] % 3] += v[q];
   if (!floating.empty())
     for (int i = 0; i < nn; ++i) out.u[i] = out.u[i] + rigid_at(i, alpha); // the floating bodies' motions
+  if (!u_particular.empty())
+    for (int i = 0; i < nn; ++i) out.u[i] = out.u[i] + u_particular[i]; // the whole displacement
 }
 
 /// Vertices without a point of an obstacle that went through it: they get one (forced).

@@ -36,6 +36,8 @@ struct ContactEngine::State {
   std::vector<double> solved_xf;       ///< and that response
   bool exact = true;                   ///< the reference's columns are exact (its x_f is never corrected)
   std::vector<Vec3> u_free;
+  std::vector<Vec3> u_particular, t_particular; ///< a body force's particular traces per dof node (empty: none)
+  Vec3 body_force{0, 0, 0};            ///< b, force per volume
   // the frame
   std::unique_ptr<contact_detail::Compliance> D;
   std::vector<Vec3> wf, lambda, u_prev, warm_lambda;
@@ -64,6 +66,8 @@ struct ContactEngine::State {
     double L = 1;
     std::vector<std::array<double, 6>> modes; ///< orthonormal, the motions its prescribed displacements leave free
     int first = 0;                    ///< its first entry in alpha
+    double volume = 0;                ///< its volume (divergence theorem over its triangles)
+    Vec3 xg{};                        ///< its volume centroid
   };
   std::vector<Floating> floating;
   std::vector<int> node_floating;      ///< per dof node: its floating body (index into floating) or -1
@@ -71,6 +75,9 @@ struct ContactEngine::State {
   std::vector<double> alpha;           ///< every floating body's motion coordinates (kept from frame to frame)
 
   void set_up_floating(const std::vector<int> &pins);
+  /// Per motion coordinate, the body force's generalized force: the exact weight b V at the
+  /// volume centroid, less the lumped Σ A t_p the homogeneous loads carry.
+  std::vector<double> weight_correction() const;
   /// The motion of node i's body at it for the coordinates a (alpha's layout; zero for a held body).
   Vec3 rigid_at(int i, const std::vector<double> &a) const;
   /// Mode k of floating body f at node i.

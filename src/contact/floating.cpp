@@ -91,7 +91,39 @@ void ContactEngine::State::set_up_floating(const std::vector<int> &pins)
   }
   int first = 0;
   for (Floating &f : floating) f.first = first, first += static_cast<int>(f.modes.size());
+  for (int t = 0; t < mesh.num_triangles(); ++t) { // volumes and volume centroids: tetrahedra from the origin
+    const int b = geo.bodies.of_triangle[t];
+    if (index[b] < 0) continue;
+    Floating &f = floating[index[b]];
+    const Vec3 &a = mesh.vertices[mesh.triangles[t][0]], &p = mesh.vertices[mesh.triangles[t][1]], &q = mesh.vertices[mesh.triangles[t][2]];
+    const double v = dot(a, cross(p, q)) / 6;
+    f.volume += v, f.xg = f.xg + (v / 4) * (a + p + q);
+  }
+  for (Floating &f : floating) f.xg = (1.0 / f.volume) * f.xg;
   alpha.assign(first, 0.0);
+}
+
+std::vector<double> ContactEngine::State::weight_correction() const
+{
+  std::vector<double> r(alpha.size(), 0.0);
+  if (t_particular.empty()) return r;
+  const std::vector<char> &pattern = ref->pattern();
+  for (const Floating &f : floating) {
+    const Vec3 W = f.volume * body_force, M = cross(f.xg - f.x0, W);
+    for (std::size_t k = 0; k < f.modes.size(); ++k) {
+      const std::array<double, 6> &q = f.modes[k];
+      r[f.first + k] += dot(W, Vec3{q[0], q[1], q[2]}) + dot(M, Vec3{q[3], q[4], q[5]}) / f.L;
+    }
+  }
+  for (int i = 0; i < disc->num_nodes(); ++i) { // the lumped −t_p the homogeneous loads carry, taken back
+    const int f = node_floating[i];
+    if (f < 0) continue;
+    for (int c = 0; c < 3; ++c)
+      if (!pattern[3 * i + c])
+        for (std::size_t k = 0; k < floating[f].modes.size(); ++k)
+          r[floating[f].first + k] += geo.area[i] * t_particular[i][c] * mode_at(floating[f], static_cast<int>(k), i)[c];
+  }
+  return r;
 }
 
 Vec3 ContactEngine::State::mode_at(const Floating &f, int k, int i) const
@@ -129,6 +161,8 @@ std::vector<double> ContactEngine::State::balance(const std::vector<Vec3> &lam, 
   D->loads(lam, js, vs);
   for (std::size_t q = 0; q < js.size(); ++q) add(js[q], vs[q]);
   if (gross) *gross = sum;
+  const std::vector<double> w = weight_correction();
+  for (std::size_t k = 0; k < r.size(); ++k) r[k] += w[k];
   return r;
 }
 

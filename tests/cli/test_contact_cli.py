@@ -276,6 +276,26 @@ class ContactRunTests(ContactCase):
         inside_faces = ((np.abs(x) < 1e-9) | (np.abs(x - 1) < 1e-9)).sum(axis=1) == 1
         self.assertLess(np.max(np.abs(stress[inside_faces] - [0, 0, -10, 0, 0, 0])), 1e-2 * 10)
 
+    def test_a_cube_resting_on_the_table_under_gravity(self):
+        # Nothing prescribed, density 2 and gravity 5 down: the cube rests on a frictionless table,
+        # which carries its weight rho g V = 10 (the balance takes the exact weight; the lumped
+        # particular traction would leave a lateral force of 1e-4 that no frictionless table
+        # balances). The pressure is not uniform: the table holds the base flat, where the free
+        # column's base would bulge by Poisson's ratio.
+        import h5py
+        import numpy as np
+        self.problem(mesh=self.copy_mesh("cube_l0.msh"), material={"E": 1000.0, "nu": 0.3, "density": 2.0}, boundary=[],
+                     gravity=[0, 0, -5], contact={"obstacles": [TABLE]})
+        r = self.run_problem(timeout=TIMEOUT_RUN)
+        self.assertSucceeds(r, self.out)
+        with h5py.File(self.out, "r") as f:
+            F = f["/contact/forces/table"][()]
+            p = f["/contact/pressure"][()]
+            x = f["/mesh/vertices"][()]
+        self.assertLess(np.max(np.abs(F - [0, 0, 10])), 1e-6 * 10)
+        base = np.abs(x[:, 2]) < 1e-12
+        self.assertTrue(np.all(p[base] > 5) and np.all(p[~base] == 0))  # the whole base touches, nothing else
+
     def test_scene_frames_equal_static_runs(self):
         # The table rises under the cube frame by frame; each frictionless frame is the static
         # problem with the table at that frame's place (its own run, -bem_mat_type dense).

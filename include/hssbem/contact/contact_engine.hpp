@@ -183,6 +183,15 @@ public:
   std::vector<Vec3> haptic_forces(const std::vector<Pose> &poses);
   /// The same with the obstacles translated by `offsets`.
   std::vector<Vec3> haptic_forces(const std::vector<Vec3> &offsets);
+  /// A uniform body force b (force per volume; zero: none) and its particular solution's traces
+  /// per dof node (u_p, t_p: bem/body_force.hpp), from now on: the values the frames give are the
+  /// homogeneous problem's (homogeneous_selection), and u_p is added to every frame's
+  /// displacement, so the gaps, the slips and ContactSolution::u are the whole displacement's and
+  /// λ the whole contact traction; ContactSolution::t stays the homogeneous traction. A floating
+  /// body's balance takes its exact weight b V (V its volume, at its volume centroid) in place of
+  /// the lumped Σ A t_p of the homogeneous loads (which differs by the discretisation: a lateral
+  /// force a frictionless table could not balance).
+  void set_body_force(const Vec3 &b, std::vector<Vec3> u_p, std::vector<Vec3> t_p);
 
   int num_obstacles() const;
   const std::string &obstacle_name(int o) const;

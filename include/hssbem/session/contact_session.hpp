@@ -137,7 +137,9 @@ public:
   OptionValues options_used() const;
 
 private:
-  const ContactFrameReport &solve(const SystemSelection &values, const std::vector<Pose> &poses, long long frame);
+  const ContactFrameReport &solve(const SystemSelection &values, const std::vector<Pose> &poses, long long frame, const UniformBodyForce &force);
+  /// The last step's homogeneous nodal solution (the particular displacement taken off u).
+  NodalSolution homogeneous() const;
   std::unique_ptr<ReferenceFactorization> body_reference(const BemOperator &op, std::vector<char> pattern, std::vector<char> kept, bool pressure, int body);
   void make_reference();
   /// Per unknown, the columns of K₀′ a dense reference keeps (kept_columns(); empty: every one).
@@ -160,6 +162,7 @@ private:
   std::unique_ptr<ContactEngine> m_engine;
   std::unique_ptr<ContactObstacles> m_drawn;
   SystemSelection m_values;
+  UniformBodyForce m_force;   ///< the last step's body force
   std::vector<Pose> m_poses; ///< the last step's obstacle poses
   ContactSolution m_sol;
   ContactFrameReport m_report;
