@@ -97,49 +97,93 @@ double known_ratio(const SystemSelection &values, const SystemSelection &base)
   return s;
 }
 
-std::string join(const std::vector<std::string> &parts)
+} // namespace
+
+namespace {
+
+/// The prescribed components of body b's dof nodes as constraints on its rigid motions.
+std::vector<NodeConstraint> body_constraints(const Discretization &disc, const std::vector<std::array<bool, 3>> &known, const Bodies &bodies, int b)
 {
-  std::string s;
-  for (const std::string &p : parts) s += (s.empty() ? "" : "; ") + p;
-  return s;
+  std::vector<NodeConstraint> held;
+  for (int i = 0; i < disc.num_nodes(); ++i)
+    if (bodies.of_vertex[disc.node(i).vertex] == b)
+      for (int c = 0; c < 3; ++c)
+        if (known[i][c]) held.push_back({i, Vec3{c == 0 ? 1.0 : 0.0, c == 1 ? 1.0 : 0.0, c == 2 ? 1.0 : 0.0}});
+  return held;
+}
+
+/// How far vertex v of body b lies from what may touch it at the base positions: the obstacles'
+/// gaps and, with "bodies", the other bodies' surfaces (infinite for a vertex that never touches).
+double partner_distance(const Geometry &g, int v, int b)
+{
+  const Vec3 &x = g.disc->mesh().vertices[v];
+  double d = std::numeric_limits<double>::infinity();
+  if (!g.candidate[v]) return d;
+  for (const ObstacleGeometry &o : g.obstacles) {
+    ObstacleGap h;
+    if (o.gap(x, Pose{}, std::numeric_limits<double>::infinity(), h)) d = std::min(d, std::abs(h.gap));
+  }
+  for (int other = 0; g.bodies_touch && other < g.bodies.count; ++other) {
+    if (other == b) continue;
+    const TriangleHit hit = g.body_bvh[other].closest(x);
+    if (hit.triangle >= 0) d = std::min(d, norm(hit.point - x));
+  }
+  return d;
+}
+
+/// Body b's pin vertices: the farthest from its partners (A), then among those at least half as
+/// far, the farthest from A (B) and from the line AB (C); then the rest by distance (a fallback).
+std::vector<int> pin_vertices(const Geometry &g, int b, const std::vector<char> &loaded)
+{
+  const std::vector<Vec3> &xs = g.disc->mesh().vertices;
+  std::vector<int> vs;
+  std::vector<double> dist(xs.size(), 0);
+  for (int v = 0; v < static_cast<int>(xs.size()); ++v)
+    if (g.bodies.of_vertex[v] == b && g.disc->node_count(v) > 0) vs.push_back(v), dist[v] = !loaded.empty() && loaded[v] ? 0.0 : std::min(partner_distance(g, v, b), 1e300);
+  std::stable_sort(vs.begin(), vs.end(), [&](int p, int q) { return dist[p] > dist[q]; });
+  if (vs.empty()) return vs;
+  const int A = vs[0];
+  auto pick = [&](auto score) {
+    int best = A;
+    double top = -1;
+    for (int v : vs)
+      if (dist[v] >= 0.5 * dist[A] && score(v) > top) top = score(v), best = v;
+    return best;
+  };
+  const int B = pick([&](int v) { return norm(xs[v] - xs[A]); });
+  const Vec3 ab = xs[B] - xs[A];
+  const int C = pick([&](int v) { return norm(cross(ab, xs[v] - xs[A])); });
+  std::vector<int> order{A, B, C};
+  order.insert(order.end(), vs.begin(), vs.end());
+  return order;
 }
 
 } // namespace
 
-void check_bodies_held(const Discretization &disc, const std::vector<std::array<bool, 3>> &known, const std::vector<Obstacle> &obstacles, const ContactSettings &settings,
-                       const ContactOptions &options)
+std::vector<int> floating_pins(const Discretization &disc, const std::vector<std::array<bool, 3>> &known, const std::vector<Obstacle> &obstacles, const ContactSettings &settings,
+                               const ContactOptions &options, const std::vector<char> &loaded)
 {
   const std::vector<char> pattern = node_pattern(known);
-  const Geometry g = make_geometry(disc, pattern, obstacles, settings, options);
-  const std::vector<ContactPoint> points = contact_detail::merge_points(g, contact_detail::obstacle_points(g, std::vector<Pose>(g.obstacles.size()), {}), contact_detail::body_points(g));
+  ContactSettings s = settings;
+  s.bodies = true; // the other bodies' surfaces count as partners for the pins' distance
+  const Geometry g = make_geometry(disc, pattern, obstacles, s, options);
+  std::vector<int> pins;
   for (int b = 0; b < g.bodies.count; ++b) {
-    std::vector<NodeConstraint> held;
-    int lowest = -1;
-    for (int i = 0; i < disc.num_nodes(); ++i) {
-      if (g.bodies.of_vertex[disc.node(i).vertex] != b) continue;
-      if (lowest < 0 || disc.node(i).vertex < lowest) lowest = disc.node(i).vertex;
-      for (int c = 0; c < 3; ++c)
-        if (known[i][c]) held.push_back({i, Vec3{c == 0 ? 1.0 : 0.0, c == 1 ? 1.0 : 0.0, c == 2 ? 1.0 : 0.0}});
-    }
-    const ConstraintReport alone = analyse_constraints(disc, held);
-    if (alone.rank == 6) continue;
-    bool any = false;
-    for (const ContactPoint &p : points) {
-      const bool mine = p.body == b || p.other == b;
-      if (!mine || p.lead >= 0) continue; // a follower holds what its lead holds
-      any = true;
-      for (int k = 0; k < (p.mu > 0 ? 3 : 1); ++k) held.push_back({p.body == b ? p.node : p.term_node[1], p.frame[k]});
-    }
-    const ConstraintReport with_contact = analyse_constraints(disc, held);
-    const std::string body = "body " + std::to_string(b) + " (the surface of vertex " + std::to_string(lowest) + ")";
-    if (!any)
-      throw ConstraintError(body + ": its prescribed displacements leave it free to move (" + join(alone.free_modes) + ") and no obstacle or other body is within reach to hold it");
-    if (with_contact.rank < 6)
-      throw ConstraintError(body + ": held only by frictionless contact, which leaves it free to move (" + join(with_contact.free_modes) +
-                            "); prescribe displacements that fix these motions, or give the contact friction");
-    throw ConstraintError(body + ": its prescribed displacements leave it free to move (" + join(alone.free_modes) +
-                          "); bodies held by contact alone are not supported yet: prescribe displacements that hold it");
+    std::vector<NodeConstraint> held = body_constraints(disc, known, g.bodies, b);
+    int rank = analyse_constraints(disc, held).rank;
+    for (int v : rank == 6 ? std::vector<int>{} : pin_vertices(g, b, loaded))
+      for (int c = 0; c < 3 && rank < 6; ++c) {
+        const Vec3 e{c == 0 ? 1.0 : 0.0, c == 1 ? 1.0 : 0.0, c == 2 ? 1.0 : 0.0};
+        std::vector<NodeConstraint> more = held;
+        for (int i = disc.first_node(v); i < disc.first_node(v) + disc.node_count(v); ++i) more.push_back({i, e});
+        const int r = analyse_constraints(disc, more).rank;
+        if (r <= rank) continue;
+        rank = r, held = std::move(more);
+        for (int i = disc.first_node(v); i < disc.first_node(v) + disc.node_count(v); ++i) pins.push_back(3 * i + c);
+      }
   }
+  std::sort(pins.begin(), pins.end());
+  return pins;
 }
 
 // --- the engine -----------------------------------------------------------------------------------
@@ -161,6 +205,7 @@ ContactEngine::ContactEngine(const Discretization &disc, const ReferenceFactoriz
   m->u_response.assign(disc.num_nodes(), Vec3{0, 0, 0});
   m->friction = settings.friction > 0;
   for (const ObstacleGeometry &o : m->geo.obstacles) m->friction = m->friction || o.obstacle().friction > 0;
+  m->set_up_floating(settings.pins);
 }
 
 ContactEngine::~ContactEngine() = default;
@@ -182,6 +227,13 @@ std::vector<char> contact_loaded_unknowns(const Discretization &disc, const std:
 }
 
 const Bodies &ContactEngine::bodies() const { return m->geo.bodies; }
+std::vector<int> ContactEngine::floating_bodies() const
+{
+  std::vector<int> b;
+  for (const State::Floating &f : m->floating) b.push_back(f.body);
+  std::sort(b.begin(), b.end());
+  return b;
+}
 double ContactEngine::reach() const { return m->geo.reach; }
 std::size_t ContactEngine::memory_bytes() const { return m->columns->memory_bytes(); }
 const std::shared_ptr<ReferenceColumns> &ContactEngine::columns() const { return m->columns; }
@@ -249,6 +301,21 @@ void ContactEngine::State::set_u_free()
   u_free.resize(disc->num_nodes());
   for (int i = 0; i < disc->num_nodes(); ++i)
     for (int c = 0; c < 3; ++c) u_free[i][c] = pattern[3 * i + c] ? free_values.known[i][c] : xf[3 * i + c];
+  if (!floating.empty())
+    for (int i = 0; i < disc->num_nodes(); ++i) u_free[i] = u_free[i] + rigid_at(i, alpha); // the floating bodies' motions
+  if (!u_particular.empty())
+    for (int i = 0; i < disc->num_nodes(); ++i) u_free[i] = u_free[i] + u_particular[i]; // the body force's particular solution
+}
+
+void ContactEngine::set_body_force(const Vec3 &b, std::vector<Vec3> u_p, std::vector<Vec3> t_p)
+{
+  const std::size_t n = m->disc->num_nodes();
+  if ((!u_p.empty() && u_p.size() != n) || t_p.size() != u_p.size()) throw std::invalid_argument("contact: the particular traces need one entry per dof node");
+  m->body_force = b;
+  m->t_particular = std::move(t_p);
+  if (u_p == m->u_particular) return;
+  m->u_particular = std::move(u_p);
+  m->has_free = false; // the free displacement changes
 }
 
 /// Approximate columns W̃ (ReferenceFactorization::exact_columns() false): the frame was solved
@@ -278,8 +345,7 @@ void ContactEngine::State::correct(const SystemSelection &values, ContactSolutio
     if (rep.corrections >= opt.max_it)
       throw std::runtime_error("the corrections of the compressed reference did not settle in " + std::to_string(opt.max_it) + " solves (-contact_max_it; last change " +
                                std::to_string(rep.correction) + ")");
-    set_u_free();
-    rounds(out, rep);
+    settle(out, rep);
   }
 }
 
@@ -302,7 +368,7 @@ const ContactFrameReport &ContactEngine::solve(const SystemSelection &values, co
     s.detect();
     rep.detect_seconds += detect.seconds();
     rep.rounds = 0;
-    s.rounds(out, rep);
+    s.settle(out, rep);
     if (!s.ref->exact_columns()) {
       const Timer correct;
       s.correct(values, out, rep);

@@ -4,6 +4,7 @@
 // the outputs and the warm start of the next frame.
 #include "engine_state.hpp"
 
+#include "hssbem/core/lapack.hpp"
 #include "hssbem/core/phase.hpp"
 #include "hssbem/core/timer.hpp"
 
@@ -280,6 +281,10 @@ void ContactEngine::State::fields(ContactSolution &out) const
       out.t[i][c] = pattern[j] ? out.x[j] : free_values.known[i][c];
     }
   for (std::size_t q = 0; q < js.size(); ++q) out.t[js[q] / 3][js[q] % 3] += v[q];
+  if (!floating.empty())
+    for (int i = 0; i < nn; ++i) out.u[i] = out.u[i] + rigid_at(i, alpha); // the floating bodies' motions
+  if (!u_particular.empty())
+    for (int i = 0; i < nn; ++i) out.u[i] = out.u[i] + u_particular[i]; // the whole displacement
 }
 
 /// Vertices without a point of an obstacle that went through it: they get one (forced).
@@ -305,6 +310,31 @@ bool ContactEngine::State::penetrations(const ContactSolution &out)
   return found;
 }
 
+/// The rigid part of body b's displacement u: the least-squares fit t + θ × (x − x_c) over its
+/// dof nodes weighted by their areas (x_c their area centroid): t the mean displacement, θ from
+/// (Σ A (|r|² I − r rᵀ)) θ = Σ A r × u. Independent of where the pins sit (the motion α is not:
+/// it is the rigid motion of the pins' frame).
+void ContactEngine::State::rigid_part(int b, const std::vector<Vec3> &u, Vec3 &t, Vec3 &theta) const
+{
+  double A = 0;
+  Vec3 xc{0, 0, 0};
+  t = Vec3{0, 0, 0};
+  for (int i = 0; i < disc->num_nodes(); ++i)
+    if (geo.bodies.of_vertex[disc->node(i).vertex] == b) A += geo.area[i], xc = xc + geo.area[i] * disc->node_position(i), t = t + geo.area[i] * u[i];
+  xc = (1.0 / A) * xc, t = (1.0 / A) * t;
+  double M[9] = {0}, rhs[3] = {0};
+  for (int i = 0; i < disc->num_nodes(); ++i) {
+    if (geo.bodies.of_vertex[disc->node(i).vertex] != b) continue;
+    const Vec3 r = disc->node_position(i) - xc, m = cross(r, u[i]);
+    for (int a = 0; a < 3; ++a) {
+      rhs[a] += geo.area[i] * m[a];
+      for (int c = 0; c < 3; ++c) M[3 * a + c] += geo.area[i] * ((a == c ? dot(r, r) : 0.0) - r[a] * r[c]);
+    }
+  }
+  if (lapack::gesv(3, 1, M, rhs) != 0) rhs[0] = rhs[1] = rhs[2] = 0; // a body on a line: no rotation to read
+  theta = Vec3{rhs[0], rhs[1], rhs[2]};
+}
+
 /// Per vertex, of its leading points: the largest pressure and its state, the smallest gap; the
 /// forces of every point (a follower's normal traction only: its tie rows' are internal).
 void ContactEngine::State::outputs(ContactSolution &out) const
@@ -317,6 +347,9 @@ void ContactEngine::State::outputs(ContactSolution &out) const
   out.contact_traction.assign(nv, Vec3{0, 0, 0});
   out.obstacle_force.assign(geo.obstacles.size(), Vec3{0, 0, 0});
   out.body_force.assign(geo.bodies.count, Vec3{0, 0, 0});
+  out.body_translation.assign(geo.bodies.count, Vec3{0, 0, 0});
+  out.body_rotation.assign(geo.bodies.count, Vec3{0, 0, 0});
+  for (const Floating &f : floating) rigid_part(f.body, out.u, out.body_translation[f.body], out.body_rotation[f.body]);
   for (int c = 0; c < D->size(); ++c) {
     const ContactPoint &p = D->point(c);
     if (p.lead < 0 && !(gap[c] >= out.gap[p.vertex])) out.gap[p.vertex] = gap[c];

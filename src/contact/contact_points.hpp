@@ -235,9 +235,17 @@ public:
   /// fixed, for other free relative displacements (one solve with the factored fixed-state
   /// system); a leading point that would pull opens with its followers (open_pulling_points).
   void haptic(const Compliance &D, const std::vector<Vec3> &wf, double tol_gap, std::vector<Vec3> &lambda);
+  /// The last solve's slipping points with friction held stuck in the fixed-state system (haptic()
+  /// then answers as if they stuck): the floating bodies' Newton, where sliding points alone do not
+  /// resist a motion that sticking ones would. The next solve sets the states afresh.
+  void stick_slipping_points(const Compliance &D);
+  /// λ of the fixed-state system alone for other free relative displacements: every point of
+  /// the last solve closed in its state (no point opens; the answer is linear in wf).
+  void fixed_states(const Compliance &D, const std::vector<Vec3> &wf, std::vector<Vec3> &lambda);
 
 private:
   void factor_fixed_states(const Compliance &D);
+  std::vector<double> fixed_state_answer(const Compliance &D, const std::vector<Vec3> &wf);
   std::vector<double> m_lu;          ///< the fixed-state system of the last solve, factored (haptic)
   std::vector<int> m_piv, m_rows;    ///< its pivots and the points it covers
   std::vector<std::int8_t> m_state;

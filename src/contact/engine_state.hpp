@@ -41,6 +41,8 @@ struct ContactEngine::State {
   std::vector<double> solved_xf;       ///< and that response
   bool exact = true;                   ///< the reference's columns are exact (its x_f is never corrected)
   std::vector<Vec3> u_free;
+  std::vector<Vec3> u_particular, t_particular; ///< a body force's particular traces per dof node (empty: none)
+  Vec3 body_force{0, 0, 0};            ///< b, force per volume
   // the frame
   std::unique_ptr<contact_detail::Compliance> D;
   std::vector<Vec3> wf, lambda, u_prev, warm_lambda;
@@ -59,6 +61,52 @@ struct ContactEngine::State {
   ContactFrameReport report;
   std::vector<Pose> warm_poses;        ///< the obstacles' poses of the warm start
   TriangleBvh surface;                 ///< the mesh's triangles (the warm start's interpolation)
+  // bodies held by contact alone (floating.cpp)
+  /// A floating body: its free rigid motions q = Σ_k α_k modes[k] in the coordinates
+  /// (a, L θ) — a translation and a rotation θ about the centroid x0 scaled by the body's size L —
+  /// move its points by a + θ × (x − x0).
+  struct Floating {
+    int body = -1, lowest = -1;       ///< the body and its lowest vertex (errors name them)
+    Vec3 x0{};
+    double L = 1;
+    std::vector<std::array<double, 6>> modes; ///< orthonormal, the motions its prescribed displacements leave free
+    int first = 0;                    ///< its first entry in alpha
+    double volume = 0;                ///< its volume (divergence theorem over its triangles)
+    Vec3 xg{};                        ///< its volume centroid
+  };
+  std::vector<Floating> floating;
+  std::vector<int> node_floating;      ///< per dof node: its floating body (index into floating) or -1
+  std::vector<char> pinned;            ///< per unknown: a pin (ContactSettings::pins)
+  std::vector<double> alpha;           ///< every floating body's motion coordinates (kept from frame to frame)
+
+  void set_up_floating(const std::vector<int> &pins);
+  /// Per motion coordinate, the body force's generalized force: the exact weight b V at the
+  /// volume centroid, less the lumped Σ A t_p the homogeneous loads carry.
+  std::vector<double> weight_correction() const;
+  /// The motion of node i's body at it for the coordinates a (alpha's layout; zero for a held body).
+  Vec3 rigid_at(int i, const std::vector<double> &a) const;
+  /// Mode k of floating body f at node i.
+  Vec3 mode_at(const Floating &f, int k, int i) const;
+  /// The frame solved with the floating bodies balanced: the contact solved (rounds) at their
+  /// motions, then Newton on the motions until the forces and moments on each balance.
+  void settle(ContactSolution &out, ContactFrameReport &rep);
+  /// Per motion coordinate, the generalized force on its body: the frame's loads and the contact
+  /// tractions λ (their loads on the traction-known unknowns); `gross`: the sum of the forces'
+  /// magnitudes (the balance's scale).
+  std::vector<double> balance(const std::vector<Vec3> &lam, double *gross = nullptr) const;
+  /// ∂balance/∂alpha on the current active set (and stick/slip states).
+  std::vector<double> balance_jacobian(const std::vector<double> &r0);
+  bool newton_step(const std::vector<double> &r, std::vector<double> &step, std::vector<double> &unresisted);
+  /// λ for the free relative displacements w with the current active set (and states).
+  std::vector<Vec3> resolve(const std::vector<Vec3> &w);
+  /// The free relative displacements with the floating bodies moved by da more.
+  std::vector<Vec3> moved_w(const std::vector<double> &da) const;
+  /// Where the balance has no Newton step (the contact does not resist r's part `unresisted`):
+  /// the motion along it that closes the nearest open point, or an error naming the body.
+  std::vector<double> closing_move(const std::vector<double> &unresisted) const;
+  std::string unbalanced_error(const std::vector<double> &unresisted) const;
+  /// The rigid part of body b's displacement u (ContactSolution::body_translation, body_rotation).
+  void rigid_part(int b, const std::vector<Vec3> &u, Vec3 &t, Vec3 &theta) const;
 
   void free_response(const SystemSelection &values);
   void set_u_free();

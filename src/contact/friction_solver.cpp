@@ -637,7 +637,16 @@ void FrictionSolver::factor_fixed_states(const Compliance &D)
   m_factored = true;
 }
 
-void FrictionSolver::haptic(const Compliance &D, const std::vector<Vec3> &wf, double tol_gap, std::vector<Vec3> &lambda)
+void FrictionSolver::stick_slipping_points(const Compliance &D)
+{
+  for (int c = 0; c < D.size(); ++c)
+    if (m_state[c] == 2 && D.point(c).mu > 0) m_state[c] = 1;
+  factor_fixed_states(D);
+}
+
+/// The fixed-state system's right-hand side for wf (closed: the gap and a sticking point's slip;
+/// a sliding point's tangential rows and a held tangent's: zero), solved.
+std::vector<double> FrictionSolver::fixed_state_answer(const Compliance &D, const std::vector<Vec3> &wf)
 {
   if (!m_factored) factor_fixed_states(D);
   const int m = 3 * static_cast<int>(m_rows.size());
@@ -647,6 +656,21 @@ void FrictionSolver::haptic(const Compliance &D, const std::vector<Vec3> &wf, do
     for (int k = 0; k < 3; ++k) y[3 * a + k] = ((slip || D.held(m_rows[a], k)) && k > 0) ? 0.0 : -wf[m_rows[a]][k];
   }
   if (m > 0) lapack::getrs('N', m, 1, m_lu.data(), m, m_piv.data(), y.data(), m);
+  return y;
+}
+
+void FrictionSolver::fixed_states(const Compliance &D, const std::vector<Vec3> &wf, std::vector<Vec3> &lambda)
+{
+  const std::vector<double> y = fixed_state_answer(D, wf);
+  lambda.assign(D.size(), Vec3{0, 0, 0});
+  for (int a = 0; a < static_cast<int>(m_rows.size()); ++a)
+    for (int k = 0; k < 3; ++k) lambda[m_rows[a]][k] = y[3 * a + k];
+}
+
+void FrictionSolver::haptic(const Compliance &D, const std::vector<Vec3> &wf, double tol_gap, std::vector<Vec3> &lambda)
+{
+  const std::vector<double> y = fixed_state_answer(D, wf);
+  const int m = static_cast<int>(y.size());
   const auto column = [&](const std::vector<int> &rows, double *out) { // one blocked solve
     const int nr = static_cast<int>(rows.size());
     std::fill(out, out + static_cast<std::size_t>(m) * nr, 0.0);

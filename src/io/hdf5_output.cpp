@@ -106,6 +106,18 @@ void write_contact(H5Writer &w, const std::string &name, const ContactData &c)
   for (const auto &[who, force] : c.forces)
     w.dataset(f.get(), fname, who, doubles({force.begin(), force.end()}, {3}));
   w.end_group(f, fname);
+  if (!c.body_motion.empty()) {
+    const std::string bname = name + "/bodies";
+    H5Handle b = w.group(bname);
+    for (const auto &[k, motion] : c.body_motion) {
+      const std::string kname = bname + "/" + std::to_string(k);
+      H5Handle kg = w.group(kname);
+      w.dataset(kg.get(), kname, "translation", doubles({motion[0].begin(), motion[0].end()}, {3}));
+      w.dataset(kg.get(), kname, "rotation", doubles({motion[1].begin(), motion[1].end()}, {3}));
+      w.end_group(kg, kname);
+    }
+    w.end_group(b, bname);
+  }
   const std::map<std::string, double> no_real;
   const std::map<std::string, long long> counts{{"iterations", c.iterations}, {"active_vertices", c.active_vertices}};
   const std::map<std::string, std::string> no_text;
@@ -127,6 +139,7 @@ void check_contact(const std::string &path, const std::string &group, const Cont
       fail_output(path, "obstacle name '" + entry.first + "' cannot name the dataset " + group + "/forces/<name>");
     check_finite(path, group + "/forces/" + entry.first, std::vector<Vec3>{entry.second});
   }
+  for (const auto &[k, motion] : c.body_motion) check_finite(path, group + "/bodies/" + std::to_string(k), std::vector<Vec3>{motion[0], motion[1]});
 }
 
 std::vector<XdmfAttribute> contact_attributes(const std::string &group, std::size_t nv)

@@ -78,14 +78,6 @@ UniformBodyForce body_force_of(const ProblemSetup &s, const std::optional<Vec3> 
   return UniformBodyForce(s.material, *s.spec.density * *gravity, vertex_centroid(*s.mesh));
 }
 
-/// Contact does not take a body force yet: refused before any work.
-void refuse_gravity_with_contact(const ProblemSpec &spec)
-{
-  if (!spec.contact.present) return;
-  const bool any = spec.gravity || std::any_of(spec.frames.begin(), spec.frames.end(), [](const FrameSpec &f) { return f.gravity.has_value(); });
-  if (any) throw ProblemError(spec.file + ": gravity: a contact problem does not take gravity yet (static solves and scenes do)");
-}
-
 } // namespace
 
 UniformBodyForce frame_body_force(const ProblemSetup &s, std::size_t frame)
@@ -131,7 +123,6 @@ ProblemSetup setup_problem(ProblemSpec spec, const ProblemOverrides &o)
   s.mesh = std::make_unique<SurfaceMesh>(o.mesh_data ? *o.mesh_data : read_mesh(fault_path("MeshRead", s.spec.mesh_path)));
   validate_and_orient(*s.mesh, s.notices);
   s.disc = std::make_unique<Discretization>(*s.mesh, o.feature_angle_deg);
-  refuse_gravity_with_contact(s.spec);
   s.body_force = body_force_of(s, s.spec.gravity);
   const NodeConditions nc = apply_rules(s.spec.rules, *s.disc, s.spec.file);
   s.selection = homogeneous_selection(selection_of(nc), *s.disc, s.body_force);

@@ -1,6 +1,7 @@
 // A contact: its reference chosen and built, its engine, its frames and fields (see contact_session.hpp).
 #include "hssbem/session/contact_session.hpp"
 
+#include "hssbem/bem/body_force.hpp"
 #include "hssbem/bem/rigid_modes.hpp"
 #include "hssbem/core/fault.hpp"
 #include "hssbem/core/progress.hpp"
@@ -66,9 +67,9 @@ std::vector<NodeConditions> frames_of(const ProblemSetup &s, const NodeCondition
 /// contact may load (contact_loaded_unknowns) and those of every unknown that carries a non-zero
 /// known value, or a pressure, in the base rules or a frame (the free responses' right-hand
 /// sides). Frames not known ahead: every column.
-std::vector<char> kept_columns(std::vector<char> kept, const ContactJob &job)
+std::vector<char> kept_columns(std::vector<char> kept, const ContactJob &job, bool body_force)
 {
-  if (job.frames.empty()) return {};
+  if (job.frames.empty() || body_force) return {}; // a body force's homogeneous values load every traction unknown
   std::vector<const NodeConditions *> all{&job.base};
   for (const NodeConditions &nc : job.frames) all.push_back(&nc);
   for (std::size_t i = 0; 3 * i < kept.size(); ++i)
@@ -200,11 +201,7 @@ void ContactSession::set_up()
     judged.insert(judged.end(), m_job.placements.begin(), m_job.placements.end());
     m_drawn->check_facing(judged);
   }
-  try {
-    check_bodies_held(disc, m_job.base.displacement_prescribed, m_job.obstacles, m_job.settings, m_options.contact);
-  } catch (const ConstraintError &e) {
-    throw ConstraintError(m_problem->where() + e.what());
-  }
+  pin_floating();
   fault_point("ContactSetup");
   if (!m_pre) make_reference();
   m_engine = std::make_unique<ContactEngine>(disc, *m_pre->reference, m_job.obstacles, m_job.settings, m_options.contact, m_pre->columns);
@@ -222,15 +219,46 @@ void ContactSession::adopt(std::shared_ptr<ContactPrecomputation> pre)
   m_pre = std::move(pre);
 }
 
+void ContactSession::pin_floating()
+{
+  if (m_pinned) return;
+  m_pinned = true;
+  const Discretization &disc = m_problem->disc();
+  std::vector<char> loaded(disc.mesh().num_vertices(), 0); // the vertices a load reaches: no pin there
+  std::vector<const NodeConditions *> all{&m_job.base};
+  for (const NodeConditions &nc : m_job.frames) all.push_back(&nc);
+  for (const NodeConditions *nc : all)
+    for (int i = 0; i < disc.num_nodes(); ++i)
+      for (int c = 0; c < 3; ++c)
+        if (!nc->displacement_prescribed[i][c] && (nc->value[i][c] != 0 || (!nc->pressure.empty() && !std::isnan(nc->pressure[i])))) loaded[disc.node(i).vertex] = 1;
+  m_job.settings.pins = floating_pins(disc, m_job.base.displacement_prescribed, m_job.obstacles, m_job.settings, m_options.contact, loaded);
+  pin(m_job.base);
+  for (NodeConditions &nc : m_job.frames) pin(nc);
+}
+
+void ContactSession::pin(NodeConditions &nc) const
+{
+  for (int j : m_job.settings.pins) nc.displacement_prescribed[j / 3][j % 3] = true, nc.value[j / 3][j % 3] = 0;
+}
+
+SystemSelection ContactSession::pinned(SystemSelection values) const
+{
+  for (int j : m_job.settings.pins) values.displacement_known[j / 3][j % 3] = true, values.known[j / 3][j % 3] = 0;
+  return values;
+}
+
 std::vector<char> ContactSession::kept_unknowns() const
 {
-  return kept_columns(contact_loaded_unknowns(m_problem->disc(), m_job.base.unknown_pattern(), m_job.obstacles, m_job.settings, m_options.contact), m_job);
+  const ProblemSetup &s = m_problem->setup();
+  const bool body_force = !s.body_force.zero() || std::any_of(s.spec.frames.begin(), s.spec.frames.end(), [](const FrameSpec &f) { return f.gravity.has_value(); });
+  return kept_columns(contact_loaded_unknowns(m_problem->disc(), m_job.base.unknown_pattern(), m_job.obstacles, m_job.settings, m_options.contact), m_job, body_force);
 }
 
 /// The options that shape the precomputation: the operator's quadrature, the reference's type and
 /// compression, the candidates' reach and depth (not the frames' solver, nor the interior's).
 Fingerprint ContactSession::fingerprint() const
 {
+  const_cast<ContactSession *>(this)->pin_floating(); // the pins are part of the pattern
   OptionValues used = options_used();
   used["bem_mat_type"] = OptionValue::of(*find_option("bem_mat_type"), mat_type());
   for (auto it = used.begin(); it != used.end();)
@@ -239,20 +267,39 @@ Fingerprint ContactSession::fingerprint() const
   return hssbem::fingerprint(*m_problem, m_job.base.unknown_pattern(), dense ? kept_unknowns() : std::vector<char>{}, used, 1);
 }
 
-const ContactFrameReport &ContactSession::solve(const SystemSelection &values, const std::vector<Pose> &poses, long long frame)
+/// With a body force the engine takes the homogeneous problem's values and adds the particular
+/// displacement (docs/body-forces.md): its u is then the whole displacement, its t the
+/// homogeneous traction, which the fields complete as the static path does.
+const ContactFrameReport &ContactSession::solve(const SystemSelection &values, const std::vector<Pose> &poses, long long frame, const UniformBodyForce &force)
 {
   set_up();
-  m_values = values;
+  const Discretization &disc = m_problem->disc();
+  m_force = force;
+  m_values = pinned(values);
   m_poses = poses;
+  ParticularTraces p = force.zero() ? ParticularTraces{} : particular_traces(disc, force);
+  m_engine->set_body_force(force.force_per_volume(), std::move(p.u), std::move(p.t));
   {
     const EventScope event(SCN_Frame);
-    m_report = m_engine->solve(m_values, poses, m_sol);
+    m_report = m_engine->solve(homogeneous_selection(m_values, disc, force), poses, m_sol);
   }
   check_finite(m_sol, frame);
   return m_report;
 }
 
-const ContactFrameReport &ContactSession::step(const SystemSelection &values, const std::vector<Pose> &poses) { return solve(values, poses, -1); }
+NodalSolution ContactSession::homogeneous() const
+{
+  NodalSolution h{m_sol.u, m_sol.t};
+  if (m_force.zero()) return h;
+  const std::vector<Vec3> up = particular_traces(m_problem->disc(), m_force).u;
+  for (std::size_t i = 0; i < h.u.size(); ++i) h.u[i] = h.u[i] - up[i];
+  return h;
+}
+
+const ContactFrameReport &ContactSession::step(const SystemSelection &values, const std::vector<Pose> &poses)
+{
+  return solve(values, poses, -1, m_problem->setup().body_force);
+}
 
 const ContactFrameReport &ContactSession::step(std::size_t i)
 {
@@ -260,7 +307,8 @@ const ContactFrameReport &ContactSession::step(std::size_t i)
     throw std::out_of_range("contact: frame " + std::to_string(i) + " of a job without it");
   fault_point("Frame");
   const SystemSelection values = selection_of(m_job.frames.empty() ? m_job.base : m_job.frames[i]);
-  return solve(values, m_job.placements[i], m_problem->setup().spec.frames.empty() ? -1 : static_cast<long long>(i));
+  const ProblemSetup &s = m_problem->setup();
+  return solve(values, m_job.placements[i], s.spec.frames.empty() ? -1 : static_cast<long long>(i), s.spec.frames.empty() ? s.body_force : frame_body_force(s, i));
 }
 
 FrameData ContactSession::frame_data(unsigned parts) const
@@ -269,7 +317,7 @@ FrameData ContactSession::frame_data(unsigned parts) const
   FrameData f;
   NodeConditions nc;
   nc.displacement_prescribed = m_values.displacement_known;
-  put_fields(surface_fields(s, NodalSolution{m_sol.u, m_sol.t}, s.body_force, vertex_displacement_prescribed(*s.disc, nc), parts), f);
+  put_fields(surface_fields(s, homogeneous(), m_force, vertex_displacement_prescribed(*s.disc, nc), parts), f);
   f.attributes_real = {{"seconds", m_report.seconds}};
   f.attributes_int = {{"iterations", m_report.iterations}, {"active_vertices", m_report.active_vertices}};
   f.contact = contact_data(*m_engine, m_sol, m_report, m_job.settings.bodies);
@@ -293,8 +341,8 @@ ResultData ContactSession::result(int ranks)
   ResultData r = base(ranks);
   NodeConditions nc;
   nc.displacement_prescribed = m_values.displacement_known;
-  const NodalSolution nodal{m_sol.u, m_sol.t};
-  SurfaceFields f = surface_fields(s, nodal, s.body_force, vertex_displacement_prescribed(*s.disc, nc), kResultFields, &m_seconds);
+  const NodalSolution nodal = homogeneous();
+  SurfaceFields f = surface_fields(s, nodal, m_force, vertex_displacement_prescribed(*s.disc, nc), kResultFields, &m_seconds);
   const std::vector<NodeStress> nodes = f.nodes;
   put_fields(std::move(f), r);
   interior_fields(PETSC_COMM_SELF, s, nodal, nodes, m_options.interior, r, m_seconds); // the contact run is one rank's

@@ -173,6 +173,7 @@ ContactData contact_data(const ContactEngine &engine, const ContactSolution &sol
   for (int o = 0; o < engine.num_obstacles(); ++o) c.forces[engine.obstacle_name(o)] = sol.obstacle_force[o];
   if (bodies)
     for (int b = 0; b < engine.bodies().count; ++b) c.forces["body_" + std::to_string(b)] = sol.body_force[b];
+  for (int b : engine.floating_bodies()) c.body_motion[b] = {sol.body_translation[b], sol.body_rotation[b]};
   c.iterations = rep.iterations;
   c.active_vertices = rep.active_vertices;
   return c;

@@ -297,17 +297,3 @@ TEST(Gravity, ABodyImmersedInAFluidOfItsOwnDensityIsHydrostatic)
   EXPECT_LE(inside, 2e-6);
   EXPECT_LE(du, 2e-7);
 }
-
-TEST(Gravity, AContactProblemRefusesItInOneLine)
-{
-  const std::string dir = temp_dir();
-  const std::string file = column_problem(dir, 2, R"(, "gravity": [0, 0, -10], "contact": {"obstacles": [{"name": "table", "plane": {"point": [0, 0, 0], "normal": [0, 0, 1]}}]})");
-  try {
-    setup_problem(file, ProblemOverrides{});
-    ADD_FAILURE() << "a contact problem with gravity was accepted";
-  } catch (const ProblemError &e) {
-    const std::string what = e.what();
-    EXPECT_NE(what.find(": gravity: a contact problem does not take gravity yet"), std::string::npos) << what;
-    EXPECT_EQ(what.find('\n'), std::string::npos);
-  }
-}

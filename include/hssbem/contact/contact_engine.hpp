@@ -58,6 +58,10 @@ struct ContactSettings {
   double friction = 0;          ///< Coulomb coefficient of every pair (an obstacle's own wins); 0: frictionless
   bool bodies = false;          ///< contact between the mesh's bodies too (bodies.hpp)
   std::vector<char> candidate;  ///< per vertex: may touch (empty: every vertex); a vertex with three prescribed displacements never does
+  /// Unknowns (3 · node + component) pinned to zero in the reference pattern to regularise the
+  /// bodies that contact alone holds (floating_pins()): not boundary conditions. The engine adds
+  /// each such body's free rigid motions as unknowns and its balance of forces as equations.
+  std::vector<int> pins;
 };
 
 /// One iteration of a frame, for a monitor.
@@ -108,6 +112,7 @@ struct ContactFrameReport {
   long long products = 0;      ///< friction: products with the Newton matrix (GMRES)
   int corrections = 0;         ///< accurate solves that corrected the answer (approximate columns only)
   double correction = 0;       ///< the last correction's relative change of the unknowns
+  int balances = 0;            ///< floating bodies: solves of the contact until their forces balanced (1: none moved)
   double seconds = 0, detect_seconds = 0, solve_seconds = 0, fields_seconds = 0, correct_seconds = 0;
   bool paired = false;         ///< the bodies were paired again (at their current positions: they moved relative to each other by half the reach)
   double pair_seconds = 0;     ///< of detect_seconds: the bodies' pairing check (and pairing, when `paired`)
@@ -126,15 +131,21 @@ struct ContactSolution {
   std::vector<Vec3> contact_traction;
   std::vector<Vec3> obstacle_force; ///< per obstacle: the force it exerts on the bodies
   std::vector<Vec3> body_force;     ///< per body: the force the other bodies exert on it (zero without "bodies")
+  /// per body that contact alone holds (zero for the others): the rigid part of its displacement u,
+  /// the least-squares fit t + θ × (x − x_c) over its dof nodes weighted by their areas — t the
+  /// mean displacement of its surface (of its area centroid x_c), θ the rotation vector (radians).
+  std::vector<Vec3> body_translation, body_rotation;
 };
 
-/// Every body's rigid motions must be held. Throws ConstraintError (bem/rigid_modes.hpp) naming
-/// the body (its number and lowest vertex) and its free motions when its prescribed
-/// displacements (`known`, per dof node) leave some free: "held only by frictionless contact,
-/// which leaves it free to ..." when the contact candidates at the obstacles' base positions
-/// cannot hold it either, else that bodies held by contact alone are not supported yet.
-void check_bodies_held(const Discretization &disc, const std::vector<std::array<bool, 3>> &known, const std::vector<Obstacle> &obstacles,
-                       const ContactSettings &settings, const ContactOptions &options = {});
+/// The pins of the bodies contact alone holds: per body whose prescribed displacements (`known`,
+/// per dof node) leave rigid motions free, as few displacement components as fix them (at most
+/// six, on every dof node of up to three vertices far apart, the farthest from the obstacles
+/// and the other bodies at their base positions, off the vertices `loaded` marks where it can: a
+/// pin's own load would be lost), as unknowns 3 · node + component, sorted. Empty when every body
+/// is held. They go into the reference pattern with the value zero (ContactSettings::pins): the
+/// reference of a free body is singular (docs/contact.md).
+std::vector<int> floating_pins(const Discretization &disc, const std::vector<std::array<bool, 3>> &known, const std::vector<Obstacle> &obstacles,
+                               const ContactSettings &settings, const ContactOptions &options = {}, const std::vector<char> &loaded = {});
 
 /// Per unknown, 1 where a contact of these obstacles and settings may load it in some frame (and
 /// so ask its column of W): the candidates' unknowns, and the master nodes of the body pairs
@@ -181,10 +192,21 @@ public:
   std::vector<Vec3> haptic_forces(const std::vector<Pose> &poses);
   /// The same with the obstacles translated by `offsets`.
   std::vector<Vec3> haptic_forces(const std::vector<Vec3> &offsets);
+  /// A uniform body force b (force per volume; zero: none) and its particular solution's traces
+  /// per dof node (u_p, t_p: bem/body_force.hpp), from now on: the values the frames give are the
+  /// homogeneous problem's (homogeneous_selection), and u_p is added to every frame's
+  /// displacement, so the gaps, the slips and ContactSolution::u are the whole displacement's and
+  /// λ the whole contact traction; ContactSolution::t stays the homogeneous traction. A floating
+  /// body's balance takes its exact weight b V (V its volume, at its volume centroid) in place of
+  /// the lumped Σ A t_p of the homogeneous loads (which differs by the discretisation: a lateral
+  /// force a frictionless table could not balance).
+  void set_body_force(const Vec3 &b, std::vector<Vec3> u_p, std::vector<Vec3> t_p);
 
   int num_obstacles() const;
   const std::string &obstacle_name(int o) const;
   const Bodies &bodies() const;
+  /// The bodies contact alone holds (those of ContactSettings::pins), in increasing order.
+  std::vector<int> floating_bodies() const;
   double reach() const;
   /// Bytes held by the engine (the columns of W above all; not the reference's own).
   std::size_t memory_bytes() const;

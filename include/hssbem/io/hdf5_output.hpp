@@ -52,6 +52,9 @@ struct ContactData {
   std::vector<double> gap;             ///< /contact/gap (nv): NaN where a vertex faces nothing within reach
   std::vector<std::int8_t> status;     ///< /contact/status (nv int8): 0 free, 1 stick, 2 slip
   std::map<std::string, Vec3> forces;  ///< /contact/forces/<obstacle> and /contact/forces/body_<k> (3 each)
+  /// per body that contact alone holds (its number k): /contact/bodies/<k>/translation (of its
+  /// centroid) and /contact/bodies/<k>/rotation (the rotation vector about it, radians), 3 each
+  std::map<int, std::array<Vec3, 2>> body_motion;
   long long iterations = 0;            ///< attribute of /contact
   long long active_vertices = 0;       ///< attribute of /contact
   bool present() const { return !pressure.empty(); }

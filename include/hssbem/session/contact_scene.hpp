@@ -58,8 +58,9 @@ public:
   using Pattern = std::vector<std::array<bool, 3>>; ///< per vertex: displacement prescribed (else traction)
 
   /// The mesh must be valid, closed and oriented outward (validate_and_orient()); the scene keeps
-  /// a copy. `held` says which displacement components are prescribed (the reference pattern):
-  /// it must hold every body (check_bodies_held() throws ConstraintError otherwise). Throws
+  /// a copy. `held` says which displacement components are prescribed (the reference pattern); a
+  /// body it leaves free is held by contact alone (pinned: floating_pins(); its rigid motion
+  /// solved each step, a step refused when nothing it touches balances it). Throws
   /// std::invalid_argument for bad obstacles or sizes, std::runtime_error when the reference
   /// asked for does not fit the machine.
   ContactScene(const SurfaceMesh &mesh, const Material &material, const Pattern &held, std::vector<Obstacle> obstacles, const ContactSettings &settings = {},

@@ -137,22 +137,32 @@ public:
   OptionValues options_used() const;
 
 private:
-  const ContactFrameReport &solve(const SystemSelection &values, const std::vector<Pose> &poses, long long frame);
+  const ContactFrameReport &solve(const SystemSelection &values, const std::vector<Pose> &poses, long long frame, const UniformBodyForce &force);
+  /// The last step's homogeneous nodal solution (the particular displacement taken off u).
+  NodalSolution homogeneous() const;
   std::unique_ptr<ReferenceFactorization> body_reference(const BemOperator &op, std::vector<char> pattern, std::vector<char> kept, bool pressure, int body);
   void make_reference();
   /// Per unknown, the columns of K₀′ a dense reference keeps (kept_columns(); empty: every one).
   std::vector<char> kept_unknowns() const;
+  /// Once: the pins of the bodies contact alone holds (floating_pins) into the settings, the base
+  /// pattern and the frames (prescribed, zero): the reference's pattern.
+  void pin_floating();
+  void pin(NodeConditions &nc) const;
+  /// A frame's values with the pins (the face gives the values of the base rules' pattern).
+  SystemSelection pinned(SystemSelection values) const;
 
   std::shared_ptr<const SessionProblem> m_problem;
   ContactJob m_job;
   SessionOptions m_options;
   MachineLimits m_limits;
   std::vector<char> m_on_h2;
+  bool m_pinned = false;
   std::shared_ptr<ContactPrecomputation> m_pre;
   std::vector<ContactBodyReport> m_bodies;
   std::unique_ptr<ContactEngine> m_engine;
   std::unique_ptr<ContactObstacles> m_drawn;
   SystemSelection m_values;
+  UniformBodyForce m_force;   ///< the last step's body force
   std::vector<Pose> m_poses; ///< the last step's obstacle poses
   ContactSolution m_sol;
   ContactFrameReport m_report;
