@@ -11,6 +11,12 @@ load are the cold run's to the bit.
   OMP_NUM_THREADS=2 OPENBLAS_NUM_THREADS=2 bench_persistence.py --driver build/bin/hssbem \\
       --mesh organ10k.msh --candidates 0.2 --frames 5 --runs 2 --csv out.csv
 
+With `--base-driver OLD` (another build's driver, e.g. the commit a change started from), each
+run also makes OLD's own file (its cold run, whose frames must be the new driver's to the bit),
+and `--load-rounds K` then loads each driver's file K more times, OLD and new alternating: the
+load compared side by side on the same machine at the same time (rows with `driver` old / new;
+`file_read_s` is one plain read of that file just before).
+
 The scene: the mesh's region "bottom" clamped (scripts/gen_meshes.py --disk-triangles), a
 sphere of radius 0.6 pressed 0.03 into the top and moved across it over the frames; the contact
 candidates are the `--candidates` share of the vertices highest in z. Needs h5py and numpy.
@@ -55,6 +61,27 @@ def problem(mesh, share, frames, out_dir):
     return path, sum(p[2] >= z_cut for p in v), len(v)
 
 
+def pair_problem(mesh, share, frames, out_dir):
+    """Two organs face to face (scripts/gen_meshes.py --disk-pair): contact between the bodies,
+    the lower one's bottom 20 % (in z) clamped, the upper one's top 20 % pushed down 0.03 over
+    the frames; the candidates: the `share` of each body's vertices nearest the other."""
+    v = msh_vertices(mesh)
+    z = sorted(p[2] for p in v)
+    mid = 0.5 * (z[0] + z[-1])  # between the two (mirrored) bodies
+    near = sorted(abs(p[2] - mid) for p in v)[int(share * len(v))]
+    low, high = z[int(0.1 * len(z))], z[int(0.9 * len(z))]  # each body's 20 % farthest from the other
+    box = lambda z0, z1: {"box": [[-10, -10, z0], [10, 10, z1]]}
+    push = lambda f: 0.03 * (f + 1) / frames
+    spec = {"mesh": os.path.abspath(mesh), "material": {"E": 3000, "nu": 0.45},
+            "boundary": [{"where": box(-10, low), "displacement": [0, 0, 0]}, {"where": box(high, 10), "displacement": [0, 0, 0]}],
+            "contact": {"obstacles": [], "bodies": True, "where": box(mid - near, mid + near)},
+            "frames": [{"boundary": [{"where": box(high, 10), "displacement": [0, 0, -push(f)]}]} for f in range(frames)]}
+    path = os.path.join(out_dir, "pair.json")
+    with open(path, "w") as f:
+        json.dump(spec, f, indent=1)
+    return path, sum(abs(p[2] - mid) <= near for p in v), len(v)
+
+
 def run(driver, prob, out, extra):
     """(wall s, CPU s (user + system, every thread), stdout) of one run."""
     cmd = ["/usr/bin/time", "-f", "%e %U %S", driver, "-problem", prob, "-o", out] + extra
@@ -79,16 +106,55 @@ def frames_of(path):
         return fields, float(f["/frames/0"].attrs["seconds"]), {k: float(v) for k, v in f["/timings"].attrs.items()}
 
 
+def touching(frames):
+    """The most vertices with a positive contact pressure in any frame."""
+    return max(int((fr[2] > 0).sum()) for fr in frames)
+
+
 def identical(a, b):
     import numpy as np
     return all(np.array_equal(x, y) and x.tobytes() == y.tobytes() for fa, fb in zip(a, b) for x, y in zip(fa, fb)) and len(a) == len(b)
 
 
+def cold_run(driver, prob, d, tag, saved):
+    """A cold run of `driver` that saves to `saved`: its figures and its frames."""
+    wall, cpu, out = run(driver, prob, os.path.join(d, "cold_%s.h5" % tag), ["-hssbem_save", saved])
+    frames, frame0, _ = frames_of(os.path.join(d, "cold_%s.h5" % tag))
+    return {"unknowns": int(figure(r"(\d+) unknowns", out)), "setup_s": figure(r"contact: set up in ([\d.]+) s", out),
+            "save_s": figure(r"saved the precomputation to .* in ([\d.]+) s", out), "cold_frame0_s": frame0, "cold_wall_s": wall,
+            "cold_cpu_s": cpu, "touching_max": touching(frames), "memory_mb": figure(r"contact: set up in .*; (\d+) MB\)", out), "file_mb": os.path.getsize(saved) / 1e6}, frames
+
+
+def read_once(path):
+    """Seconds of one plain read of the file (from the page cache when it is there)."""
+    t0 = time.time()
+    with open(path, "rb") as f:
+        while f.read(1 << 24):
+            pass
+    return time.time() - t0
+
+
+def load_run(driver, prob, d, saved, cold):
+    """A run of `driver` that loads `saved`: its figures, its frames compared with `cold`'s."""
+    read_s = read_once(saved)
+    wall, cpu, out = run(driver, prob, os.path.join(d, "load.h5"), ["-hssbem_load", saved])
+    frames, frame0, _ = frames_of(os.path.join(d, "load.h5"))
+    return {"load_s": figure(r"loaded the precomputation from .* in ([\d.]+) s", out), "load_frame0_s": frame0, "load_wall_s": wall,
+            "load_cpu_s": cpu, "file_read_s": read_s, "bitwise": identical(cold, frames), "loadavg_1min": os.getloadavg()[0]}
+
+
+def show(row):
+    print(" ".join("%s=%s" % (k, ("%.3f" % v) if isinstance(v, float) else v) for k, v in row.items()), flush=True)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--driver", required=True)
+    ap.add_argument("--base-driver", default=None, help="another build's driver, loaded side by side (its own file)")
+    ap.add_argument("--load-rounds", type=int, default=0, help="after the runs, loads of each driver's file, alternating")
     ap.add_argument("--mesh", required=True)
     ap.add_argument("--candidates", type=float, default=0.2)
+    ap.add_argument("--pair", action="store_true", help="the mesh holds two organs (--disk-pair): press them together")
     ap.add_argument("--frames", type=int, default=5)
     ap.add_argument("--runs", type=int, default=2)
     ap.add_argument("--dir", default=None, help="where the files go (default: a new temporary directory)")
@@ -96,33 +162,34 @@ def main():
     ap.add_argument("--keep", action="store_true", help="keep the last saved file")
     a = ap.parse_args()
     d = a.dir or tempfile.mkdtemp(prefix="bench-persistence-")
-    prob, ncand, nv = problem(a.mesh, a.candidates, a.frames, d)
+    os.makedirs(d, exist_ok=True)
+    prob, ncand, nv = (pair_problem if a.pair else problem)(a.mesh, a.candidates, a.frames, d)
     print("bench_persistence: %s, %d of %d vertices candidates, %d frames; OMP_NUM_THREADS=%s; load %s" %
           (a.mesh, ncand, nv, a.frames, os.environ.get("OMP_NUM_THREADS"), os.getloadavg()), flush=True)
-    rows = []
+    drivers = [("new", a.driver)] + ([("old", a.base_driver)] if a.base_driver else [])
+    rows, files = [], {}
     for i in range(1, a.runs + 1):
-        saved = os.path.join(d, "precomputation_%d.h5" % i)
-        wall_c, cpu_c, out_c = run(a.driver, prob, os.path.join(d, "cold.h5"), ["-hssbem_save", saved])
-        cold, frame0_c, t_c = frames_of(os.path.join(d, "cold.h5"))
-        t0 = time.time()
-        with open(saved, "rb") as f:  # one read of the file (from the page cache when it is there)
-            while f.read(1 << 24):
-                pass
-        read_s = time.time() - t0
-        wall_l, cpu_l, out_l = run(a.driver, prob, os.path.join(d, "load.h5"), ["-hssbem_load", saved])
-        load, frame0_l, t_l = frames_of(os.path.join(d, "load.h5"))
-        row = {"run": i, "unknowns": int(figure(r"(\d+) unknowns", out_c)), "candidates": ncand,
-               "setup_s": figure(r"contact: set up in ([\d.]+) s", out_c), "save_s": figure(r"saved the precomputation to .* in ([\d.]+) s", out_c),
-               "cold_frame0_s": frame0_c, "cold_wall_s": wall_c, "cold_cpu_s": cpu_c,
-               "load_s": figure(r"loaded the precomputation from .* in ([\d.]+) s", out_l), "load_frame0_s": frame0_l, "load_wall_s": wall_l, "load_cpu_s": cpu_l,
-               "file_read_s": read_s, "memory_mb": figure(r"contact: set up in .*; (\d+) MB\)", out_c), "file_mb": os.path.getsize(saved) / 1e6,
-               "bitwise": identical(cold, load), "loadavg_1min": os.getloadavg()[0]}
-        rows.append(row)
-        print(" ".join("%s=%s" % (k, ("%.3f" % v) if isinstance(v, float) else v) for k, v in row.items()), flush=True)
-        if not a.keep or i < a.runs:
-            os.remove(saved)
+        colds = {}
+        for tag, driver in drivers:
+            files[tag] = os.path.join(d, "precomputation_%s_%d.h5" % (tag, i))
+            figures, colds[tag] = cold_run(driver, prob, d, tag, files[tag])
+            row = {"run": i, "driver": tag, "candidates": ncand, **figures, **load_run(driver, prob, d, files[tag], colds["new"])}
+            rows.append(row)
+            show(row)
+        if i < a.runs or not (a.keep or a.load_rounds):
+            for f in files.values():
+                os.remove(f)
+    for k in range(1, a.load_rounds + 1):
+        for tag, driver in (drivers[::-1] if k % 2 else drivers):
+            row = {"run": "load%d" % k, "driver": tag, **load_run(driver, prob, d, files[tag], colds["new"])}
+            rows.append(row)
+            show(row)
+    if a.load_rounds and not a.keep:
+        for f in files.values():
+            os.remove(f)
+    fields = list(dict.fromkeys(k for r in rows for k in r))
     with open(a.csv, "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0]))
+        w = csv.DictWriter(f, fieldnames=fields)
         w.writeheader()
         w.writerows(rows)
 

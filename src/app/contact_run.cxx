@@ -5,7 +5,6 @@
 #include "hssbem/core/progress.hpp"
 #include "hssbem/core/timer.hpp"
 #include "hssbem/io/hdf5_output.hpp"
-#include "hssbem/io/temp_files.hpp"
 #include "hssbem/petsc/log.h"
 #include "hssbem/petsc/system.h"
 #include "hssbem/session/choice.hpp"
@@ -116,8 +115,7 @@ void check_persistence(const DriverOptions &o, const std::string &mat_type, cons
   if ((!o.save.empty() || !o.load.empty()) && mat_type != "dense")
     throw std::invalid_argument(std::string(o.save.empty() ? "-hssbem_load" : "-hssbem_save") + ": only dense reference factorizations are saved and loaded yet; this contact takes the " +
                                 mat_type + " one (-bem_mat_type dense)");
-  if (!o.save.empty() && o.save == output) throw std::invalid_argument("-hssbem_save: '" + o.save + "' is the result file");
-  if (!o.save.empty() && o.save == o.load) throw std::invalid_argument("-hssbem_save: '" + o.save + "' is the file -hssbem_load reads");
+  check_save_load(o, output);
 }
 
 } // namespace
@@ -148,9 +146,7 @@ void run_contact(MPI_Comm comm, const DriverOptions &o, std::shared_ptr<const Se
       };
     ContactSession session(problem, contact_job(s), so, limits);
     session.timings() = std::move(seconds);
-    std::vector<std::string> inputs = s.input_files;
-    if (!o.load.empty()) inputs.push_back(o.load);
-    if (!o.save.empty()) check_not_an_input(o.save, inputs); // before the set-up it would save
+    const std::vector<std::string> inputs = save_load_inputs(o, s);
     const Timer timer;
     if (!o.load.empty()) load_set_up(session, o.load);
     session.set_up();

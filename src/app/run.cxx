@@ -4,6 +4,7 @@
 #include "hssbem/core/fault.hpp"
 #include "hssbem/core/timer.hpp"
 #include "hssbem/io/hdf5_output.hpp"
+#include "hssbem/io/temp_files.hpp"
 #include "hssbem/petsc/log.h"
 #include "hssbem/session/petsc_call.hpp"
 #include "hssbem/session/result_fields.hpp"
@@ -38,6 +39,20 @@ std::shared_ptr<const ProblemSetup> set_up(MPI_Comm comm, const std::string &fil
 unsigned job_bit(JobKind job) { return job == JobKind::Static ? kStatic : job == JobKind::Scene ? kScene : kContact; }
 
 } // namespace
+
+void check_save_load(const DriverOptions &o, const std::string &output)
+{
+  if (!o.save.empty() && o.save == output) throw std::invalid_argument("-hssbem_save: '" + o.save + "' is the result file");
+  if (!o.save.empty() && o.save == o.load) throw std::invalid_argument("-hssbem_save: '" + o.save + "' is the file -hssbem_load reads");
+}
+
+std::vector<std::string> save_load_inputs(const DriverOptions &o, const ProblemSetup &s)
+{
+  std::vector<std::string> inputs = s.input_files;
+  if (!o.load.empty()) inputs.push_back(o.load);
+  if (!o.save.empty()) check_not_an_input(o.save, inputs); // before the set-up it would save
+  return inputs;
+}
 
 void print_summary(MPI_Comm comm, const SessionProblem &p, const std::string &tail)
 {
@@ -84,9 +99,9 @@ void run_problem(MPI_Comm comm, const DriverOptions &o)
   });
   seconds["setup"] += timer.seconds();
   if (o.help) print_help(comm, job_bit(problem->job()));
-  if ((!o.save.empty() || !o.load.empty()) && problem->job() != JobKind::Contact)
-    throw std::invalid_argument(std::string(o.save.empty() ? "-hssbem_load" : "-hssbem_save") + ": a saved precomputation is a contact's (this problem is a " + job_name(problem->job()) +
-                                " job)");
+  if ((!o.save.empty() || !o.load.empty()) && problem->job() == JobKind::Static)
+    throw std::invalid_argument(std::string(o.save.empty() ? "-hssbem_load" : "-hssbem_save") + ": a saved precomputation is a contact's or a scene's (this problem is a " +
+                                job_name(problem->job()) + " job)");
   switch (problem->job()) {
   case JobKind::Static: run_static(comm, o, problem, std::move(seconds)); break;
   case JobKind::Scene: run_scene(comm, o, problem, std::move(seconds)); break;

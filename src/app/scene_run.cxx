@@ -3,6 +3,7 @@
 #include "hssbem/app/run.hpp"
 
 #include "hssbem/core/progress.hpp"
+#include "hssbem/core/timer.hpp"
 #include "hssbem/io/hdf5_output.hpp"
 #include "hssbem/petsc/krylov.h"
 #include "hssbem/petsc/log.h"
@@ -61,6 +62,22 @@ void scene_frames(SceneSession &session, const DriverOptions &o, FrameWriter *wr
   }
 }
 
+/// -hssbem_load: the precomputation of the file instead of the set-up.
+void scene_load(SceneSession &session, const std::string &path)
+{
+  const Timer timer;
+  session.load(path);
+  HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF, "hssbem: scene: loaded the precomputation from %s in %.2f s\n", path.c_str(), timer.seconds()));
+}
+
+/// -hssbem_save: the precomputation after the set-up.
+void scene_save(const SceneSession &session, const std::string &path, const std::vector<std::string> &inputs)
+{
+  const Timer timer;
+  session.save(path, inputs);
+  HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF, "hssbem: scene: saved the precomputation to %s in %.2f s\n", path.c_str(), timer.seconds()));
+}
+
 } // namespace
 
 void run_scene(MPI_Comm comm, const DriverOptions &o, std::shared_ptr<const SessionProblem> problem, std::map<std::string, double> seconds)
@@ -77,11 +94,15 @@ void run_scene(MPI_Comm comm, const DriverOptions &o, std::shared_ptr<const Sess
   check_scene(*problem, ref, o.session, limits); // every rank: the same error everywhere
   const std::size_t nframes = s.spec.frames.size();
   HssbemCallThrow(PetscPrintf(comm, "hssbem: scene: %zu frames on the dense scene engine (rank 0), strategy %s\n", nframes, scene_strategy_name(o.session.scene.strategy)));
+  check_save_load(o, s.output);
   run_collectively(comm, [&] {
     if (rank != 0) return;
     SceneSession session(problem, std::move(ref), o.session, limits, HssbemSceneKrylovCreate());
     session.timings() = std::move(seconds);
-    session.set_up();
+    const std::vector<std::string> inputs = save_load_inputs(o, s);
+    if (!o.load.empty()) scene_load(session, o.load);
+    session.set_up(); // nothing left to do after a load
+    if (!o.save.empty()) scene_save(session, o.save, inputs);
     const SceneReference &r = session.reference();
     HssbemCallThrow(PetscPrintf(PETSC_COMM_SELF, "hssbem: scene: set up in %.2f s (reference pattern: %s; W for %lld of %zu unknowns, those the frames switch or load; %.0f MB)\n",
                                 session.engine().setup_seconds(), r.name.c_str(), r.count(), r.candidates.size(), session.engine().memory_bytes() / 1e6));

@@ -1,8 +1,10 @@
 // The container of a saved precomputation (see saved_file.hpp), written: HDF5 behind a header of
-// our own with the file's length and checksum, the result file's safe way.
+// our own with the file's length and checksum (of all but the Fletcher-32 chunks, which the
+// header lists), the result file's safe way.
 #include "hssbem/io/saved_file.hpp"
 
 #include "file_commit.hpp"
+#include "fletcher32.hpp"
 #include "h5_writer.hpp"
 #include "saved_file_format.hpp"
 
@@ -25,7 +27,8 @@
 namespace hssbem {
 
 using detail::Fd;
-using detail::hash_body;
+using detail::ByteRange;
+using detail::hash_kept;
 using detail::header_text;
 using detail::kHeaderBytes;
 
@@ -37,6 +40,7 @@ struct SavedFileWriter::Impl {
   detail::FileSetCommit files;
   std::optional<detail::H5ErrorSilencer> silence;
   hid_t file = H5I_INVALID_HID;
+  std::vector<std::string> chunked; ///< the arrays stored in Fletcher-32 chunks
 
   Impl(const std::string &p) : path(p), files(p) {}
   ~Impl()
@@ -53,6 +57,8 @@ struct SavedFileWriter::Impl {
     if (status < 0) fail(object, call);
   }
   void array(const std::string &name, const void *data, std::size_t n, hid_t file_type, hid_t mem_type);
+  std::vector<ByteRange> chunk_ranges(int fd) const;
+  std::uint64_t chunk_base(int fd, hid_t set) const;
   void header();
 };
 
@@ -98,6 +104,7 @@ void SavedFileWriter::Impl::array(const std::string &name, const void *data, std
     const hsize_t chunk[1] = {(dims[0] + count - 1) / count};
     check(H5Pset_chunk(dcpl.get(), 1, chunk), object, "H5Pset_chunk");
     check(H5Pset_fletcher32(dcpl.get()), object, "H5Pset_fletcher32");
+    chunked.push_back(name);
   }
   detail::H5Handle set(H5Dcreate2(file, name.c_str(), file_type, space.get(), lcpl.get(), dcpl.get(), H5P_DEFAULT), H5Dclose);
   check(set.get() < 0 ? -1 : 0, object, "H5Dcreate2");
@@ -109,16 +116,86 @@ void SavedFileWriter::doubles(const std::string &name, const double *data, std::
 void SavedFileWriter::ints(const std::string &name, const int *data, std::size_t n) { m->array(name, data, n, H5T_STD_I32LE, H5T_NATIVE_INT); }
 void SavedFileWriter::chars(const std::string &name, const char *data, std::size_t n) { m->array(name, data, n, H5T_STD_I8LE, H5T_NATIVE_SCHAR); }
 
-/// The header into the user block: the length and the hash of what HDF5 wrote after it.
+/// Where HDF5's chunk addresses start in the file: after the user block (HDF5 1.10 reports
+/// addresses relative to it) or at 0. Told by the first chunk of `set`, whose stored Fletcher-32
+/// holds at exactly one of the two.
+std::uint64_t SavedFileWriter::Impl::chunk_base(int fd, hid_t set) const
+{
+  const detail::H5Handle space(H5Dget_space(set), H5Sclose);
+  hsize_t offset = 0, size = 0;
+  haddr_t addr = HADDR_UNDEF;
+  unsigned mask = 0;
+  if (space.get() < 0 || H5Dget_chunk_info(set, space.get(), 0, &offset, &mask, &addr, &size) < 0 || size < 4) fail("a chunked array", "H5Dget_chunk_info");
+  std::vector<unsigned char> chunk(size);
+  for (std::uint64_t base : {static_cast<std::uint64_t>(kHeaderBytes), std::uint64_t{0}}) {
+    if (::pread(fd, chunk.data(), size, static_cast<off_t>(base + addr)) != static_cast<ssize_t>(size)) continue;
+    const unsigned char *c = chunk.data() + size - 4;
+    if (detail::fletcher32(chunk.data(), size - 4) == (c[0] | c[1] << 8 | c[2] << 16 | static_cast<std::uint32_t>(c[3]) << 24)) return base;
+  }
+  detail::fail_output(path, "cannot locate the chunks HDF5 wrote in '" + tmp + "'");
+}
+
+/// The extents of every Fletcher-32 chunk in the file (reopened by HDF5), adjacent ones joined.
+std::vector<ByteRange> SavedFileWriter::Impl::chunk_ranges(int fd) const
+{
+  std::vector<ByteRange> out;
+  if (chunked.empty()) return out;
+  const detail::H5Handle f(H5Fopen(tmp.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
+  check(f.get() < 0 ? -1 : 0, "the file", "H5Fopen");
+  std::optional<std::uint64_t> base;
+  for (const std::string &name : chunked) {
+    const detail::H5Handle set(H5Dopen2(f.get(), name.c_str(), H5P_DEFAULT), H5Dclose), space(set.get() < 0 ? -1 : H5Dget_space(set.get()), H5Sclose);
+    hsize_t count = 0;
+    check(space.get() < 0 ? -1 : H5Dget_num_chunks(set.get(), space.get(), &count), "array '" + name + "'", "H5Dget_num_chunks");
+    if (!base) base = chunk_base(fd, set.get());
+    for (hsize_t k = 0; k < count; ++k) {
+      hsize_t offset = 0, size = 0;
+      haddr_t addr = HADDR_UNDEF;
+      unsigned mask = 0;
+      check(H5Dget_chunk_info(set.get(), space.get(), k, &offset, &mask, &addr, &size), "array '" + name + "'", "H5Dget_chunk_info");
+      out.push_back({*base + addr, size});
+    }
+  }
+  std::sort(out.begin(), out.end(), [](const ByteRange &a, const ByteRange &b) { return a.at < b.at; });
+  std::vector<ByteRange> joined;
+  for (const ByteRange &r : out) {
+    if (!joined.empty() && joined.back().at + joined.back().bytes == r.at) joined.back().bytes += r.bytes;
+    else joined.push_back(r);
+  }
+  return joined;
+}
+
+namespace {
+
+/// The largest of `ranges` whose line fits the header beside `rest` bytes, in file order (the
+/// others are hashed: slower to load, as safe).
+std::vector<ByteRange> fitting(std::vector<ByteRange> ranges, std::size_t rest)
+{
+  std::sort(ranges.begin(), ranges.end(), [](const ByteRange &a, const ByteRange &b) { return a.bytes > b.bytes; });
+  std::vector<ByteRange> kept;
+  for (const ByteRange &r : ranges) {
+    kept.push_back(r);
+    if (rest + detail::unhashed_line(kept).size() + 2 > kHeaderBytes) kept.pop_back();
+  }
+  std::sort(kept.begin(), kept.end(), [](const ByteRange &a, const ByteRange &b) { return a.at < b.at; });
+  return kept;
+}
+
+} // namespace
+
+/// The header into the user block: the length, the ranges HDF5's Fletcher-32 checks, and the
+/// hash of their line and of every other byte after the header.
 void SavedFileWriter::Impl::header()
 {
   const Fd f{::open(tmp.c_str(), O_RDWR | O_NOFOLLOW | O_CLOEXEC)};
   struct stat st {};
   if (f.fd < 0 || ::fstat(f.fd, &st) != 0) detail::fail_output(path, "cannot reopen '" + tmp + "': " + std::strerror(errno));
   const std::uint64_t bytes = static_cast<std::uint64_t>(st.st_size);
+  const std::vector<ByteRange> skip = fitting(chunk_ranges(f.fd), header_text(kind, format, bytes, 0, "").size());
+  const std::string unhashed = detail::unhashed_line(skip);
   std::uint64_t sum = 0;
-  if (!hash_body(f.fd, bytes, sum)) detail::fail_output(path, "cannot read back '" + tmp + "'");
-  std::string h = header_text(kind, format, bytes, sum);
+  if (!hash_kept(f.fd, bytes, skip, unhashed, sum)) detail::fail_output(path, "cannot read back '" + tmp + "'");
+  std::string h = header_text(kind, format, bytes, sum, unhashed);
   h.resize(kHeaderBytes, '\0');
   if (::pwrite(f.fd, h.data(), h.size(), 0) != static_cast<ssize_t>(h.size())) detail::fail_output(path, "cannot write the header of '" + tmp + "': " + std::strerror(errno));
 }

@@ -11,12 +11,11 @@
 #include <string>
 #include <vector>
 
-#include <sys/mman.h>
 #include <unistd.h>
 
 namespace hssbem::detail {
 
-inline constexpr std::size_t kHeaderBytes = 512; // HDF5's smallest user block
+inline constexpr std::size_t kHeaderBytes = 4096; // HDF5's user block: room for the unhashed ranges
 inline constexpr const char *kMagic = "hssbem saved file";
 
 /// A file descriptor closed on every path.
@@ -67,51 +66,56 @@ private:
   std::uint64_t m_bytes = 0;
 };
 
-/// The hash of bytes [kHeaderBytes, end) of the open file fd, read through a buffer; false on a
-/// read error.
-inline bool hash_body_read(int fd, std::uint64_t end, std::uint64_t &out)
+/// A byte range [at, at + bytes) of a file.
+struct ByteRange {
+  std::uint64_t at, bytes;
+};
+
+/// The hash of `prefix`, then of the bytes [kHeaderBytes, end) of the open file fd outside
+/// `skip` (sorted, disjoint, inside that span), read through one buffer: the kept pieces are
+/// joined so that the stripes fall the same way whatever the pieces. False on a read error.
+inline bool hash_kept(int fd, std::uint64_t end, const std::vector<ByteRange> &skip, const std::string &prefix, std::uint64_t &out)
 {
   StreamHash h;
   std::vector<unsigned char> buf(8 << 20);
-  for (std::uint64_t at = kHeaderBytes; at < end;) {
-    const std::size_t want = static_cast<std::size_t>(std::min<std::uint64_t>(buf.size(), end - at));
-    std::size_t have = 0; // a whole buffer (short reads joined): the stripes fall the same way every time
-    while (have < want) {
-      const ssize_t got = ::pread(fd, buf.data() + have, want - have, static_cast<off_t>(at + have));
+  std::size_t fill = std::min(prefix.size(), buf.size());
+  std::memcpy(buf.data(), prefix.data(), fill);
+  std::uint64_t at = kHeaderBytes;
+  for (std::size_t r = 0; r <= skip.size(); ++r) {
+    const std::uint64_t stop = r < skip.size() ? skip[r].at : end;
+    while (at < stop) {
+      const std::size_t want = static_cast<std::size_t>(std::min<std::uint64_t>(buf.size() - fill, stop - at));
+      const ssize_t got = ::pread(fd, buf.data() + fill, want, static_cast<off_t>(at));
       if (got < 0 && errno == EINTR) continue;
       if (got <= 0) return false;
-      have += static_cast<std::size_t>(got);
+      fill += static_cast<std::size_t>(got), at += static_cast<std::uint64_t>(got);
+      if (fill == buf.size()) h.add(buf.data(), fill), fill = 0;
     }
-    h.add(buf.data(), want);
-    at += want;
+    if (r < skip.size()) at = skip[r].at + skip[r].bytes;
   }
+  h.add(buf.data(), fill);
   out = h.value();
   return true;
 }
 
-/// The same, from the file mapped into memory (no copy of its pages: the checksum pass of a
-/// gigabyte file costs the hash alone when the file is in the page cache), in the same stripes;
-/// through a buffer where the file cannot be mapped.
-inline bool hash_body(int fd, std::uint64_t end, std::uint64_t &out)
+/// The header's line of the ranges left out of the checksum (each checked by HDF5's Fletcher-32
+/// as it is read): "unhashed:" then " <at>+<bytes>" per range, in hexadecimal.
+inline std::string unhashed_line(const std::vector<ByteRange> &skip)
 {
-  if (end <= kHeaderBytes) return hash_body_read(fd, end, out);
-  void *map = ::mmap(nullptr, static_cast<std::size_t>(end), PROT_READ, MAP_PRIVATE, fd, 0);
-  if (map == MAP_FAILED) return hash_body_read(fd, end, out);
-  ::madvise(map, static_cast<std::size_t>(end), MADV_SEQUENTIAL);
-  StreamHash h;
-  const unsigned char *p = static_cast<const unsigned char *>(map);
-  for (std::uint64_t at = kHeaderBytes; at < end; at += 8 << 20)
-    h.add(p + at, static_cast<std::size_t>(std::min<std::uint64_t>(8 << 20, end - at)));
-  ::munmap(map, static_cast<std::size_t>(end));
-  out = h.value();
-  return true;
+  std::string line = "unhashed:";
+  char b[40];
+  for (const ByteRange &r : skip) {
+    std::snprintf(b, sizeof b, " %llx+%llx", static_cast<unsigned long long>(r.at), static_cast<unsigned long long>(r.bytes));
+    line += b;
+  }
+  return line;
 }
 
-inline std::string header_text(const std::string &kind, int format, std::uint64_t bytes, std::uint64_t checksum)
+inline std::string header_text(const std::string &kind, int format, std::uint64_t bytes, std::uint64_t checksum, const std::string &unhashed)
 {
   char hex[17];
   std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(checksum));
-  return std::string(kMagic) + "\nkind: " + kind + "\nformat: " + std::to_string(format) + "\nbytes: " + std::to_string(bytes) + "\nchecksum: " + hex + "\n";
+  return std::string(kMagic) + "\nkind: " + kind + "\nformat: " + std::to_string(format) + "\nbytes: " + std::to_string(bytes) + "\nchecksum: " + hex + "\n" + unhashed + "\n";
 }
 
 } // namespace hssbem::detail

@@ -157,12 +157,38 @@ DenseScene::DenseScene(const BemOperator &op, const SystemSelection &reference, 
     factor_reference(op, reference, progress);
     measure_rates();
   }
-  single_copy(op);
+  finish_set_up(op);
   progress.report(0.95);
+  m_setup_seconds = timer.seconds();
+}
+
+DenseScene::DenseScene(const BemOperator &op, Saved saved, const SceneOptions &options, std::unique_ptr<KrylovSolver> krylov)
+    : m_n(3 * op.num_nodes()), m_nodes(op.num_nodes()), m_opt(options), m_krylov(std::move(krylov)), m_cap(nullptr, 3 * op.num_nodes(), options.single_from)
+{
+  const Timer timer;
+  auto require = [](bool ok, const char *what) {
+    if (!ok) throw std::invalid_argument(std::string("DenseScene: the saved set-up does not fit: ") + what);
+  };
+  require(saved.reference && saved.reference->num_unknowns() == m_n, "the reference's unknowns");
+  require(m_opt.candidates.empty() || static_cast<int>(m_opt.candidates.size()) == m_n, "one candidate flag per unknown");
+  require(saved.reference->has_operator() == m_opt.keep_operator, "H and G kept or not as the options say");
+  m_reference = std::move(saved.reference);
+  m_ref = m_reference->pattern();
+  const std::size_t kept = candidate_columns().size();
+  require(saved.W.size() == static_cast<std::size_t>(m_n) * kept, "W's columns are the candidates'");
+  require(saved.Wp.size() == (m_opt.with_pressure ? static_cast<std::size_t>(m_n) * m_nodes : 0), "W_p as the options' pressure says");
+  m_W = std::move(saved.W), m_Wp = std::move(saved.Wp);
+  m_bandwidth = saved.rates[0], m_flops = saved.rates[1], m_lu_flops = saved.rates[2];
+  finish_set_up(op);
+  m_setup_seconds = timer.seconds();
+}
+
+void DenseScene::finish_set_up(const BemOperator &op)
+{
+  single_copy(op);
   m_cap = CapacitanceInverse(std::make_shared<StoredColumns>(m_W.data(), m_n, &m_wcol), m_n, m_opt.single_from);
   m_cap.rebuild({});
   m_cap_pattern = m_ref;
-  m_setup_seconds = timer.seconds();
 }
 
 DenseScene::~DenseScene() = default;
@@ -205,10 +231,7 @@ void DenseScene::factor_reference(const BemOperator &op, const SystemSelection &
   m_reference_seconds = t_reference.seconds();
   progress.report(0.25);
   if (!m_opt.candidates.empty() && static_cast<int>(m_opt.candidates.size()) != N) throw std::invalid_argument("DenseScene: one candidate flag per unknown");
-  std::vector<int> kept;
-  m_wcol.assign(N, -1);
-  for (int j = 0; j < N; ++j)
-    if (m_opt.candidates.empty() || m_opt.candidates[j]) m_wcol[j] = static_cast<int>(kept.size()), kept.push_back(j);
+  const std::vector<int> kept = candidate_columns();
   const Timer t_columns;
   m_W.resize(static_cast<std::size_t>(N) * kept.size());
   m_reference->columns(kept, m_W.data());
@@ -221,6 +244,15 @@ void DenseScene::factor_reference(const BemOperator &op, const SystemSelection &
     m_reference->pressure_columns(nodes, m_Wp.data());
   }
   if (!m_opt.keep_operator) m_reference->drop_operator(); // W and A₀ hold what the Woodbury path needs
+}
+
+std::vector<int> DenseScene::candidate_columns()
+{
+  std::vector<int> kept;
+  m_wcol.assign(m_n, -1);
+  for (int j = 0; j < m_n; ++j)
+    if (m_opt.candidates.empty() || m_opt.candidates[j]) m_wcol[j] = static_cast<int>(kept.size()), kept.push_back(j);
+  return kept;
 }
 
 /// W's single-precision copy for the fields: its rows in cluster order (core/cluster_tree.hpp),

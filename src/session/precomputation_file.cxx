@@ -16,6 +16,7 @@ namespace hssbem {
 namespace {
 
 constexpr const char *kKind = "contact precomputation";
+constexpr const char *kSceneKind = "scene precomputation";
 
 std::string real_text(double v)
 {
@@ -93,7 +94,8 @@ void write_dense(SavedFileWriter &w, const std::string &at, const DenseReference
 {
   const DenseReferenceData &d = ref.data();
   w.chars(at + "/pattern", d.pattern.data(), d.pattern.size());
-  for (const auto &[name, v] : {std::make_pair("lu", &d.lu), std::make_pair("K", &d.K), std::make_pair("H", &d.H), std::make_pair("G", &d.G), std::make_pair("Gn", &d.Gn)})
+  w.doubles(at + "/lu", d.lu.data(), d.lu.size());
+  for (const auto &[name, v] : {std::make_pair("K", &d.K), std::make_pair("H", &d.H), std::make_pair("G", &d.G), std::make_pair("Gn", &d.Gn)})
     w.doubles(at + "/" + name, v->data(), v->size());
   w.ints(at + "/piv", d.piv.data(), d.piv.size());
   w.ints(at + "/kpos", d.kpos.data(), d.kpos.size());
@@ -206,6 +208,36 @@ std::shared_ptr<ContactPrecomputation> load_precomputation(const ContactSession 
   if (pre->reference->pattern() != session.job().base.unknown_pattern()) r.fail("its reference pattern is not this problem's");
   pre->columns = read_columns(r, *pre->reference);
   return pre;
+}
+
+void save_scene_precomputation(const SceneSession &session, const std::string &path, const std::vector<std::string> &inputs)
+{
+  if (!session.is_set_up()) throw std::invalid_argument("cannot save '" + path + "': the scene is not set up");
+  const DenseScene &scene = session.engine();
+  SavedFileWriter w(path, inputs, kSceneKind, kPrecomputationFormat);
+  write_fingerprint(w, session.fingerprint());
+  write_dense(w, "reference", scene.reference());
+  w.doubles("scene/W", scene.columns().data(), scene.columns().size());
+  w.doubles("scene/Wp", scene.pressure_columns().data(), scene.pressure_columns().size());
+  w.doubles("scene/rates", scene.rates().data(), scene.rates().size());
+  w.commit();
+}
+
+DenseScene::Saved load_scene_precomputation(const SceneSession &session, const std::string &path)
+{
+  const SavedFileReader r(path, kSceneKind, kPrecomputationFormat);
+  const std::string why = session.fingerprint().difference(read_fingerprint(r));
+  if (!why.empty()) r.fail(why);
+  DenseScene::Saved s;
+  s.reference = read_dense(r, "reference");
+  if (s.reference->pattern() != session.reference().pattern()) r.fail("its reference pattern is not this problem's");
+  s.W.resize(r.size("scene/W"));
+  r.doubles("scene/W", s.W.data(), s.W.size());
+  s.Wp = r.doubles("scene/Wp");
+  const std::vector<double> rates = r.doubles("scene/rates");
+  if (rates.size() != s.rates.size()) r.fail("its scene's rates are damaged");
+  std::copy(rates.begin(), rates.end(), s.rates.begin());
+  return s;
 }
 
 void ContactSession::save(const std::string &path, const std::vector<std::string> &inputs) const { save_precomputation(*this, path, inputs); }

@@ -27,7 +27,7 @@ SystemSelection node_selection(const Discretization &disc, const Scene::Pattern 
 } // namespace
 
 Scene::Scene(const SurfaceMesh &mesh, const Material &material, const Pattern &reference, const SceneOptions &options, std::unique_ptr<KrylovSolver> krylov,
-             double feature_angle_deg, const std::vector<char> &candidate_vertices)
+             double feature_angle_deg, const std::vector<char> &candidate_vertices, const std::string &load)
 {
   if (reference.size() != mesh.vertices.size()) throw std::invalid_argument("Scene: the reference pattern needs one entry per vertex");
   if (options.with_pressure) throw std::invalid_argument("Scene: pressure loads are not part of the Scene API (give tractions)");
@@ -46,7 +46,8 @@ Scene::Scene(const SurfaceMesh &mesh, const Material &material, const Pattern &r
   MachineLimits limits;
   HssbemCallThrow(HssbemMachineLimits(PETSC_COMM_SELF, &limits));
   m_session = std::make_unique<SceneSession>(m_problem, std::move(ref), so, limits, std::move(krylov));
-  m_session->set_up();
+  if (!load.empty()) m_session->load(load);
+  m_session->set_up(); // nothing left to do after a load
   m_pattern = reference;
   m_values.assign(mesh.vertices.size(), Vec3{0, 0, 0});
   m_area = node_areas(disc);

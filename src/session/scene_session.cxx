@@ -7,6 +7,8 @@
 #include "hssbem/petsc/log.h"
 #include "hssbem/session/choice.hpp"
 #include "hssbem/session/petsc_call.hpp"
+#include "hssbem/session/precomputation_file.hpp"
+#include "hssbem/io/saved_file.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -40,6 +42,13 @@ long long SceneReference::count() const
   return candidates.empty() ? 3LL * static_cast<long long>(selection.displacement_known.size()) : std::count(candidates.begin(), candidates.end(), 1);
 }
 
+std::vector<char> SceneReference::pattern() const
+{
+  std::vector<char> out(3 * selection.displacement_known.size());
+  for (std::size_t i = 0; i < out.size(); ++i) out[i] = selection.displacement_known[i / 3][i % 3];
+  return out;
+}
+
 SceneReference scene_reference(const ProblemSetup &s)
 {
   NodeConditions ref_nc = apply_rules(s.spec.rules, *s.disc, s.spec.file);
@@ -66,17 +75,38 @@ SceneSession::SceneSession(std::shared_ptr<const SessionProblem> problem, SceneR
 
 SceneSession::~SceneSession() = default;
 
+SceneOptions SceneSession::engine_options() const
+{
+  SceneOptions so = m_options.scene;
+  so.with_pressure = m_ref.pressure;
+  so.candidates = m_ref.candidates;
+  return so;
+}
+
 void SceneSession::set_up()
 {
   if (m_scene) return;
   check_scene(*m_problem, m_ref, m_options, m_limits);
-  SceneOptions so = m_options.scene;
-  so.with_pressure = m_ref.pressure;
-  so.candidates = m_ref.candidates;
   const Timer timer;
   fault_point("SceneSetup");
-  m_scene = std::make_unique<DenseScene>(m_problem->op(), m_ref.selection, so, std::move(m_krylov));
+  m_scene = std::make_unique<DenseScene>(m_problem->op(), m_ref.selection, engine_options(), std::move(m_krylov));
   m_seconds["scene_setup"] += timer.seconds();
+}
+
+void SceneSession::save(const std::string &path, const std::vector<std::string> &inputs) const { save_scene_precomputation(*this, path, inputs); }
+
+void SceneSession::load(const std::string &path)
+{
+  if (m_scene) throw std::logic_error("SceneSession::load: the scene is set up already");
+  check_scene(*m_problem, m_ref, m_options, m_limits);
+  const Timer timer;
+  DenseScene::Saved saved = load_scene_precomputation(*this, path);
+  try {
+    m_scene = std::make_unique<DenseScene>(m_problem->op(), std::move(saved), engine_options(), std::move(m_krylov));
+  } catch (const std::invalid_argument &e) {
+    throw SavedFileError("cannot load '" + path + "': " + e.what());
+  }
+  m_seconds["scene_load"] += timer.seconds();
 }
 
 const SceneFrameReport &SceneSession::step(const SystemSelection &frame)
@@ -140,10 +170,7 @@ OptionValues SceneSession::options_used() const { return option_values(m_options
 
 Fingerprint SceneSession::fingerprint() const
 {
-  const std::vector<std::array<bool, 3>> &known = m_ref.selection.displacement_known;
-  std::vector<char> pattern(3 * known.size());
-  for (std::size_t i = 0; i < pattern.size(); ++i) pattern[i] = known[i / 3][i % 3];
-  return hssbem::fingerprint(*m_problem, pattern, m_ref.candidates, options_used(), 1);
+  return hssbem::fingerprint(*m_problem, m_ref.pattern(), m_ref.candidates, options_used(), 1);
 }
 
 } // namespace hssbem

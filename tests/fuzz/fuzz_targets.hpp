@@ -60,7 +60,7 @@ inline void saved_input(const std::string &bytes)
   const std::string path = "/tmp/hssbem_fuzz_saved." + std::to_string(::getpid());
   std::ofstream(path, std::ios::binary | std::ios::trunc).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
   try {
-    const SavedFileReader r(path, "contact precomputation", 1);
+    const SavedFileReader r(path, "contact precomputation", 2);
     (void)r.text("fingerprint_version");
     (void)r.chars("on_h2");
     (void)r.ints("reference/piv");

@@ -108,10 +108,12 @@ def main():
 def saved_seeds(out):
     """Saved precomputations' headers (io/saved_file.hpp): the right kind and format with a
     length and checksum that do not hold, another kind, another format, a damaged field."""
-    def header(kind="contact precomputation", fmt="1", size="512", checksum="0123456789abcdef", tail=b""):
-        text = "hssbem saved file\nkind: %s\nformat: %s\nbytes: %s\nchecksum: %s\n" % (kind, fmt, size, checksum)
-        return text.encode().ljust(512, b"\0") + tail
-    seeds = {"empty_body": header(), "with_body": header(size="600", tail=b"\x89HDF\r\n\x1a\n" + bytes(80)),
+    def header(kind="contact precomputation", fmt="2", size="4096", checksum="0123456789abcdef", tail=b"", unhashed="unhashed:"):
+        text = "hssbem saved file\nkind: %s\nformat: %s\nbytes: %s\nchecksum: %s\n%s\n" % (kind, fmt, size, checksum, unhashed)
+        return text.encode().ljust(4096, b"\0") + tail
+    seeds = {"empty_body": header(), "with_body": header(size="4184", tail=b"\x89HDF\r\n\x1a\n" + bytes(80)),
+             "unhashed_range": header(size="4184", tail=bytes(88), unhashed="unhashed: 1010+10"),
+             "bad_range": header(size="4184", tail=bytes(88), unhashed="unhashed: 1060+ffff"),
              "other_kind": header(kind="scene precomputation"), "other_format": header(fmt="7"),
              "bad_size": header(size="5x2"), "bad_checksum": header(checksum="zz")}
     for name, data in seeds.items():

@@ -8,6 +8,7 @@
 #include "hssbem/io/saved_file.hpp"
 #include "hssbem/session/contact_scene.hpp"
 #include "hssbem/session/precomputation_file.hpp"
+#include "hssbem/session/scene.hpp"
 
 #include <gtest/gtest.h>
 
@@ -274,7 +275,7 @@ TEST(Persistence, AnotherFormatOrKindIsRefused)
     SavedFileWriter w(file.path, {}, "contact precomputation", kPrecomputationFormat + 1);
     w.commit();
   }
-  EXPECT_NE(load_error(Case(), file.path).find("its format is version 2; this hssbem reads version 1"), std::string::npos);
+  EXPECT_NE(load_error(Case(), file.path).find("its format is version 3; this hssbem reads version 2"), std::string::npos);
   {
     SavedFileWriter w(file.path, {}, "scene precomputation", kPrecomputationFormat);
     w.commit();
@@ -312,4 +313,92 @@ TEST(Persistence, AlteredFilesAreRefused)
   }
   EXPECT_EQ(refused, tried);
   EXPECT_GT(tried, 300);
+}
+
+// --- a scene without contact (SceneSession, the library's Scene) ------------------------------
+
+namespace {
+
+/// The shipped cube clamped at its base (z = 0), its top's vertices the candidates; frame f
+/// presses the top's vertices with x ≤ 0.25 (f + 1) down by δ (switched: u prescribed).
+struct SceneCase {
+  SurfaceMesh mesh;
+  Scene::Pattern clamped;
+  std::vector<char> top;
+  SceneOptions options;
+
+  SceneCase()
+  {
+    mesh = read_mesh(mesh_file("cube_l0.msh"));
+    std::vector<std::string> notices;
+    validate_and_orient(mesh, notices);
+    clamped.assign(mesh.vertices.size(), {false, false, false});
+    top.assign(mesh.vertices.size(), 0);
+    for (std::size_t v = 0; v < mesh.vertices.size(); ++v) {
+      if (mesh.vertices[v][2] < 1e-12) clamped[v] = {true, true, true};
+      top[v] = mesh.vertices[v][2] > 1 - 1e-12;
+    }
+    options.strategy = SceneStrategy::Update; // auto's choice follows measured times: one strategy for both runs
+  }
+  std::unique_ptr<Scene> scene(const Material &m = {E, nu}, const std::string &load = {}) const
+  {
+    return std::make_unique<Scene>(mesh, m, clamped, options, nullptr, option_default::bem_feature_angle, top, load);
+  }
+  SceneStrategy frame(Scene &s, int f) const
+  {
+    Scene::Pattern p = clamped;
+    std::vector<Vec3> values(mesh.vertices.size(), Vec3{0, 0, 0});
+    for (std::size_t v = 0; v < mesh.vertices.size(); ++v)
+      if (top[v] && mesh.vertices[v][0] <= 0.25 * (f + 1) + 1e-12) p[v][2] = true, values[v][2] = -delta;
+    s.set_pattern(p);
+    s.set_values(values);
+    return s.solve().strategy;
+  }
+};
+
+std::string scene_load_error(const SceneCase &c, const Material &m, const std::string &file)
+{
+  try {
+    c.scene(m, file);
+  } catch (const SavedFileError &e) {
+    return e.what();
+  }
+  return "";
+}
+
+} // namespace
+
+TEST(Persistence, SceneFramesAfterLoadAreTheColdOnesBitwise)
+{
+  const SceneCase c;
+  auto cold = c.scene();
+  const TempFile file("plain_scene");
+  cold->save(file.path);
+  auto warm = c.scene({E, nu}, file.path);
+  for (int f = 0; f < 3; ++f) {
+    EXPECT_EQ(c.frame(*cold, f), SceneStrategy::Update);
+    c.frame(*warm, f);
+    double most = 0;
+    for (const Vec3 &u : cold->displacement()) most = std::max(most, -u[2]);
+    EXPECT_GT(most, 0.99 * delta) << "frame " << f << " presses the top"; // no test by doing nothing
+    EXPECT_TRUE(same_bits(cold->displacement(), warm->displacement())) << "frame " << f;
+    EXPECT_TRUE(same_bits(cold->traction(), warm->traction())) << "frame " << f;
+  }
+}
+
+TEST(Persistence, SceneMismatchesAreRefused)
+{
+  const SceneCase c;
+  const TempFile file("plain_scene2"), contact("contact_for_scene");
+  c.scene()->save(file.path);
+  EXPECT_NE(scene_load_error(c, {E, 0.31}, file.path).find("the material differs: E 1000, nu 0.3 in the file, E 1000, nu 0.31 in the problem"), std::string::npos);
+  SceneCase fewer = c; // another candidate set
+  for (std::size_t v = 0; v < fewer.top.size(); ++v) fewer.top[v] = fewer.top[v] && fewer.mesh.vertices[v][0] < 0.5;
+  EXPECT_NE(scene_load_error(fewer, {E, nu}, file.path).find("the candidate set differs"), std::string::npos) << scene_load_error(fewer, {E, nu}, file.path);
+  SceneCase held = c; // another reference pattern
+  held.clamped[0] = {!held.clamped[0][0], held.clamped[0][1], held.clamped[0][2]};
+  EXPECT_NE(scene_load_error(held, {E, nu}, file.path).find("the pattern of prescribed components differs"), std::string::npos) << scene_load_error(held, {E, nu}, file.path);
+  save_altered(Case(), contact.path, [](Fingerprint &) {}); // a contact's file is no scene's
+  EXPECT_NE(scene_load_error(c, {E, nu}, contact.path).find("it holds a contact precomputation, not a scene precomputation"), std::string::npos);
+  EXPECT_EQ(scene_load_error(c, {E, nu}, file.path), "");
 }

@@ -15,6 +15,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace hssbem {
 
@@ -32,6 +33,14 @@ void run_problem(MPI_Comm comm, const DriverOptions &o);
 /// The problem's one summary line (collective): its mesh, dof nodes, unknowns and ranks; `tail`
 /// adds what the job says there (a static solve's operator).
 void print_summary(MPI_Comm comm, const SessionProblem &problem, const std::string &tail);
+
+/// -hssbem_save and -hssbem_load's files, checked before the set-up: the file saved is not the
+/// result file (`output`), nor the file loaded. Throws std::invalid_argument.
+void check_save_load(const DriverOptions &o, const std::string &output);
+
+/// The files a saved precomputation may not overwrite: the problem's inputs and the file loaded;
+/// throws OutputError when -hssbem_save names one of them.
+std::vector<std::string> save_load_inputs(const DriverOptions &o, const ProblemSetup &s);
 
 /// A static solve on every rank of comm (StaticSession), the result file written together.
 /// `seconds` holds the set-up's times so far.

@@ -18,6 +18,7 @@
 #pragma once
 
 #include "hssbem/bem/bem_operator.hpp"
+#include "hssbem/core/default_init_allocator.hpp"
 
 #include <cstddef>
 #include <memory>
@@ -81,7 +82,7 @@ struct DenseReferenceData {
   std::vector<double> H, G, Gn;     ///< the operator (keep_operator), column-major; Gn with pressure
   std::vector<double> K;            ///< reference_columns_only: the kept columns of K₀′, column-major
   std::vector<int> kpos;            ///< per unknown: its column in K, or -1 (empty: H and G hold them)
-  std::vector<double> lu;           ///< LU of A₀ (LAPACK getrf), column-major
+  std::vector<double, DefaultInitAllocator<double>> lu; ///< LU of A₀ (LAPACK getrf), column-major; resize() leaves it unset (a load overwrites it)
   std::vector<int> piv;             ///< its pivots (1-based)
   double scale_t = 1;               ///< ‖H‖_F / ‖G‖_F (operator_scale())
 };

@@ -115,6 +115,19 @@ public:
   /// (a pattern that leaves the body free to move: check the constraints first).
   DenseScene(const BemOperator &op, const SystemSelection &reference, const SceneOptions &options = {},
              std::unique_ptr<KrylovSolver> krylov = nullptr);
+  /// What a set-up computed, kept to be saved and loaded (session/precomputation_file.hpp): the
+  /// reference factorization (its LU, and H, G, Gn as the options keep them), W and W_p (rows in
+  /// unknown order) and the cost model's measured rates.
+  struct Saved {
+    std::unique_ptr<DenseReference> reference;
+    std::vector<double> W, Wp;
+    std::array<double, 3> rates{}; ///< bandwidth(), flop_rate() and the LU's flop/s
+  };
+  /// A scene set up before (the parts of a Saved): no assembly, no factorization, no columns;
+  /// the single-precision copy and the capacitance are made as the set-up makes them, so the
+  /// frames are the set-up's to the bit. Throws std::invalid_argument when the parts do not fit
+  /// the operator and the options (sizes, candidates, pressure, the operator kept).
+  DenseScene(const BemOperator &op, Saved saved, const SceneOptions &options = {}, std::unique_ptr<KrylovSolver> krylov = nullptr);
   ~DenseScene();
   DenseScene(const DenseScene &) = delete;
   DenseScene &operator=(const DenseScene &) = delete;
@@ -137,6 +150,11 @@ public:
   double residual(const SystemSelection &sel, const std::vector<double> &x) const;
 
   int num_unknowns() const { return m_n; }
+  /// The set-up's parts, for saving (Saved): the reference, W, W_p, the rates.
+  const DenseReference &reference() const { return *m_reference; }
+  const std::vector<double> &columns() const { return m_W; }
+  const std::vector<double> &pressure_columns() const { return m_Wp; }
+  std::array<double, 3> rates() const { return {m_bandwidth, m_flops, m_lu_flops}; }
   double setup_seconds() const { return m_setup_seconds; }
   /// Of the set-up: the reference (assembly of H and G, LU of A₀) and W's columns.
   double reference_seconds() const { return m_reference_seconds; }
@@ -153,6 +171,10 @@ public:
 
 private:
   void factor_reference(const BemOperator &op, const SystemSelection &reference, const Progress &progress);
+  /// m_wcol from the options' candidates; the unknowns whose columns W stores, in order.
+  std::vector<int> candidate_columns();
+  /// The set-up's end, after the reference and W: the single-precision copy, the capacitance.
+  void finish_set_up(const BemOperator &op);
   void measure_rates();
   std::vector<char> pattern_of(const SystemSelection &sel) const;
   /// y = A₀⁻¹ b_S for the pattern of the switched set J (m_cap) and sel's values.

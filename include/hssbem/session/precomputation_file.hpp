@@ -9,7 +9,7 @@
 /// Values (loads, prescribed displacements, obstacle poses) may differ: that is the point. The
 /// frames after a load are the cold run's to the bit (the same factors, the same columns).
 ///
-/// Layout (format 1): text attributes `fingerprint_*` (the Fingerprint's fields); arrays
+/// Layout (format 2): text attributes `fingerprint_*` (the Fingerprint's fields); arrays
 /// `on_h2` (per body), `reference/*` (one body) or `body<b>/*` (several: CompositeReference),
 /// each a DenseReferenceData (`pattern`, `lu`, `piv`, `K`, `kpos`, `H`, `G`, `Gn`, `scale_t`),
 /// and `columns/order` with `columns/<k>/js`, `columns/<k>/values` for the k-th block of W's
@@ -17,6 +17,7 @@
 #pragma once
 
 #include "hssbem/session/contact_session.hpp"
+#include "hssbem/session/scene_session.hpp"
 
 #include <memory>
 #include <string>
@@ -26,7 +27,7 @@ namespace hssbem {
 
 /// The format version the files are written in and the only one read (a change of layout
 /// increments it; docs/persistence.md).
-inline constexpr int kPrecomputationFormat = 1;
+inline constexpr int kPrecomputationFormat = 2;
 
 /// Saves `session`'s precomputation (after set_up(), or after frames: the columns they added are
 /// kept too) to `path`, which may not be one of `inputs`. Throws std::invalid_argument before
@@ -37,5 +38,15 @@ void save_precomputation(const ContactSession &session, const std::string &path,
 /// SavedFileError ("cannot load '<path>': ...") for a file that is not one, is damaged, or was
 /// made for another problem (the first difference named: Fingerprint::difference()).
 std::shared_ptr<ContactPrecomputation> load_precomputation(const ContactSession &session, const std::string &path);
+
+/// A scene's precomputation (kind "scene precomputation", the same format): the fingerprint
+/// (SceneSession::fingerprint()), `reference/*` (the DenseReferenceData of the reference pattern:
+/// its LU, and H, G, Gn as the scene keeps them), `scene/W` (W's candidate columns, rows in
+/// unknown order), `scene/Wp` (W_p, with pressure loads) and `scene/rates` (the cost model's
+/// measured rates, so that `auto` chooses as the scene that saved them). Throws as the contact's.
+void save_scene_precomputation(const SceneSession &session, const std::string &path, const std::vector<std::string> &inputs = {});
+/// The parts of the scene precomputation saved in `path` for `session`'s problem, for
+/// DenseScene's loading constructor (SceneSession::load()).
+DenseScene::Saved load_scene_precomputation(const SceneSession &session, const std::string &path);
 
 } // namespace hssbem

@@ -5,6 +5,7 @@
 /// is in mesh vertex order; the dof nodes of a sharp vertex (double nodes) share its conditions.
 ///
 ///   hssbem::Scene scene(mesh, hssbem::Material::from_young(3000, 0.49), clamped);
+///   scene.save("organ.pre");                     // the next start: Scene(..., "organ.pre") loads it
 ///   for (;;) {                                   // each frame of the simulation
 ///     scene.set_pattern(prescribed);             // per vertex and component: u prescribed?
 ///     scene.set_values(values);                  // u where prescribed, t elsewhere
@@ -26,6 +27,7 @@
 
 #include <array>
 #include <memory>
+#include <string>
 #include <vector>
 
 namespace hssbem {
@@ -42,11 +44,18 @@ public:
   /// them (a contact region: set-up time and memory in proportion), and a frame beyond them is
   /// refused (std::invalid_argument). options.candidates (per unknown) must be left empty. A
   /// scene that does not fit the machine's memory is refused before anything is allocated.
+  /// `load` (a file save() wrote for a scene of the same mesh, material, reference, candidates
+  /// and options): its precomputation instead of the set-up (SceneSession::load(); a file made
+  /// for another scene is refused with SavedFileError naming the difference).
   Scene(const SurfaceMesh &mesh, const Material &material, const Pattern &reference, const SceneOptions &options = {},
-        std::unique_ptr<KrylovSolver> krylov = nullptr, double feature_angle_deg = option_default::bem_feature_angle, const std::vector<char> &candidate_vertices = {});
+        std::unique_ptr<KrylovSolver> krylov = nullptr, double feature_angle_deg = option_default::bem_feature_angle, const std::vector<char> &candidate_vertices = {},
+        const std::string &load = {});
   ~Scene();
   Scene(const Scene &) = delete; // the discretization points into the scene's copy of the mesh
   Scene &operator=(const Scene &) = delete;
+
+  /// The precomputation saved to `path` (docs/persistence.md), to be given as `load` next time.
+  void save(const std::string &path) const { m_session->save(path); }
 
   /// The pattern of the next frames (one entry per vertex). Throws std::invalid_argument on a
   /// size mismatch.

@@ -30,6 +30,7 @@ struct SceneReference {
   std::vector<char> candidates;
   bool pressure = false;        ///< some frame has pressure loads (W_p = A₀⁻¹ Gn)
   long long count() const;      ///< the candidates (every unknown when none are named)
+  std::vector<char> pattern() const; ///< per unknown (3 · node + component), 1 where the selection prescribes u
 };
 
 /// The reference of a problem file's scene: the base rules where they hold the body, else
@@ -54,6 +55,15 @@ public:
 
   /// The precomputation: the memory check, then the reference LU and W's candidate columns.
   void set_up();
+  /// Whether set_up() or load() made the precomputation.
+  bool is_set_up() const { return m_scene != nullptr; }
+  /// The precomputation saved to `path` (not one of `inputs`; session/precomputation_file.hpp),
+  /// after set_up(). Throws std::invalid_argument before it, OutputError when it cannot be written.
+  void save(const std::string &path, const std::vector<std::string> &inputs = {}) const;
+  /// Instead of set_up(): the precomputation saved in `path` for this problem (the frames are
+  /// those of the set-up that saved it, to the bit). Throws SavedFileError for a file that is not
+  /// one, is damaged or was made for another problem (naming the first difference).
+  void load(const std::string &path);
   /// Solves a frame (the problem's dof nodes; its pattern may switch the candidates only), under
   /// the problem's body force (ProblemSetup::body_force); solution() then holds it. set_up()
   /// first when not done.
@@ -91,6 +101,8 @@ private:
   MachineLimits m_limits;
   std::unique_ptr<KrylovSolver> m_krylov;
   std::unique_ptr<DenseScene> m_scene;
+  /// The engine's options: the session's, with the reference's pressure and candidates.
+  SceneOptions engine_options() const;
   /// The frame's homogeneous system solved (the boundary data less the body force's traces).
   const SceneFrameReport &solve_homogeneous(const SystemSelection &homogeneous);
 
