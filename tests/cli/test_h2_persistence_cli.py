@@ -77,7 +77,7 @@ class H2PersistenceTests(CliTestCase):
     def test_each_difference_is_refused(self):
         self.saved()
         load = ("-hssbem_load", SAVED)
-        self.organ("mesh.json", mesh="sphere_l1.msh")
+        self.organ("mesh.json", mesh="disk_organ_4k.msh")
         self.refused(r"cannot load 'organ\.pre': the mesh differs: \d+ vertices and \d+ triangles in the file, \d+ vertices and \d+ triangles in the problem",
                      "mesh.json", *load)
         self.organ("material.json", E=2000.0)
