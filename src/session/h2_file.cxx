@@ -68,16 +68,22 @@ void save_h2_precomputation(MPI_Comm comm, const std::string &path, const std::v
   const int rank = comm_rank(comm);
   const std::string mine = h2_part_path(path, rank);
   run_collectively(comm, [&] {
-    PackedArrays matrix, factors;
-    PackWriter wm(matrix), wf(factors);
-    sys.matrix().pack(wm);
-    F.pack(wf);
     SavedFileWriter w(mine, inputs, kKind, kH2PrecomputationFormat);
     write_fingerprint(w, f);
     w.text("rank", std::to_string(rank));
     w.ints("partition", node_part.data(), node_part.size());
-    write_stream(w, "matrix", matrix);
-    write_stream(w, "factors", factors);
+    { // one packed copy at a time beside the precomputation: the matrix's, then the factors'
+      PackedArrays matrix;
+      PackWriter wm(matrix);
+      sys.matrix().pack(wm);
+      write_stream(w, "matrix", matrix);
+    }
+    {
+      PackedArrays factors;
+      PackWriter wf(factors);
+      F.pack(wf);
+      write_stream(w, "factors", factors);
+    }
     w.commit();
   });
 }
