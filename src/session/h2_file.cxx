@@ -105,7 +105,7 @@ std::shared_ptr<LoadedH2Part> load_h2_precomputation(MPI_Comm comm, const std::s
   return part;
 }
 
-std::shared_ptr<const H2DistributedSystem> unpack_h2_system(const LoadedH2Part &part, const BemOperator &op, const H2Options &options, const std::vector<int> &node_part,
+std::shared_ptr<const H2DistributedSystem> unpack_h2_system(LoadedH2Part &part, const BemOperator &op, const H2Options &options, const std::vector<int> &node_part,
                                                             const RankComm &comm)
 {
   std::optional<H2Matrix> K;
@@ -120,6 +120,7 @@ std::shared_ptr<const H2DistributedSystem> unpack_h2_system(const LoadedH2Part &
       PackReader r(part.matrix);
       K.emplace(H2Matrix::unpack(std::move(tree), std::move(owner), comm.rank(), r));
       if (!r.done()) throw std::invalid_argument("damaged: the matrix is followed by more");
+      part.matrix = PackedArrays(); // unpacked: its copy goes
     } catch (const std::invalid_argument &e) {
       throw std::invalid_argument("cannot load '" + part.path + "': " + e.what());
     }
@@ -127,14 +128,17 @@ std::shared_ptr<const H2DistributedSystem> unpack_h2_system(const LoadedH2Part &
   return make_shared_collectively<H2DistributedSystem>(comm, std::move(*K), comm);
 }
 
-std::unique_ptr<H2Factorization> unpack_h2_factorization(const LoadedH2Part &part, const H2DistributedSystem &sys)
+std::unique_ptr<H2Factorization> unpack_h2_factorization(LoadedH2Part &part, const H2DistributedSystem &sys)
 {
   PackReader r(part.factors);
+  std::unique_ptr<H2Factorization> F;
   try {
-    return make_unique_collectively<H2Factorization>(sys.product().comm(), sys.matrix(), sys.product().comm(), sys.first_point(), sys.num_points(), r);
+    F = make_unique_collectively<H2Factorization>(sys.product().comm(), sys.matrix(), sys.product().comm(), sys.first_point(), sys.num_points(), r);
   } catch (const std::invalid_argument &e) {
     throw std::invalid_argument("cannot load '" + part.path + "': " + e.what());
   }
+  part.factors = PackedArrays(); // unpacked: its copy goes
+  return F;
 }
 
 } // namespace hssbem

@@ -117,7 +117,7 @@ void StaticSession::assemble()
 
 void StaticSession::use_loaded(HssbemSystemOptions &so)
 {
-  const std::shared_ptr<const LoadedH2Part> part = m_loaded;
+  const std::shared_ptr<LoadedH2Part> part = m_loaded; // its streams are freed as they are unpacked
   const BemOperator &op = m_problem->op();
   const H2Options h2 = m_options.h2;
   so.h2_source = [part, &op, h2](const std::vector<int> &node_part, const RankComm &comm) { return unpack_h2_system(*part, op, h2, node_part, comm); };

@@ -59,12 +59,14 @@ std::shared_ptr<LoadedH2Part> load_h2_precomputation(MPI_Comm comm, const std::s
 /// The H² system of a loaded part on the layout's partition `node_part` (the same as the file's,
 /// else refused: "the partition differs") and ranks (collective): the tree is built again from
 /// op's collocation points as the compression builds it (leaf size `options.leaf_size`), the rest
-/// unpacked. Throws std::invalid_argument ("cannot load '<path>': ...") on every rank.
-std::shared_ptr<const H2DistributedSystem> unpack_h2_system(const LoadedH2Part &part, const BemOperator &op, const H2Options &options, const std::vector<int> &node_part,
+/// unpacked; the part's matrix streams are freed then. Throws std::invalid_argument ("cannot
+/// load '<path>': ...") on every rank.
+std::shared_ptr<const H2DistributedSystem> unpack_h2_system(LoadedH2Part &part, const BemOperator &op, const H2Options &options, const std::vector<int> &node_part,
                                                             const RankComm &comm);
 
-/// PC h2's factorization of a loaded part, on `sys` (unpack_h2_system's). Collective; throws
-/// std::invalid_argument ("cannot load '<path>': ...") on every rank.
-std::unique_ptr<H2Factorization> unpack_h2_factorization(const LoadedH2Part &part, const H2DistributedSystem &sys);
+/// PC h2's factorization of a loaded part, on `sys` (unpack_h2_system's); the part's factor
+/// streams are freed then. Collective; throws std::invalid_argument ("cannot load '<path>':
+/// ...") on every rank.
+std::unique_ptr<H2Factorization> unpack_h2_factorization(LoadedH2Part &part, const H2DistributedSystem &sys);
 
 } // namespace hssbem
