@@ -35,6 +35,33 @@ std::shared_ptr<const ProblemSetup> set_up(MPI_Comm comm, const std::string &fil
   return s;
 }
 
+/// -hssbem_save and -hssbem_load of a static solve: neither over the result file, nor the same file.
+void check_static_persistence(const DriverOptions &o, const std::string &output)
+{
+  if (!o.save.empty() && o.save == output) throw std::invalid_argument("-hssbem_save: '" + o.save + "' is the result file");
+  if (!o.save.empty() && o.save == o.load) throw std::invalid_argument("-hssbem_save: '" + o.save + "' is the file -hssbem_load reads");
+}
+
+/// -hssbem_load: the H² operator and PC h2's factors of the file instead of the compression and
+/// the factorization (read and checked here; unpacked by the assembly and the PC's set-up).
+void load_static(MPI_Comm comm, StaticSession &session, const std::string &path)
+{
+  const Timer timer;
+  session.load(path);
+  session.assemble();
+  HssbemCallThrow(PetscPrintf(comm, "hssbem: static: loaded the H2 operator from %s in %.2f s\n", path.c_str(), timer.seconds()));
+}
+
+/// -hssbem_save: after the solve (its factors are PC h2's set-up), every rank its part.
+void save_static(MPI_Comm comm, const StaticSession &session, const std::string &path, const std::string &loaded)
+{
+  const Timer timer;
+  std::vector<std::string> inputs = session.problem().setup().input_files;
+  if (!loaded.empty()) inputs.push_back(loaded);
+  session.save(path, inputs);
+  HssbemCallThrow(PetscPrintf(comm, "hssbem: static: saved the precomputation to %s in %.2f s\n", path.c_str(), timer.seconds()));
+}
+
 /// The OptionJob bit of a job.
 unsigned job_bit(JobKind job) { return job == JobKind::Static ? kStatic : job == JobKind::Scene ? kScene : kContact; }
 
@@ -71,9 +98,12 @@ void run_static(MPI_Comm comm, const DriverOptions &o, std::shared_ptr<const Ses
   fault_point("Driver"); /* tests: an error no guard makes collective (the last resort of app/main.hpp) */
   session.create_solver();
   check_unused_options(comm, true);
+  check_static_persistence(o, problem->setup().output);
+  if (!o.load.empty()) load_static(comm, session, o.load);
   const HssbemSolveInfo &info = session.solve();
   HssbemCallThrow(PetscPrintf(comm, "hssbem: solved with %s/%s%s%s: %" PetscInt_FMT " iterations, relative residual %.3e\n", info.ksp_type.c_str(), info.pc_type.c_str(),
                               info.solver_type.empty() ? "" : "/", info.solver_type.c_str(), info.iterations, (double)info.residual));
+  if (!o.save.empty()) save_static(comm, session, o.save, o.load);
   check_unused_options(comm, false);
   const ResultData r = session.result();
   const std::string &output = problem->setup().output;
@@ -99,9 +129,6 @@ void run_problem(MPI_Comm comm, const DriverOptions &o)
   });
   seconds["setup"] += timer.seconds();
   if (o.help) print_help(comm, job_bit(problem->job()));
-  if ((!o.save.empty() || !o.load.empty()) && problem->job() == JobKind::Static)
-    throw std::invalid_argument(std::string(o.save.empty() ? "-hssbem_load" : "-hssbem_save") + ": a saved precomputation is a contact's or a scene's (this problem is a " +
-                                job_name(problem->job()) + " job)");
   switch (problem->job()) {
   case JobKind::Static: run_static(comm, o, problem, std::move(seconds)); break;
   case JobKind::Scene: run_scene(comm, o, problem, std::move(seconds)); break;

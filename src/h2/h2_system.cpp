@@ -37,6 +37,12 @@ H2DistributedSystem::H2DistributedSystem(const BemOperator &op, const H2Options 
   m_product = make_unique_collectively<H2DistributedProduct>(comm, *m_K, comm);
 }
 
+H2DistributedSystem::H2DistributedSystem(H2Matrix K, const RankComm &comm)
+{
+  collectively(comm, [&] { m_K = std::make_unique<H2Matrix>(std::move(K)); });
+  m_product = make_unique_collectively<H2DistributedProduct>(comm, *m_K, comm);
+}
+
 std::vector<double> H2DistributedSystem::rhs(const SystemSelection &sel) const
 {
   const int n = num_points();

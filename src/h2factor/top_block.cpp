@@ -195,4 +195,46 @@ void SpreadTop::solve(double *x) const
   comm.sum(x, n);
 }
 
+// ---------------------------------------------------------------------------------------------
+// The stored form (persistence).
+
+void TopBlock::pack(PackWriter &w) const
+{
+  w.put(m_n), w.put(m_mixed ? 1 : 0), w.put(m_norm);
+  w.put(m_A), w.put(m_lu), w.put(m_piv);
+}
+
+void TopBlock::unpack(PackReader &r)
+{
+  m_n = r.get_int(0, INT32_MAX, "top size");
+  m_mixed = r.get_int(0, 1, "top kind") == 1;
+  m_norm = r.get_double();
+  r.get(m_A), r.get(m_lu), r.get(m_piv);
+  const std::size_t n = static_cast<std::size_t>(m_n);
+  if (m_A.m != m_n || m_A.n != m_n || m_A.a.size() != n * n || m_piv.size() != n || m_lu.size() != (m_mixed ? n * n : 0))
+    throw std::invalid_argument("damaged: the top does not fit its size");
+  for (int p : m_piv)
+    if (p < 1 || p > m_n) throw std::invalid_argument("damaged: a pivot of the top out of range");
+}
+
+void SpreadTop::pack(PackWriter &w) const
+{
+  w.put(m_n), w.put(m_ranks), w.put(m_rank), w.put(m_trial);
+  w.put(m_lu), w.put(m_piv);
+}
+
+void SpreadTop::unpack(const RankComm &comm, PackReader &r)
+{
+  m_comm = &comm;
+  m_n = r.get_int(0, INT32_MAX, "top size");
+  m_ranks = r.get_int(), m_rank = r.get_int();
+  m_trial = r.get_double();
+  r.get(m_lu), r.get(m_piv);
+  if (m_ranks != comm.size() || m_rank != comm.rank()) throw std::invalid_argument("damaged: the top is another rank's share");
+  if (m_lu.size() != static_cast<std::size_t>(m_n) * spread_columns(m_n, kBlock, m_rank, m_ranks) || m_piv.size() != static_cast<std::size_t>(m_n))
+    throw std::invalid_argument("damaged: the top does not fit its size");
+  for (int p : m_piv)
+    if (p < 0 || p > m_n) throw std::invalid_argument("damaged: a pivot of the top out of range");
+}
+
 } // namespace hssbem::h2f

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "hssbem/core/dense_matrix.hpp"
+#include "hssbem/core/packed.hpp"
 #include "hssbem/core/rank_comm.hpp"
 
 #include <cstddef>
@@ -30,6 +31,9 @@ public:
   bool factor(DenseMatrix A, int mixed_from);
   void solve(double *x) const override;
   bool mixed() const { return m_mixed; }
+  /// The factored top in a stored form and back (persistence; unpack throws "damaged: ...").
+  void pack(PackWriter &w) const;
+  void unpack(PackReader &r);
   std::size_t bytes() const override { return m_A.bytes() + m_lu.size() * sizeof(float) + m_piv.size() * sizeof(int); }
 
 private:
@@ -64,6 +68,10 @@ public:
   void solve(double *x) const override;
   std::size_t bytes() const override { return m_lu.size() * sizeof(float) + m_piv.size() * sizeof(int); }
   double trial_error() const override { return m_trial; }
+  /// This rank's share of the factored top in a stored form, and back on `comm` (of the same
+  /// size and rank as the one it was factored on; unpack throws "damaged: ...").
+  void pack(PackWriter &w) const;
+  void unpack(const RankComm &comm, PackReader &r);
 
 private:
   /// Column c's position among this rank's columns, or -1 when another rank holds it.

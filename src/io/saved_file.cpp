@@ -114,6 +114,7 @@ void SavedFileWriter::Impl::array(const std::string &name, const void *data, std
 
 void SavedFileWriter::doubles(const std::string &name, const double *data, std::size_t n) { m->array(name, data, n, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE); }
 void SavedFileWriter::ints(const std::string &name, const int *data, std::size_t n) { m->array(name, data, n, H5T_STD_I32LE, H5T_NATIVE_INT); }
+void SavedFileWriter::floats(const std::string &name, const float *data, std::size_t n) { m->array(name, data, n, H5T_IEEE_F32LE, H5T_NATIVE_FLOAT); }
 void SavedFileWriter::chars(const std::string &name, const char *data, std::size_t n) { m->array(name, data, n, H5T_STD_I8LE, H5T_NATIVE_SCHAR); }
 
 /// Where HDF5's chunk addresses start in the file: after the user block (HDF5 1.10 reports

@@ -242,6 +242,7 @@ void SavedFileReader::doubles(const std::string &name, double *out, std::size_t 
 
 std::vector<double> SavedFileReader::doubles(const std::string &name) const { return read_array<double>(*this, m->file, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE); }
 std::vector<int> SavedFileReader::ints(const std::string &name) const { return read_array<int>(*this, m->file, name, H5T_STD_I32LE, H5T_NATIVE_INT); }
+std::vector<float> SavedFileReader::floats(const std::string &name) const { return read_array<float>(*this, m->file, name, H5T_IEEE_F32LE, H5T_NATIVE_FLOAT); }
 std::vector<char> SavedFileReader::chars(const std::string &name) const { return read_array<char>(*this, m->file, name, H5T_STD_I8LE, H5T_NATIVE_SCHAR); }
 
 } // namespace hssbem

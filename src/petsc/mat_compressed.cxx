@@ -160,7 +160,8 @@ PetscErrorCode HssbemMatCreateCompressed_Private(MPI_Comm comm, HssbemSystemCont
   const HssbemLayout &L = *sys->layout;
   guard.Run([&] {
     hssbem::collectively(*L.comm, [] { hssbem::fault_point("Compression"); }); /* as in MatMult */
-    if (h2) sys->h2 = hssbem::make_shared_collectively<hssbem::H2DistributedSystem>(*L.comm, op, sys->h2_options, L.node_part, *L.comm);
+    if (h2 && sys->h2_source) sys->h2 = sys->h2_source(L.node_part, *L.comm); /* collective */
+    else if (h2) sys->h2 = hssbem::make_shared_collectively<hssbem::H2DistributedSystem>(*L.comm, op, sys->h2_options, L.node_part, *L.comm);
     else sys->hss = hssbem::make_shared_collectively<hssbem::HssDistributedSystem>(*L.comm, op, sys->hss_options, L.node_part, *L.comm);
     b0                 = sys->distributed()->rhs(sys->sel);
     sys->system_of_dof = HssbemSystemRows(sys->distributed()->tree());

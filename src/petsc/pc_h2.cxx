@@ -29,6 +29,8 @@ struct PC_H2 : PC_Compressed {
   std::shared_ptr<const hssbem::H2DistributedSystem> dsys; /* the matrix factored (every rank its part) */
   std::unique_ptr<hssbem::H2FactorCache>              cache;
   std::unique_ptr<hssbem::H2Factorization>            factors;
+  /* HssbemPCH2SetFactorSource(): the next set-up's factorization, loaded (empty: factor) */
+  std::function<std::unique_ptr<hssbem::H2Factorization>(const hssbem::H2DistributedSystem &)> factor_source;
 
   PC_H2() : PC_Compressed("PC h2") {}
   const hssbem::DistributedBemSystem &Factor(const HssbemSystemContext &p, const HssbemLayout &L) override;
@@ -74,10 +76,20 @@ const hssbem::DistributedBemSystem &PC_H2::Factor(const HssbemSystemContext &p, 
   factors.reset();
   inverse_error = -1;
   ChooseMatrix_Private(this, p, L);
+  hssbem::Timer timer;
+  if (factor_source) { /* a saved factorization of the matrix's compression, loaded */
+    const auto load = std::move(factor_source);
+    factor_source   = nullptr;
+    hssbem::collectively(*L.comm, [&] {
+      if (source != Source::Matrix) throw std::invalid_argument("a saved PC h2 factorization is of the matrix's own H2 compression; this PC compresses its own (-pc_h2_rel_tol below -mat_h2_rel_tol)");
+    });
+    factors        = load(*dsys);
+    seconds_factor = timer.seconds();
+    return *dsys;
+  }
   hssbem::collectively(*L.comm, [&] {
     if (!cache) cache = std::make_unique<hssbem::H2FactorCache>(dsys->product());
   });
-  hssbem::Timer timer;
   try {
     factors = hssbem::make_unique_collectively<hssbem::H2Factorization>(*L.comm, *cache, p.sel, options, p.modes.empty() ? nullptr : &p.modes);
   } catch (const hssbem::H2Breakdown &e) { /* thrown on every rank */
@@ -410,5 +422,41 @@ PetscErrorCode HssbemPCH2GetFactorOptions(PC pc, hssbem::H2FactorOptions *o, Pet
     *o     = h2.options;
     *is_h2 = PETSC_TRUE;
   }));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/*@C
+  HssbemPCH2GetFactorization - The factorization a PC h2 holds after its set-up, and whether it is
+  of the matrix's own H² compression (what a saved precomputation keeps); NULL before the set-up,
+  after a breakdown, or when pc is not a PC h2.
+
+  Not Collective
+
+  Level: developer
+@*/
+PetscErrorCode HssbemPCH2GetFactorization(PC pc, const hssbem::H2Factorization **F, PetscBool *of_matrix)
+{
+  PetscFunctionBegin;
+  *F         = nullptr;
+  *of_matrix = PETSC_FALSE;
+  PetscCall(PCCompressedSet<PC_H2>(pc, PCH2, [&](PC_H2 &h2) {
+    *F         = h2.factors.get();
+    *of_matrix = h2.factors && h2.source == Source::Matrix ? PETSC_TRUE : PETSC_FALSE;
+  }));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/*@C
+  HssbemPCH2SetFactorSource - At the next set-up, take the factorization `load` returns for the
+  matrix's own H² compression instead of factoring it (a saved precomputation, loaded); once.
+
+  Logically Collective
+
+  Level: developer
+@*/
+PetscErrorCode HssbemPCH2SetFactorSource(PC pc, std::function<std::unique_ptr<hssbem::H2Factorization>(const hssbem::H2DistributedSystem &)> load)
+{
+  PetscFunctionBegin;
+  PetscCall(PCCompressedSet<PC_H2>(pc, PCH2, [&](PC_H2 &h2) { h2.factor_source = std::move(load); }));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

@@ -248,6 +248,7 @@ PetscErrorCode HssbemCreateSystemWithOptions(MPI_Comm comm, const hssbem::BemOpe
     ctx->h2_options.pressure_columns = pressure;
     size_options.single_precision    = ctx->h2_options.single_precision;
     size_options.h2_rel_tol          = ctx->h2_options.rel_tol;
+    ctx->h2_source                   = opts.h2_source;
   } else if (type == hssbem::OperatorType::Hss) {
     ctx->hss_options                  = opts.hss;
     ctx->hss_options.pressure_columns = pressure;
@@ -258,6 +259,29 @@ PetscErrorCode HssbemCreateSystemWithOptions(MPI_Comm comm, const hssbem::BemOpe
   else PetscCall(HssbemMatCreateCompressed_Private(comm, ctx.get(), A, b));
   PetscCall(HssbemMatComposeSystemContext(*A, ctx.get()));
   ctx.release();
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/*@C
+  HssbemMatGetH2System - The H² system behind A (every rank its part) and the partition of its
+  layout, or null and an empty partition when A is not HssbemCreateSystem()'s H² operator.
+
+  Not Collective
+
+  Level: developer
+@*/
+PetscErrorCode HssbemMatGetH2System(Mat A, std::shared_ptr<const hssbem::H2DistributedSystem> *sys, std::vector<int> *node_part)
+{
+  HssbemSystemContext *p;
+
+  PetscFunctionBegin;
+  PetscCall(HssbemMatGetSystemContext(A, &p));
+  sys->reset();
+  node_part->clear();
+  if (p && p->h2 && p->layout) {
+    *sys = p->h2;
+    PetscCallCXX(*node_part = p->layout->node_part);
+  }
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

@@ -18,6 +18,7 @@
 #include <petscmat.h>
 
 #include <exception>
+#include <functional>
 #include <memory>
 #include <new>
 #include <string>
@@ -54,6 +55,8 @@ struct HssbemSystemContext {
   std::shared_ptr<const hssbem::H2DistributedSystem>  h2;
   std::shared_ptr<const hssbem::HssDistributedSystem> hss;
   std::vector<PetscInt>                               system_of_dof;
+  /* HssbemSystemOptions::h2_source: the H² matrix loaded instead of compressed (null: compress). */
+  std::function<std::shared_ptr<const hssbem::H2DistributedSystem>(const std::vector<int> &, const hssbem::RankComm &)> h2_source;
 
   /* The distributed operator behind a MatShell, or NULL (dense). */
   const hssbem::DistributedBemSystem *distributed() const

@@ -32,6 +32,8 @@ std::string hash_text(std::uint64_t v)
   return b;
 }
 
+} // namespace
+
 /// The Fingerprint's fields as text attributes `fingerprint_<field>`.
 void write_fingerprint(SavedFileWriter &w, const Fingerprint &f)
 {
@@ -53,6 +55,8 @@ void write_fingerprint(SavedFileWriter &w, const Fingerprint &f)
   };
   for (const auto &[name, value] : fields) w.text(std::string("fingerprint_") + name, value);
 }
+
+namespace {
 
 /// Reads attribute `fingerprint_<name>` as a number of the kind of `out` (the whole text).
 class FingerprintReader {
@@ -76,6 +80,8 @@ private:
   const SavedFileReader &m_r;
 };
 
+} // namespace
+
 Fingerprint read_fingerprint(const SavedFileReader &r)
 {
   const FingerprintReader f(r);
@@ -87,6 +93,8 @@ Fingerprint read_fingerprint(const SavedFileReader &r)
   f.get("pattern", out.pattern), f.get("candidates", out.candidates), f.get("candidate_set", out.candidate_set), f.get("ranks", out.ranks);
   return out;
 }
+
+namespace {
 
 // --- the dense references and the columns ---------------------------------------------------
 

@@ -6,6 +6,8 @@
 #include "hssbem/core/timer.hpp"
 #include "hssbem/petsc/log.h"
 #include "hssbem/petsc/options.h"
+#include "hssbem/petsc/pc_h2.h"
+#include "hssbem/session/h2_file.hpp"
 #include "hssbem/session/petsc_call.hpp"
 #include "hssbem/session/result_fields.hpp"
 
@@ -107,9 +109,46 @@ void StaticSession::assemble()
   so.hss = m_options.hss;
   so.limits = &m_limits;
   HssbemCallThrow(HssbemKSPGetSizeOptions(m_ksp, &so.solver));
+  if (m_loaded) use_loaded(so);
   HssbemCallThrow(HssbemCreateSystemWithOptions(m_comm, m_problem->op(), s.selection, s.pure_traction ? &modes : nullptr, operator_type_name(m_choice.type), so, &m_A, &m_b));
   HssbemCallThrow(MatViewFromOptions(m_A, NULL, "-bem_mat_view"));
-  m_seconds["assembly"] += timer.seconds();
+  m_seconds[m_loaded ? "load" : "assembly"] += timer.seconds();
+}
+
+void StaticSession::use_loaded(HssbemSystemOptions &so)
+{
+  const std::shared_ptr<LoadedH2Part> part = m_loaded; // its streams are freed as they are unpacked
+  const BemOperator &op = m_problem->op();
+  const H2Options h2 = m_options.h2;
+  so.h2_source = [part, &op, h2](const std::vector<int> &node_part, const RankComm &comm) { return unpack_h2_system(*part, op, h2, node_part, comm); };
+  PC pc;
+  HssbemCallThrow(KSPGetPC(m_ksp, &pc));
+  HssbemCallThrow(HssbemPCH2SetFactorSource(pc, [part](const H2DistributedSystem &sys) { return unpack_h2_factorization(*part, sys); }));
+}
+
+void StaticSession::load(const std::string &path)
+{
+  if (m_choice.type != OperatorType::H2)
+    throw std::invalid_argument("-hssbem_load: a saved static precomputation is the H2 operator's and PC h2's; this solve takes the " + std::string(operator_type_name(m_choice.type)) + " operator");
+  create_solver();
+  const Timer timer;
+  m_loaded = load_h2_precomputation(m_comm, path, h2_precomputation_fingerprint(fingerprint()));
+  m_seconds["load"] += timer.seconds();
+}
+
+void StaticSession::save(const std::string &path, const std::vector<std::string> &inputs) const
+{
+  std::shared_ptr<const H2DistributedSystem> sys;
+  std::vector<int> node_part;
+  const H2Factorization *F = nullptr;
+  PetscBool of_matrix = PETSC_FALSE;
+  PC pc;
+  if (m_A) HssbemCallThrow(HssbemMatGetH2System(m_A, &sys, &node_part));
+  if (m_ksp) HssbemCallThrow(KSPGetPC(m_ksp, &pc));
+  if (m_ksp) HssbemCallThrow(HssbemPCH2GetFactorization(pc, &F, &of_matrix));
+  if (!sys || !F || !of_matrix)
+    throw std::invalid_argument("-hssbem_save: only a static solve on the H2 operator with PC h2 factoring it is saved (-bem_mat_type h2 -pc_type h2, -pc_h2_rel_tol not below -mat_h2_rel_tol), after its solve");
+  save_h2_precomputation(m_comm, path, inputs, h2_precomputation_fingerprint(fingerprint()), node_part, *sys, *F);
 }
 
 const HssbemSolveInfo &StaticSession::solve(bool to_all)

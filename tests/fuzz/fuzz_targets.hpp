@@ -5,6 +5,7 @@
 // SavedFileError.)
 #pragma once
 
+#include "hssbem/core/packed.hpp"
 #include "hssbem/io/saved_file.hpp"
 #include "hssbem/mesh/mesh.hpp"
 #include "hssbem/problem/problem.hpp"
@@ -12,6 +13,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <string>
 #include <vector>
@@ -70,11 +72,43 @@ inline void saved_input(const std::string &bytes)
   std::remove(path.c_str());
 }
 
+/// The packed streams of a saved H2 precomputation (core/packed.hpp, session/h2_file.hpp): the
+/// bytes cut in three (integers, floats, doubles), then read as the unpacking reads, each step
+/// chosen by the next integer, until the streams end. It may only fail with std::invalid_argument.
+inline void packed_input(const std::string &bytes)
+{
+  PackedArrays a;
+  const std::size_t third = bytes.size() / 3;
+  a.i.resize(third / sizeof(int)), a.f.resize(third / sizeof(float)), a.d.resize((bytes.size() - 2 * third) / sizeof(double));
+  if (!a.i.empty()) std::memcpy(a.i.data(), bytes.data(), a.i.size() * sizeof(int)); // (no memcpy to an empty vector's null data)
+  if (!a.f.empty()) std::memcpy(a.f.data(), bytes.data() + third, a.f.size() * sizeof(float));
+  if (!a.d.empty()) std::memcpy(a.d.data(), bytes.data() + 2 * third, a.d.size() * sizeof(double));
+  PackReader r(a);
+  std::vector<int> vi;
+  std::vector<float> vf;
+  std::vector<double> vd;
+  DenseMatrix M;
+  try {
+    while (!r.done()) { // every step reads at least one integer
+      switch (static_cast<unsigned>(r.get_int()) % 6) {
+      case 0: (void)r.get_int(-1, 100, "value"); break;
+      case 1: (void)r.get_double(); break;
+      case 2: r.get(vi); break;
+      case 3: r.get(vf); break;
+      case 4: r.get(vd); break;
+      default: r.get(M); break;
+      }
+    }
+  } catch (const std::invalid_argument &) {
+  }
+}
+
 inline void fuzz_msh(const std::string &b) { mesh_input(b, "fuzz.msh"); }
 inline void fuzz_stl(const std::string &b) { mesh_input(b, "fuzz.stl"); }
 inline void fuzz_off(const std::string &b) { mesh_input(b, "fuzz.off"); }
 inline void fuzz_obj(const std::string &b) { mesh_input(b, "fuzz.obj"); }
 inline void fuzz_problem(const std::string &b) { problem_input(b); }
 inline void fuzz_saved(const std::string &b) { saved_input(b); }
+inline void fuzz_packed(const std::string &b) { packed_input(b); }
 
 } // namespace hssbem::fuzz

@@ -3,8 +3,8 @@
 # its seeds (make_seeds.py) and its kept regression inputs, for a bounded time or number of
 # inputs each, two harnesses at a time (one per core of the CI machine):
 #
-#   tests/fuzz/run_fuzzers.sh BUILD 60              # 60 s per harness (CI: 3 rounds, about 3 min;
-#                                                   # the sixth, saved, shares the third round)
+#   tests/fuzz/run_fuzzers.sh BUILD 60              # 60 s per harness (CI: 4 rounds, about 4 min;
+#                                                   # the seventh, packed, alone in the fourth)
 #   tests/fuzz/run_fuzzers.sh BUILD runs=1000000    # 10^6 inputs per harness
 #   tests/fuzz/run_fuzzers.sh BUILD 600 --grow      # then merge what is new into corpus/<harness>/
 #
@@ -23,12 +23,12 @@ case "$limit" in
   *) budget="-max_total_time=$limit" ;;
 esac
 rm -rf "$build/seeds" && /usr/bin/python3 "$here/make_seeds.py" "$build/seeds"
-harnesses=(msh stl off obj problem saved)
+harnesses=(msh stl off obj problem saved packed)
 
 run_one() { # run_one HARNESS: fuzz, then report one line; returns non-zero on a crash
   local h=$1 start corpus artifacts
   corpus="$build/corpus/$h" artifacts="$build/artifacts/$h/"
-  mkdir -p "$corpus" "$artifacts" "$here/corpus/$h" "$here/regressions/$h"
+  mkdir -p "$corpus" "$artifacts" "$here/corpus/$h" "$here/regressions/$h" "$build/seeds/$h"
   start=$(date +%s)
   # -timeout: an input that takes 10 s is a bug too; -rss_limit_mb: so is one that takes 2 GB.
   if "$build/fuzz_$h" "$budget" -timeout=10 -rss_limit_mb=2048 -max_len=4096 -print_final_stats=1 \

@@ -77,6 +77,50 @@ TEST(FuzzRegressions, SavedInputs)
   fs::remove_all(seeds);
 }
 
+TEST(FuzzRegressions, PackedInputs)
+{
+  using namespace hssbem::fuzz;
+  replay(regressions / "packed", fuzz_packed);
+  replay(corpus / "packed", fuzz_packed);
+}
+
+TEST(FuzzRegressions, PackedStreamsRoundTripAndRefuseDamage)
+{
+  hssbem::PackedArrays a;
+  hssbem::PackWriter w(a);
+  hssbem::DenseMatrix M(2, 3);
+  M(1, 2) = 7.5;
+  w.put(3), w.put(std::vector<int>{4, 5}), w.put(std::vector<float>{1.5f}), w.put(M);
+  {
+    hssbem::PackReader r(a);
+    std::vector<int> v;
+    std::vector<float> f;
+    hssbem::DenseMatrix back;
+    EXPECT_EQ(r.get_int(0, 10, "value"), 3);
+    r.get(v), r.get(f), r.get(back);
+    EXPECT_EQ(v, (std::vector<int>{4, 5}));
+    EXPECT_EQ(f, (std::vector<float>{1.5f}));
+    EXPECT_EQ(back.m, 2);
+    EXPECT_EQ(back.a, M.a);
+    EXPECT_TRUE(r.done());
+  }
+  // a stream that ends early, a negative length, a length past the end, a value out of range,
+  // entries that do not fit a matrix's sizes: refused (std::invalid_argument), never read
+  const auto refused = [](hssbem::PackedArrays p, int step) {
+    hssbem::PackReader r(p);
+    std::vector<double> d;
+    hssbem::DenseMatrix m;
+    if (step == 0) EXPECT_THROW(r.get(d), std::invalid_argument);
+    if (step == 1) EXPECT_THROW(r.get_int(0, 1, "value"), std::invalid_argument);
+    if (step == 2) EXPECT_THROW(r.get(m), std::invalid_argument);
+  };
+  refused({{}, {}, {}}, 0);
+  refused({{}, {}, {-1}}, 0);
+  refused({{1.0}, {}, {2}}, 0);
+  refused({{}, {}, {5}}, 1);
+  refused({{1.0, 2.0}, {}, {2, 2, 2}}, 2);
+}
+
 TEST(FuzzRegressions, ProblemInputs)
 {
   using namespace hssbem::fuzz;

@@ -17,6 +17,7 @@
 #include "hssbem/core/cluster_tree.hpp"
 #include "hssbem/core/tree_ownership.hpp"
 #include "hssbem/core/dense_matrix.hpp"
+#include "hssbem/core/packed.hpp"
 #include "hssbem/h2/block_partition.hpp"
 
 #include <cstddef>
@@ -180,6 +181,15 @@ public:
   int rank() const { return m_owners.rank(); }
   /// Take over cluster c's stored bases and blocks (gathering a distributed matrix on one rank).
   void adopt(int c, StoredInterpolation U, StoredInterpolation V, std::vector<H2Block> far, std::vector<H2Block> near);
+
+  /// This rank's part in a stored form (persistence: session/h2_file.hpp): its sizes, the column
+  /// scales, the block partition, every cluster's skeletons, the bases and blocks of the clusters
+  /// held here, and the figures of the compression.
+  void pack(PackWriter &w) const;
+  /// The matrix pack() stored, on `tree` (the tree it was made on, built again from the points
+  /// and the partition), held as `owner` says (empty: everything on this rank) by rank `rank`.
+  /// Throws std::invalid_argument ("damaged: ...") for a stored form that does not fit the tree.
+  static H2Matrix unpack(ClusterTree tree, std::vector<int> owner, int rank, PackReader &r);
 
   /// Recompute rank, block and memory figures.
   void update_stats();

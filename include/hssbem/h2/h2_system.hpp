@@ -37,6 +37,9 @@ class H2DistributedSystem : public DistributedBemSystem {
 public:
   /// Collective: compress (compress_bem_operator_h2 with node_part) and plan the products.
   H2DistributedSystem(const BemOperator &op, const H2Options &options, const std::vector<int> &node_part, const RankComm &comm);
+  /// Collective: around this rank's part of a matrix compressed already (a saved one,
+  /// H2Matrix::unpack), the products planned.
+  H2DistributedSystem(H2Matrix K, const RankComm &comm);
 
   const H2Matrix &matrix() const { return *m_K; }
   const H2DistributedProduct &product() const { return *m_product; }

@@ -126,6 +126,11 @@ public:
   /// rank for a singular pivot block on any rank, std::invalid_argument for bad options; another
   /// error on its rank and PeerFault on the others (fault sites H2FSubtree, H2FTop).
   H2Factorization(H2FactorCache &cache, const SystemSelection &sel, const H2FactorOptions &options, const std::vector<double> *rigid_modes = nullptr);
+  /// The factorization pack() stored, of the H² matrix `K` (the one it was made of, loaded
+  /// too) on the ranks of `comm` (as many as it was made on; this rank's points from `first`,
+  /// `count` of them). Collective; throws std::invalid_argument ("damaged: ...") on every rank
+  /// for a stored form that does not fit K or this rank's rows.
+  H2Factorization(const H2Matrix &K, const RankComm &comm, int first, int count, PackReader &r);
   ~H2Factorization();
   H2Factorization(const H2Factorization &) = delete;
   H2Factorization &operator=(const H2Factorization &) = delete;
@@ -144,6 +149,10 @@ public:
   int first_point() const { return m_first; }
   int num_points() const { return m_count; }
   const H2FactorStats &stats() const { return m_stats; }
+  /// This rank's factors in a stored form (persistence: session/h2_file.hpp): the options, the
+  /// pattern, the steps, the top (this rank's share) and the figures. The solve of a factorization
+  /// unpacked from it is this one's, bit for bit.
+  void pack(PackWriter &w) const;
   const H2FactorOptions &options() const { return m_options; }
   /// A single-precision top's trial solve error (H2FactorStats::top_single; rank 0's when it is
   /// on rank 0), else 0.

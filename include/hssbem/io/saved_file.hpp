@@ -50,6 +50,7 @@ public:
   void doubles(const std::string &name, const double *data, std::size_t n);
   void ints(const std::string &name, const int *data, std::size_t n);
   void chars(const std::string &name, const char *data, std::size_t n);
+  void floats(const std::string &name, const float *data, std::size_t n);
   /// Closes the file, writes the header, syncs and renames it into place. Throws OutputError.
   void commit();
 
@@ -76,6 +77,7 @@ public:
   std::vector<double> doubles(const std::string &name) const;
   std::vector<int> ints(const std::string &name) const;
   std::vector<char> chars(const std::string &name) const;
+  std::vector<float> floats(const std::string &name) const;
   /// Throws SavedFileError "cannot load '<path>': <reason>".
   [[noreturn]] void fail(const std::string &reason) const;
 

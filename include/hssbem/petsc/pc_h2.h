@@ -6,8 +6,13 @@
 
 #include "hssbem/petsc/compat.h"
 #include "hssbem/core/option_table.hpp"
+#include "hssbem/h2/h2_system.hpp"
+#include "hssbem/h2factor/h2_factorization.hpp"
 
 #include <petscpc.h>
+
+#include <functional>
+#include <memory>
 
 #define PCH2 "h2"
 
@@ -27,3 +32,13 @@ PETSC_EXTERN PetscErrorCode PCH2SetSingleTopFrom(PC, PetscInt);
 PETSC_EXTERN PetscErrorCode PCH2SetSpreadTop(PC, PetscBool);
 PETSC_EXTERN PetscErrorCode PCH2SetSketchSize(PC, PetscInt);
 PETSC_EXTERN PetscErrorCode PCH2SetEstimateError(PC, PetscInt);
+
+/* Persistence (session/h2_file.hpp). The factorization a PC h2 holds after its set-up and whether
+   it factors the matrix's own H² compression (NULL and PETSC_FALSE before the set-up, after a
+   breakdown, or on another PC type). */
+PetscErrorCode HssbemPCH2GetFactorization(PC pc, const hssbem::H2Factorization **F, PetscBool *of_matrix);
+/* At its next set-up on the matrix's own H² compression, the PC takes the factorization `load`
+   returns for that system (a saved one; called on every rank, collectively) instead of factoring;
+   once. Refused at the set-up when the PC would factor a compression of its own (a tolerance
+   tighter than the matrix's). Nothing on another PC type. */
+PetscErrorCode HssbemPCH2SetFactorSource(PC pc, std::function<std::unique_ptr<hssbem::H2Factorization>(const hssbem::H2DistributedSystem &)> load);

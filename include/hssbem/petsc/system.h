@@ -9,10 +9,13 @@
 #include "hssbem/core/option_table.hpp"
 #include "hssbem/core/size_limits.hpp"
 #include "hssbem/h2/h2_compression.hpp"
+#include "hssbem/h2/h2_system.hpp"
 #include "hssbem/h2factor/h2_factorization.hpp"
 #include "hssbem/hss/hss_compression.hpp"
 
 #include <petscksp.h>
+#include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -41,6 +44,10 @@ struct HssbemSystemOptions {
   hssbem::HssOptions           hss;              /* the HSS operator's */
   hssbem::SizeOptions          solver;           /* the solver's part of the size model (HssbemKSPGetSizeOptions()); its compression fields follow h2 and hss */
   const hssbem::MachineLimits *limits = nullptr; /* the machine of the size check (null: HssbemMachineLimits()) */
+  /* When set, the H² operator's matrix is this function's instead of a compression (a saved one,
+     session/h2_file.hpp): called on every rank, collectively, with the layout's partition (the
+     part of each dof node) and its ranks. */
+  std::function<std::shared_ptr<const hssbem::H2DistributedSystem>(const std::vector<int> &node_part, const hssbem::RankComm &comm)> h2_source;
 };
 
 /* HssbemCreateSystem() with the options given instead of read: the session layer reads the
@@ -54,6 +61,10 @@ PetscErrorCode HssbemCreateSystemWithOptions(MPI_Comm comm, const hssbem::BemOpe
    in cluster order, rank p holding part p's nodes. These convert either way between A's layout and
    a mesh-order vector from HssbemMatCreateMeshOrderVec() (a copy when A is in mesh order). */
 PetscErrorCode HssbemMatCreateMeshOrderVec(Mat A, Vec *y);
+
+/* The H² system behind A (every rank its part) and the layout's partition, or null (and an empty
+   partition) when A is not the H² operator of HssbemCreateSystem(): what a save keeps. */
+PetscErrorCode HssbemMatGetH2System(Mat A, std::shared_ptr<const hssbem::H2DistributedSystem> *sys, std::vector<int> *node_part);
 PetscErrorCode HssbemVecToMeshOrder(Mat A, Vec x, Vec y);
 PetscErrorCode HssbemVecFromMeshOrder(Mat A, Vec y, Vec x);
 

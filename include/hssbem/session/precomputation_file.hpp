@@ -16,6 +16,7 @@
 /// columns. A contact's precomputation lives on one rank (rank 0's): the file is one rank's too.
 #pragma once
 
+#include "hssbem/io/saved_file.hpp"
 #include "hssbem/session/contact_session.hpp"
 #include "hssbem/session/scene_session.hpp"
 
@@ -28,6 +29,12 @@ namespace hssbem {
 /// The format version the files are written in and the only one read (a change of layout
 /// increments it; docs/persistence.md).
 inline constexpr int kPrecomputationFormat = 2;
+
+/// A Fingerprint as the text attributes `fingerprint_<field>` of a saved file, and back (any
+/// precomputation's file: this one's, session/h2_file.hpp's). read_fingerprint() throws
+/// SavedFileError for a missing or damaged field.
+void write_fingerprint(SavedFileWriter &w, const Fingerprint &f);
+Fingerprint read_fingerprint(const SavedFileReader &r);
 
 /// Saves `session`'s precomputation (after set_up(), or after frames: the columns they added are
 /// kept too) to `path`, which may not be one of `inputs`. Throws std::invalid_argument before

@@ -28,6 +28,8 @@
 
 namespace hssbem {
 
+struct LoadedH2Part;
+
 class StaticSession {
 public:
   /// Chooses the operator (the machine's limits measured on comm). `problem` is kept.
@@ -66,6 +68,18 @@ public:
   /// What the precomputation depends on.
   Fingerprint fingerprint() const;
 
+  /// After solve() on the H² operator with PC h2 (the default path): saves the precomputation —
+  /// the H² matrix and PC h2's factors, every rank its part (session/h2_file.hpp) — to `path`
+  /// (not over one of `inputs`). Collective; throws std::invalid_argument on another path or
+  /// before the solve, std::runtime_error when a file cannot be written.
+  void save(const std::string &path, const std::vector<std::string> &inputs = {}) const;
+  /// Before assemble(): the precomputation saved in `path` is the operator and PC h2's factors
+  /// instead of the compression and the factorization (collective). Throws std::runtime_error
+  /// ("cannot load '<path>': ...", naming the first difference) for a file that is damaged or
+  /// was made for another problem, options or number of ranks; std::invalid_argument when this
+  /// solve does not take the H² operator.
+  void load(const std::string &path);
+
   /// The PETSc objects (null before create_solver() or assemble()): a program's own KSP, or the
   /// Python module's petsc4py objects, may take them.
   KSP ksp() const { return m_ksp; }
@@ -75,6 +89,8 @@ public:
 
 private:
   void destroy();
+  /// The loaded parts as the system's matrix (so.h2_source) and as PC h2's factors.
+  void use_loaded(HssbemSystemOptions &so);
 
   MPI_Comm m_comm;
   std::shared_ptr<const SessionProblem> m_problem;
@@ -87,6 +103,7 @@ private:
   HssbemSolveInfo m_info;
   std::vector<double> m_x;
   std::map<std::string, double> m_seconds;
+  std::shared_ptr<LoadedH2Part> m_loaded; ///< load(): the parts read, unpacked by assemble() and the PC's set-up
 };
 
 /// A prepared problem solved with the operator `type` and the options of the options database
