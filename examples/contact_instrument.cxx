@@ -107,6 +107,8 @@ static int Run(MPI_Comm comm)
   }
   PetscCall(PetscPrintf(comm, "contact_instrument: frames %.1f Hz (%.2f iterations each, up to %lld vertices touching); haptic %.0f Hz; max |F| = %.4e\n", frames / t_frames, static_cast<double>(iterations) / frames, touching,
                         haptic * frames / std::max(t_haptic, 1e-12), fmax));
+  const hssbem::Vec3 F = scene.obstacle_forces()[0]; /* the last frame's, to compare with the command line */
+  PetscCall(PetscPrintf(comm, "contact_instrument: last frame, force on the tool (%.10e, %.10e, %.10e)\n", F[0], F[1], F[2]));
   return 0;
 }
 
