@@ -105,7 +105,7 @@ static int Run(MPI_Comm comm)
       fmax = std::max(fmax, hssbem::norm(F[0]));
     }
   }
-  PetscCall(PetscPrintf(comm, "contact_instrument: frames %.1f Hz (%.2f iterations each, up to %lld vertices touching); haptic %.0f Hz; max |F| = %.4e\n", frames / t_frames, static_cast<double>(iterations) / frames, touching,
+  PetscCall(PetscPrintf(comm, "contact_instrument: frames %.3g Hz (%.0f ms each, %.2f iterations each, up to %lld vertices touching); haptic %.0f Hz; max |F| = %.4e\n", frames / t_frames, 1e3 * t_frames / frames, static_cast<double>(iterations) / frames, touching,
                         haptic * frames / std::max(t_haptic, 1e-12), fmax));
   const hssbem::Vec3 F = scene.obstacle_forces()[0]; /* the last frame's, to compare with the command line */
   PetscCall(PetscPrintf(comm, "contact_instrument: last frame, force on the tool (%.10e, %.10e, %.10e)\n", F[0], F[1], F[2]));
