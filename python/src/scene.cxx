@@ -135,7 +135,9 @@ private:
     run_collectively(m_comm, [&] {
       if (m_rank != 0) return;
       m_scene = std::make_unique<SceneSession>(m_problem, std::move(ref), o.session, limits, HssbemSceneKrylovCreate());
-      m_scene->set_up();
+      if (!o.load.empty()) m_scene->load(o.load); // a precomputation saved for this scene (docs/persistence.md)
+      else m_scene->set_up();
+      if (!o.save.empty()) m_scene->save(o.save, m_setup->input_files);
     });
   }
 

@@ -28,9 +28,12 @@ struct ContactCase {
     s = setup_problem(std::move(spec), ProblemOverrides{});
     op = std::make_unique<BemOperator>(*s.disc, s.material);
     base = apply_rules(s.spec.rules, *s.disc, s.spec.file);
-    check_bodies_held(*s.disc, base.displacement_prescribed, obstacles, settings, opt);
+    // A body contact alone holds is pinned as the contact session pins it (floating_pins()).
+    ContactSettings pinned = settings;
+    pinned.pins = floating_pins(*s.disc, base.displacement_prescribed, obstacles, pinned, opt);
+    for (int j : pinned.pins) base.displacement_prescribed[j / 3][j % 3] = true, base.value[j / 3][j % 3] = 0;
     ref = std::make_unique<DenseReference>(*op, base.unknown_pattern());
-    engine = std::make_unique<ContactEngine>(*s.disc, *ref, std::move(obstacles), settings, opt);
+    engine = std::make_unique<ContactEngine>(*s.disc, *ref, std::move(obstacles), pinned, opt);
   }
   /// The frame with the obstacles at `offsets` (one per obstacle).
   const ContactFrameReport &solve(const std::vector<Vec3> &offsets)
