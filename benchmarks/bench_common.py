@@ -1,8 +1,12 @@
-"""Helpers shared by the benchmark scripts (bench_dense.py, bench_hss.py): mesh sizes, argument
-parsing, machine description, log tails."""
+"""Helpers shared by the benchmark scripts (bench_dense.py, bench_hss.py, bench_persistence.py,
+bench_h2_persistence.py): mesh sizes, argument parsing, machine description, log tails, timed
+driver runs and the figures they print."""
 import argparse
 import os
 import platform
+import re
+import subprocess
+import sys
 
 
 def triangles_for_unknowns(n):
@@ -51,3 +55,24 @@ def tail(path, lines=25, width=None):
     except OSError:
         return ""
     return "".join(l if width is None or len(l) <= width else l[:width] + " [...]\n" for l in out)
+
+
+def timed_run(driver, prob, out, extra, ranks=1):
+    """(wall s, CPU s (user + system, every thread; with ranks > 1 what mpiexec's process tree
+    reports to /usr/bin/time), stdout) of one run of the driver; exits with its output when it
+    fails."""
+    cmd = ["/usr/bin/time", "-f", "%e %U %S"]
+    if ranks > 1:
+        cmd += ["mpiexec", "-n", str(ranks), "--oversubscribe"]
+    cmd += [driver, "-problem", prob, "-o", out] + extra
+    p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, universal_newlines=True)
+    if p.returncode != 0:
+        sys.exit("failed: %s\n%s\n%s" % (" ".join(cmd), p.stdout, p.stderr))
+    wall, user, system = p.stderr.strip().splitlines()[-1].split()
+    return float(wall), float(user) + float(system), p.stdout
+
+
+def figure(pattern, text):
+    """The number the regular expression's first group finds in text (NaN when absent)."""
+    m = re.search(pattern, text)
+    return float(m.group(1)) if m else float("nan")

@@ -23,10 +23,9 @@ import csv
 import glob
 import json
 import os
-import re
-import subprocess
-import sys
 import tempfile
+
+from bench_common import figure, timed_run
 
 
 def problem(mesh, name, push, side, out_dir):
@@ -37,24 +36,6 @@ def problem(mesh, name, push, side, out_dir):
     with open(path, "w") as f:
         json.dump(spec, f, indent=1)
     return path
-
-
-def run(driver, np_, prob, out, extra):
-    """(wall s, CPU s (user + system, every thread, rank 0's process), stdout) of one run."""
-    cmd = ["/usr/bin/time", "-f", "%e %U %S"]
-    if np_ > 1:
-        cmd += ["mpiexec", "-n", str(np_), "--oversubscribe"]
-    cmd += [driver, "-problem", prob, "-o", out] + extra
-    p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, universal_newlines=True)
-    if p.returncode != 0:
-        sys.exit("failed: %s\n%s\n%s" % (" ".join(cmd), p.stdout, p.stderr))
-    wall, user, system = p.stderr.strip().splitlines()[-1].split()
-    return float(wall), float(user) + float(system), p.stdout
-
-
-def figure(pattern, text):
-    m = re.search(pattern, text)
-    return float(m.group(1)) if m else float("nan")
 
 
 def answer(path):
@@ -82,10 +63,10 @@ def main():
         mine, other = ("A", "B") if i % 2 else ("B", "A")
         saved = os.path.join(d, "organ_%d.pre" % i)
         out = os.path.join(d, "out.h5")
-        wall_c, cpu_c, out_c = run(a.driver, a.np, probs[mine], out, ["-hssbem_save", saved])
+        wall_c, cpu_c, out_c = timed_run(a.driver, probs[mine], out, ["-hssbem_save", saved], a.np)
         cold[mine] = answer(out)
         size = sum(os.path.getsize(p) for p in [saved] + glob.glob(saved + ".rank*"))
-        wall_l, cpu_l, out_l = run(a.driver, a.np, probs[other], out, ["-hssbem_load", saved])
+        wall_l, cpu_l, out_l = timed_run(a.driver, probs[other], out, ["-hssbem_load", saved], a.np)
         warm[other] = answer(out)
         t_c, t_l = cold[mine][2], warm[other][2]
         cold_s = t_c.get("assembly", 0) + t_c.get("solve", 0)

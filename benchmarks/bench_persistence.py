@@ -25,11 +25,10 @@ import argparse
 import csv
 import json
 import os
-import re
-import subprocess
-import sys
 import tempfile
 import time
+
+from bench_common import figure, timed_run
 
 
 def msh_vertices(path):
@@ -82,21 +81,6 @@ def pair_problem(mesh, share, frames, out_dir):
     return path, sum(abs(p[2] - mid) <= near for p in v), len(v)
 
 
-def run(driver, prob, out, extra):
-    """(wall s, CPU s (user + system, every thread), stdout) of one run."""
-    cmd = ["/usr/bin/time", "-f", "%e %U %S", driver, "-problem", prob, "-o", out] + extra
-    p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, universal_newlines=True)
-    if p.returncode != 0:
-        sys.exit("failed: %s\n%s\n%s" % (" ".join(cmd), p.stdout, p.stderr))
-    wall, user, system = p.stderr.strip().splitlines()[-1].split()
-    return float(wall), float(user) + float(system), p.stdout
-
-
-def figure(pattern, text):
-    m = re.search(pattern, text)
-    return float(m.group(1)) if m else float("nan")
-
-
 def frames_of(path):
     """Every frame's displacement, traction and contact pressure, and frame 0's seconds."""
     import h5py
@@ -118,7 +102,7 @@ def identical(a, b):
 
 def cold_run(driver, prob, d, tag, saved):
     """A cold run of `driver` that saves to `saved`: its figures and its frames."""
-    wall, cpu, out = run(driver, prob, os.path.join(d, "cold_%s.h5" % tag), ["-hssbem_save", saved])
+    wall, cpu, out = timed_run(driver, prob, os.path.join(d, "cold_%s.h5" % tag), ["-hssbem_save", saved])
     frames, frame0, _ = frames_of(os.path.join(d, "cold_%s.h5" % tag))
     return {"unknowns": int(figure(r"(\d+) unknowns", out)), "setup_s": figure(r"contact: set up in ([\d.]+) s", out),
             "save_s": figure(r"saved the precomputation to .* in ([\d.]+) s", out), "cold_frame0_s": frame0, "cold_wall_s": wall,
@@ -137,7 +121,7 @@ def read_once(path):
 def load_run(driver, prob, d, saved, cold):
     """A run of `driver` that loads `saved`: its figures, its frames compared with `cold`'s."""
     read_s = read_once(saved)
-    wall, cpu, out = run(driver, prob, os.path.join(d, "load.h5"), ["-hssbem_load", saved])
+    wall, cpu, out = timed_run(driver, prob, os.path.join(d, "load.h5"), ["-hssbem_load", saved])
     frames, frame0, _ = frames_of(os.path.join(d, "load.h5"))
     return {"load_s": figure(r"loaded the precomputation from .* in ([\d.]+) s", out), "load_frame0_s": frame0, "load_wall_s": wall,
             "load_cpu_s": cpu, "file_read_s": read_s, "bitwise": identical(cold, frames), "loadavg_1min": os.getloadavg()[0]}
