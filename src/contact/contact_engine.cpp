@@ -345,6 +345,7 @@ void ContactEngine::State::correct(const SystemSelection &values, ContactSolutio
     if (rep.corrections >= opt.max_it)
       throw std::runtime_error("the corrections of the compressed reference did not settle in " + std::to_string(opt.max_it) + " solves (-contact_max_it; last change " +
                                std::to_string(rep.correction) + ")");
+    set_u_free(); // xf changed
     settle(out, rep);
   }
 }

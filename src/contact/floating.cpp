@@ -274,7 +274,6 @@ bool ContactEngine::State::newton_step(const std::vector<double> &r, std::vector
 void ContactEngine::State::settle(ContactSolution &out, ContactFrameReport &rep)
 {
   if (floating.empty()) {
-    set_u_free(); // the free response as the frame (or the compressed reference's correction) left it
     rounds(out, rep);
     return;
   }
