@@ -8,6 +8,7 @@
 #include "hssbem/session/choice.hpp"
 #include "hssbem/session/contact_session.hpp"
 #include "hssbem/session/petsc_call.hpp"
+#include "hssbem/session/precomputation_file.hpp"
 #include "hssbem/session/scene_session.hpp"
 
 #include <pybind11/stl.h>
@@ -147,8 +148,7 @@ private:
   void set_up_contact(const DriverOptions &o, const MachineLimits &limits)
   {
     const std::string mat_type = reference_mat_type(contact_references_on_h2(m_problem->disc(), o.session.operator_type, limits)); // every rank: the same error everywhere
-    if ((!o.save.empty() || !o.load.empty()) && mat_type != "dense")
-      throw std::invalid_argument(std::string(o.save.empty() ? "hssbem_load" : "hssbem_save") + ": only dense reference factorizations are saved and loaded yet; this contact takes the " + mat_type + " one");
+    if (!o.save.empty() || !o.load.empty()) check_contact_reference_saveable(mat_type, o.save.empty() ? "hssbem_load" : "hssbem_save");
     run_collectively(m_comm, [&] {
       if (m_rank != 0) return;
       ContactJob job = contact_job(*m_setup);

@@ -112,9 +112,7 @@ void save_set_up(const ContactSession &session, const std::string &path, std::ve
 /// What -hssbem_save and -hssbem_load can do, checked on every rank before the set-up.
 void check_persistence(const DriverOptions &o, const std::string &mat_type, const std::string &output)
 {
-  if ((!o.save.empty() || !o.load.empty()) && mat_type != "dense")
-    throw std::invalid_argument(std::string(o.save.empty() ? "-hssbem_load" : "-hssbem_save") + ": only dense reference factorizations are saved and loaded yet; this contact takes the " +
-                                mat_type + " one (-bem_mat_type dense)");
+  if (!o.save.empty() || !o.load.empty()) check_contact_reference_saveable(mat_type, o.save.empty() ? "-hssbem_load" : "-hssbem_save", " (-bem_mat_type dense)");
   check_save_load(o, output);
 }
 

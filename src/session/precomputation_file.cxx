@@ -202,6 +202,12 @@ void save_precomputation(const ContactSession &session, const std::string &path,
   w.commit();
 }
 
+void check_contact_reference_saveable(const std::string &mat_type, const std::string &option, const std::string &remedy)
+{
+  if (mat_type != "dense")
+    throw std::invalid_argument(option + ": only dense reference factorizations are saved and loaded yet; this contact takes the " + mat_type + " one" + remedy);
+}
+
 std::shared_ptr<ContactPrecomputation> load_precomputation(const ContactSession &session, const std::string &path)
 {
   const SavedFileReader r(path, kKind, kPrecomputationFormat);

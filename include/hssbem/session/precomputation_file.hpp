@@ -41,6 +41,11 @@ Fingerprint read_fingerprint(const SavedFileReader &r);
 /// set-up or for an H² reference (not saved yet), OutputError when the file cannot be written.
 void save_precomputation(const ContactSession &session, const std::string &path, const std::vector<std::string> &inputs = {});
 
+/// Before a contact's set-up, on every rank: throws std::invalid_argument when its references
+/// `mat_type` (reference_mat_type()) cannot be saved or loaded (only dense ones are, yet), the line
+/// naming `option` as the face spells it ("-hssbem_save", "hssbem_load") and ending in `remedy`.
+void check_contact_reference_saveable(const std::string &mat_type, const std::string &option, const std::string &remedy = "");
+
 /// The precomputation saved in `path` for `session`'s problem, ready for session.adopt(). Throws
 /// SavedFileError ("cannot load '<path>': ...") for a file that is not one, is damaged, or was
 /// made for another problem (the first difference named: Fingerprint::difference()).
