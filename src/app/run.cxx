@@ -35,13 +35,6 @@ std::shared_ptr<const ProblemSetup> set_up(MPI_Comm comm, const std::string &fil
   return s;
 }
 
-/// -hssbem_save and -hssbem_load of a static solve: neither over the result file, nor the same file.
-void check_static_persistence(const DriverOptions &o, const std::string &output)
-{
-  if (!o.save.empty() && o.save == output) throw std::invalid_argument("-hssbem_save: '" + o.save + "' is the result file");
-  if (!o.save.empty() && o.save == o.load) throw std::invalid_argument("-hssbem_save: '" + o.save + "' is the file -hssbem_load reads");
-}
-
 /// -hssbem_load: the H² operator and PC h2's factors of the file instead of the compression and
 /// the factorization (read and checked here; unpacked by the assembly and the PC's set-up).
 void load_static(MPI_Comm comm, StaticSession &session, const std::string &path)
@@ -53,11 +46,9 @@ void load_static(MPI_Comm comm, StaticSession &session, const std::string &path)
 }
 
 /// -hssbem_save: after the solve (its factors are PC h2's set-up), every rank its part.
-void save_static(MPI_Comm comm, const StaticSession &session, const std::string &path, const std::string &loaded)
+void save_static(MPI_Comm comm, const StaticSession &session, const std::string &path, const std::vector<std::string> &inputs)
 {
   const Timer timer;
-  std::vector<std::string> inputs = session.problem().setup().input_files;
-  if (!loaded.empty()) inputs.push_back(loaded);
   session.save(path, inputs);
   HssbemCallThrow(PetscPrintf(comm, "hssbem: static: saved the precomputation to %s in %.2f s\n", path.c_str(), timer.seconds()));
 }
@@ -98,12 +89,13 @@ void run_static(MPI_Comm comm, const DriverOptions &o, std::shared_ptr<const Ses
   fault_point("Driver"); /* tests: an error no guard makes collective (the last resort of app/main.hpp) */
   session.create_solver();
   check_unused_options(comm, true);
-  check_static_persistence(o, problem->setup().output);
+  check_save_load(o, problem->setup().output);
+  const std::vector<std::string> inputs = save_load_inputs(o, problem->setup());
   if (!o.load.empty()) load_static(comm, session, o.load);
   const HssbemSolveInfo &info = session.solve();
   HssbemCallThrow(PetscPrintf(comm, "hssbem: solved with %s/%s%s%s: %" PetscInt_FMT " iterations, relative residual %.3e\n", info.ksp_type.c_str(), info.pc_type.c_str(),
                               info.solver_type.empty() ? "" : "/", info.solver_type.c_str(), info.iterations, (double)info.residual));
-  if (!o.save.empty()) save_static(comm, session, o.save, o.load);
+  if (!o.save.empty()) save_static(comm, session, o.save, inputs);
   check_unused_options(comm, false);
   const ResultData r = session.result();
   const std::string &output = problem->setup().output;
